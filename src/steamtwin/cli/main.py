@@ -1,0 +1,20 @@
+"""The ``steamtwin`` command: one sub-command per pipeline stage, plus ``demo``."""
+
+from __future__ import annotations
+
+import typer
+
+from steamtwin.cli.demo import demo
+from steamtwin.cli.simulate import simulate
+from steamtwin.cli.turbine import turbine_app
+
+app = typer.Typer(
+    name="steamtwin",
+    help="Digital twin of a steam turbine in deep peak-shaving operation.\n\n"
+    "Example: steamtwin demo --out demo-output",
+    no_args_is_help=True,
+    add_completion=False,
+)
+app.add_typer(turbine_app, name="turbine")
+app.command()(simulate)
+app.command()(demo)

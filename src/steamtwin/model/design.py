@@ -1,0 +1,167 @@
+"""Design, then off-design: derive the model's constants from the turbine spec.
+
+Following the TESPy habit (a plant described once at its design point), the spec's geometry and
+design heat balance give every constant the kernel needs:
+
+* the control stage's nozzle throat area, from the design flow through the valves open at design
+  at the design control-stage pressure (Saint-Venant nozzle flow);
+* blade speeds, optimum velocity ratios, extraction fractions and stage-group flow geometry;
+* the metal conduction chains of casing and rotor per stage group;
+* one efficiency scale on all stages so the design HP-exhaust temperature of the heat balance is
+  met with the empirical parameter values — the single design "tuning" (reported, bounded).
+
+The design control-stage pressure and HP power are *not* imposed: the tests check that the model
+reproduces them from the spec's flow capacities and efficiencies.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from steamtwin.model.kernel import KernelConstants
+from steamtwin.model.steampath import KAPPA_SUPERHEATED, nozzle_flow_function
+from steamtwin.spec import SpecError, TurbineSpec
+from steamtwin.steam import if97
+
+METAL_NODES = 8
+EFFICIENCY_SCALE_RANGE = (0.8, 1.2)
+
+
+@dataclass(frozen=True)
+class DesignConstants:
+    """The kernel constants plus what the design step found (SI units)."""
+
+    kernel: KernelConstants
+    nozzle_area: float  # m², all nozzle groups together
+    efficiency_scale: float
+
+
+def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
+                     metal_nodes: int = METAL_NODES) -> KernelConstants:
+    """Constants for the kernel at a given efficiency scale (the scale is solved elsewhere)."""
+    design = spec.design
+    omega = design.rotational_speed
+    cs = spec.control_stage
+    orders = sorted({valve.opening_order for valve in cs.valves})
+    level_arc = np.array(
+        [sum(v.admission_arc for v in cs.valves if v.opening_order == o) for o in orders]
+    )
+    level_segments = np.array(
+        [float(sum(1 for v in cs.valves if v.opening_order == o)) for o in orders]
+    )
+    area_per_arc = _nozzle_area_per_arc(spec)
+    n = len(spec.stages)
+    extraction_fraction = np.zeros(n)
+    for extraction in spec.extractions:
+        extraction_fraction[extraction.after_stage - 1] += (
+            extraction.design_flow / design.main_steam_flow
+        )
+    groups = spec.metal_groups
+    capacity = np.zeros((len(groups), 2, metal_nodes))
+    conductance = np.zeros((len(groups), 2, metal_nodes - 1))
+    area = np.zeros((len(groups), 2))
+    half_cell = np.zeros((len(groups), 2))
+    outer = np.zeros((len(groups), 2))
+    hydraulic_diameter = np.zeros(len(groups))
+    flow_area = np.zeros(len(groups))
+    rotor_speed = np.zeros(len(groups))
+    for g, group in enumerate(groups):
+        blading = [cs.blading if s == 0 else spec.stages[s - 1].blading for s in group.stages]
+        height = float(np.mean([b.blade_height for b in blading]))
+        diameter = float(np.mean([b.mean_diameter for b in blading]))
+        hydraulic_diameter[g] = 2.0 * height
+        flow_area[g] = math.pi * diameter * height
+        casing = _plane_wall(group.casing_mass, group.casing_area, spec.casing_material,
+                             group.insulation_conductance, metal_nodes)
+        rotor = _solid_cylinder(group.rotor_mass, group.rotor_area, spec.rotor_material,
+                                metal_nodes)
+        for body, chain in enumerate((casing, rotor)):
+            capacity[g, body], conductance[g, body], half_cell[g, body], outer[g, body] = chain
+        area[g] = group.casing_area, group.rotor_area
+        rotor_radius = 2.0 * group.rotor_mass / (spec.rotor_material.density * group.rotor_area)
+        rotor_speed[g] = omega * rotor_radius
+    return KernelConstants(
+        rotational_speed=omega,
+        valve_pressure_drop=design.valve_pressure_drop,
+        nozzle_discharge_coefficient=cs.nozzle_discharge_coefficient,
+        level_area=level_arc * area_per_arc,
+        level_arc=level_arc,
+        level_segments=level_segments,
+        cs_blade_speed=omega * cs.blading.mean_diameter / 2.0,
+        cs_optimum_ratio=_optimum_ratio(cs.blading.nozzle_exit_angle, cs.blading.reaction),
+        cs_peak_efficiency=cs.blading.peak_blade_efficiency,
+        cs_friction_loss=cs.blading.friction_loss,
+        cs_diameter=cs.blading.mean_diameter,
+        stage_capacity=np.array([s.flow_capacity for s in spec.stages]),
+        stage_blade_speed=np.array([omega * s.blading.mean_diameter / 2.0 for s in spec.stages]),
+        stage_optimum_ratio=np.array(
+            [_optimum_ratio(s.blading.nozzle_exit_angle, s.blading.reaction) for s in spec.stages]
+        ),
+        stage_peak_efficiency=np.array([s.blading.peak_blade_efficiency for s in spec.stages]),
+        stage_friction_loss=np.array([s.blading.friction_loss for s in spec.stages]),
+        extraction_fraction=extraction_fraction,
+        efficiency_scale=efficiency_scale,
+        group_first_stage=np.array([group.stages[0] for group in groups], dtype=np.int64),
+        group_last_stage=np.array([group.stages[-1] for group in groups], dtype=np.int64),
+        group_ending_at_stage=np.array(
+            [next((g for g, group in enumerate(groups) if group.stages[-1] == stage), -1)
+             for stage in range(n + 1)], dtype=np.int64),
+        group_hydraulic_diameter=hydraulic_diameter,
+        group_flow_area=flow_area,
+        group_rotor_speed=rotor_speed,
+        metal_capacity=capacity,
+        metal_conductance=conductance,
+        metal_area=area,
+        metal_half_cell_resistance=half_cell,
+        metal_outer_conductance=outer,
+        ambient_temperature=spec.ambient_temperature,
+        sensor_group=[group.name for group in groups].index(spec.casing_sensor_group),
+    )
+
+
+def _optimum_ratio(nozzle_exit_angle: float, reaction: float) -> float:
+    return math.cos(nozzle_exit_angle) / (2.0 * math.sqrt(1.0 - reaction))
+
+
+def _nozzle_area_per_arc(spec: TurbineSpec) -> float:
+    """Throat area per unit admission arc (m²) passing the design flow through the open valves."""
+    design = spec.design
+    cs = spec.control_stage
+    p_valve = design.main_steam_pressure * (1.0 - design.valve_pressure_drop)
+    h0 = float(if97.enthalpy_pt(design.main_steam_pressure, design.main_steam_temperature))
+    v_valve = float(if97.specific_volume_ph(p_valve, h0))
+    psi = nozzle_flow_function(design.control_stage_pressure / p_valve, KAPPA_SUPERHEATED)
+    open_arc = sum(v.admission_arc for v in cs.valves if v.open_at_design)
+    if psi <= 0.0:
+        raise SpecError("design control-stage pressure is not below the valve outlet pressure")
+    area = design.main_steam_flow / (
+        cs.nozzle_discharge_coefficient * psi * math.sqrt(p_valve / v_valve)
+    )
+    return area / open_arc
+
+
+def _plane_wall(mass, area, material, insulation, nodes):
+    """Finite-volume chain of a plane wall (capacity J/K, conductance W/K, half-cell, outer)."""
+    depth = mass / (material.density * area)
+    dx = depth / nodes
+    capacity = np.full(nodes, material.density * material.specific_heat * area * dx)
+    conductance = np.full(nodes - 1, material.thermal_conductivity * area / dx)
+    half_cell = dx / (2.0 * material.thermal_conductivity)
+    outer = area / (1.0 / insulation + half_cell) if insulation > 0.0 else 0.0
+    return capacity, conductance, half_cell, outer
+
+
+def _solid_cylinder(mass, area, material, nodes):
+    """Finite-volume chain of a solid cylinder, node 0 at the surface, no outer loss."""
+    radius = 2.0 * mass / (material.density * area)
+    length = area / (2.0 * math.pi * radius)
+    dr = radius / nodes
+    outer_radii = radius - dr * np.arange(nodes)
+    inner_radii = np.maximum(outer_radii - dr, 0.0)
+    capacity = (material.density * material.specific_heat * math.pi
+                * (outer_radii**2 - inner_radii**2) * length)
+    conductance = material.thermal_conductivity * 2.0 * math.pi * inner_radii[:-1] * length / dr
+    return capacity, conductance, dr / (2.0 * material.thermal_conductivity), 0.0

@@ -1,0 +1,258 @@
+"""The built-in full-order model (FOM) of the HP section: a :class:`Simulator`.
+
+Quasi-steady stage-by-stage steam path (``steampath``) coupled to 1-D metal conduction of rotor
+and inner casing per stage group (``metal``), solved sample by sample in a compiled loop
+(``kernel``) with superheated-steam properties from spline tables of IAPWS-IF97
+(``steamtwin.steam.tables``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import pandas as pd
+
+from steamtwin.model import kernel
+from steamtwin.model.design import EFFICIENCY_SCALE_RANGE, DesignConstants, kernel_constants
+from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.simulator import INPUT_SIGNALS
+from steamtwin.spec import SpecError, TurbineSpec
+from steamtwin.steam import if97
+from steamtwin.steam.tables import steam_tables
+
+# Physical validity of the inputs (SI); the tables cover 0.05–25 MPa and up to 650 °C.
+INPUT_RANGES = {
+    "main_steam_pressure": (1.0e6, 25.0e6, "Pa"),
+    "main_steam_temperature": (523.15, 913.15, "K"),
+    "main_steam_flow": (1.0, 2000.0, "kg/s"),
+    "hp_exhaust_pressure": (0.1e6, 20.0e6, "Pa"),
+}
+
+_STATUS_TEXT = {
+    kernel.STATUS_OVER_CAPACITY: "main_steam_flow exceeds what the wide-open governing valves "
+    "pass at this throttle pressure",
+    kernel.STATUS_OUT_OF_TABLES: "a steam state leaves the superheated region covered by the "
+    "property tables (0.05–25 MPa, saturation…650 °C)",
+    kernel.STATUS_NO_CONVERGENCE: "the steam-path iteration did not converge",
+    kernel.STATUS_PRESSURE_INVERSION: "hp_exhaust_pressure is too high for this flow: the "
+    "stage pressures reach the throttle pressure",
+}
+
+
+class InputError(ValueError):
+    """Model inputs are missing, not finite, or outside the model's validity."""
+
+
+@dataclass(frozen=True)
+class SimulationResult:
+    """Outputs (SI) plus diagnostics and per-stage states of one simulation.
+
+    ``outputs`` holds the sensor predictions; ``diagnostics`` every kernel result column
+    (powers and energy flows in W); ``stage_pressures``/``stage_temperatures`` (Pa/K) the
+    control-stage outlet (column 0) and each pressure stage's outlet, when requested.
+    """
+
+    outputs: pd.DataFrame
+    diagnostics: pd.DataFrame
+    stage_pressures: pd.DataFrame | None
+    stage_temperatures: pd.DataFrame | None
+
+
+class FullOrderModel:
+    """HP-section full-order model of a turbine described by ``spec``.
+
+    ``simulate(inputs, params)`` maps canonical boundary conditions (SI) to canonical sensor
+    predictions (SI). The design step (constants from the spec's heat balance) runs on first use
+    and is cached in ``design_``.
+    """
+
+    input_signals = INPUT_SIGNALS
+
+    def __init__(self, spec: TurbineSpec) -> None:
+        self.spec = spec
+
+    @property
+    def output_signals(self) -> tuple[str, ...]:
+        """Predicted signals: the spec's sensors the model computes, plus ``hp_power``."""
+        computed = ("control_stage_pressure", "control_stage_temperature",
+                    "hp_exhaust_temperature", "hp_inner_casing_temperature")
+        return (*(name for name in computed if name in self.spec.sensors), "hp_power")
+
+    @cached_property
+    def design_(self) -> DesignConstants:
+        """Kernel constants with the efficiency scale that meets the design exhaust temperature."""
+        design = self.spec.design
+        target = design.hp_exhaust_temperature
+        inputs = self.design_inputs()
+
+        def exhaust_error(scale: float) -> float:
+            constants = kernel_constants(self.spec, scale)
+            result = self._run(constants, inputs, ModelParameters(), detail=False)
+            return float(result.diagnostics["hp_exhaust_temperature"].iloc[0]) - target
+
+        low, high = EFFICIENCY_SCALE_RANGE
+        scale_a, scale_b = 1.0, 0.98
+        error_a, error_b = exhaust_error(scale_a), exhaust_error(scale_b)
+        for _ in range(30):
+            if abs(error_b) < 1e-6:
+                break
+            scale_a, scale_b, error_a = scale_b, scale_b - error_b * (scale_b - scale_a) / (
+                error_b - error_a), error_b
+            if not low <= scale_b <= high:
+                raise SpecError(
+                    f"turbine {self.spec.name!r}: meeting the design HP-exhaust temperature "
+                    f"{target - 273.15:.1f} °C needs stage efficiencies scaled by {scale_b:.3f}, "
+                    f"outside {EFFICIENCY_SCALE_RANGE}: the blade efficiencies and the heat "
+                    "balance are inconsistent"
+                )
+            error_b = exhaust_error(scale_b)
+        constants = kernel_constants(self.spec, scale_b)
+        return DesignConstants(
+            kernel=constants,
+            nozzle_area=float(constants.level_area.sum()),
+            efficiency_scale=scale_b,
+        )
+
+    def design_inputs(self) -> pd.DataFrame:
+        """A one-sample input frame at the design point (SI units)."""
+        design = self.spec.design
+        return pd.DataFrame(
+            {
+                "main_steam_pressure": [design.main_steam_pressure],
+                "main_steam_temperature": [design.main_steam_temperature],
+                "main_steam_flow": [design.main_steam_flow],
+                "hp_exhaust_pressure": [design.hp_exhaust_pressure],
+            },
+            index=pd.to_datetime(["2000-01-01T00:00:00Z"]),
+        )
+
+    def simulate(self, inputs: pd.DataFrame, params: ModelParameters | None = None
+                 ) -> pd.DataFrame:
+        """Sensor predictions (SI: Pa, K, W) for a time series of boundary conditions (SI).
+
+        The metal starts in equilibrium with the first sample. Raises :class:`InputError` naming
+        the column and row of any input the model cannot take.
+        """
+        return self.simulate_detailed(inputs, params, stages=False).outputs
+
+    def simulate_detailed(self, inputs: pd.DataFrame, params: ModelParameters | None = None,
+                          stages: bool = True) -> SimulationResult:
+        """Like :meth:`simulate`, plus diagnostics and (``stages=True``) per-stage states."""
+        return self._run(self.design_.kernel, inputs, params or ModelParameters(), stages)
+
+    def _run(self, constants: kernel.KernelConstants, inputs: pd.DataFrame,
+             params: ModelParameters, detail: bool) -> SimulationResult:
+        columns, time_step = _validated_inputs(inputs)
+        p0, t0, flow, p_exhaust = (columns[name] for name in INPUT_SIGNALS)
+        n = p0.size
+        stages = constants.stage_capacity.size
+        design = self.spec.design
+        pressures = design.hp_exhaust_pressure + (
+            np.linspace(design.control_stage_pressure, design.hp_exhaust_pressure, stages + 1)
+            - design.hp_exhaust_pressure
+        ) * flow[0] / design.main_steam_flow
+        pressures = np.maximum(pressures, p_exhaust[0] * (1.0 + 0.01 * np.arange(stages, -1, -1)))
+        h0 = float(if97.enthalpy_pt(p0[0], t0[0]))
+        enthalpies = np.full(stages + 1, h0 - 1.0e5)
+        metal = np.full(constants.metal_capacity.shape, t0[0])
+        results = np.full((n, kernel.N_RESULTS), np.nan)
+        status = np.zeros(n, dtype=np.int64)
+        rows = n if detail else 0
+        stage_p = np.zeros((rows, stages + 1))
+        stage_t = np.zeros((rows, stages + 1))
+        parameter_array = np.array([params.flow_coefficient, params.friction_coefficient,
+                                    params.heat_transfer_coefficient])
+        solved = kernel.run_kernel(constants, steam_tables(), time_step, p0, t0, flow, p_exhaust,
+                                   parameter_array, pressures, enthalpies, metal, results, status,
+                                   stage_p, stage_t)
+        if solved < n:
+            raise InputError(
+                f"inputs row {solved} ({inputs.index[solved]}): {_STATUS_TEXT[int(status[solved])]}"
+                f" (main_steam_pressure {p0[solved] / 1e6:.3f} MPa, main_steam_temperature "
+                f"{t0[solved] - 273.15:.1f} °C, main_steam_flow {flow[solved] * 3.6:.0f} t/h, "
+                f"hp_exhaust_pressure {p_exhaust[solved] / 1e6:.3f} MPa)"
+            )
+        diagnostics = pd.DataFrame(results, index=inputs.index, columns=kernel.RESULT_COLUMNS)
+        outputs = diagnostics[list(self.output_signals)].copy()
+        stage_names = ["control_stage"] + [f"stage_{i}" for i in range(1, stages + 1)]
+        return SimulationResult(
+            outputs=outputs,
+            diagnostics=diagnostics,
+            stage_pressures=pd.DataFrame(stage_p, index=inputs.index, columns=stage_names)
+            if detail else None,
+            stage_temperatures=pd.DataFrame(stage_t, index=inputs.index, columns=stage_names)
+            if detail else None,
+        )
+
+
+def _validated_inputs(inputs: pd.DataFrame) -> tuple[dict[str, np.ndarray], np.ndarray]:
+    """Check the input frame; return SI arrays per signal and the time step per sample (s)."""
+    if not isinstance(inputs, pd.DataFrame) or inputs.empty:
+        raise InputError("inputs must be a non-empty DataFrame of canonical signals")
+    missing = [name for name in INPUT_SIGNALS if name not in inputs.columns]
+    if missing:
+        raise InputError(f"inputs lack required column(s) {missing} (SI units: Pa, K, kg/s)")
+    columns: dict[str, np.ndarray] = {}
+    for name in INPUT_SIGNALS:
+        values = pd.to_numeric(inputs[name], errors="coerce").to_numpy(dtype=float)
+        low, high, unit = INPUT_RANGES[name]
+        bad = np.flatnonzero(~np.isfinite(values) | (values < low) | (values > high))
+        if bad.size:
+            row = int(bad[0])
+            raise InputError(
+                f"inputs column {name!r} row {row} ({inputs.index[row]}): "
+                f"{inputs[name].iloc[row]!r} is not a number within [{low:g}, {high:g}] {unit} "
+                f"({bad.size} bad rows)"
+            )
+        columns[name] = np.ascontiguousarray(values)
+    ratio = columns["hp_exhaust_pressure"] / columns["main_steam_pressure"]
+    bad = np.flatnonzero(ratio >= 0.95)
+    if bad.size:
+        row = int(bad[0])
+        raise InputError(
+            f"inputs row {row} ({inputs.index[row]}): pressure ratio hp_exhaust_pressure/"
+            f"main_steam_pressure = {ratio[row]:.3f} ≥ 0.95: the HP section cannot expand"
+        )
+    p0, t0 = columns["main_steam_pressure"], columns["main_steam_temperature"]
+    t_min = _lowest_superheated_temperature(p0)
+    bad = np.flatnonzero(t0 <= t_min)
+    if bad.size:
+        row = int(bad[0])
+        raise InputError(
+            f"inputs column 'main_steam_temperature' row {row} ({inputs.index[row]}): "
+            f"{t0[row] - 273.15:.1f} °C is not superheated at {p0[row] / 1e6:.3f} MPa "
+            f"(must exceed {t_min[row] - 273.15:.1f} °C)"
+        )
+    return columns, _time_steps(inputs.index)
+
+
+def _lowest_superheated_temperature(pressure: np.ndarray) -> np.ndarray:
+    """Saturation temperature, or the IF97 region 2/3 boundary above 16.529 MPa (K)."""
+    saturation = if97.saturation_temperature(np.minimum(pressure, 22.0e6))
+    # IF97 eq. 6 (B23 line), T in K from p in MPa
+    reduced = np.maximum((pressure / 1e6 - 13.91883977887) / 1.0192970039326e-3, 0.0)
+    b23 = 572.54459862746 + np.sqrt(reduced)
+    return np.where(pressure > 16.5291643e6, b23, saturation)
+
+
+def _time_steps(index: pd.Index) -> np.ndarray:
+    """Seconds since the previous sample (first entry ∞: steady start)."""
+    if isinstance(index, pd.DatetimeIndex):
+        seconds = (index - index[0]).total_seconds().to_numpy(dtype=float)
+    elif pd.api.types.is_numeric_dtype(index):
+        seconds = index.to_numpy(dtype=float)
+    else:
+        raise InputError("inputs must be indexed by a DatetimeIndex or by time in seconds")
+    steps = np.empty_like(seconds)
+    steps[0] = math.inf
+    steps[1:] = np.diff(seconds)
+    bad = np.flatnonzero(~(steps[1:] > 0.0))
+    if bad.size:
+        row = int(bad[0]) + 1
+        raise InputError(
+            f"inputs time index row {row} ({index[row]}): timestamps must increase strictly"
+        )
+    return steps

@@ -1,0 +1,57 @@
+"""Boundary conditions along the unit's operating line (sliding pressure), for off-design runs.
+
+At a load fraction L of the rated point:
+
+* main-steam pressure from the spec's sliding-pressure line (linear between its points);
+* main-steam temperature at its design value (the boiler holds 538 °C down to deep part load);
+* main-steam flow m = L·m_design — steam rate taken constant (within ~3 % over 30–100 % load for
+  reheat units, Cotton 1998 ch. 2);
+* HP-exhaust pressure p = p_design·m/m_design: the reheater, IP and LP sections downstream
+  swallow steam by Stodola's cone law with a large pressure ratio, so their inlet pressure is
+  proportional to flow at constant reheat temperature (Stodola 1927; Cooke 1985).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from steamtwin.spec import TurbineSpec
+
+
+def operating_point(spec: TurbineSpec, load_fraction: float | np.ndarray) -> dict[str, np.ndarray]:
+    """Canonical boundary conditions (SI) at ``load_fraction`` (0–1.1) of rated load."""
+    load = np.asarray(load_fraction, dtype=float)
+    line = spec.sliding_pressure
+    if np.any(~np.isfinite(load)) or np.any(load < 0.2) or np.any(load > line.load_fraction[-1]):
+        raise ValueError(
+            f"load_fraction must lie within 0.2…{line.load_fraction[-1]} (got {load_fraction!r})"
+        )
+    design = spec.design
+    flow = load * design.main_steam_flow
+    return {
+        "main_steam_pressure": np.interp(load, line.load_fraction, line.pressure),
+        "main_steam_temperature": np.full_like(load, design.main_steam_temperature),
+        "main_steam_flow": flow,
+        "hp_exhaust_pressure": design.hp_exhaust_pressure * flow / design.main_steam_flow,
+    }
+
+
+def load_profile_inputs(spec: TurbineSpec, load_fraction: np.ndarray, step_seconds: float = 1.0,
+                        start: str = "2026-01-01T00:00:00Z") -> pd.DataFrame:
+    """An input frame following a load profile (one value per sample) on the operating line."""
+    load = np.asarray(load_fraction, dtype=float)
+    index = pd.date_range(start, periods=load.size, freq=pd.Timedelta(seconds=step_seconds))
+    return pd.DataFrame(operating_point(spec, load), index=index)
+
+
+def ramp_profile(start_load: float, end_load: float, rate_per_minute: float,
+                 hold_before_s: float, hold_after_s: float, step_seconds: float = 1.0
+                 ) -> np.ndarray:
+    """Load fractions: a hold, a linear ramp at ``rate_per_minute`` (fraction/min), a hold."""
+    if rate_per_minute <= 0.0 or step_seconds <= 0.0:
+        raise ValueError("rate_per_minute and step_seconds must be positive")
+    ramp_s = abs(end_load - start_load) / rate_per_minute * 60.0
+    times = np.arange(0.0, hold_before_s + ramp_s + hold_after_s + step_seconds / 2, step_seconds)
+    progress = np.clip((times - hold_before_s) / ramp_s, 0.0, 1.0) if ramp_s > 0 else 1.0
+    return start_load + (end_load - start_load) * progress

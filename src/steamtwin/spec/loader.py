@@ -1,0 +1,365 @@
+"""Read a turbine spec from TOML, validating every field and naming the offending one.
+
+Dimensional values are written with their unit (``"16.7 MPa"``, ``"538 degC"``, ``"1800 t/h"``)
+and converted to SI with pint; plain numbers are for dimensionless fields only.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import tomllib
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+from steamtwin.dcs.signals import SIGNALS
+from steamtwin.spec.turbine import (
+    ControlStage,
+    DesignPoint,
+    Extraction,
+    GoverningValve,
+    Material,
+    MetalGroup,
+    PressureStage,
+    SlidingPressureLine,
+    StageGeometry,
+    TurbineSpec,
+)
+from steamtwin.units import UnitError, parse_quantity
+
+FORMAT_VERSION = 1
+BUILT_IN = ("reference",)
+
+
+class SpecError(ValueError):
+    """A turbine spec is missing a field, has a bad value or is inconsistent."""
+
+
+class _Table:
+    """A TOML table with its dotted path, so every error names the field."""
+
+    def __init__(self, data: Any, path: str, source: str) -> None:
+        if not isinstance(data, dict):
+            raise SpecError(f"{source}: [{path}] must be a table")
+        self.data, self.path, self.source = data, path, source
+
+    def _where(self, key: str) -> str:
+        return f"{self.source}: {self.path}.{key}" if self.path else f"{self.source}: {key}"
+
+    def raw(self, key: str) -> Any:
+        if key not in self.data:
+            raise SpecError(f"{self._where(key)} is missing")
+        return self.data[key]
+
+    def quantity(self, key: str, si_unit: str, low: float, high: float) -> float:
+        """A value in ``si_unit`` that must lie in [low, high] (in SI)."""
+        try:
+            value = parse_quantity(self.raw(key), si_unit, self._where(key))
+        except UnitError as error:
+            raise SpecError(str(error)) from None
+        if not math.isfinite(value) or not low <= value <= high:
+            raise SpecError(
+                f"{self._where(key)} = {self.raw(key)!r} is outside the valid range "
+                f"[{low:g}, {high:g}] {si_unit or '(dimensionless)'}"
+            )
+        return value
+
+    def integer(self, key: str, low: int, high: int) -> int:
+        value = self.raw(key)
+        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+            raise SpecError(
+                f"{self._where(key)} = {value!r}: expected an integer in [{low}, {high}]"
+            )
+        return value
+
+    def text(self, key: str) -> str:
+        value = self.raw(key)
+        if not isinstance(value, str) or not value.strip():
+            raise SpecError(f"{self._where(key)}: expected a non-empty string")
+        return value
+
+    def flag(self, key: str) -> bool:
+        value = self.raw(key)
+        if not isinstance(value, bool):
+            raise SpecError(f"{self._where(key)} = {value!r}: expected true or false")
+        return value
+
+    def table(self, key: str) -> _Table:
+        path = f"{self.path}.{key}" if self.path else key
+        return _Table(self.raw(key), path, self.source)
+
+    def tables(self, key: str) -> list[_Table]:
+        value = self.raw(key)
+        path = f"{self.path}.{key}" if self.path else key
+        if not isinstance(value, list) or not value:
+            raise SpecError(f"{self._where(key)}: expected a non-empty array of tables")
+        return [_Table(item, f"{path}[{index}]", self.source) for index, item in enumerate(value)]
+
+
+def load_spec(source: str | Path) -> TurbineSpec:
+    """Load a built-in turbine (``"reference"``) or a TOML file and validate it.
+
+    Raises :class:`SpecError` naming the file and field for anything missing, out of range or
+    inconsistent.
+    """
+    if str(source) in BUILT_IN:
+        resource = resources.files("steamtwin.spec") / "data" / f"{source}.toml"
+        return parse_spec(resource.read_text(encoding="utf-8"), f"built-in '{source}'")
+    path = Path(source)
+    if not path.is_file():
+        raise SpecError(
+            f"turbine spec {str(source)!r} is neither a built-in ({', '.join(BUILT_IN)}) nor a file"
+        )
+    return parse_spec(path.read_text(encoding="utf-8"), str(path))
+
+
+def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
+    """Parse and validate the TOML text of a turbine spec; ``source`` names it in errors."""
+    try:
+        document = _Table(tomllib.loads(text), "", source)
+    except tomllib.TOMLDecodeError as error:
+        raise SpecError(f"{source}: not valid TOML: {error}") from None
+    version = document.integer("format_version", 1, 1000)
+    if version != FORMAT_VERSION:
+        raise SpecError(f"{source}: format_version {version} is not supported (expected 1)")
+    design = _design(document.table("design"))
+    control_stage = _control_stage(document.table("control_stage"))
+    stages = tuple(_pressure_stage(table) for table in document.tables("stages"))
+    extractions = tuple(
+        _extraction(table, len(stages)) for table in document.data.get("extractions", [])
+        and document.tables("extractions")
+    )
+    metal = document.table("metal")
+    groups = tuple(_metal_group(table, len(stages)) for table in metal.tables("groups"))
+    spec = TurbineSpec(
+        name=document.text("name"),
+        description=document.text("description"),
+        design=design,
+        control_stage=control_stage,
+        stages=stages,
+        extractions=extractions,
+        casing_material=_material(metal.table("casing_material")),
+        rotor_material=_material(metal.table("rotor_material")),
+        metal_groups=groups,
+        casing_sensor_group=metal.text("casing_sensor_group"),
+        ambient_temperature=metal.quantity("ambient_temperature", "K", 223.15, 373.15),
+        sliding_pressure=_sliding_pressure(document.table("sliding_pressure")),
+        sensors=_sensors(document),
+    )
+    _check_consistency(spec, source)
+    return spec
+
+
+def _design(table: _Table) -> DesignPoint:
+    return DesignPoint(
+        main_steam_pressure=table.quantity("main_steam_pressure", "Pa", 1e6, 25e6),
+        main_steam_temperature=table.quantity("main_steam_temperature", "K", 573.15, 923.15),
+        main_steam_flow=table.quantity("main_steam_flow", "kg/s", 1.0, 2000.0),
+        control_stage_pressure=table.quantity("control_stage_pressure", "Pa", 0.1e6, 25e6),
+        hp_exhaust_pressure=table.quantity("hp_exhaust_pressure", "Pa", 0.05e6, 25e6),
+        hp_exhaust_temperature=table.quantity("hp_exhaust_temperature", "K", 373.15, 923.15),
+        hp_power=table.quantity("hp_power", "W", 1e5, 2e9),
+        generator_power=table.quantity("generator_power", "W", 1e5, 2e9),
+        rotational_speed=table.quantity("rotational_speed", "rad/s", 100.0, 420.0),
+        valve_pressure_drop=table.quantity("valve_pressure_drop", "", 0.0, 0.2),
+    )
+
+
+def _blading(table: _Table) -> StageGeometry:
+    return StageGeometry(
+        mean_diameter=table.quantity("mean_diameter", "m", 0.2, 3.5),
+        blade_height=table.quantity("blade_height", "m", 0.005, 1.5),
+        blade_count=table.integer("blade_count", 4, 1000),
+        reaction=table.quantity("reaction", "", 0.0, 0.9),
+        nozzle_exit_angle=table.quantity(
+            "nozzle_exit_angle", "rad", math.radians(5), math.radians(40)
+        ),
+        peak_blade_efficiency=table.quantity("peak_blade_efficiency", "", 0.3, 1.0),
+        friction_loss=table.quantity("friction_loss", "", 0.0, 0.3),
+    )
+
+
+def _control_stage(table: _Table) -> ControlStage:
+    valves = tuple(
+        GoverningValve(
+            name=valve.text("name"),
+            opening_order=valve.integer("opening_order", 1, 32),
+            admission_arc=valve.quantity("admission_arc", "", 1e-3, 1.0),
+            open_at_design=valve.flag("open_at_design"),
+        )
+        for valve in table.tables("valves")
+    )
+    total_arc = sum(valve.admission_arc for valve in valves)
+    if total_arc > 1.0 + 1e-9:
+        raise SpecError(
+            f"{table.source}: control_stage.valves: admission arcs add up to {total_arc:.3f} "
+            "of the circumference (must be ≤ 1)"
+        )
+    names = [valve.name for valve in valves]
+    if len(set(names)) != len(names):
+        raise SpecError(f"{table.source}: control_stage.valves: valve names repeat: {names}")
+    if not any(valve.open_at_design for valve in valves):
+        raise SpecError(f"{table.source}: control_stage.valves: no valve is open at design")
+    _check_valve_sequence(valves, table.source)
+    return ControlStage(
+        blading=_blading(table),
+        nozzle_discharge_coefficient=table.quantity("nozzle_discharge_coefficient", "", 0.8, 1.0),
+        valves=valves,
+    )
+
+
+def _check_valve_sequence(valves: tuple[GoverningValve, ...], source: str) -> None:
+    """Valves open at design must be exactly the first opening orders (no gaps in the sequence)."""
+    for order in sorted({valve.opening_order for valve in valves}):
+        group = [valve for valve in valves if valve.opening_order == order]
+        if len({valve.open_at_design for valve in group}) > 1:
+            raise SpecError(
+                f"{source}: control_stage.valves: valves of opening_order {order} "
+                "disagree on open_at_design"
+            )
+    open_orders = {v.opening_order for v in valves if v.open_at_design}
+    closed_orders = {v.opening_order for v in valves if not v.open_at_design}
+    if closed_orders and open_orders and max(open_orders) > min(closed_orders):
+        raise SpecError(
+            f"{source}: control_stage.valves: a valve open at design opens after a closed one "
+            f"(open orders {sorted(open_orders)}, closed orders {sorted(closed_orders)})"
+        )
+
+
+def _pressure_stage(table: _Table) -> PressureStage:
+    return PressureStage(
+        blading=_blading(table), flow_capacity=table.quantity("flow_capacity", "m^2", 1e-5, 10.0)
+    )
+
+
+def _extraction(table: _Table, stage_count: int) -> Extraction:
+    return Extraction(
+        name=table.text("name"),
+        after_stage=table.integer("after_stage", 1, stage_count - 1),
+        design_flow=table.quantity("design_flow", "kg/s", 0.0, 500.0),
+        design_pressure=table.quantity("design_pressure", "Pa", 0.05e6, 25e6),
+    )
+
+
+def _material(table: _Table) -> Material:
+    return Material(
+        density=table.quantity("density", "kg/m^3", 1000.0, 20000.0),
+        specific_heat=table.quantity("specific_heat", "J/(kg*K)", 100.0, 2000.0),
+        thermal_conductivity=table.quantity("thermal_conductivity", "W/(m*K)", 1.0, 200.0),
+    )
+
+
+def _metal_group(table: _Table, stage_count: int) -> MetalGroup:
+    stages = table.raw("stages")
+    if (
+        not isinstance(stages, list)
+        or not stages
+        or not all(isinstance(s, int) and not isinstance(s, bool) for s in stages)
+        or stages != list(range(stages[0], stages[0] + len(stages)))
+        or not 0 <= stages[0] <= stages[-1] <= stage_count
+    ):
+        raise SpecError(
+            f"{table.source}: {table.path}.stages = {stages!r}: expected consecutive stage numbers "
+            f"within 0…{stage_count} (0 = control stage)"
+        )
+    return MetalGroup(
+        name=table.text("name"),
+        stages=tuple(stages),
+        casing_mass=table.quantity("casing_mass", "kg", 1.0, 1e6),
+        casing_area=table.quantity("casing_area", "m^2", 1e-3, 1e3),
+        rotor_mass=table.quantity("rotor_mass", "kg", 1.0, 1e6),
+        rotor_area=table.quantity("rotor_area", "m^2", 1e-3, 1e3),
+        insulation_conductance=table.quantity("insulation_conductance", "W/(m^2*K)", 0.0, 50.0),
+    )
+
+
+def _sliding_pressure(table: _Table) -> SlidingPressureLine:
+    loads = table.raw("load_fraction")
+    pressures = table.raw("pressure")
+    where = f"{table.source}: sliding_pressure"
+    if not isinstance(loads, list) or not isinstance(pressures, list) or len(loads) < 2:
+        raise SpecError(f"{where}: load_fraction and pressure must be arrays of ≥ 2 values")
+    if len(loads) != len(pressures):
+        raise SpecError(
+            f"{where}: load_fraction has {len(loads)} values but pressure has {len(pressures)}"
+        )
+    load_values = tuple(
+        parse_quantity(value, "", f"{where}.load_fraction[{i}]") for i, value in enumerate(loads)
+    )
+    if any(b <= a for a, b in itertools.pairwise(load_values)) or not (
+        load_values[0] >= 0.0 and load_values[-1] <= 1.2
+    ):
+        raise SpecError(f"{where}.load_fraction must increase within 0…1.2, got {list(loads)}")
+    try:
+        pressure_values = tuple(
+            parse_quantity(value, "Pa", f"{where}.pressure[{i}]")
+            for i, value in enumerate(pressures)
+        )
+    except UnitError as error:
+        raise SpecError(str(error)) from None
+    if any(not 1e5 <= p <= 25e6 for p in pressure_values):
+        raise SpecError(f"{where}.pressure values must lie within 0.1…25 MPa")
+    return SlidingPressureLine(load_values, pressure_values)
+
+
+def _sensors(document: _Table) -> tuple[str, ...]:
+    names = document.raw("sensors")
+    if not isinstance(names, list) or not names:
+        raise SpecError(f"{document.source}: sensors must be a non-empty array of signal names")
+    for index, name in enumerate(names):
+        if name not in SIGNALS:
+            raise SpecError(
+                f"{document.source}: sensors[{index}] = {name!r} is not a canonical signal "
+                f"(known: {', '.join(SIGNALS)})"
+            )
+    return tuple(names)
+
+
+def _check_consistency(spec: TurbineSpec, source: str) -> None:
+    """Cross-field checks: pressures fall along the path, groups cover the stages once."""
+    design = spec.design
+    if not design.main_steam_pressure > design.control_stage_pressure > design.hp_exhaust_pressure:
+        raise SpecError(
+            f"{source}: design pressures must fall along the steam path: main steam "
+            f"{design.main_steam_pressure / 1e6:g} MPa > control stage "
+            f"{design.control_stage_pressure / 1e6:g} MPa > HP exhaust "
+            f"{design.hp_exhaust_pressure / 1e6:g} MPa"
+        )
+    if design.hp_exhaust_temperature >= design.main_steam_temperature:
+        raise SpecError(
+            f"{source}: design.hp_exhaust_temperature must be below design.main_steam_temperature"
+        )
+    if design.hp_power >= design.generator_power:
+        raise SpecError(f"{source}: design.hp_power must be below design.generator_power")
+    for extraction in spec.extractions:
+        upstream, downstream = design.control_stage_pressure, design.hp_exhaust_pressure
+        if not upstream > extraction.design_pressure > downstream:
+            raise SpecError(
+                f"{source}: extraction {extraction.name!r} design_pressure must lie between the "
+                "control-stage and HP-exhaust design pressures"
+            )
+        if extraction.design_flow >= design.main_steam_flow:
+            raise SpecError(f"{source}: extraction {extraction.name!r} takes more than the flow")
+    covered = [stage for group in spec.metal_groups for stage in group.stages]
+    expected = list(range(len(spec.stages) + 1))
+    if sorted(covered) != expected:
+        raise SpecError(
+            f"{source}: metal.groups must cover stages 0…{len(spec.stages)} exactly once, "
+            f"got {sorted(covered)}"
+        )
+    if spec.casing_sensor_group not in {group.name for group in spec.metal_groups}:
+        raise SpecError(
+            f"{source}: metal.casing_sensor_group {spec.casing_sensor_group!r} names no group"
+        )
+    for group in spec.metal_groups:
+        for body, mass, area, material in (
+            ("casing", group.casing_mass, group.casing_area, spec.casing_material),
+            ("rotor", group.rotor_mass, group.rotor_area, spec.rotor_material),
+        ):
+            thickness = mass / (material.density * area)
+            if not 0.01 <= thickness <= 1.0:
+                raise SpecError(
+                    f"{source}: metal group {group.name!r}: {body}_mass/{body}_area imply a metal "
+                    f"depth of {thickness:.3f} m (expected 0.01–1 m)"
+                )

@@ -1,0 +1,149 @@
+"""The turbine description: validated, immutable dataclasses in SI units.
+
+A :class:`TurbineSpec` holds the design heat balance at rated load, the control stage with its
+governing valves, the pressure stages, extractions, the metal of rotor and inner casing per stage
+group, the sliding-pressure line and the DCS sensors the unit has. It is built from TOML by
+:func:`steamtwin.spec.load_spec`; all values are SI (Pa, K, kg/s, W, m, m², kg, rad, rad/s).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class DesignPoint:
+    """Design heat balance at rated load (SI units).
+
+    Pressures in Pa, temperatures in K, flow in kg/s, powers in W, ``rotational_speed`` in rad/s.
+    ``valve_pressure_drop`` is the fractional pressure loss across a fully open stop + governing
+    valve pair (dimensionless).
+    """
+
+    main_steam_pressure: float
+    main_steam_temperature: float
+    main_steam_flow: float
+    control_stage_pressure: float
+    hp_exhaust_pressure: float
+    hp_exhaust_temperature: float
+    hp_power: float
+    generator_power: float
+    rotational_speed: float
+    valve_pressure_drop: float
+
+
+@dataclass(frozen=True)
+class GoverningValve:
+    """A governing valve and the nozzle group it feeds.
+
+    ``admission_arc`` is the group's share of the circumference (0–1); valves with the same
+    ``opening_order`` open together; ``open_at_design`` marks the valves fully open at rated load.
+    """
+
+    name: str
+    opening_order: int
+    admission_arc: float
+    open_at_design: bool
+
+
+@dataclass(frozen=True)
+class StageGeometry:
+    """Blading of one stage: diameters and heights in m, ``nozzle_exit_angle`` in rad.
+
+    ``peak_blade_efficiency`` is the stage efficiency at the optimum velocity ratio before
+    friction losses; ``friction_loss`` the share of the isentropic drop lost to profile friction at
+    design (both dimensionless).
+    """
+
+    mean_diameter: float
+    blade_height: float
+    blade_count: int
+    reaction: float
+    nozzle_exit_angle: float
+    peak_blade_efficiency: float
+    friction_loss: float
+
+
+@dataclass(frozen=True)
+class ControlStage:
+    """The governing (control) stage: an impulse stage with nozzle governing."""
+
+    blading: StageGeometry
+    nozzle_discharge_coefficient: float
+    valves: tuple[GoverningValve, ...]
+
+
+@dataclass(frozen=True)
+class PressureStage:
+    """A pressure stage: blading plus its Stodola flow capacity ``flow_capacity`` in m².
+
+    The flow capacity K is the constant of the stage cone law
+    m = K·sqrt((p_in² − p_out²)/(p_in·v_in)) (Stodola 1927; Cooke 1985), an equivalent throat area.
+    """
+
+    blading: StageGeometry
+    flow_capacity: float
+
+
+@dataclass(frozen=True)
+class Extraction:
+    """A bleed after pressure stage ``after_stage`` (1-based); flow in kg/s, pressure in Pa."""
+
+    name: str
+    after_stage: int
+    design_flow: float
+    design_pressure: float
+
+
+@dataclass(frozen=True)
+class Material:
+    """Metal properties: density kg/m³, specific heat J/(kg·K), conductivity W/(m·K)."""
+
+    density: float
+    specific_heat: float
+    thermal_conductivity: float
+
+
+@dataclass(frozen=True)
+class MetalGroup:
+    """Rotor and inner-casing metal wetted by the steam of a group of stages.
+
+    ``stages`` lists stage numbers (0 = control stage, 1… = pressure stages). Masses in kg, wetted
+    areas in m², ``insulation_conductance`` in W/(m²·K) from the casing's outer surface to the
+    surroundings.
+    """
+
+    name: str
+    stages: tuple[int, ...]
+    casing_mass: float
+    casing_area: float
+    rotor_mass: float
+    rotor_area: float
+    insulation_conductance: float
+
+
+@dataclass(frozen=True)
+class SlidingPressureLine:
+    """Main-steam pressure (Pa) against load fraction (0–1), linearly interpolated."""
+
+    load_fraction: tuple[float, ...]
+    pressure: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class TurbineSpec:
+    """A complete, validated turbine description (SI units)."""
+
+    name: str
+    description: str
+    design: DesignPoint
+    control_stage: ControlStage
+    stages: tuple[PressureStage, ...]
+    extractions: tuple[Extraction, ...]
+    casing_material: Material
+    rotor_material: Material
+    metal_groups: tuple[MetalGroup, ...]
+    casing_sensor_group: str
+    ambient_temperature: float
+    sliding_pressure: SlidingPressureLine
+    sensors: tuple[str, ...]
