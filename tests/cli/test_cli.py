@@ -1,0 +1,62 @@
+"""The steamtwin command: help with examples, turbine show, simulate round trip, errors."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from steamtwin.cli.main import app
+from steamtwin.model.operating import load_profile_inputs
+
+runner = CliRunner()
+
+
+@pytest.mark.parametrize("command", [[], ["turbine", "show"], ["simulate"], ["demo"]])
+def test_every_command_has_help_with_an_example(command):
+    result = runner.invoke(app, [*command, "--help"])
+    assert result.exit_code == 0
+    assert "Example: steamtwin" in result.output
+
+
+def test_turbine_show_prints_heat_balance_and_stages():
+    result = runner.invoke(app, ["turbine", "show", "reference"])
+    assert result.exit_code == 0, result.output
+    assert "13.03 MPa" in result.output and "1800 t/h" in result.output
+    assert "GV4" in result.output and "0.1155" not in result.output
+
+
+def test_simulate_round_trip_in_wire_units(tmp_path, reference_model, reference_spec):
+    frame = load_profile_inputs(reference_spec, np.full(5, 0.5))
+    wire = pd.DataFrame({
+        "time": frame.index.strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "main_steam_pressure": frame["main_steam_pressure"] / 1e6,
+        "main_steam_temperature": frame["main_steam_temperature"] - 273.15,
+        "main_steam_flow": frame["main_steam_flow"] * 3.6,
+        "hp_exhaust_pressure": frame["hp_exhaust_pressure"] / 1e6,
+    })
+    inputs, outputs = tmp_path / "inputs.csv", tmp_path / "outputs.csv"
+    wire.to_csv(inputs, index=False)
+    result = runner.invoke(app, ["simulate", "--inputs", str(inputs), "--out", str(outputs)])
+    assert result.exit_code == 0, result.output
+    written = pd.read_csv(outputs)
+    expected = reference_model.simulate(frame).iloc[-1]
+    assert written["hp_exhaust_temperature"].iloc[-1] == pytest.approx(
+        expected.hp_exhaust_temperature - 273.15, abs=1e-3)
+    assert written["control_stage_pressure"].iloc[-1] == pytest.approx(
+        expected.control_stage_pressure / 1e6, rel=1e-5)
+    assert written["hp_power"].iloc[-1] == pytest.approx(expected.hp_power / 1e6, rel=1e-5)
+
+
+def test_simulate_reports_bad_rows_without_traceback(tmp_path):
+    inputs = tmp_path / "inputs.csv"
+    inputs.write_text(
+        "time,main_steam_pressure,main_steam_temperature,main_steam_flow,hp_exhaust_pressure\n"
+        "0,16.7,538,1800,3.9\n1,16.7,abc,1800,3.9\n"
+    )
+    result = runner.invoke(app, ["simulate", "--inputs", str(inputs), "--out",
+                                 str(tmp_path / "o.csv")])
+    assert result.exit_code == 2
+    assert "column 'main_steam_temperature' row 3" in result.output
+    assert "Traceback" not in result.output

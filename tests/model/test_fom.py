@@ -1,0 +1,230 @@
+"""Full-order model: design point, off-design trends, parameters, energy balance, bad input."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from steamtwin.model.fom import InputError
+from steamtwin.model.operating import load_profile_inputs, operating_point, ramp_profile
+from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.simulator import Simulator
+from steamtwin.steam import if97
+
+
+def _steady(model, spec, load, params=None):
+    frame = load_profile_inputs(spec, [load])
+    return model.simulate_detailed(frame, params, stages=False).diagnostics.iloc[0]
+
+
+def _energy_residual(diagnostics: pd.DataFrame) -> np.ndarray:
+    out = (diagnostics["hp_power"] + diagnostics["heat_to_metal"]
+           + diagnostics["extraction_energy_flow"] + diagnostics["exhaust_energy_flow"])
+    return ((diagnostics["inlet_energy_flow"] - out) / diagnostics["inlet_energy_flow"]).to_numpy()
+
+
+def test_is_a_simulator(reference_model):
+    assert isinstance(reference_model, Simulator)
+    assert reference_model.output_signals == (
+        "control_stage_pressure", "control_stage_temperature", "hp_exhaust_temperature",
+        "hp_inner_casing_temperature", "hp_power")
+
+
+def test_design_point_reproduces_heat_balance(reference_model, reference_spec):
+    design = reference_spec.design
+    result = reference_model.simulate(reference_model.design_inputs()).iloc[0]
+    assert abs(result.hp_exhaust_temperature - design.hp_exhaust_temperature) < 2.0
+    assert result.control_stage_pressure == pytest.approx(design.control_stage_pressure, rel=0.01)
+    assert result.hp_power == pytest.approx(design.hp_power, rel=0.01)
+    assert 0.8 <= reference_model.design_.efficiency_scale <= 1.2
+
+
+def test_design_extraction_pressure_matches_heat_balance(reference_model, reference_spec):
+    result = reference_model.simulate_detailed(reference_model.design_inputs())
+    extraction = reference_spec.extractions[0]
+    pressure = result.stage_pressures.iloc[0][f"stage_{extraction.after_stage}"]
+    assert pressure == pytest.approx(extraction.design_pressure, rel=0.01)
+
+
+def test_energy_balance_closes_along_the_operating_line_and_in_a_ramp(reference_model,
+                                                                        reference_spec):
+    line = load_profile_inputs(reference_spec, [0.3, 0.5, 0.75, 1.0], step_seconds=3600)
+    ramp = load_profile_inputs(reference_spec, ramp_profile(1.0, 0.3, 0.05, 60, 600))
+    for frame in (line, ramp):
+        diagnostics = reference_model.simulate_detailed(frame, stages=False).diagnostics
+        assert np.abs(_energy_residual(diagnostics)).max() < 1e-12
+
+
+def test_control_stage_pressure_follows_flow_as_stodola_says(reference_model, reference_spec):
+    # cone law with an exhaust pressure proportional to flow: p1 ∝ m·sqrt(p·v), p·v ~ RT
+    loads = [0.3, 0.5, 0.75, 1.0]
+    p1 = np.array([_steady(reference_model, reference_spec, load).control_stage_pressure
+                   for load in loads])
+    assert np.all(np.diff(p1) > 0)
+    ratio = p1 / np.array(loads) / p1[-1]
+    assert np.all(np.abs(ratio - 1.0) < 0.05)
+
+
+def test_exhaust_temperature_trends(reference_model, reference_spec):
+    # sliding pressure keeps the HP pressure ratio, so the exhaust temperature changes little;
+    # at constant throttle pressure a lower flow widens the expansion and cools the exhaust
+    sliding = [_steady(reference_model, reference_spec, load).hp_exhaust_temperature
+               for load in (0.3, 0.5, 0.75)]
+    assert np.ptp(sliding) < 15.0
+    flows = np.array([0.85, 0.9, 0.95, 1.0]) * reference_spec.design.main_steam_flow
+    frame = _constant_pressure_frame(reference_spec, flows)
+    exhaust = reference_model.simulate(frame)["hp_exhaust_temperature"].to_numpy()
+    assert np.all(np.diff(exhaust) > 0)
+
+
+def _constant_pressure_frame(spec, flows):
+    design = spec.design
+    n = len(flows)
+    return pd.DataFrame({
+        "main_steam_pressure": np.full(n, design.main_steam_pressure),
+        "main_steam_temperature": np.full(n, design.main_steam_temperature),
+        "main_steam_flow": flows,
+        "hp_exhaust_pressure": design.hp_exhaust_pressure * flows / design.main_steam_flow,
+    }, index=np.arange(n) * 1e7)  # far apart: each sample is steady
+
+
+def test_valve_points_are_efficiency_peaks(reference_model, reference_spec):
+    design = reference_spec.design
+    fractions = np.array([0.82, 0.90, 0.99, 1.00, 1.01])
+    flows = fractions * design.main_steam_flow
+    frame = _constant_pressure_frame(reference_spec, flows)
+    diagnostics = reference_model.simulate_detailed(frame, stages=False).diagnostics
+    h0 = if97.enthalpy_pt(design.main_steam_pressure, design.main_steam_temperature)
+    s0 = if97.entropy_pt(design.main_steam_pressure, design.main_steam_temperature)
+    isentropic = if97.enthalpy_ps(frame["hp_exhaust_pressure"].to_numpy(), s0)
+    used = (diagnostics.inlet_energy_flow - diagnostics.extraction_energy_flow
+            - diagnostics.exhaust_energy_flow - diagnostics.heat_to_metal)
+    efficiency = (used / (flows * (h0 - isentropic))).to_numpy()
+    vp1, middle, below, at_design, above = efficiency
+    assert at_design > below and at_design > above  # GV1-3 wide open: the design valve point
+    assert middle < np.interp(0.90, [0.82, 1.00], [vp1, at_design])  # GV3 throttling between
+    # at the design valve point GV1-3 admit fully; between the points GV3 admits in part
+    arcs = diagnostics.active_admission_arc.to_numpy()
+    assert arcs[3] == pytest.approx(0.72, abs=2e-3) and arcs[1] < arcs[3]
+
+
+def test_flow_coefficient_lowers_control_stage_pressure(reference_model, reference_spec):
+    low = _steady(reference_model, reference_spec, 0.5, ModelParameters(flow_coefficient=0.95))
+    high = _steady(reference_model, reference_spec, 0.5, ModelParameters(flow_coefficient=1.05))
+    assert high.control_stage_pressure < low.control_stage_pressure
+    # the downstream cone law: p1² − p_ex² scales with 1/φ²
+    p_ex = operating_point(reference_spec, 0.5)["hp_exhaust_pressure"]
+    ratio = (low.control_stage_pressure**2 - p_ex**2) / (high.control_stage_pressure**2 - p_ex**2)
+    assert ratio == pytest.approx((1.05 / 0.95) ** 2, rel=0.03)
+
+
+def test_friction_coefficient_costs_power_and_heats_exhaust(reference_model, reference_spec):
+    for load in (0.3, 1.0):
+        smooth = _steady(reference_model, reference_spec, load,
+                         ModelParameters(friction_coefficient=0.5))
+        rough = _steady(reference_model, reference_spec, load,
+                        ModelParameters(friction_coefficient=2.0))
+        assert rough.hp_power < smooth.hp_power
+        assert rough.hp_exhaust_temperature > smooth.hp_exhaust_temperature
+        assert rough.control_stage_temperature > smooth.control_stage_temperature
+
+
+def test_heat_transfer_coefficient_acts_only_in_transients(reference_model, reference_spec):
+    frame = load_profile_inputs(reference_spec, ramp_profile(1.0, 0.3, 0.05, 60, 1800))
+    slow = reference_model.simulate(frame, ModelParameters(heat_transfer_coefficient=0.5))
+    fast = reference_model.simulate(frame, ModelParameters(heat_transfer_coefficient=2.0))
+    difference = (fast - slow).abs()
+    # steady start: only the lagging loss through the insulation feels the coefficient
+    assert difference.iloc[0].drop("hp_power").max() < 0.05
+    assert difference["hp_inner_casing_temperature"].max() > 0.5
+    assert difference["hp_exhaust_temperature"].max() > 10 * difference[
+        "hp_exhaust_temperature"].iloc[0]
+    # cooling ramp: a better-coupled casing follows the steam down sooner
+    index = int(np.argmax(difference["hp_inner_casing_temperature"].to_numpy()))
+    assert (fast["hp_inner_casing_temperature"].iloc[index]
+            < slow["hp_inner_casing_temperature"].iloc[index])
+
+
+def _casing_step_response_minutes(model, spec, load):
+    """Minutes for the casing thermocouple to make 63 % and 95 % of a 20 K steam step."""
+    seconds = np.arange(0, 8 * 3600, 10.0)
+    point = operating_point(spec, load)
+    frame = pd.DataFrame({name: np.full(seconds.size, value) for name, value in point.items()},
+                         index=seconds)
+    frame["main_steam_temperature"] = np.where(seconds < 60, 811.15, 791.15)
+    casing = model.simulate(frame)["hp_inner_casing_temperature"].to_numpy()
+    start, end = casing[0], casing[-1]
+    assert start - end == pytest.approx(20.0, abs=3.0)
+    return [(seconds[np.flatnonzero((start - casing) >= share * (start - end))[0]] - 60) / 60
+            for share in (0.632, 0.95)]
+
+
+def test_casing_time_constants_are_defensible(reference_model, reference_spec):
+    # A thermocouple 14 mm under the bore of a 225 mm cast wall with Bi = hL/k >> 1: the layer
+    # over it follows the steam in ~δ²/α = 0.014²/7.3e-6 s ≈ 0.5 min plus the film, the wall
+    # bulk in ~L²/(α·λ1²) ≈ 0.225²/(7.3e-6·2.5) s ≈ 45 min (Incropera & DeWitt ch. 5, plane
+    # wall, λ1 → π/2 for Bi → ∞). Less flow, less heat transfer: slower at 30 % load.
+    rated = _casing_step_response_minutes(reference_model, reference_spec, 1.0)
+    deep = _casing_step_response_minutes(reference_model, reference_spec, 0.3)
+    assert 0.5 < rated[0] < 10.0 and 20.0 < rated[1] < 120.0
+    assert deep[0] > rated[0] and deep[1] > rated[1]
+
+
+def test_start_is_steady_and_hold_stays_steady(reference_model, reference_spec):
+    frame = load_profile_inputs(reference_spec, np.full(300, 0.5))
+    outputs = reference_model.simulate(frame)
+    assert (outputs.max() - outputs.min()).max() < 1e-6 * outputs.abs().max().max()
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "message"),
+    [
+        ("main_steam_temperature", np.nan, r"'main_steam_temperature' row 3 .*nan"),
+        ("main_steam_pressure", -1.0, r"'main_steam_pressure' row 3 .*within"),
+        ("hp_exhaust_pressure", 17.0e6, r"row 3 .*pressure ratio"),
+        ("main_steam_temperature", 600.0, r"'main_steam_temperature' row 3 .*not superheated"),
+    ],
+)
+def test_bad_input_names_column_and_row(reference_model, reference_spec, column, value, message):
+    frame = load_profile_inputs(reference_spec, np.full(6, 1.0))
+    frame.iloc[3, frame.columns.get_loc(column)] = value
+    with pytest.raises(InputError, match=message):
+        reference_model.simulate(frame)
+
+
+def test_missing_column_and_bad_time_index(reference_model, reference_spec):
+    frame = load_profile_inputs(reference_spec, np.full(4, 1.0))
+    with pytest.raises(InputError, match=r"lack required column\(s\) \['main_steam_flow'\]"):
+        reference_model.simulate(frame.drop(columns="main_steam_flow"))
+    with pytest.raises(InputError, match=r"row 2 .*must increase strictly"):
+        reference_model.simulate(frame.iloc[[0, 1, 1, 2]])
+
+
+def test_flow_beyond_valves_wide_open_is_an_error(reference_model, reference_spec):
+    frame = _constant_pressure_frame(reference_spec, np.array([1.0, 1.15]) * 500.0)
+    frame["hp_exhaust_pressure"] = reference_spec.design.hp_exhaust_pressure
+    with pytest.raises(InputError, match=r"row 1 .*exceeds what the wide-open governing valves"):
+        reference_model.simulate(frame)
+    frame = _constant_pressure_frame(reference_spec, np.array([1.0, 1.3]) * 500.0)
+    with pytest.raises(InputError, match=r"row 1 .*stage pressures reach the throttle pressure"):
+        reference_model.simulate(frame)
+
+
+@settings(max_examples=25, deadline=None)
+@given(load=st.floats(0.3, 1.0), temperature=st.floats(773.15, 823.15),
+       flow_coefficient=st.floats(0.9, 1.1), friction=st.floats(0.5, 2.0))
+def test_any_valid_operating_point_is_physical(reference_model, reference_spec, load,
+                                                temperature, flow_coefficient, friction):
+    frame = load_profile_inputs(reference_spec, [load, load])
+    frame["main_steam_temperature"] = temperature
+    params = ModelParameters(flow_coefficient=flow_coefficient, friction_coefficient=friction)
+    diagnostics = reference_model.simulate_detailed(frame, params, stages=False).diagnostics
+    row = diagnostics.iloc[-1]
+    assert np.abs(_energy_residual(diagnostics)).max() < 1e-12
+    assert frame["hp_exhaust_pressure"].iloc[0] < row.control_stage_pressure
+    assert row.control_stage_pressure < frame["main_steam_pressure"].iloc[0]
+    assert row.hp_exhaust_temperature < row.control_stage_temperature < temperature
+    assert row.hp_power > 0.0

@@ -1,0 +1,74 @@
+"""Metal conduction chains against analytic solutions; the Dittus–Boelter coefficient."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.optimize import brentq
+
+from steamtwin.model.metal import advance_chain, dittus_boelter_htc
+
+K, RHO, C = 34.0, 7800.0, 600.0  # low-alloy steel near 500 °C (ASME II-D Group C)
+
+
+def _wall(depth, nodes, area=1.0):
+    dx = depth / nodes
+    return np.full(nodes, RHO * C * area * dx), np.full(nodes - 1, K * area / dx), dx
+
+
+def test_steady_wall_carries_the_series_resistance_flux():
+    capacity, conductance, dx = _wall(0.2, 20)
+    h, u = 5000.0, 0.6
+    surface = 1.0 / (1.0 / h + dx / (2 * K))
+    outer = 1.0 / (1.0 / u + dx / (2 * K))
+    new = np.empty(20)
+    q = advance_chain(np.full(20, 500.0), new, capacity, conductance, surface, outer, 800.0,
+                      300.0, math.inf, np.empty(20), np.empty(20))
+    assert q == pytest.approx((800.0 - 300.0) / (1 / h + 0.2 / K + 1 / u), rel=1e-9)
+    assert np.all(np.diff(new) < 0)  # linear fall towards the lagging
+
+
+def test_step_conserves_energy_exactly():
+    capacity, conductance, _ = _wall(0.15, 8)
+    old = np.linspace(700.0, 650.0, 8)
+    new = np.empty(8)
+    surface, outer, dt = 3000.0, 0.5, 1.0
+    q = advance_chain(old, new, capacity, conductance, surface, outer, 780.0, 308.0, dt,
+                      np.empty(8), np.empty(8))
+    stored = float(np.sum(capacity * (new - old))) / dt
+    lost = outer * (new[-1] - 308.0)
+    assert q == pytest.approx(stored + lost, rel=1e-12)
+
+
+def test_slowest_mode_decays_at_the_analytic_rate():
+    # plane wall, convection on one face, adiabatic other face: θ ~ exp(-λ1² α t / L²) with
+    # λ1·tan λ1 = Bi (Incropera & DeWitt, eq. 5.39)
+    depth, h, nodes = 0.1, 500.0, 200
+    capacity, conductance, dx = _wall(depth, nodes)
+    biot = h * depth / K
+    lam = brentq(lambda x: x * math.tan(x) - biot, 1e-9, math.pi / 2 - 1e-9)
+    rate = lam**2 * (K / (RHO * C)) / depth**2
+    temps = np.full(nodes, 100.0)
+    surface = 1.0 / (1.0 / h + dx / (2 * K))
+    dt, steps = 2.0, 3000
+    new = np.empty(nodes)
+    history = []
+    for _ in range(steps):
+        advance_chain(temps, new, capacity, conductance, surface, 0.0, 0.0, 0.0, dt,
+                      np.empty(nodes), np.empty(nodes))
+        temps = new.copy()
+        history.append(temps.mean())
+    measured = math.log(history[1500] / history[2999]) / (1499 * dt)
+    assert measured == pytest.approx(rate, rel=0.01)
+
+
+def test_dittus_boelter_matches_hand_calculation():
+    # steam near 13 MPa, 500 °C: v = 0.0245 m³/kg, μ = 3.0e-5 Pa s, k = 0.083 W/(m K),
+    # cp = 3300 J/(kg K); 80 m/s in a 0.1 m hydraulic diameter
+    h = dittus_boelter_htc(80.0, 0.1, 0.0245, 3.0e-5, 0.083, 3300.0)
+    reynolds = 80.0 * 0.1 / (3.0e-5 * 0.0245)
+    prandtl = 3300.0 * 3.0e-5 / 0.083
+    assert h == pytest.approx(0.023 * reynolds**0.8 * prandtl**0.4 * 0.083 / 0.1, rel=1e-12)
+    assert 3000.0 < h < 20000.0  # HP blade-path range

@@ -1,0 +1,93 @@
+"""Turbine spec loading: the reference unit, SI conversion and errors that name the field."""
+
+from __future__ import annotations
+
+import re
+from importlib import resources
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from steamtwin.spec import SpecError, load_spec, parse_spec
+
+REFERENCE_TEXT = (resources.files("steamtwin.spec") / "data" / "reference.toml").read_text()
+
+
+def _replace(key_line: str, new_line: str) -> str:
+    pattern = re.compile(rf"^{re.escape(key_line)}.*$", re.MULTILINE)
+    assert pattern.search(REFERENCE_TEXT), key_line
+    return pattern.sub(new_line, REFERENCE_TEXT, count=1)
+
+
+def test_reference_is_in_si_units(reference_spec):
+    design = reference_spec.design
+    assert design.main_steam_pressure == pytest.approx(16.7e6)
+    assert design.main_steam_temperature == pytest.approx(811.15)
+    assert design.main_steam_flow == pytest.approx(500.0)
+    assert design.rotational_speed == pytest.approx(314.159, rel=1e-5)
+    assert len(reference_spec.stages) == 12
+    assert [v.name for v in reference_spec.control_stage.valves] == ["GV1", "GV2", "GV3", "GV4"]
+    assert reference_spec.extractions[0].after_stage == 8
+
+
+def test_missing_field_is_named():
+    text = _replace('main_steam_flow = "1800 t/h"', "")
+    with pytest.raises(SpecError, match=r"design\.main_steam_flow is missing"):
+        parse_spec(text, "unit.toml")
+
+
+def test_negative_value_names_field_and_range():
+    text = _replace('main_steam_pressure = "16.7 MPa"', 'main_steam_pressure = "-16.7 MPa"')
+    with pytest.raises(SpecError, match=r"unit.toml: design\.main_steam_pressure .*outside"):
+        parse_spec(text, "unit.toml")
+
+
+def test_value_without_unit_is_refused():
+    text = _replace('main_steam_pressure = "16.7 MPa"', "main_steam_pressure = 16.7")
+    with pytest.raises(SpecError, match=r"main_steam_pressure: 16.7 has no unit"):
+        parse_spec(text, "unit.toml")
+
+
+def test_wrong_kind_of_unit_is_refused():
+    text = _replace('main_steam_pressure = "16.7 MPa"', 'main_steam_pressure = "16.7 m"')
+    with pytest.raises(SpecError, match=r"not convertible to Pa"):
+        parse_spec(text, "unit.toml")
+
+
+def test_pressures_must_fall_along_the_path():
+    text = _replace('hp_exhaust_pressure = "3.90 MPa"', 'hp_exhaust_pressure = "14 MPa"')
+    with pytest.raises(SpecError, match=r"design pressures must fall along the steam path"):
+        parse_spec(text, "unit.toml")
+
+
+def test_admission_arcs_cannot_exceed_the_circumference():
+    text = REFERENCE_TEXT.replace("admission_arc = 0.20", "admission_arc = 0.40")
+    with pytest.raises(SpecError, match=r"admission arcs add up to 1\.120"):
+        parse_spec(text, "unit.toml")
+
+
+def test_metal_groups_must_cover_every_stage():
+    text = REFERENCE_TEXT.replace("stages = [9, 10, 11, 12]", "stages = [9, 10, 11]")
+    with pytest.raises(SpecError, match=r"metal\.groups must cover stages 0…12 exactly once"):
+        parse_spec(text, "unit.toml")
+
+
+def test_unknown_sensor_is_named():
+    text = REFERENCE_TEXT.replace('"load",\n]', '"vibration",\n]')
+    with pytest.raises(SpecError, match=r"sensors\[8\] = 'vibration' is not a canonical signal"):
+        parse_spec(text, "unit.toml")
+
+
+def test_unknown_built_in_or_missing_file():
+    with pytest.raises(SpecError, match=r"neither a built-in"):
+        load_spec("no-such-unit")
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.floats(min_value=-1e3, max_value=1e3, allow_nan=False).filter(
+    lambda x: not 1.0 <= x <= 25.0))
+def test_main_steam_pressure_outside_range_is_refused(value):
+    text = _replace('main_steam_pressure = "16.7 MPa"', f'main_steam_pressure = "{value!r} MPa"')
+    with pytest.raises(SpecError, match=r"design\.main_steam_pressure"):
+        parse_spec(text, "unit.toml")
