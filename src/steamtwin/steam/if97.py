@@ -375,7 +375,19 @@ def _backward(
     if dry.any():
         res[dry] = _props(out, "P", pf[dry], "T", T[dry])
     if wet.any():
-        res[wet] = _props(out, "P", pf[wet], key, xf[wet])
+        # Region 4: lever rule between the saturated states (CoolProp's own two-phase
+        # S(p, h) / H(p, s) were found inconsistent with it by ~0.1 J/(kg K) / ~3 J/kg).
+        pw = pf[wet]
+        q0, q1 = np.zeros_like(pw), np.ones_like(pw)
+        kf, kg = _props(key, "P", pw, "Q", q0), _props(key, "P", pw, "Q", q1)
+        quality = (xf[wet] - kf) / (kg - kf)
+        if out == "D":  # lever rule on specific volume
+            vf = 1.0 / _props("D", "P", pw, "Q", q0)
+            vg = 1.0 / _props("D", "P", pw, "Q", q1)
+            res[wet] = 1.0 / (vf + quality * (vg - vf))
+        else:
+            of, og = _props(out, "P", pw, "Q", q0), _props(out, "P", pw, "Q", q1)
+            res[wet] = of + quality * (og - of)
     return res.reshape(shape)
 
 

@@ -6,28 +6,33 @@ are sampled from the IAPWS-IF97 basic equation on a grid in transformed coordina
 cell carries a local polynomial, and a look-up is "locate the cell, evaluate one polynomial".
 
 Domain: superheated steam (IF97 region 2) for 0.05 MPa ≤ p ≤ 25 MPa and
-``T_low(p) ≤ T ≤ T_MAX = 923.15 K`` where ``T_low(p) = T_boundary(p) + 0.5 K``.  The region-2
-lower boundary ``T_boundary`` is the saturation line Tsat(p) for p ≤ 16.5291643 MPa and the
-B23 line (IF97 eqs. 5–6) above; the 0.5 K margin (``T_MARGIN``) keeps every sampled state
-strictly inside region 2.
+``T_low(p) ≤ T ≤ T_MAX = 923.15 K`` with ``T_low(p) = T_boundary(p) + T_MARGIN`` and
+``T_MARGIN = 0.05 K``.  The region-2 lower boundary ``T_boundary`` is the saturation line
+Tsat(p) for p ≤ 16.5291643 MPa and the B23 line (IF97 eqs. 5–6) above.  The margin keeps every
+sampled state strictly inside region 2; states between ``T_boundary`` and ``T_low`` are served by
+extrapolation of the edge cells, which was measured to stay within the same error bounds as
+the interior (see ``tests/steam/test_tables.py``).
 
-Coordinates: ``X = ln p`` on a uniform grid, split into two uniform segments at the kink of the
-lower boundary (p = 16.5291643 MPa) so that every table cell is smooth.  The second coordinate
-is normalised so that each table is a rectangle, e.g. for the (p, h) table
-``Y = (h − h_low(p)) / (h_high(p) − h_low(p))`` with ``h_low = h(p, T_low)`` and
-``h_high = h(p, T_MAX)``; likewise for (p, s) with s_low/s_high and for (p, T) with
-T_low/T_MAX.  Properties are interpolated by bicubic splines (``scipy`` ``RectBivariateSpline``,
-s = 0) stored per cell as 16 coefficients of a local bicubic polynomial in the cell coordinates
-``(t, u) ∈ [0, 1]²``; the boundary functions of X are cubic splines stored as 4 coefficients per
-interval.  Specific volume is tabulated as ``p·v`` (J/kg) and divided by p on look-up.
+Coordinates: ``X = ln p``, uniform in two segments split at the kink of the lower boundary
+(p = 16.5291643 MPa) so that every table cell is smooth.  The second coordinate is normalised
+so that each table is a rectangle: for the (p, h) table ``Y = (h − h_low(p)) / (h_high(p) −
+h_low(p))`` with ``h_low = h(p, T_low)`` and ``h_high = h(p, T_MAX)``; likewise for (p, s) with
+s_low/s_high and for (p, T) with T_low/T_MAX.  The (p, T) table places its Y nodes closer
+together near Y = 0 (``Y = c·η + (1 − c)·η²`` with η uniform) because h(T) is strongly curved
+next to the boundary at high pressure.  Properties are interpolated by bicubic splines
+(``scipy`` ``RectBivariateSpline``, s = 0), stored per cell as 16 coefficients of a bicubic
+polynomial in the local cell coordinates ``(t, u) ∈ [0, 1]²``; the boundary functions of X are
+cubic splines stored as 4 coefficients per interval.  Specific volume is tabulated as ``p·v``
+(J/kg) and divided by p on look-up.
 
-All grid values come from the IF97 *basic* equation (CoolProp ``IF97::Water``); states on the
-(p, h) and (p, s) grids are found by Newton iteration on ``h(p, T)`` resp. ``s(p, T)`` rather
-than from the IF97 backward equations, so the tables are consistent with ``if97.*_pt``.
+All grid values come from the IF97 *basic* equation (CoolProp ``IF97::Water``): states on the
+(p, h) and (p, s) grids are found by Newton iteration on ``h(p, T)`` resp. ``s(p, T)``, not
+from the IF97 backward equations, so the tables are consistent with ``if97.*_pt``.
 
 The scalar kernels are numba ``@njit(cache=True, nogil=True)`` functions taking the
 :class:`SteamTables` namedtuple as first argument.  Outside the domain they extrapolate the
-polynomial of the nearest cell (no exceptions); use :func:`ph_domain_position` and
+polynomial of the nearest cell (no exceptions, NaN in → NaN out); use
+:func:`ph_domain_position` (and :func:`ps_domain_position`, :func:`pt_domain_position`) and
 :func:`pressure_in_range` to check the domain.
 """
 
@@ -68,6 +73,7 @@ __all__ = [
     "build_steam_tables",
     "enthalpy_ps",
     "enthalpy_pt",
+    "load_or_build_steam_tables",
     "lower_boundary_temperature",
     "ph_domain_position",
     "ph_properties",
@@ -93,7 +99,7 @@ FloatArray = NDArray[np.float64]
 P_MIN = 0.05e6  #: lowest table pressure, Pa
 P_MAX = 25.0e6  #: highest table pressure, Pa
 T_MAX = 923.15  #: highest table temperature, K (650 °C)
-T_MARGIN = 0.5  #: distance of the table's lower edge from the region-2 boundary, K
+T_MARGIN = 0.05  #: distance of the table's lower edge from the region-2 boundary, K
 
 # IF97 B23 boundary (IAPWS R7-97(2012), eqs. 5 and 6, Table 1), pressures in MPa.
 _B23_N = (
@@ -124,7 +130,7 @@ class _Grid(NamedTuple):
     c_pt: float
 
 
-_GRID = _Grid(nx_a=180, nx_b=48, ny_ph=160, ny_ps=160, ny_pt=160, c_ph=0.25, c_ps=0.25, c_pt=0.25)
+_GRID = _Grid(nx_a=180, nx_b=48, ny_ph=128, ny_ps=128, ny_pt=160, c_ph=1.0, c_ps=1.0, c_pt=0.3)
 
 # Property indices of the (p, h) table.
 PH_T = 0  #: temperature, K
@@ -154,7 +160,8 @@ class SteamTables(NamedTuple):
     """Spline tables for superheated steam; float64 arrays only (one numba argument).
 
     ``meta``: [ln p_min, ln p_split, ln p_max, Δx below split, Δx above split, cells below,
-    cells above, p_min (Pa), p_max (Pa), T_max (K)].
+    cells above, p_min (Pa), p_max (Pa), T_max (K), Y-clustering c of the (p,h), (p,s), (p,T)
+    tables, 1/Δx below split, 1/Δx above split] (p in Pa).
     ``bounds[k, i, :]``: cubic coefficients in the local coordinate t ∈ [0, 1] of ln-p cell i
     for k = T_low (K), h_low, h_high (J/kg), s_low, s_high (J/(kg·K)).
     ``ph[prop, i, j, :]``: bicubic coefficients ``a[m*4 + n]`` of ``Σ a t^m u^n`` for the
@@ -208,6 +215,13 @@ def _x_nodes(grid: _Grid) -> FloatArray:
     return np.concatenate([xa, xb[1:]])
 
 
+def _p_nodes(grid: _Grid) -> FloatArray:
+    """Pressures (Pa) of the ln-p nodes, with the end and kink nodes exact."""
+    p = np.exp(_x_nodes(grid))
+    p[0], p[grid.nx_a], p[-1] = P_MIN, P_SPLIT, P_MAX
+    return p
+
+
 def _y_nodes(n: int, c: float) -> FloatArray:
     """Y at the uniform nodes of eta: Y = c·eta + (1 − c)·eta² (clusters nodes near Y = 0)."""
     eta = np.linspace(0.0, 1.0, n + 1)
@@ -244,8 +258,7 @@ def _sample(grid: _Grid) -> dict[str, FloatArray]:
     from steamtwin.steam import if97
 
     x = _x_nodes(grid)
-    p = np.exp(x)
-    p[grid.nx_a] = P_SPLIT  # exact kink node
+    p = _p_nodes(grid)
     t_low = lower_boundary_temperature(p) + T_MARGIN
     h_low = if97.enthalpy_pt(p, t_low)
     h_high = if97.enthalpy_pt(p, T_MAX)
@@ -507,8 +520,12 @@ def _locate_x(meta: FloatArray, p: float) -> tuple[int, float]:
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
 def _locate_y(y: float, c: float, n: int) -> tuple[int, float]:
     """Cell index and local coordinate u along eta, where Y = c·eta + (1 − c)·eta²."""
-    # Below Y = 0: linear continuation (value and slope continuous).
-    eta = 2.0 * y / (c + math.sqrt(c * c + 4.0 * (1.0 - c) * y)) if y > 0.0 else y / c
+    if c == 1.0:  # uniform grid
+        eta = y
+    elif y > 0.0:
+        eta = 2.0 * y / (c + math.sqrt(c * c + 4.0 * (1.0 - c) * y))
+    else:  # linear continuation below Y = 0 (value and slope continuous)
+        eta = y / c
     r = eta * n
     fj = math.floor(r)
     if not fj >= 0.0:
@@ -591,7 +608,7 @@ def enthalpy_pt(tables: SteamTables, p: float, T: float) -> float:
 def ph_domain_position(tables: SteamTables, p: float, h: float) -> float:
     """Normalised enthalpy Y = (h − h_low(p)) / (h_high(p) − h_low(p)) of the (p, h) table.
 
-    Y < 0: below the table's lower edge T_boundary(p) + 0.5 K (wet, too cold or region 1/3);
+    Y < 0: below the table's lower edge T_boundary(p) + 0.05 K (wet, too cold, region 1/3);
     Y > 1: above T_max = 923.15 K; NaN if p (Pa) is outside the table's pressure range.
     """
     if not pressure_in_range(tables, p):
