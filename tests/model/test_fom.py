@@ -214,7 +214,8 @@ def test_flow_beyond_valves_wide_open_is_an_error(reference_model, reference_spe
 
 
 @settings(max_examples=25, deadline=None)
-@given(load=st.floats(0.3, 1.0), temperature=st.floats(773.15, 823.15),
+# up to 0.9 of rated flow: above ~0.94, φ < 0.94 exceeds the valves wide open (test below)
+@given(load=st.floats(0.3, 0.9), temperature=st.floats(773.15, 823.15),
        flow_coefficient=st.floats(0.9, 1.1), friction=st.floats(0.5, 2.0))
 def test_any_valid_operating_point_is_physical(reference_model, reference_spec, load,
                                                 temperature, flow_coefficient, friction):
@@ -228,3 +229,13 @@ def test_any_valid_operating_point_is_physical(reference_model, reference_spec, 
     assert row.control_stage_pressure < frame["main_steam_pressure"].iloc[0]
     assert row.hp_exhaust_temperature < row.control_stage_temperature < temperature
     assert row.hp_power > 0.0
+
+
+def test_low_flow_coefficient_cannot_pass_rated_flow_at_rated_pressure(reference_model,
+                                                                     reference_spec):
+    # deposits shrink the nozzle throats too: the valves wide open no longer pass rated flow
+    frame = load_profile_inputs(reference_spec, [1.0])
+    with pytest.raises(InputError, match=r"exceeds what the wide-open governing valves pass"):
+        reference_model.simulate(frame, ModelParameters(flow_coefficient=0.9))
+    assert reference_model.simulate(frame, ModelParameters(flow_coefficient=0.95)).notna().all(
+        axis=None)

@@ -243,6 +243,8 @@ def test_coolprop_failure_reports_input_values():
     with pytest.raises(SteamPropertyError) as info:
         if97.temperature_ph([1e6, 1e6], [3e6, 1e8])
     msg = str(info.value)
+    assert info.value.argument == "h"
+    assert info.value.index == (1,)
     assert "100000000" in msg
     assert "1000000" in msg
     assert "index 1" in msg

@@ -9,13 +9,13 @@ returns a float64 :class:`numpy.ndarray` of the broadcast shape (0-d for scalar 
 
 Forward functions of ``(p, T)`` evaluate the IF97 basic equations (CoolProp's ``IF97::Water``
 backend).  Functions of ``(p, h)`` and ``(p, s)`` by default return the state that is *exactly*
-consistent with those basic equations: CoolProp's IF97 backward-equation value is refined by
-Newton iteration on the forward equation (``h(p, T) = h`` resp. ``s(p, T) = s``) to about
-1e-10 relative.  The raw IF97 backward equations are only consistent with the basic equations
-to within the release's permissible inconsistencies (10 mK in region 2; CoolProp's evaluation
-was measured at up to about 23 mK for T(p, h) at 25 MPa, i.e. about 180 J/kg in h(p, s));
-pass ``backward=True`` to get them unrefined (faster, and what the IF97 verification tables
-list).
+consistent with those basic equations: starting from CoolProp's IF97 backward-equation value,
+a bracketed Newton iteration solves ``h(p, T) = h`` resp. ``s(p, T) = s`` to about 1e-11
+relative in T; wet states (region 4) use the lever rule between the saturated states.  The raw
+IF97 backward equations are consistent with the basic equations only within IF97's tolerated
+inconsistencies (tens of mK); for CoolProp's evaluation we measured up to 23 mK in T(p, h) and
+19 mK in T(p, s) near 25 MPa, i.e. up to 180 J/kg in h(p, s).  Pass ``backward=True`` to get
+the raw backward-equation values (faster; these are what the IF97 verification tables list).
 
 Reference: IAPWS R7-97(2012), Revised Release on the IAPWS Industrial Formulation 1997 for the
 Thermodynamic Properties of Water and Steam.
@@ -206,7 +206,15 @@ def _props(out: str, n1: str, v1: FloatArray, n2: str, v2: FloatArray) -> FloatA
 
 
 def _coolprop_error(
-    out: str, n1: str, x1: float, n2: str, x2: float, arr: np.ndarray, flat: int, why: str = ""
+    out: str,
+    n1: str,
+    x1: float,
+    n2: str,
+    x2: float,
+    arr: np.ndarray,
+    flat: int,
+    why: str = "",
+    argument: str | None = None,
 ) -> SteamPropertyError:
     """SteamPropertyError carrying CoolProp's own message for one failed point."""
     if not why:
@@ -219,7 +227,7 @@ def _coolprop_error(
     return SteamPropertyError(
         f"IF97 property {out!r} could not be evaluated for {n1}={x1!r} {_units(n1)}, "
         f"{n2}={x2!r} {_units(n2)}{where}; {why}",
-        None,
+        argument,
         idx,
     )
 
@@ -292,13 +300,16 @@ def _saturation_bounds(p: FloatArray, key: str) -> tuple[FloatArray, FloatArray,
     return Ts, f, g
 
 
-def _invert_forward(p: FloatArray, target: FloatArray, key: str) -> tuple[FloatArray, np.ndarray]:
+def _invert_forward(
+    p: FloatArray, target: FloatArray, key: str, shape: tuple[int, ...] | None = None
+) -> tuple[FloatArray, np.ndarray]:
     """Solve key(p, T) = target for T (key 'H' or 'S') on the IF97 basic equations.
 
-    ``p`` and ``target`` are 1-D arrays of equal length.  Safeguarded Newton iteration (the
-    root is kept bracketed, h and s increase with T at constant p), started from CoolProp's
-    backward-equation value where that exists.  Returns (T, two_phase) where ``two_phase``
-    marks wet states (T = Tsat there).
+    ``p`` and ``target`` are 1-D arrays of equal length (the raveled inputs of broadcast
+    ``shape``, used for error messages).  Safeguarded Newton iteration (the root is kept
+    bracketed, h and s increase with T at constant p), started from CoolProp's backward-equation
+    value where that exists.  Returns (T, two_phase) where ``two_phase`` marks wet states
+    (T = Tsat there).
     """
     T0 = _props_raw("T", "P", p, key, target)  # backward-equation estimate (NaN if it fails)
     Ts, f, g = _saturation_bounds(p, key)
@@ -344,9 +355,10 @@ def _invert_forward(p: FloatArray, target: FloatArray, key: str) -> tuple[FloatA
                 float(p[k]),
                 key,
                 float(target[k]),
-                p,
+                np.broadcast_to(0.0, p.shape if shape is None else shape),
                 k,
                 "the state lies outside the IF97 range of validity (" + _RANGE_PT + ")",
+                argument=key.lower(),
             )
     return T, two_phase
 
@@ -367,7 +379,7 @@ def _backward(
     pb, xb = np.broadcast_arrays(pa, xa)
     shape = pb.shape
     pf, xf = pb.ravel().copy(), xb.ravel().copy()
-    T, wet = _invert_forward(pf, xf, key)
+    T, wet = _invert_forward(pf, xf, key, shape)
     if out == "T":
         return T.reshape(shape)
     res = np.empty_like(T)
