@@ -38,8 +38,15 @@ def main() -> None:
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"Python {platform.python_version()}")
     print(f"setup (spec, steam tables, kernel compile/cache load, design step): {setup:.1f} s")
-    for name, load in cases.items():
-        frame = load_profile_inputs(spec, load[:SAMPLES])
+    noisy = load_profile_inputs(spec, cases["ramp 100 → 30 % at 5 %/min + hold"][:SAMPLES])
+    random = np.random.default_rng(7)
+    noise = {"main_steam_pressure": 0.001 * 16.7e6, "main_steam_temperature": 1.0,
+             "main_steam_flow": 0.005 * 500.0, "hp_exhaust_pressure": 0.001 * 3.9e6}
+    for column, sigma in noise.items():  # DCS-like sensor noise on every input
+        noisy[column] += random.normal(0.0, sigma, len(noisy))
+    frames = {name: load_profile_inputs(spec, load[:SAMPLES]) for name, load in cases.items()}
+    frames["same ramp with sensor noise on every input"] = noisy
+    for name, frame in frames.items():
         diagnostics = model.simulate_detailed(frame, stages=False).diagnostics
         times = []
         for _ in range(REPEATS):

@@ -8,9 +8,17 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from steamtwin.model.metal import advance_chain, dittus_boelter_htc
+from steamtwin.model.metal import dittus_boelter_htc, prepare_chain, surface_heat
 
 K, RHO, C = 34.0, 7800.0, 600.0  # low-alloy steel near 500 °C (ASME II-D Group C)
+
+
+def _step(old, capacity, conductance, surface, outer, fluid, ambient, inverse_dt):
+    """One implicit step: (heat from the fluid W, new temperatures K)."""
+    base, response = np.empty(old.size), np.empty(old.size)
+    prepare_chain(old, capacity, conductance, surface, outer, ambient, inverse_dt, base, response,
+                  np.empty(old.size))
+    return surface_heat(surface, base[0], response[0], fluid), base + response * fluid
 
 
 def _wall(depth, nodes, area=1.0):
@@ -23,9 +31,7 @@ def test_steady_wall_carries_the_series_resistance_flux():
     h, u = 5000.0, 0.6
     surface = 1.0 / (1.0 / h + dx / (2 * K))
     outer = 1.0 / (1.0 / u + dx / (2 * K))
-    new = np.empty(20)
-    q = advance_chain(np.full(20, 500.0), new, capacity, conductance, surface, outer, 800.0,
-                      300.0, math.inf, np.empty(20), np.empty(20))
+    q, new = _step(np.full(20, 500.0), capacity, conductance, surface, outer, 800.0, 300.0, 0.0)
     assert q == pytest.approx((800.0 - 300.0) / (1 / h + 0.2 / K + 1 / u), rel=1e-9)
     assert np.all(np.diff(new) < 0)  # linear fall towards the lagging
 
@@ -33,13 +39,31 @@ def test_steady_wall_carries_the_series_resistance_flux():
 def test_step_conserves_energy_exactly():
     capacity, conductance, _ = _wall(0.15, 8)
     old = np.linspace(700.0, 650.0, 8)
-    new = np.empty(8)
     surface, outer, dt = 3000.0, 0.5, 1.0
-    q = advance_chain(old, new, capacity, conductance, surface, outer, 780.0, 308.0, dt,
-                      np.empty(8), np.empty(8))
+    q, new = _step(old, capacity, conductance, surface, outer, 780.0, 308.0, 1.0 / dt)
     stored = float(np.sum(capacity * (new - old))) / dt
     lost = outer * (new[-1] - 308.0)
     assert q == pytest.approx(stored + lost, rel=1e-12)
+
+
+def test_step_matches_a_dense_solve():
+    # the affine step equals a dense solve of the implicit-Euler system at any steam temperature
+    capacity, conductance, _ = _wall(0.15, 8)
+    old = np.linspace(700.0, 650.0, 8)
+    surface, outer, inverse_dt = 3000.0, 0.5, 1.0
+    matrix = np.diag(capacity * inverse_dt)
+    for j, g in enumerate(conductance):
+        matrix[j, j] += g
+        matrix[j + 1, j + 1] += g
+        matrix[j, j + 1] = matrix[j + 1, j] = -g
+    matrix[0, 0] += surface
+    matrix[-1, -1] += outer
+    for fluid in (300.0, 900.0):
+        rhs = capacity * inverse_dt * old
+        rhs[0] += surface * fluid
+        rhs[-1] += outer * 308.0
+        _, new = _step(old, capacity, conductance, surface, outer, fluid, 308.0, inverse_dt)
+        assert np.allclose(new, np.linalg.solve(matrix, rhs), rtol=0, atol=1e-9)
 
 
 def test_slowest_mode_decays_at_the_analytic_rate():
@@ -53,12 +77,9 @@ def test_slowest_mode_decays_at_the_analytic_rate():
     temps = np.full(nodes, 100.0)
     surface = 1.0 / (1.0 / h + dx / (2 * K))
     dt, steps = 2.0, 3000
-    new = np.empty(nodes)
     history = []
     for _ in range(steps):
-        advance_chain(temps, new, capacity, conductance, surface, 0.0, 0.0, 0.0, dt,
-                      np.empty(nodes), np.empty(nodes))
-        temps = new.copy()
+        _, temps = _step(temps, capacity, conductance, surface, 0.0, 0.0, 0.0, 1.0 / dt)
         history.append(temps.mean())
     measured = math.log(history[1500] / history[2999]) / (1499 * dt)
     assert measured == pytest.approx(rate, rel=0.01)

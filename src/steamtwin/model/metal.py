@@ -43,37 +43,50 @@ def rotor_relative_velocity(axial_velocity: float, rotor_surface_speed: float) -
 
 
 @njit(cache=True)
-def advance_chain(old: np.ndarray, new: np.ndarray, capacity: np.ndarray,
-                  conductance: np.ndarray, surface_conductance: float,
-                  outer_conductance: float, fluid_temperature: float,
-                  ambient_temperature: float, dt: float, diagonal: np.ndarray,
-                  rhs: np.ndarray) -> float:
-    """One implicit-Euler step of a conduction chain; returns the heat taken from the steam, W.
+def prepare_chain(old: np.ndarray, capacity: np.ndarray, conductance: np.ndarray,
+                  surface_conductance: float, outer_conductance: float,
+                  ambient_temperature: float, inverse_dt: float, base: np.ndarray,
+                  response: np.ndarray, work: np.ndarray) -> None:
+    """Set up one implicit-Euler step of a conduction chain, affine in the steam temperature.
 
-    Node 0 faces the steam through ``surface_conductance`` (W/K), the last node the surroundings
-    through ``outer_conductance`` (W/K); ``conductance[j]`` (W/K) links nodes j and j+1;
-    ``capacity`` in J/K; ``dt`` in s (``math.inf`` gives the steady state). ``diagonal`` and
-    ``rhs`` are scratch arrays of the chain's length.
+    The new temperatures are ``base + response·T_steam`` (K) whatever the steam temperature the
+    steam path settles on, so iterating the steam path costs no further solves. Node 0 faces the
+    steam through ``surface_conductance`` (W/K), the last node the surroundings through
+    ``outer_conductance`` (W/K); ``conductance[j]`` (W/K) links nodes j and j+1; ``capacity`` in
+    J/K; ``inverse_dt`` in 1/s (0 gives the steady state). ``work`` is scratch of the chain's
+    length. Thomas algorithm on the symmetric tridiagonal system (off-diagonals −conductance).
     """
     n = old.size
     for j in range(n):
-        storage = capacity[j] / dt
-        diagonal[j] = storage
-        rhs[j] = storage * old[j]
+        storage = capacity[j] * inverse_dt
+        work[j] = storage  # diagonal
+        base[j] = storage * old[j]
+        response[j] = 0.0
         if j > 0:
-            diagonal[j] += conductance[j - 1]
+            work[j] += conductance[j - 1]
         if j < n - 1:
-            diagonal[j] += conductance[j]
-    diagonal[0] += surface_conductance
-    rhs[0] += surface_conductance * fluid_temperature
-    diagonal[n - 1] += outer_conductance
-    rhs[n - 1] += outer_conductance * ambient_temperature
-    # Thomas algorithm; off-diagonals are −conductance
+            work[j] += conductance[j]
+    work[0] += surface_conductance
+    response[0] = surface_conductance
+    work[n - 1] += outer_conductance
+    base[n - 1] += outer_conductance * ambient_temperature
     for j in range(1, n):
-        factor = -conductance[j - 1] / diagonal[j - 1]
-        diagonal[j] += factor * conductance[j - 1]
-        rhs[j] -= factor * rhs[j - 1]
-    new[n - 1] = rhs[n - 1] / diagonal[n - 1]
+        factor = conductance[j - 1] / work[j - 1]
+        work[j] -= factor * conductance[j - 1]
+        base[j] += factor * base[j - 1]
+        response[j] += factor * response[j - 1]
+    inverse = 1.0 / work[n - 1]
+    base[n - 1] *= inverse
+    response[n - 1] *= inverse
     for j in range(n - 2, -1, -1):
-        new[j] = (rhs[j] + conductance[j] * new[j + 1]) / diagonal[j]
-    return surface_conductance * (fluid_temperature - new[0])
+        inverse = 1.0 / work[j]
+        base[j] = (base[j] + conductance[j] * base[j + 1]) * inverse
+        response[j] = (response[j] + conductance[j] * response[j + 1]) * inverse
+
+
+@njit(cache=True)
+def surface_heat(surface_conductance: float, base_surface: float, response_surface: float,
+                 fluid_temperature: float) -> float:
+    """Heat (W) a chain set up by :func:`prepare_chain` takes from steam at that temperature (K)."""
+    return surface_conductance * (
+        fluid_temperature - (base_surface + response_surface * fluid_temperature))

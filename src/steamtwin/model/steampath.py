@@ -43,7 +43,8 @@ def nozzle_flow_function(pressure_ratio: float, kappa: float) -> float:
     ratio = max(pressure_ratio, critical_pressure_ratio(kappa))
     if ratio >= 1.0:
         return 0.0
-    bracket = ratio ** (2.0 / kappa) - ratio ** ((kappa + 1.0) / kappa)
+    root = ratio ** (1.0 / kappa)  # π^(2/κ) − π^((κ+1)/κ) = root² − π·root
+    bracket = root * root - ratio * root
     return math.sqrt(2.0 * kappa / (kappa - 1.0) * max(bracket, 0.0))
 
 

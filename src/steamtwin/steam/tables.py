@@ -550,6 +550,51 @@ def _bicubic(a: FloatArray, t: float, u: float) -> float:
     return r0 + t * (r1 + t * (r2 + t * r3))
 
 
+# Located-pressure kernels: a model that evaluates several properties at one pressure locates
+# it on the ln p axis once (one logarithm) and reuses the cell for every look-up there.
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+def locate_pressure(tables: SteamTables, p: float) -> tuple[int, float]:
+    """Cell index and local coordinate of pressure p (Pa) on the ln p axis (for ``*_at``)."""
+    return _locate_x(tables.meta, p)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
+def _ph_cell(tables: SteamTables, i: int, t: float, h: float) -> tuple[int, float]:
+    h_lo = _cubic(tables.bounds, _B_HLOW, i, t)
+    h_hi = _cubic(tables.bounds, _B_HHIGH, i, t)
+    return _locate_y((h - h_lo) / (h_hi - h_lo), tables.meta[_M_C_PH], tables.ph.shape[2])
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+def ph_property_at(tables: SteamTables, prop: int, i: int, t: float, p: float, h: float) -> float:
+    """As :func:`ph_property` at pressure p (Pa) already located as cell ``i``, coordinate ``t``."""
+    if prop < 0 or prop >= tables.ph.shape[0]:
+        return math.nan
+    j, u = _ph_cell(tables, i, t, h)
+    val = _bicubic(tables.ph[prop, i, j], t, u)
+    if prop == PH_V:
+        val /= p
+    return val
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+def entropy_and_pv_at(tables: SteamTables, i: int, t: float, h: float) -> tuple[float, float]:
+    """Entropy J/(kg·K) and the product p·v (J/kg) at a located pressure and enthalpy h (J/kg)."""
+    j, u = _ph_cell(tables, i, t, h)
+    return _bicubic(tables.ph[PH_S, i, j], t, u), _bicubic(tables.ph[PH_V, i, j], t, u)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+def enthalpy_ps_at(tables: SteamTables, i: int, t: float, s: float) -> float:
+    """Specific enthalpy h (J/kg) at a located pressure and entropy s (J/(kg·K))."""
+    s_lo = _cubic(tables.bounds, _B_SLOW, i, t)
+    s_hi = _cubic(tables.bounds, _B_SHIGH, i, t)
+    j, u = _locate_y((s - s_lo) / (s_hi - s_lo), tables.meta[_M_C_PS], tables.ps.shape[1])
+    return _bicubic(tables.ps[i, j], t, u)
+
+
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
 def pressure_in_range(tables: SteamTables, p: float) -> bool:
     """True if p (Pa) lies within the table pressure range [0.05 MPa, 25 MPa]."""
@@ -559,25 +604,15 @@ def pressure_in_range(tables: SteamTables, p: float) -> bool:
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
 def ph_property(tables: SteamTables, prop: int, p: float, h: float) -> float:
     """Property ``prop`` (one of PH_*) at p (Pa), h (J/kg); SI units; NaN for a bad ``prop``."""
-    if prop < 0 or prop >= tables.ph.shape[0]:
-        return math.nan
     i, t = _locate_x(tables.meta, p)
-    h_lo = _cubic(tables.bounds, _B_HLOW, i, t)
-    h_hi = _cubic(tables.bounds, _B_HHIGH, i, t)
-    j, u = _locate_y((h - h_lo) / (h_hi - h_lo), tables.meta[_M_C_PH], tables.ph.shape[2])
-    val = _bicubic(tables.ph[prop, i, j], t, u)
-    if prop == PH_V:
-        val /= p
-    return val
+    return ph_property_at(tables, prop, i, t, p, h)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
 def ph_properties(tables: SteamTables, p: float, h: float, out: FloatArray) -> None:
     """Write all six PH_* properties at p (Pa), h (J/kg) into ``out[0:6]`` (SI units)."""
     i, t = _locate_x(tables.meta, p)
-    h_lo = _cubic(tables.bounds, _B_HLOW, i, t)
-    h_hi = _cubic(tables.bounds, _B_HHIGH, i, t)
-    j, u = _locate_y((h - h_lo) / (h_hi - h_lo), tables.meta[_M_C_PH], tables.ph.shape[2])
+    j, u = _ph_cell(tables, i, t, h)
     for k in range(tables.ph.shape[0]):
         out[k] = _bicubic(tables.ph[k, i, j], t, u)
     out[PH_V] /= p
@@ -587,10 +622,7 @@ def ph_properties(tables: SteamTables, p: float, h: float, out: FloatArray) -> N
 def enthalpy_ps(tables: SteamTables, p: float, s: float) -> float:
     """Specific enthalpy h (J/kg) at p (Pa), s (J/(kg·K))."""
     i, t = _locate_x(tables.meta, p)
-    s_lo = _cubic(tables.bounds, _B_SLOW, i, t)
-    s_hi = _cubic(tables.bounds, _B_SHIGH, i, t)
-    j, u = _locate_y((s - s_lo) / (s_hi - s_lo), tables.meta[_M_C_PS], tables.ps.shape[1])
-    return _bicubic(tables.ps[i, j], t, u)
+    return enthalpy_ps_at(tables, i, t, s)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
