@@ -31,34 +31,24 @@ def test_reference_is_in_si_units(reference_spec):
     assert reference_spec.extractions[0].after_stage == 8
 
 
-def test_missing_field_is_named():
-    text = _replace('main_steam_flow = "1800 t/h"', "")
-    with pytest.raises(SpecError, match=r"design\.main_steam_flow is missing"):
-        parse_spec(text, "unit.toml")
-
-
-def test_negative_value_names_field_and_range():
-    text = _replace('main_steam_pressure = "16.7 MPa"', 'main_steam_pressure = "-16.7 MPa"')
-    with pytest.raises(SpecError, match=r"unit.toml: design\.main_steam_pressure .*outside"):
-        parse_spec(text, "unit.toml")
-
-
-def test_value_without_unit_is_refused():
-    text = _replace('main_steam_pressure = "16.7 MPa"', "main_steam_pressure = 16.7")
-    with pytest.raises(SpecError, match=r"main_steam_pressure: 16.7 has no unit"):
-        parse_spec(text, "unit.toml")
-
-
-def test_wrong_kind_of_unit_is_refused():
-    text = _replace('main_steam_pressure = "16.7 MPa"', 'main_steam_pressure = "16.7 m"')
-    with pytest.raises(SpecError, match=r"not convertible to Pa"):
-        parse_spec(text, "unit.toml")
-
-
-def test_pressures_must_fall_along_the_path():
-    text = _replace('hp_exhaust_pressure = "3.90 MPa"', 'hp_exhaust_pressure = "14 MPa"')
-    with pytest.raises(SpecError, match=r"design pressures must fall along the steam path"):
-        parse_spec(text, "unit.toml")
+@pytest.mark.parametrize(
+    ("line", "replacement", "message"),
+    [
+        ('main_steam_flow = "1800 t/h"', "", r"design\.main_steam_flow is missing"),
+        ('main_steam_pressure = "16.7 MPa"', 'main_steam_pressure = "-16.7 MPa"',
+         r"unit.toml: design\.main_steam_pressure .*outside"),
+        ('main_steam_pressure = "16.7 MPa"', "main_steam_pressure = 16.7",
+         r"main_steam_pressure: 16.7 has no unit"),
+        ('main_steam_pressure = "16.7 MPa"', 'main_steam_pressure = "16.7 m"',
+         r"not convertible to Pa"),
+        ('hp_exhaust_pressure = "3.90 MPa"', 'hp_exhaust_pressure = "14 MPa"',
+         r"design pressures must fall along the steam path"),
+    ],
+    ids=["missing", "negative", "no-unit", "wrong-unit", "pressures-rise"],
+)
+def test_bad_design_field_is_named(line, replacement, message):
+    with pytest.raises(SpecError, match=message):
+        parse_spec(_replace(line, replacement), "unit.toml")
 
 
 def test_admission_arcs_cannot_exceed_the_circumference():

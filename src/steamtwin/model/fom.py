@@ -21,7 +21,7 @@ from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import SpecError, TurbineSpec
 from steamtwin.steam import if97
-from steamtwin.steam.tables import steam_tables
+from steamtwin.steam.tables import lower_boundary_temperature, steam_tables
 
 # Physical validity of the inputs (SI); the tables cover 0.05–25 MPa and up to 650 °C.
 INPUT_RANGES = {
@@ -217,7 +217,7 @@ def _validated_inputs(inputs: pd.DataFrame) -> tuple[dict[str, np.ndarray], np.n
             f"main_steam_pressure = {ratio[row]:.3f} ≥ 0.95: the HP section cannot expand"
         )
     p0, t0 = columns["main_steam_pressure"], columns["main_steam_temperature"]
-    t_min = _lowest_superheated_temperature(p0)
+    t_min = lower_boundary_temperature(p0)
     bad = np.flatnonzero(t0 <= t_min)
     if bad.size:
         row = int(bad[0])
@@ -227,15 +227,6 @@ def _validated_inputs(inputs: pd.DataFrame) -> tuple[dict[str, np.ndarray], np.n
             f"(must exceed {t_min[row] - 273.15:.1f} °C)"
         )
     return columns, _time_steps(inputs.index)
-
-
-def _lowest_superheated_temperature(pressure: np.ndarray) -> np.ndarray:
-    """Saturation temperature, or the IF97 region 2/3 boundary above 16.529 MPa (K)."""
-    saturation = if97.saturation_temperature(np.minimum(pressure, 22.0e6))
-    # IF97 eq. 6 (B23 line), T in K from p in MPa
-    reduced = np.maximum((pressure / 1e6 - 13.91883977887) / 1.0192970039326e-3, 0.0)
-    b23 = 572.54459862746 + np.sqrt(reduced)
-    return np.where(pressure > 16.5291643e6, b23, saturation)
 
 
 def _time_steps(index: pd.Index) -> np.ndarray:
