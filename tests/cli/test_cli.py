@@ -60,3 +60,17 @@ def test_simulate_reports_bad_rows_without_traceback(tmp_path):
     assert result.exit_code == 2
     assert "column 'main_steam_temperature' row 3" in result.output
     assert "Traceback" not in result.output
+
+
+def test_demo_writes_its_files_from_the_model(tmp_path, reference_model, reference_spec):
+    result = runner.invoke(app, ["demo", "--out", str(tmp_path)])
+    assert result.exit_code == 0, result.output
+    assert "skipped (not built yet)" in result.output
+    line = pd.read_csv(tmp_path / "off_design_line.csv")
+    assert list(line["load_fraction"]) == [0.3, 0.5, 0.75, 1.0]
+    rated = reference_model.simulate(load_profile_inputs(reference_spec, [1.0])).iloc[0]
+    assert line["hp_power_MW"].iloc[-1] == pytest.approx(rated.hp_power / 1e6, rel=1e-5)
+    ramp = pd.read_csv(tmp_path / "ramp_simulation.csv")
+    assert ramp["main_steam_flow"].iloc[0] == pytest.approx(1800.0)
+    assert ramp["main_steam_flow"].iloc[-1] == pytest.approx(540.0)
+    assert (tmp_path / "ramp_simulation.png").stat().st_size > 10_000

@@ -105,7 +105,6 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         extraction_fraction=extraction_fraction,
         efficiency_scale=efficiency_scale,
         group_first_stage=np.array([group.stages[0] for group in groups], dtype=np.int64),
-        group_last_stage=np.array([group.stages[-1] for group in groups], dtype=np.int64),
         group_ending_at_stage=np.array(
             [next((g for g, group in enumerate(groups) if group.stages[-1] == stage), -1)
              for stage in range(n + 1)], dtype=np.int64),

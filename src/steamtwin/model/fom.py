@@ -149,14 +149,10 @@ class FullOrderModel:
         p0, t0, flow, p_exhaust = (columns[name] for name in INPUT_SIGNALS)
         n = p0.size
         stages = constants.stage_capacity.size
-        design = self.spec.design
-        pressures = design.hp_exhaust_pressure + (
-            np.linspace(design.control_stage_pressure, design.hp_exhaust_pressure, stages + 1)
-            - design.hp_exhaust_pressure
-        ) * flow[0] / design.main_steam_flow
-        pressures = np.maximum(pressures, p_exhaust[0] * (1.0 + 0.01 * np.arange(stages, -1, -1)))
-        h0 = float(if97.enthalpy_pt(p0[0], t0[0]))
-        enthalpies = np.full(stages + 1, h0 - 1.0e5)
+        # a rough start for the first sample's sweeps (only its p·v values are used): pressures
+        # falling linearly from 80 % of throttle to the exhaust, enthalpy 100 kJ/kg under inlet
+        pressures = np.linspace(0.8 * p0[0], p_exhaust[0], stages + 1)
+        enthalpies = np.full(stages + 1, float(if97.enthalpy_pt(p0[0], t0[0])) - 1.0e5)
         metal = np.full(constants.metal_capacity.shape, t0[0])
         results = np.full((n, kernel.N_RESULTS), np.nan)
         status = np.zeros(n, dtype=np.int64)

@@ -120,7 +120,6 @@ class KernelConstants(NamedTuple):
     extraction_fraction: np.ndarray  # of throttle flow, bled after each stage
     efficiency_scale: float  # matches the design heat balance
     group_first_stage: np.ndarray  # int, 0 = control stage
-    group_last_stage: np.ndarray  # int
     group_ending_at_stage: np.ndarray  # int per stage 0…n: the group that ends there, or -1
     group_hydraulic_diameter: np.ndarray  # m
     group_flow_area: np.ndarray  # m²
