@@ -14,11 +14,11 @@ K, RHO, C = 34.0, 7800.0, 600.0  # low-alloy steel near 500 °C (ASME II-D Group
 
 
 def _step(old, capacity, conductance, surface, outer, fluid, ambient, inverse_dt):
-    """One implicit step: (heat from the fluid W, new temperatures K)."""
-    base, response = np.empty(old.size), np.empty(old.size)
-    prepare_chain(old, capacity, conductance, surface, outer, ambient, inverse_dt, base, response,
-                  np.empty(old.size))
-    return surface_heat(surface, base[0], response[0], fluid), base + response * fluid
+    """One implicit step of a single chain: (heat from the fluid W, new temperatures K)."""
+    base, response = np.empty((1, old.size)), np.empty((1, old.size))
+    prepare_chain(0, old[np.newaxis], capacity[np.newaxis], conductance[np.newaxis], surface,
+                  outer, ambient, inverse_dt, base, response, np.empty(old.size))
+    return surface_heat(surface, base[0, 0], response[0, 0], fluid), base[0] + response[0] * fluid
 
 
 def _wall(depth, nodes, area=1.0):
@@ -93,3 +93,19 @@ def test_dittus_boelter_matches_hand_calculation():
     prandtl = 3300.0 * 3.0e-5 / 0.083
     assert h == pytest.approx(0.023 * reynolds**0.8 * prandtl**0.4 * 0.083 / 0.1, rel=1e-12)
     assert 3000.0 < h < 20000.0  # HP blade-path range
+
+
+def test_chains_are_independent_rows():
+    # two different walls set up as rows of one array give what each gives alone
+    walls = [_wall(0.15, 8), _wall(0.25, 8)]
+    old = np.array([np.linspace(700.0, 650.0, 8), np.full(8, 600.0)])
+    capacity = np.array([walls[0][0], walls[1][0]])
+    conductance = np.array([walls[0][1], walls[1][1]])
+    base, response = np.empty((2, 8)), np.empty((2, 8))
+    for chain in (1, 0):
+        prepare_chain(chain, old, capacity, conductance, 2000.0, 0.5, 308.0, 0.1, base, response,
+                      np.empty(8))
+    for chain in (0, 1):
+        _, alone = _step(old[chain], capacity[chain], conductance[chain], 2000.0, 0.5, 750.0,
+                         308.0, 0.1)
+        assert np.allclose(base[chain] + response[chain] * 750.0, alone, rtol=0, atol=1e-12)

@@ -60,11 +60,12 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
             extraction.design_flow / design.main_steam_flow
         )
     groups = spec.metal_groups
-    capacity = np.zeros((len(groups), 2, metal_nodes))
-    conductance = np.zeros((len(groups), 2, metal_nodes - 1))
-    area = np.zeros((len(groups), 2))
-    half_cell = np.zeros((len(groups), 2))
-    outer = np.zeros((len(groups), 2))
+    chains = 2 * len(groups)  # chain 2·g is group g's casing, 2·g + 1 its rotor
+    capacity = np.zeros((chains, metal_nodes))
+    conductance = np.zeros((chains, metal_nodes - 1))
+    area = np.zeros(chains)
+    half_cell = np.zeros(chains)
+    outer = np.zeros(chains)
     hydraulic_diameter = np.zeros(len(groups))
     flow_area = np.zeros(len(groups))
     rotor_speed = np.zeros(len(groups))
@@ -79,8 +80,9 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         rotor = _solid_cylinder(group.rotor_mass, group.rotor_area, spec.rotor_material,
                                 metal_nodes)
         for body, chain in enumerate((casing, rotor)):
-            capacity[g, body], conductance[g, body], half_cell[g, body], outer[g, body] = chain
-        area[g] = group.casing_area, group.rotor_area
+            row = 2 * g + body
+            capacity[row], conductance[row], half_cell[row], outer[row] = chain
+        area[2 * g], area[2 * g + 1] = group.casing_area, group.rotor_area
         rotor_radius = 2.0 * group.rotor_mass / (spec.rotor_material.density * group.rotor_area)
         rotor_speed[g] = omega * rotor_radius
     return KernelConstants(

@@ -124,11 +124,11 @@ class KernelConstants(NamedTuple):
     group_hydraulic_diameter: np.ndarray  # m
     group_flow_area: np.ndarray  # m²
     group_rotor_speed: np.ndarray  # m/s, rotor surface speed
-    metal_capacity: np.ndarray  # (groups, 2 bodies, nodes) J/K
-    metal_conductance: np.ndarray  # (groups, 2, nodes-1) W/K
-    metal_area: np.ndarray  # (groups, 2) m²
-    metal_half_cell_resistance: np.ndarray  # (groups, 2) m²·K/W, surface to node 0
-    metal_outer_conductance: np.ndarray  # (groups, 2) W/K to the surroundings
+    metal_capacity: np.ndarray  # (chains, nodes) J/K; chain 2·group + CASING/ROTOR
+    metal_conductance: np.ndarray  # (chains, nodes-1) W/K
+    metal_area: np.ndarray  # (chains,) m²
+    metal_half_cell_resistance: np.ndarray  # (chains,) m²·K/W, surface to node 0
+    metal_outer_conductance: np.ndarray  # (chains,) W/K to the surroundings
     ambient_temperature: float  # K
     sensor_group: int
 
@@ -253,44 +253,42 @@ def _control_stage(c, tables, flow, p_throttle, h0, p1, params, throttled, out):
 
 @njit(cache=True, inline="always")
 def _group_heat(c, tables, group, p_mean, h_mean, flow, params, first_sweep, metal_old,
-                inverse_dt, step, properties):
+                inverse_dt, surface, base, response, group_temperature, work, properties):
     """Heat (W) the casing and rotor of ``group`` take from the steam in this time step.
 
     On a sample's first sweep the steam-side coefficients are evaluated and the implicit metal
-    step is set up affine in the steam temperature (``step``: surface conductances W/K, base and
-    response temperatures, group steam temperatures K, scratch); later sweeps only evaluate it.
+    step of both chains is set up affine in the steam temperature (``surface`` conductances W/K,
+    ``base`` and ``response`` temperatures); later sweeps only evaluate it. The group's steam
+    temperature (K) is kept in ``group_temperature`` for the commit.
     """
-    surface, base, response, group_temperature, work = step
     if first_sweep:
         ph_properties(tables, p_mean, h_mean, properties)
         temperature = properties[PH_T]
         v, mu, k, cp = properties[PH_V], properties[PH_MU], properties[PH_K], properties[PH_CP]
         axial = flow * v / c.group_flow_area[group]
         d_h = c.group_hydraulic_diameter[group]
-        htc_casing = params[2] * dittus_boelter_htc(axial, d_h, v, mu, k, cp)
         relative = rotor_relative_velocity(axial, c.group_rotor_speed[group])
-        htc_rotor = params[2] * dittus_boelter_htc(relative, d_h, v, mu, k, cp)
-        for body, htc in ((CASING, htc_casing), (ROTOR, htc_rotor)):
-            surface[group, body] = c.metal_area[group, body] / (
-                1.0 / htc + c.metal_half_cell_resistance[group, body])
-            prepare_chain(metal_old[group, body], c.metal_capacity[group, body],
-                          c.metal_conductance[group, body], surface[group, body],
-                          c.metal_outer_conductance[group, body], c.ambient_temperature,
-                          inverse_dt, base[group, body], response[group, body], work)
+        for body in range(2):
+            velocity = axial if body == CASING else relative
+            htc = params[2] * dittus_boelter_htc(velocity, d_h, v, mu, k, cp)
+            chain = 2 * group + body
+            surface[chain] = c.metal_area[chain] / (1.0 / htc + c.metal_half_cell_resistance[chain])
+            prepare_chain(chain, metal_old, c.metal_capacity, c.metal_conductance, surface[chain],
+                          c.metal_outer_conductance[chain], c.ambient_temperature, inverse_dt,
+                          base, response, work)
     else:
         temperature = ph_property(tables, PH_T, p_mean, h_mean)
     group_temperature[group] = temperature
     heat = 0.0
-    for body in range(2):
-        heat += surface_heat(surface[group, body], base[group, body, 0],
-                             response[group, body, 0], temperature)
+    for chain in range(2 * group, 2 * group + 2):
+        heat += surface_heat(surface[chain], base[chain, 0], response[chain, 0], temperature)
     return heat
 
 
 @njit(cache=True)
 def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressures,
-                  enthalpies, inlet_pv, throttled, metal, step, cs_out, properties, result,
-                  max_iter):
+                  enthalpies, inlet_pv, throttled, metal, surface, base, response,
+                  group_temperature, work, cs_out, properties, result, max_iter):
     """Solve one sample and advance ``metal`` (K) in place; returns a status code."""
     n = c.stage_capacity.size
     flow_coefficient = params[0]
@@ -317,7 +315,8 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
         heat_total = 0.0
         g = c.group_ending_at_stage[0]
         heat = _group_heat(c, tables, g, pressures[0], h1, flow, params, iteration == 0, metal,
-                           inverse_dt, step, properties)
+                           inverse_dt, surface, base, response, group_temperature, work,
+                           properties)
         heat_total += heat
         enthalpies[0] = h1 - heat / flow
         power = cs_out[1]
@@ -341,7 +340,8 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
                 p_mean = math.sqrt(pressures[first - 1] * pressures[i + 1])
                 h_mean = 0.5 * (enthalpies[first - 1] + h_out)
                 heat = _group_heat(c, tables, g, p_mean, h_mean, stage_flow, params,
-                                   iteration == 0, metal, inverse_dt, step, properties)
+                                   iteration == 0, metal, inverse_dt, surface, base,
+                                   response, group_temperature, work, properties)
                 heat_total += heat
                 h_out -= heat / stage_flow
             enthalpies[i + 1] = h_out
@@ -370,8 +370,8 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             result[0] = pressures[0]
             result[1] = ph_property(tables, PH_T, pressures[0], enthalpies[0])
             result[2] = ph_property(tables, PH_T, p_exhaust, enthalpies[n])
-            _commit_metal(step, metal)
-            result[3] = metal[c.sensor_group, CASING, 0]
+            _commit_metal(base, response, group_temperature, metal)
+            result[3] = metal[2 * c.sensor_group + CASING, 0]
             result[4] = power
             result[5] = heat_total
             result[6] = extraction_energy
@@ -385,14 +385,12 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
 
 
 @njit(cache=True)
-def _commit_metal(step, metal):
+def _commit_metal(base, response, group_temperature, metal):
     """Metal temperatures (K) at the end of the step, from the converged steam temperatures."""
-    _, base, response, group_temperature, _ = step
-    groups, bodies, nodes = metal.shape
-    for g in range(groups):
-        for body in range(bodies):
-            for j in range(nodes):
-                metal[g, body, j] = base[g, body, j] + response[g, body, j] * group_temperature[g]
+    chains, nodes = metal.shape
+    for chain in range(chains):
+        for j in range(nodes):
+            metal[chain, j] = base[chain, j] + response[chain, j] * group_temperature[chain // 2]
 
 
 @njit(cache=True)
@@ -401,14 +399,15 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, pressures,
     """Simulate a series; the first sample starts from steady metal (equilibrium).
 
     ``pressures``/``enthalpies`` (stages + 1) carry the warm start in and the last solution out;
-    ``metal`` (groups, 2, nodes) the metal temperatures (K). Fills ``results`` (samples ×
-    N_RESULTS), ``status`` (samples,), and, when they have rows, the per-stage outlet pressures
-    and temperatures (samples × stages + 1). Stops at the first failed sample.
+    ``metal`` (chains, nodes) the metal temperatures (K), chain 2·group + CASING/ROTOR. Fills
+    ``results`` (samples × N_RESULTS), ``status`` (samples,), and, when they have rows, the
+    per-stage outlet pressures and temperatures (samples × stages + 1). Stops at the first failed
+    sample.
     """
     n_samples = p0.size
-    groups, bodies, nodes = metal.shape
-    step = (np.zeros((groups, bodies)), np.zeros(metal.shape), np.zeros(metal.shape),
-            np.zeros(groups), np.empty(nodes))
+    chains, nodes = metal.shape
+    surface, base, response = np.zeros(chains), np.zeros(metal.shape), np.zeros(metal.shape)
+    group_temperature, work = np.zeros(chains // 2), np.empty(nodes)
     throttled = np.empty(c.level_area.size)
     throttled[:] = p0[0]
     cs_out = np.zeros(4)
@@ -431,14 +430,16 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, pressures,
             for _ in range(50):
                 before = metal.copy()
                 code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], params, 0.0,
-                                     pressures, enthalpies, inlet_pv, throttled, metal, step,
-                                     cs_out, properties, results[k], 200)
+                                     pressures, enthalpies, inlet_pv, throttled, metal,
+                                     surface, base, response, group_temperature, work, cs_out,
+                                     properties, results[k], 200)
                 if code != STATUS_OK or np.abs(metal - before).max() < 1e-9:
                     break
         else:
             code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], params,
                                  1.0 / time_step[k], pressures, enthalpies, inlet_pv, throttled,
-                                 metal, step, cs_out, properties, results[k], 200)
+                                 metal, surface, base, response, group_temperature, work,
+                                 cs_out, properties, results[k], 200)
         status[k] = code
         if code != STATUS_OK:
             return k

@@ -43,45 +43,49 @@ def rotor_relative_velocity(axial_velocity: float, rotor_surface_speed: float) -
 
 
 @njit(cache=True)
-def prepare_chain(old: np.ndarray, capacity: np.ndarray, conductance: np.ndarray,
+def prepare_chain(chain: int, old: np.ndarray, capacity: np.ndarray, conductance: np.ndarray,
                   surface_conductance: float, outer_conductance: float,
                   ambient_temperature: float, inverse_dt: float, base: np.ndarray,
                   response: np.ndarray, work: np.ndarray) -> None:
-    """Set up one implicit-Euler step of a conduction chain, affine in the steam temperature.
+    """Set up one implicit-Euler step of chain ``chain``, affine in the steam temperature.
 
-    The new temperatures are ``base + response·T_steam`` (K) whatever the steam temperature the
-    steam path settles on, so iterating the steam path costs no further solves. Node 0 faces the
-    steam through ``surface_conductance`` (W/K), the last node the surroundings through
-    ``outer_conductance`` (W/K); ``conductance[j]`` (W/K) links nodes j and j+1; ``capacity`` in
-    J/K; ``inverse_dt`` in 1/s (0 gives the steady state). ``work`` is scratch of the chain's
+    Row ``chain`` of the 2-D arrays describes the chain: ``old`` temperatures (K), ``capacity``
+    (J/K), ``conductance`` (W/K) between nodes j and j+1. Afterwards its new temperatures are
+    ``base[chain] + response[chain]·T_steam`` (K) whatever steam temperature the steam path settles
+    on, so iterating the steam path costs no further solves. Node 0 faces the steam through
+    ``surface_conductance`` (W/K), the last node the surroundings through ``outer_conductance``
+    (W/K); ``inverse_dt`` in 1/s (0 gives the steady state). ``work`` is scratch of a chain's
     length. Thomas algorithm on the symmetric tridiagonal system (off-diagonals −conductance).
+    Rows are indexed element-wise, never sliced: slices are array views whose reference counting
+    costs more than the solve.
     """
-    n = old.size
+    n = old.shape[1]
     for j in range(n):
-        storage = capacity[j] * inverse_dt
+        storage = capacity[chain, j] * inverse_dt
         work[j] = storage  # diagonal
-        base[j] = storage * old[j]
-        response[j] = 0.0
+        base[chain, j] = storage * old[chain, j]
+        response[chain, j] = 0.0
         if j > 0:
-            work[j] += conductance[j - 1]
+            work[j] += conductance[chain, j - 1]
         if j < n - 1:
-            work[j] += conductance[j]
+            work[j] += conductance[chain, j]
     work[0] += surface_conductance
-    response[0] = surface_conductance
+    response[chain, 0] = surface_conductance
     work[n - 1] += outer_conductance
-    base[n - 1] += outer_conductance * ambient_temperature
+    base[chain, n - 1] += outer_conductance * ambient_temperature
     for j in range(1, n):
-        factor = conductance[j - 1] / work[j - 1]
-        work[j] -= factor * conductance[j - 1]
-        base[j] += factor * base[j - 1]
-        response[j] += factor * response[j - 1]
+        factor = conductance[chain, j - 1] / work[j - 1]
+        work[j] -= factor * conductance[chain, j - 1]
+        base[chain, j] += factor * base[chain, j - 1]
+        response[chain, j] += factor * response[chain, j - 1]
     inverse = 1.0 / work[n - 1]
-    base[n - 1] *= inverse
-    response[n - 1] *= inverse
+    base[chain, n - 1] *= inverse
+    response[chain, n - 1] *= inverse
     for j in range(n - 2, -1, -1):
         inverse = 1.0 / work[j]
-        base[j] = (base[j] + conductance[j] * base[j + 1]) * inverse
-        response[j] = (response[j] + conductance[j] * response[j + 1]) * inverse
+        base[chain, j] = (base[chain, j] + conductance[chain, j] * base[chain, j + 1]) * inverse
+        response[chain, j] = (
+            response[chain, j] + conductance[chain, j] * response[chain, j + 1]) * inverse
 
 
 @njit(cache=True)

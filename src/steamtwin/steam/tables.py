@@ -52,6 +52,8 @@ from numba import njit
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicSpline, RectBivariateSpline
 
+from steamtwin.cache import cache_root
+
 # steamtwin.steam.if97 (and with it CoolProp, whose import takes seconds) is imported lazily:
 # loading the tables from a valid cache file does not need it.
 
@@ -166,7 +168,8 @@ class SteamTables(NamedTuple):
     for k = T_low (K), h_low, h_high (J/kg), s_low, s_high (J/(kg·K)).
     ``ph[prop, i, j, :]``: bicubic coefficients ``a[m*4 + n]`` of ``Σ a t^m u^n`` for the
     (p, h) properties ``PH_*`` (volume stored as p·v in J/kg).
-    ``ps[i, j, :]``: h(p, s) in J/kg.  ``pt[i, j, :]``: h(p, T) in J/kg.
+    ``ps[0, i, j, :]``: h(p, s) in J/kg.  ``pt[0, i, j, :]``: h(p, T) in J/kg (a leading axis of
+    one, so every table is indexed alike).
     """
 
     meta: FloatArray
@@ -383,8 +386,8 @@ def _assemble(nodes: dict[str, FloatArray], grid: _Grid) -> SteamTables:
         meta=meta,
         bounds=bounds,
         ph=ph,
-        ps=_bicubic_coefficients(x, nodes["ps"], grid),
-        pt=_bicubic_coefficients(x, nodes["pt"], grid),
+        ps=_bicubic_coefficients(x, nodes["ps"], grid)[np.newaxis],
+        pt=_bicubic_coefficients(x, nodes["pt"], grid)[np.newaxis],
     )
 
 
@@ -410,11 +413,10 @@ def _coolprop_version() -> str:
 def steam_tables_cache_path() -> Path:
     """Path of the .npz cache of the sampled grid values for this format and CoolProp version.
 
-    The directory is ``$STEAMTWIN_CACHE_DIR`` if set, else ``~/.cache/steamtwin``.
+    The directory is :func:`steamtwin.cache.cache_root`.
     """
-    root = os.environ.get("STEAMTWIN_CACHE_DIR") or (Path.home() / ".cache" / "steamtwin")
     name = f"steam_tables_v{TABLE_FORMAT_VERSION}_coolprop-{_coolprop_version()}.npz"
-    return Path(root) / name
+    return cache_root() / name
 
 
 def _grid_signature(grid: _Grid) -> FloatArray:
@@ -541,12 +543,16 @@ def _cubic(c: FloatArray, k: int, i: int, t: float) -> float:
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
-def _bicubic(a: FloatArray, t: float, u: float) -> float:
-    """Evaluate Σ a[m*4+n] t^m u^n (a: 16 contiguous coefficients)."""
-    r3 = a[12] + u * (a[13] + u * (a[14] + u * a[15]))
-    r2 = a[8] + u * (a[9] + u * (a[10] + u * a[11]))
-    r1 = a[4] + u * (a[5] + u * (a[6] + u * a[7]))
-    r0 = a[0] + u * (a[1] + u * (a[2] + u * a[3]))
+def _bicubic(a: FloatArray, k: int, i: int, j: int, t: float, u: float) -> float:
+    """Evaluate Σ a[k, i, j, m*4+n] t^m u^n by scalar indexing.
+
+    Indexing element by element rather than slicing ``a[k, i, j]`` matters for speed: a slice is
+    a new array view, and its reference counting costs more than the polynomial.
+    """
+    r3 = a[k, i, j, 12] + u * (a[k, i, j, 13] + u * (a[k, i, j, 14] + u * a[k, i, j, 15]))
+    r2 = a[k, i, j, 8] + u * (a[k, i, j, 9] + u * (a[k, i, j, 10] + u * a[k, i, j, 11]))
+    r1 = a[k, i, j, 4] + u * (a[k, i, j, 5] + u * (a[k, i, j, 6] + u * a[k, i, j, 7]))
+    r0 = a[k, i, j, 0] + u * (a[k, i, j, 1] + u * (a[k, i, j, 2] + u * a[k, i, j, 3]))
     return r0 + t * (r1 + t * (r2 + t * r3))
 
 
@@ -573,7 +579,7 @@ def ph_property_at(tables: SteamTables, prop: int, i: int, t: float, p: float, h
     if prop < 0 or prop >= tables.ph.shape[0]:
         return math.nan
     j, u = _ph_cell(tables, i, t, h)
-    val = _bicubic(tables.ph[prop, i, j], t, u)
+    val = _bicubic(tables.ph, prop, i, j, t, u)
     if prop == PH_V:
         val /= p
     return val
@@ -583,7 +589,7 @@ def ph_property_at(tables: SteamTables, prop: int, i: int, t: float, p: float, h
 def entropy_and_pv_at(tables: SteamTables, i: int, t: float, h: float) -> tuple[float, float]:
     """Entropy J/(kg·K) and the product p·v (J/kg) at a located pressure and enthalpy h (J/kg)."""
     j, u = _ph_cell(tables, i, t, h)
-    return _bicubic(tables.ph[PH_S, i, j], t, u), _bicubic(tables.ph[PH_V, i, j], t, u)
+    return _bicubic(tables.ph, PH_S, i, j, t, u), _bicubic(tables.ph, PH_V, i, j, t, u)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
@@ -591,8 +597,8 @@ def enthalpy_ps_at(tables: SteamTables, i: int, t: float, s: float) -> float:
     """Specific enthalpy h (J/kg) at a located pressure and entropy s (J/(kg·K))."""
     s_lo = _cubic(tables.bounds, _B_SLOW, i, t)
     s_hi = _cubic(tables.bounds, _B_SHIGH, i, t)
-    j, u = _locate_y((s - s_lo) / (s_hi - s_lo), tables.meta[_M_C_PS], tables.ps.shape[1])
-    return _bicubic(tables.ps[i, j], t, u)
+    j, u = _locate_y((s - s_lo) / (s_hi - s_lo), tables.meta[_M_C_PS], tables.ps.shape[2])
+    return _bicubic(tables.ps, 0, i, j, t, u)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
@@ -614,7 +620,7 @@ def ph_properties(tables: SteamTables, p: float, h: float, out: FloatArray) -> N
     i, t = _locate_x(tables.meta, p)
     j, u = _ph_cell(tables, i, t, h)
     for k in range(tables.ph.shape[0]):
-        out[k] = _bicubic(tables.ph[k, i, j], t, u)
+        out[k] = _bicubic(tables.ph, k, i, j, t, u)
     out[PH_V] /= p
 
 
@@ -631,9 +637,9 @@ def enthalpy_pt(tables: SteamTables, p: float, T: float) -> float:
     i, t = _locate_x(tables.meta, p)
     T_lo = _cubic(tables.bounds, _B_TLOW, i, t)
     j, u = _locate_y(
-        (T - T_lo) / (tables.meta[_M_T_MAX] - T_lo), tables.meta[_M_C_PT], tables.pt.shape[1]
+        (T - T_lo) / (tables.meta[_M_T_MAX] - T_lo), tables.meta[_M_C_PT], tables.pt.shape[2]
     )
-    return _bicubic(tables.pt[i, j], t, u)
+    return _bicubic(tables.pt, 0, i, j, t, u)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
