@@ -176,7 +176,45 @@ def test_casing_time_constants_are_defensible(reference_model, reference_spec):
 def test_start_is_steady_and_hold_stays_steady(reference_model, reference_spec):
     frame = load_profile_inputs(reference_spec, np.full(300, 0.5))
     outputs = reference_model.simulate(frame)
-    assert (outputs.max() - outputs.min()).max() < 1e-6 * outputs.abs().max().max()
+    drift = outputs.max() - outputs.min()
+    temperatures = [name for name in outputs.columns if name.endswith("temperature")]
+    assert drift[temperatures].max() < 1e-6  # K
+    assert drift["control_stage_pressure"] < 1e-3  # Pa
+    assert drift["hp_power"] < 1e-2  # W
+
+
+def test_metal_stores_exactly_the_heat_it_takes(reference_model, reference_spec):
+    # implicit Euler: heat from the steam = change of heat content / step + lagging loss
+    frame = load_profile_inputs(reference_spec, ramp_profile(1.0, 0.3, 0.05, 60, 300))
+    diagnostics = reference_model.simulate_detailed(frame, stages=False).diagnostics
+    stored = np.diff(diagnostics["metal_heat_content"].to_numpy()) / 1.0
+    balance = stored + diagnostics["lagging_loss"].to_numpy()[1:]
+    heat = diagnostics["heat_to_metal"].to_numpy()[1:]
+    assert np.abs(heat).max() > 1e5  # the ramp really moves heat (W)
+    assert np.abs(balance - heat).max() < 1e-6 * np.abs(heat).max()
+    # steady start: the metal only loses what the lagging passes
+    first = diagnostics.iloc[0]
+    assert first.heat_to_metal == pytest.approx(first.lagging_loss, rel=1e-9)
+
+
+def test_low_flow_is_refused_and_deep_part_load_stays_physical(reference_model, reference_spec):
+    flows = np.array([0.2, 0.1]) * reference_spec.design.main_steam_flow
+    frame = _constant_pressure_frame(reference_spec, flows)
+    with pytest.raises(InputError, match=r"row 1 .*below 15% of rated flow"):
+        reference_model.simulate(frame)
+    row = reference_model.simulate_detailed(frame.iloc[:1], stages=False).diagnostics.iloc[0]
+    assert 0.0 < row.control_stage_efficiency < 1.0 and row.hp_power > 0.0
+
+
+def test_time_index_kinds(reference_model, reference_spec):
+    frame = load_profile_inputs(reference_spec, ramp_profile(0.5, 0.45, 0.05, 5, 5))
+    expected = reference_model.simulate(frame)
+    seconds = frame.set_axis((frame.index - frame.index[0]).total_seconds())
+    deltas = frame.set_axis(frame.index - frame.index[0])
+    for other in (seconds, deltas):
+        assert np.allclose(reference_model.simulate(other).to_numpy(), expected.to_numpy())
+    with pytest.raises(InputError, match="indexed by time"):
+        reference_model.simulate(frame.set_axis(frame.index.strftime("%H:%M:%S")))
 
 
 @pytest.mark.parametrize(

@@ -88,11 +88,13 @@ def test_slowest_mode_decays_at_the_analytic_rate():
 def test_dittus_boelter_matches_hand_calculation():
     # steam near 13 MPa, 500 °C: v = 0.0245 m³/kg, μ = 3.0e-5 Pa s, k = 0.083 W/(m K),
     # cp = 3300 J/(kg K); 80 m/s in a 0.1 m hydraulic diameter
-    h = dittus_boelter_htc(80.0, 0.1, 0.0245, 3.0e-5, 0.083, 3300.0)
     reynolds = 80.0 * 0.1 / (3.0e-5 * 0.0245)
     prandtl = 3300.0 * 3.0e-5 / 0.083
-    assert h == pytest.approx(0.023 * reynolds**0.8 * prandtl**0.4 * 0.083 / 0.1, rel=1e-12)
-    assert 3000.0 < h < 20000.0  # HP blade-path range
+    for heated, exponent in ((True, 0.4), (False, 0.3)):  # wall heats steam / steam heats wall
+        h = dittus_boelter_htc(80.0, 0.1, 0.0245, 3.0e-5, 0.083, 3300.0, heated)
+        expected = 0.023 * reynolds**0.8 * prandtl**exponent * 0.083 / 0.1
+        assert h == pytest.approx(expected, rel=1e-12)
+        assert 3000.0 < h < 20000.0  # HP blade-path range
 
 
 def test_chains_are_independent_rows():

@@ -81,3 +81,28 @@ def test_main_steam_pressure_outside_range_is_refused(value):
     text = _replace('main_steam_pressure = "16.7 MPa"', f'main_steam_pressure = "{value!r} MPa"')
     with pytest.raises(SpecError, match=r"design\.main_steam_pressure"):
         parse_spec(text, "unit.toml")
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        ('design_flow = "120 t/h"', 'design_flow = "1800 t/h"',
+         r"extractions bleed 500\.0 kg/s in all, not less than the main-steam flow"),
+        ('name = "HP stages 1-4"', 'name = "control stage"', r"metal\.groups names repeat"),
+        ("stages = [0]\n", "stages = [0, 1]\n", r"the control stage \(stage 0\) must be a group"),
+        ('hp_exhaust_temperature = "326.7 degC"', 'hp_exhaust_temperature = "240 degC"',
+         r"hp_exhaust_temperature 240\.0 °C is not superheated at 3\.9 MPa"),
+        ("load_fraction = [0.0, 0.27", 'load_fraction = ["0 MPa", 0.27',
+         r"sliding_pressure\.load_fraction\[0\]: '0 MPa' is not convertible"),
+        ('"load",\n]', '"load", 3,\n]', r"sensors\[9\] = 3 is not a canonical signal"),
+    ],
+    ids=["bleed-too-large", "group-names", "control-stage-group", "exhaust-wet", "load-unit",
+         "sensor-type"],
+)
+def test_inconsistent_spec_is_refused(old, new, message):
+    assert old in REFERENCE_TEXT
+    text = REFERENCE_TEXT.replace(old, new, 1)
+    if "stages = [0, 1]" in new:  # keep every stage covered once
+        text = text.replace("stages = [1, 2, 3, 4]", "stages = [2, 3, 4]")
+    with pytest.raises(SpecError, match=message):
+        parse_spec(text, "unit.toml")

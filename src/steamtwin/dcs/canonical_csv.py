@@ -55,13 +55,19 @@ def read_canonical_csv(path: str | Path, required: tuple[str, ...] = ()) -> pd.D
 
 def write_canonical_csv(frame: pd.DataFrame, path: str | Path) -> None:
     """Write SI canonical signals to CSV in wire units, with a ``time`` column."""
-    out = pd.DataFrame(index=frame.index)
+    out = pd.DataFrame({"time": _time_column(frame.index)})
     for name in frame.columns:
         signal = SIGNALS.get(name)
         values = frame[name].to_numpy(dtype=float)
         out[name] = convert(values, signal.si_unit, signal.wire_unit) if signal else values
-    out.index.name = "time"
-    out.to_csv(path, float_format="%.6g")
+    out.to_csv(path, index=False, float_format="%.6g")
+
+
+def _time_column(index: pd.Index) -> list[str]:
+    """Timestamps as ISO 8601, seconds at full precision (never rounded with the values)."""
+    if isinstance(index, pd.DatetimeIndex):
+        return [stamp.isoformat() for stamp in index]
+    return [repr(float(seconds)) for seconds in index]
 
 
 def _time_index(column: pd.Series, path: Path) -> pd.Index:

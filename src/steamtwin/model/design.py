@@ -22,7 +22,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from steamtwin.model.kernel import KernelConstants
-from steamtwin.model.steampath import KAPPA_SUPERHEATED, nozzle_flow_function
+from steamtwin.model.steampath import (
+    KAPPA_SUPERHEATED,
+    WINDAGE_CONSTANT,
+    nozzle_flow_function,
+    optimum_velocity_ratio,
+)
 from steamtwin.spec import SpecError, TurbineSpec
 from steamtwin.steam import if97
 
@@ -35,13 +40,18 @@ class DesignConstants:
     """The kernel constants plus what the design step found (SI units)."""
 
     kernel: KernelConstants
-    nozzle_area: float  # m², all nozzle groups together
     efficiency_scale: float
 
 
 def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
+                     control_stage_pressure: float | None = None,
                      metal_nodes: int = METAL_NODES) -> KernelConstants:
-    """Constants for the kernel at a given efficiency scale (the scale is solved elsewhere)."""
+    """Constants for the kernel at a given efficiency scale (the scale is solved elsewhere).
+
+    The nozzle throat area passes the design flow through the valves open at design at
+    ``control_stage_pressure`` (Pa; default: the heat balance's), so the design point is the
+    valve point the spec names.
+    """
     design = spec.design
     omega = design.rotational_speed
     cs = spec.control_stage
@@ -52,7 +62,8 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
     level_segments = np.array(
         [float(sum(1 for v in cs.valves if v.opening_order == o)) for o in orders]
     )
-    area_per_arc = _nozzle_area_per_arc(spec)
+    area_per_arc = _nozzle_area_per_arc(
+        spec, control_stage_pressure or design.control_stage_pressure)
     n = len(spec.stages)
     extraction_fraction = np.zeros(n)
     for extraction in spec.extractions:
@@ -86,21 +97,23 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         rotor_radius = 2.0 * group.rotor_mass / (spec.rotor_material.density * group.rotor_area)
         rotor_speed[g] = omega * rotor_radius
     return KernelConstants(
-        rotational_speed=omega,
         valve_pressure_drop=design.valve_pressure_drop,
         nozzle_discharge_coefficient=cs.nozzle_discharge_coefficient,
         level_area=level_arc * area_per_arc,
         level_arc=level_arc,
         level_segments=level_segments,
         cs_blade_speed=omega * cs.blading.mean_diameter / 2.0,
-        cs_optimum_ratio=_optimum_ratio(cs.blading.nozzle_exit_angle, cs.blading.reaction),
+        cs_optimum_ratio=optimum_velocity_ratio(cs.blading.nozzle_exit_angle, cs.blading.reaction),
         cs_peak_efficiency=cs.blading.peak_blade_efficiency,
         cs_friction_loss=cs.blading.friction_loss,
         cs_diameter=cs.blading.mean_diameter,
+        cs_windage_area=WINDAGE_CONSTANT * math.pi * math.sin(cs.blading.nozzle_exit_angle)
+        * cs.blading.mean_diameter * cs.blading.blade_height / 2.0,
         stage_capacity=np.array([s.flow_capacity for s in spec.stages]),
         stage_blade_speed=np.array([omega * s.blading.mean_diameter / 2.0 for s in spec.stages]),
         stage_optimum_ratio=np.array(
-            [_optimum_ratio(s.blading.nozzle_exit_angle, s.blading.reaction) for s in spec.stages]
+            [optimum_velocity_ratio(s.blading.nozzle_exit_angle, s.blading.reaction)
+             for s in spec.stages]
         ),
         stage_peak_efficiency=np.array([s.blading.peak_blade_efficiency for s in spec.stages]),
         stage_friction_loss=np.array([s.blading.friction_loss for s in spec.stages]),
@@ -123,18 +136,14 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
     )
 
 
-def _optimum_ratio(nozzle_exit_angle: float, reaction: float) -> float:
-    return math.cos(nozzle_exit_angle) / (2.0 * math.sqrt(1.0 - reaction))
-
-
-def _nozzle_area_per_arc(spec: TurbineSpec) -> float:
+def _nozzle_area_per_arc(spec: TurbineSpec, control_stage_pressure: float) -> float:
     """Throat area per unit admission arc (m²) passing the design flow through the open valves."""
     design = spec.design
     cs = spec.control_stage
     p_valve = design.main_steam_pressure * (1.0 - design.valve_pressure_drop)
     h0 = float(if97.enthalpy_pt(design.main_steam_pressure, design.main_steam_temperature))
     v_valve = float(if97.specific_volume_ph(p_valve, h0))
-    psi = nozzle_flow_function(design.control_stage_pressure / p_valve, KAPPA_SUPERHEATED)
+    psi = nozzle_flow_function(control_stage_pressure / p_valve, KAPPA_SUPERHEATED)
     open_arc = sum(v.admission_arc for v in cs.valves if v.open_at_design)
     if psi <= 0.0:
         raise SpecError("design control-stage pressure is not below the valve outlet pressure")

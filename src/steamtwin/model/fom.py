@@ -31,6 +31,11 @@ INPUT_RANGES = {
     "hp_exhaust_pressure": (0.1e6, 20.0e6, "Pa"),
 }
 
+# Below this share of rated flow (start-up, no-load) the velocity-ratio and partial-admission
+# loss correlations are outside the range they were fitted to (Kang et al.; Spencer, Cotton &
+# Cannon 1963 cover 25–100 % of rated flow); deep peak shaving stays above 25 %.
+MINIMUM_FLOW_FRACTION = 0.15
+
 _STATUS_TEXT = {
     kernel.STATUS_OVER_CAPACITY: "main_steam_flow exceeds what the wide-open governing valves "
     "pass at this throttle pressure",
@@ -83,21 +88,43 @@ class FullOrderModel:
 
     @cached_property
     def design_(self) -> DesignConstants:
-        """Kernel constants with the efficiency scale that meets the design exhaust temperature."""
-        design = self.spec.design
-        target = design.hp_exhaust_temperature
-        inputs = self.design_inputs()
+        """Kernel constants with the efficiency scale that meets the design exhaust temperature.
+
+        The nozzle area is sized at the model's own design control-stage pressure (two passes),
+        so rated load sits exactly on the valve point the spec names.
+        """
+        control_stage_pressure = self.spec.design.control_stage_pressure
+        for _ in range(2):
+            scale = self._solve_efficiency_scale(control_stage_pressure)
+            constants = kernel_constants(self.spec, scale, control_stage_pressure)
+            diagnostics = self._design_run(constants)
+            control_stage_pressure = float(diagnostics["control_stage_pressure"].iloc[0])
+        return DesignConstants(kernel=constants, efficiency_scale=scale)
+
+    def _design_run(self, constants: kernel.KernelConstants) -> pd.DataFrame:
+        try:
+            return self._run(constants, self.design_inputs(), ModelParameters(), False).diagnostics
+        except InputError as error:
+            raise SpecError(
+                f"turbine {self.spec.name!r}: the design point cannot be solved ({error}); the "
+                "spec's flow capacities, valves and heat balance are inconsistent"
+            ) from None
+
+    def _solve_efficiency_scale(self, control_stage_pressure: float) -> float:
+        """Secant on the scale of all stage efficiencies for the design exhaust temperature."""
+        target = self.spec.design.hp_exhaust_temperature
 
         def exhaust_error(scale: float) -> float:
-            constants = kernel_constants(self.spec, scale)
-            result = self._run(constants, inputs, ModelParameters(), detail=False)
-            return float(result.diagnostics["hp_exhaust_temperature"].iloc[0]) - target
+            constants = kernel_constants(self.spec, scale, control_stage_pressure)
+            return float(self._design_run(constants)["hp_exhaust_temperature"].iloc[0]) - target
 
         low, high = EFFICIENCY_SCALE_RANGE
         scale_a, scale_b = 1.0, 0.98
         error_a, error_b = exhaust_error(scale_a), exhaust_error(scale_b)
         for _ in range(30):
             if abs(error_b) < 1e-6:
+                return scale_b
+            if error_b == error_a:
                 break
             scale_a, scale_b, error_a = scale_b, scale_b - error_b * (scale_b - scale_a) / (
                 error_b - error_a), error_b
@@ -109,11 +136,9 @@ class FullOrderModel:
                     "balance are inconsistent"
                 )
             error_b = exhaust_error(scale_b)
-        constants = kernel_constants(self.spec, scale_b)
-        return DesignConstants(
-            kernel=constants,
-            nozzle_area=float(constants.level_area.sum()),
-            efficiency_scale=scale_b,
+        raise SpecError(
+            f"turbine {self.spec.name!r}: no efficiency scale meets the design HP-exhaust "
+            f"temperature {target - 273.15:.1f} °C (last miss {error_b:.3g} K)"
         )
 
     def design_inputs(self) -> pd.DataFrame:
@@ -147,6 +172,16 @@ class FullOrderModel:
              params: ModelParameters, detail: bool) -> SimulationResult:
         columns, time_step = _validated_inputs(inputs)
         p0, t0, flow, p_exhaust = (columns[name] for name in INPUT_SIGNALS)
+        minimum_flow = MINIMUM_FLOW_FRACTION * self.spec.design.main_steam_flow
+        low = np.flatnonzero(flow < minimum_flow)
+        if low.size:
+            row = int(low[0])
+            raise InputError(
+                f"inputs column 'main_steam_flow' row {row} ({inputs.index[row]}): "
+                f"{flow[row] * 3.6:.0f} t/h is below {MINIMUM_FLOW_FRACTION:.0%} of rated flow "
+                f"({minimum_flow * 3.6:.0f} t/h), outside the validity of the stage-efficiency "
+                f"and partial-admission loss correlations ({low.size} rows)"
+            )
         n = p0.size
         stages = constants.stage_capacity.size
         # a rough start for the first sample's sweeps (only its p·v values are used): pressures
@@ -229,10 +264,14 @@ def _time_steps(index: pd.Index) -> np.ndarray:
     """Seconds since the previous sample (first entry ∞: steady start)."""
     if isinstance(index, pd.DatetimeIndex):
         seconds = (index - index[0]).total_seconds().to_numpy(dtype=float)
-    elif pd.api.types.is_numeric_dtype(index):
+    elif isinstance(index, pd.TimedeltaIndex):
+        seconds = index.total_seconds().to_numpy(dtype=float)
+    elif pd.api.types.is_numeric_dtype(index) and not pd.api.types.is_bool_dtype(index):
         seconds = index.to_numpy(dtype=float)
     else:
-        raise InputError("inputs must be indexed by a DatetimeIndex or by time in seconds")
+        raise InputError(
+            "inputs must be indexed by time: a DatetimeIndex, a TimedeltaIndex or seconds"
+        )
     steps = np.empty_like(seconds)
     steps[0] = math.inf
     steps[1:] = np.diff(seconds)

@@ -35,10 +35,10 @@ from steamtwin.model.steampath import (
     DISC_FRICTION_CONSTANT,
     KAPPA_SUPERHEATED,
     SECTOR_END_CONSTANT,
-    WINDAGE_CONSTANT,
     nozzle_flow_function,
     stage_efficiency,
     stodola_inlet_pressure,
+    windage_power,
 )
 from steamtwin.steam.tables import (
     PH_CP,
@@ -74,6 +74,8 @@ RESULT_COLUMNS = (
     "control_stage_efficiency",  # -
     "active_admission_arc",  # -
     "iterations",  # -
+    "metal_heat_content",  # J, Σ capacity·temperature over all metal (from 0 K)
+    "lagging_loss",  # W, from the casings through the insulation
 )
 N_RESULTS = len(RESULT_COLUMNS)
 
@@ -101,7 +103,6 @@ STATUS_PRESSURE_INVERSION = 4  # stage pressures reach the throttle pressure
 class KernelConstants(NamedTuple):
     """Everything the kernel needs from the spec, derived once (SI units)."""
 
-    rotational_speed: float  # rad/s
     valve_pressure_drop: float  # fraction of throttle pressure lost in wide-open valves
     nozzle_discharge_coefficient: float
     level_area: np.ndarray  # m², nozzle throat area of each valve-opening level
@@ -112,6 +113,7 @@ class KernelConstants(NamedTuple):
     cs_peak_efficiency: float
     cs_friction_loss: float
     cs_diameter: float  # m
+    cs_windage_area: float  # m², B_e·π·sin α1·d·l/2 of the idle-arc windage power
     stage_capacity: np.ndarray  # m², Stodola constants
     stage_blade_speed: np.ndarray  # m/s
     stage_optimum_ratio: np.ndarray
@@ -236,13 +238,12 @@ def _control_stage(c, tables, flow, p_throttle, h0, p1, params, throttled, out):
         return h0
     mean_drop = available / flow
     x_a = c.cs_blade_speed / math.sqrt(2.0 * mean_drop)
-    windage = WINDAGE_CONSTANT * (1.0 - arc) / arc * x_a**3
     sector_end = SECTOR_END_CONSTANT * segments / (arc * c.cs_diameter) * x_a
     h_mix = mixed / flow
     density = 1.0 / ph_property_at(tables, PH_V, cell_1, coordinate_1, p1, h_mix)
+    windage = windage_power(c.cs_windage_area, 1.0 - arc, density, c.cs_blade_speed)
     disc = DISC_FRICTION_CONSTANT * density * c.cs_blade_speed**3 * c.cs_diameter**2
-    loss_power = (friction_coefficient * windage + sector_end) * available \
-        + friction_coefficient * disc
+    loss_power = sector_end * available + friction_coefficient * (windage + disc)
     h1 = h_mix + loss_power / flow
     out[0] = STATUS_OK
     out[1] = flow * (h0 - h1)
@@ -270,8 +271,9 @@ def _group_heat(c, tables, group, p_mean, h_mean, flow, params, first_sweep, met
         relative = rotor_relative_velocity(axial, c.group_rotor_speed[group])
         for body in range(2):
             velocity = axial if body == CASING else relative
-            htc = params[2] * dittus_boelter_htc(velocity, d_h, v, mu, k, cp)
             chain = 2 * group + body
+            steam_is_heated = metal_old[chain, 0] > temperature
+            htc = params[2] * dittus_boelter_htc(velocity, d_h, v, mu, k, cp, steam_is_heated)
             surface[chain] = c.metal_area[chain] / (1.0 / htc + c.metal_half_cell_resistance[chain])
             prepare_chain(chain, metal_old, c.metal_capacity, c.metal_conductance, surface[chain],
                           c.metal_outer_conductance[chain], c.ambient_temperature, inverse_dt,
@@ -312,6 +314,8 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
         h1 = _control_stage(c, tables, flow, p0, h0, pressures[0], params, throttled, cs_out)
         if cs_out[0] != STATUS_OK:
             return int(cs_out[0])
+        if not 0.0 <= ph_domain_position(tables, pressures[0], h1) <= 1.0:
+            return STATUS_OUT_OF_TABLES
         heat_total = 0.0
         g = c.group_ending_at_stage[0]
         heat = _group_heat(c, tables, g, pressures[0], h1, flow, params, iteration == 0, metal,
@@ -380,8 +384,23 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             result[9] = cs_out[2]
             result[10] = cs_out[3]
             result[11] = iteration + 1
+            result[12], result[13] = _metal_energy(c, metal)
             return STATUS_OK
     return STATUS_NO_CONVERGENCE
+
+
+@njit(cache=True)
+def _metal_energy(c, metal):
+    """Heat content of all metal (J, from 0 K) and the lagging loss (W) of a metal state."""
+    content = 0.0
+    loss = 0.0
+    chains, nodes = metal.shape
+    for chain in range(chains):
+        for j in range(nodes):
+            content += c.metal_capacity[chain, j] * metal[chain, j]
+        loss += c.metal_outer_conductance[chain] * (metal[chain, nodes - 1]
+                                                    - c.ambient_temperature)
+    return content, loss
 
 
 @njit(cache=True)

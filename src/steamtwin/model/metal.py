@@ -6,8 +6,9 @@ its bore and losing heat through the lagging outside; the rotor a solid cylinder
 R = 2·mass/(ρ·area) wetted on its surface. Time integration is implicit Euler, unconditionally
 stable; with an infinite step it returns the steady state, so a run starts from equilibrium.
 
-Steam-side heat-transfer coefficient: Dittus–Boelter, Nu = 0.023·Re^0.8·Pr^0.4 (Dittus & Boelter,
-Univ. Calif. Publ. Eng. 2 (1930) 443; Incropera & DeWitt, eq. 8.60) on the blade-path annulus,
+Steam-side heat-transfer coefficient: Dittus–Boelter, Nu = 0.023·Re^0.8·Pr^n, n = 0.4 when the
+wall heats the steam and 0.3 when the steam heats the wall (Dittus & Boelter, Univ. Calif. Publ.
+Eng. 2 (1930) 443; Incropera & DeWitt, eq. 8.60) on the blade-path annulus,
 hydraulic diameter 2·blade height, axial velocity m·v/(π·d·l); for the rotor the velocity is the
 vector sum of axial velocity and the core swirl, taken as half the rotor surface speed
 (Owen & Rogers, *Flow and Heat Transfer in Rotating-Disc Systems*, 1989: core rotation ≈ 0.4–0.5).
@@ -27,11 +28,16 @@ CORE_SWIRL_RATIO = 0.5
 
 @njit(cache=True)
 def dittus_boelter_htc(velocity: float, hydraulic_diameter: float, specific_volume: float,
-                       viscosity: float, conductivity: float, heat_capacity: float) -> float:
-    """Heat-transfer coefficient W/(m²·K) for turbulent flow at ``velocity`` m/s."""
+                       viscosity: float, conductivity: float, heat_capacity: float,
+                       fluid_is_heated: bool) -> float:
+    """Heat-transfer coefficient W/(m²·K) for turbulent flow at ``velocity`` m/s.
+
+    Prandtl exponent 0.4 when the wall heats the steam, 0.3 when the steam heats the wall.
+    """
     reynolds = velocity * hydraulic_diameter / (viscosity * specific_volume)
     prandtl = heat_capacity * viscosity / conductivity
-    nusselt = DITTUS_BOELTER_CONSTANT * reynolds**0.8 * prandtl**0.4
+    exponent = 0.4 if fluid_is_heated else 0.3
+    nusselt = DITTUS_BOELTER_CONSTANT * reynolds**0.8 * prandtl**exponent
     return nusselt * conductivity / hydraulic_diameter
 
 

@@ -20,7 +20,12 @@ from steamtwin.spec import TurbineSpec
 
 
 def operating_point(spec: TurbineSpec, load_fraction: float | np.ndarray) -> dict[str, np.ndarray]:
-    """Canonical boundary conditions (SI) at ``load_fraction`` (0–1.1) of rated load."""
+    """Canonical boundary conditions (SI) at ``load_fraction`` of rated load.
+
+    From 0.2 up to the last point of the spec's sliding-pressure line; near the top, flows above
+    what the valves wide open pass (~1.07 of rated for the reference unit) are the model's to
+    refuse.
+    """
     load = np.asarray(load_fraction, dtype=float)
     line = spec.sliding_pressure
     if np.any(~np.isfinite(load)) or np.any(load < 0.2) or np.any(load > line.load_fraction[-1]):
@@ -53,5 +58,6 @@ def ramp_profile(start_load: float, end_load: float, rate_per_minute: float,
         raise ValueError("rate_per_minute and step_seconds must be positive")
     ramp_s = abs(end_load - start_load) / rate_per_minute * 60.0
     times = np.arange(0.0, hold_before_s + ramp_s + hold_after_s + step_seconds / 2, step_seconds)
-    progress = np.clip((times - hold_before_s) / ramp_s, 0.0, 1.0) if ramp_s > 0 else 1.0
+    progress = (np.clip((times - hold_before_s) / ramp_s, 0.0, 1.0) if ramp_s > 0
+                else np.ones_like(times))
     return start_load + (end_load - start_load) * progress

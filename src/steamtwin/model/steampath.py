@@ -12,11 +12,13 @@ Equations and their sources:
   η = η_peak·x·(2 − x), x = ν/ν_opt, exact for the ideal impulse blade (Dixon & Hall 2014, ch. 4),
   with ν_opt = cos α1 / (2·sqrt(1 − R)) (impulse limit cos α1/2, 50 % reaction cos α1/√2),
   less the friction loss share ζ_f scaled by the friction coefficient.
-* Control-stage partial-admission and friction losses as fractions of the stage's available
-  energy E0 (Kang et al., *Principles of Steam Turbines*, China Electric Power Press, §3.5):
-  idle-arc windage ζ_w = B_e·(1/e)·(1 − e)·x_a³ with B_e = 0.15; sector-end loss
-  ζ_s = C_e·(1/e)·(S_n/d)·x_a with C_e = 0.012 m⁻¹·m; disc friction P_df = 1e-3·K1·ρ·u³·d² W
-  with K1 = 1.05.
+* Control-stage partial-admission and friction losses (Kang et al., *Principles of Steam
+  Turbines*, China Electric Power Press, §3.5): idle-arc windage ζ_w = B_e·(1/e)·(1 − e)·x_a³ of
+  the available energy E0, B_e = 0.15; sector-end loss ζ_s = C_e·(S_n/(e·d))·x_a, C_e = 0.012 m;
+  disc friction P_df = 1e-3·K1·ρ·u³·d² W, K1 = 1.05. The windage is used as the power it stands
+  for: with the flow through the admitting arc m/e = ρ·c1·π·d·l·sin α1 and c1 ≈ c_a = sqrt(2·E0),
+  ζ_w·m·E0 = (B_e·π·sin α1/2)·(1 − e)·ρ·d·l·u³ — the idle blades pump whatever the flow, which
+  keeps the loss finite as a valve closes (Stodola's windage form, ∝ ρ·u³·d·l·(1 − e)).
 """
 
 from __future__ import annotations
@@ -71,3 +73,10 @@ def stage_efficiency(velocity_ratio: float, optimum_ratio: float, peak_efficienc
     """Internal stage efficiency from the parabolic velocity-ratio law less friction, ≥ 0."""
     x = velocity_ratio / optimum_ratio
     return max(peak_efficiency * x * (2.0 - x) - friction_loss, 0.0)
+
+
+@njit(cache=True)
+def windage_power(windage_area: float, idle_arc: float, density: float, blade_speed: float
+                  ) -> float:
+    """Idle-arc windage (W): B_e·π·sin α1/2 · d·l folded into ``windage_area`` (m²)."""
+    return windage_area * idle_arc * density * blade_speed**3

@@ -26,6 +26,7 @@ from steamtwin.spec.turbine import (
     StageGeometry,
     TurbineSpec,
 )
+from steamtwin.steam.tables import lower_boundary_temperature
 from steamtwin.units import UnitError, parse_quantity
 
 FORMAT_VERSION = 1
@@ -120,16 +121,12 @@ def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
         document = _Table(tomllib.loads(text), "", source)
     except tomllib.TOMLDecodeError as error:
         raise SpecError(f"{source}: not valid TOML: {error}") from None
-    version = document.integer("format_version", 1, 1000)
-    if version != FORMAT_VERSION:
-        raise SpecError(f"{source}: format_version {version} is not supported (expected 1)")
+    document.integer("format_version", FORMAT_VERSION, FORMAT_VERSION)
     design = _design(document.table("design"))
     control_stage = _control_stage(document.table("control_stage"))
     stages = tuple(_pressure_stage(table) for table in document.tables("stages"))
-    extractions = tuple(
-        _extraction(table, len(stages)) for table in document.data.get("extractions", [])
-        and document.tables("extractions")
-    )
+    bleeds = document.tables("extractions") if "extractions" in document.data else []
+    extractions = tuple(_extraction(table, len(stages)) for table in bleeds)
     metal = document.table("metal")
     groups = tuple(_metal_group(table, len(stages)) for table in metal.tables("groups"))
     spec = TurbineSpec(
@@ -284,9 +281,13 @@ def _sliding_pressure(table: _Table) -> SlidingPressureLine:
         raise SpecError(
             f"{where}: load_fraction has {len(loads)} values but pressure has {len(pressures)}"
         )
-    load_values = tuple(
-        parse_quantity(value, "", f"{where}.load_fraction[{i}]") for i, value in enumerate(loads)
-    )
+    try:
+        load_values = tuple(
+            parse_quantity(value, "", f"{where}.load_fraction[{i}]")
+            for i, value in enumerate(loads)
+        )
+    except UnitError as error:
+        raise SpecError(str(error)) from None
     if any(b <= a for a, b in itertools.pairwise(load_values)) or not (
         load_values[0] >= 0.0 and load_values[-1] <= 1.2
     ):
@@ -308,7 +309,7 @@ def _sensors(document: _Table) -> tuple[str, ...]:
     if not isinstance(names, list) or not names:
         raise SpecError(f"{document.source}: sensors must be a non-empty array of signal names")
     for index, name in enumerate(names):
-        if name not in SIGNALS:
+        if not isinstance(name, str) or name not in SIGNALS:
             raise SpecError(
                 f"{document.source}: sensors[{index}] = {name!r} is not a canonical signal "
                 f"(known: {', '.join(SIGNALS)})"
@@ -339,8 +340,28 @@ def _check_consistency(spec: TurbineSpec, source: str) -> None:
                 f"{source}: extraction {extraction.name!r} design_pressure must lie between the "
                 "control-stage and HP-exhaust design pressures"
             )
-        if extraction.design_flow >= design.main_steam_flow:
-            raise SpecError(f"{source}: extraction {extraction.name!r} takes more than the flow")
+    bled = sum(extraction.design_flow for extraction in spec.extractions)
+    if bled >= design.main_steam_flow:
+        raise SpecError(
+            f"{source}: extractions bleed {bled:.1f} kg/s in all, not less than the main-steam "
+            f"flow {design.main_steam_flow:.1f} kg/s"
+        )
+    exhaust_boundary = float(lower_boundary_temperature(design.hp_exhaust_pressure))
+    if design.hp_exhaust_temperature <= exhaust_boundary:
+        raise SpecError(
+            f"{source}: design.hp_exhaust_temperature {design.hp_exhaust_temperature - 273.15:.1f}"
+            f" °C is not superheated at {design.hp_exhaust_pressure / 1e6:g} MPa (must exceed "
+            f"{exhaust_boundary - 273.15:.1f} °C)"
+        )
+    names = [group.name for group in spec.metal_groups]
+    if len(set(names)) != len(names):
+        raise SpecError(f"{source}: metal.groups names repeat: {names}")
+    control_groups = [group for group in spec.metal_groups if 0 in group.stages]
+    if control_groups and control_groups[0].stages != (0,):
+        raise SpecError(
+            f"{source}: metal group {control_groups[0].name!r}: the control stage (stage 0) "
+            "must be a group of its own — its chamber carries the casing thermocouple"
+        )
     covered = [stage for group in spec.metal_groups for stage in group.stages]
     expected = list(range(len(spec.stages) + 1))
     if sorted(covered) != expected:
