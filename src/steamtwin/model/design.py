@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from steamtwin.model.kernel import KernelConstants
+from steamtwin.model.kernel import ControlStageConstants, KernelConstants, MetalConstants
 from steamtwin.model.steampath import (
     KAPPA_SUPERHEATED,
     WINDAGE_CONSTANT,
@@ -96,42 +96,48 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         area[2 * g], area[2 * g + 1] = group.casing_area, group.rotor_area
         rotor_radius = 2.0 * group.rotor_mass / (spec.rotor_material.density * group.rotor_area)
         rotor_speed[g] = omega * rotor_radius
-    return KernelConstants(
+    control = ControlStageConstants(
         valve_pressure_drop=design.valve_pressure_drop,
         nozzle_discharge_coefficient=cs.nozzle_discharge_coefficient,
         level_area=level_arc * area_per_arc,
         level_arc=level_arc,
         level_segments=level_segments,
-        cs_blade_speed=omega * cs.blading.mean_diameter / 2.0,
-        cs_optimum_ratio=optimum_velocity_ratio(cs.blading.nozzle_exit_angle, cs.blading.reaction),
-        cs_peak_efficiency=cs.blading.peak_blade_efficiency,
-        cs_friction_loss=cs.blading.friction_loss,
-        cs_diameter=cs.blading.mean_diameter,
-        cs_windage_area=WINDAGE_CONSTANT * math.pi * math.sin(cs.blading.nozzle_exit_angle)
+        blade_speed=omega * cs.blading.mean_diameter / 2.0,
+        optimum_ratio=optimum_velocity_ratio(cs.blading.nozzle_exit_angle, cs.blading.reaction),
+        peak_efficiency=efficiency_scale * cs.blading.peak_blade_efficiency,
+        friction_loss=cs.blading.friction_loss,
+        diameter=cs.blading.mean_diameter,
+        windage_area=WINDAGE_CONSTANT * math.pi * math.sin(cs.blading.nozzle_exit_angle)
         * cs.blading.mean_diameter * cs.blading.blade_height / 2.0,
+    )
+    metal = MetalConstants(
+        capacity=capacity,
+        conductance=conductance,
+        area=area,
+        half_cell_resistance=half_cell,
+        outer_conductance=outer,
+        flow_area=flow_area,
+        hydraulic_diameter=hydraulic_diameter,
+        rotor_speed=rotor_speed,
+        ambient_temperature=spec.ambient_temperature,
+    )
+    return KernelConstants(
+        control=control,
+        metal=metal,
         stage_capacity=np.array([s.flow_capacity for s in spec.stages]),
         stage_blade_speed=np.array([omega * s.blading.mean_diameter / 2.0 for s in spec.stages]),
         stage_optimum_ratio=np.array(
             [optimum_velocity_ratio(s.blading.nozzle_exit_angle, s.blading.reaction)
              for s in spec.stages]
         ),
-        stage_peak_efficiency=np.array([s.blading.peak_blade_efficiency for s in spec.stages]),
+        stage_peak_efficiency=efficiency_scale
+        * np.array([s.blading.peak_blade_efficiency for s in spec.stages]),
         stage_friction_loss=np.array([s.blading.friction_loss for s in spec.stages]),
         extraction_fraction=extraction_fraction,
-        efficiency_scale=efficiency_scale,
         group_first_stage=np.array([group.stages[0] for group in groups], dtype=np.int64),
         group_ending_at_stage=np.array(
             [next((g for g, group in enumerate(groups) if group.stages[-1] == stage), -1)
              for stage in range(n + 1)], dtype=np.int64),
-        group_hydraulic_diameter=hydraulic_diameter,
-        group_flow_area=flow_area,
-        group_rotor_speed=rotor_speed,
-        metal_capacity=capacity,
-        metal_conductance=conductance,
-        metal_area=area,
-        metal_half_cell_resistance=half_cell,
-        metal_outer_conductance=outer,
-        ambient_temperature=spec.ambient_temperature,
         sensor_group=[group.name for group in groups].index(spec.casing_sensor_group),
     )
 

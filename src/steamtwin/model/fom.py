@@ -188,7 +188,7 @@ class FullOrderModel:
         # falling linearly from 80 % of throttle to the exhaust, enthalpy 100 kJ/kg under inlet
         pressures = np.linspace(0.8 * p0[0], p_exhaust[0], stages + 1)
         enthalpies = np.full(stages + 1, float(if97.enthalpy_pt(p0[0], t0[0])) - 1.0e5)
-        metal = np.full(constants.metal_capacity.shape, t0[0])
+        metal = np.full(constants.metal.capacity.shape, t0[0])
         results = np.full((n, kernel.N_RESULTS), np.nan)
         status = np.zeros(n, dtype=np.int64)
         rows = n if detail else 0

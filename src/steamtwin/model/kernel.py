@@ -100,49 +100,67 @@ STATUS_NO_CONVERGENCE = 3
 STATUS_PRESSURE_INVERSION = 4  # stage pressures reach the throttle pressure
 
 
-class KernelConstants(NamedTuple):
-    """Everything the kernel needs from the spec, derived once (SI units)."""
+class ControlStageConstants(NamedTuple):
+    """The governing stage (SI units)."""
 
     valve_pressure_drop: float  # fraction of throttle pressure lost in wide-open valves
     nozzle_discharge_coefficient: float
     level_area: np.ndarray  # m², nozzle throat area of each valve-opening level
     level_arc: np.ndarray  # fraction of circumference of each level
     level_segments: np.ndarray  # number of nozzle groups (arc segments) of each level
-    cs_blade_speed: float  # m/s
-    cs_optimum_ratio: float
-    cs_peak_efficiency: float
-    cs_friction_loss: float
-    cs_diameter: float  # m
-    cs_windage_area: float  # m², B_e·π·sin α1·d·l/2 of the idle-arc windage power
+    blade_speed: float  # m/s
+    optimum_ratio: float
+    peak_efficiency: float  # with the design efficiency scale applied
+    friction_loss: float
+    diameter: float  # m
+    windage_area: float  # m², B_e·π·sin α1·d·l/2 of the idle-arc windage power
+
+
+class MetalConstants(NamedTuple):
+    """Conduction chains and steam-side geometry of the stage groups (SI units).
+
+    Chain 2·group is the group's inner casing, 2·group + 1 its rotor.
+    """
+
+    capacity: np.ndarray  # (chains, nodes) J/K
+    conductance: np.ndarray  # (chains, nodes-1) W/K
+    area: np.ndarray  # (chains,) m², wetted
+    half_cell_resistance: np.ndarray  # (chains,) m²·K/W, surface to node 0
+    outer_conductance: np.ndarray  # (chains,) W/K to the surroundings
+    flow_area: np.ndarray  # (groups,) m², blade-path annulus
+    hydraulic_diameter: np.ndarray  # (groups,) m
+    rotor_speed: np.ndarray  # (groups,) m/s, rotor surface speed
+    ambient_temperature: float  # K
+
+
+class KernelConstants(NamedTuple):
+    """Everything the kernel needs from the spec, derived once (SI units).
+
+    Split in parts so each compiled helper receives only the arrays it uses: every array handed
+    to an inlined helper costs reference counting at each call.
+    """
+
+    control: ControlStageConstants
+    metal: MetalConstants
     stage_capacity: np.ndarray  # m², Stodola constants
     stage_blade_speed: np.ndarray  # m/s
     stage_optimum_ratio: np.ndarray
-    stage_peak_efficiency: np.ndarray
+    stage_peak_efficiency: np.ndarray  # with the design efficiency scale applied
     stage_friction_loss: np.ndarray
     extraction_fraction: np.ndarray  # of throttle flow, bled after each stage
-    efficiency_scale: float  # matches the design heat balance
     group_first_stage: np.ndarray  # int, 0 = control stage
     group_ending_at_stage: np.ndarray  # int per stage 0…n: the group that ends there, or -1
-    group_hydraulic_diameter: np.ndarray  # m
-    group_flow_area: np.ndarray  # m²
-    group_rotor_speed: np.ndarray  # m/s, rotor surface speed
-    metal_capacity: np.ndarray  # (chains, nodes) J/K; chain 2·group + CASING/ROTOR
-    metal_conductance: np.ndarray  # (chains, nodes-1) W/K
-    metal_area: np.ndarray  # (chains,) m²
-    metal_half_cell_resistance: np.ndarray  # (chains,) m²·K/W, surface to node 0
-    metal_outer_conductance: np.ndarray  # (chains,) W/K to the surroundings
-    ambient_temperature: float  # K
     sensor_group: int
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _nozzle_group_flow(area, p1, pressure, h0, tables):
     """Flow (kg/s) of a nozzle group fed at ``pressure`` (Pa) with enthalpy h0, back pressure p1."""
     return area * nozzle_flow_function(p1 / pressure, KAPPA_SUPERHEATED) * math.sqrt(
         pressure / ph_property(tables, PH_V, pressure, h0))
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True)
 def _throttled_pressure(flow, area, p1, p_valve, h0, tables, guess):
     """Pressure after a part-open valve whose nozzle group must pass ``flow`` (kg/s).
 
@@ -176,45 +194,44 @@ def _throttled_pressure(flow, area, p1, p_valve, h0, tables, guess):
     return x1
 
 
-@njit(cache=True, inline="always")
-def _nozzle_group_expansion(c, tables, cell_1, coordinate_1, h0, s_in, friction_coefficient):
+@njit(cache=True)
+def _nozzle_group_expansion(cs, tables, cell_1, coordinate_1, h0, s_in, friction_coefficient):
     """Outlet enthalpy and isentropic drop (J/kg) of a nozzle group expanding to p1 (located)."""
     drop = max(h0 - enthalpy_ps_at(tables, cell_1, coordinate_1, s_in), 0.0)
-    velocity_ratio = c.cs_blade_speed / math.sqrt(2.0 * drop) if drop > 0.0 else 1e3
-    efficiency = stage_efficiency(velocity_ratio, c.cs_optimum_ratio,
-                                  c.efficiency_scale * c.cs_peak_efficiency,
-                                  friction_coefficient * c.cs_friction_loss)
+    velocity_ratio = cs.blade_speed / math.sqrt(2.0 * drop) if drop > 0.0 else 1e3
+    efficiency = stage_efficiency(velocity_ratio, cs.optimum_ratio, cs.peak_efficiency,
+                                  friction_coefficient * cs.friction_loss)
     return h0 - efficiency * drop, drop
 
 
-@njit(cache=True, inline="always")
-def _control_stage(c, tables, flow, p_throttle, h0, p1, params, throttled, out):
+@njit(cache=True)
+def _control_stage(cs, tables, flow, p_throttle, h0, p1, params, throttled, out):
     """Expand the nozzle groups to ``p1``; returns the mixed outlet enthalpy (J/kg).
 
     ``out`` receives [status, power W, efficiency, active arc]; ``throttled`` holds each level's
     valve-outlet pressure (warm start in, solution out).
     """
     flow_coefficient, friction_coefficient = params[0], params[1]
-    p_valve = p_throttle * (1.0 - c.valve_pressure_drop)
+    p_valve = p_throttle * (1.0 - cs.valve_pressure_drop)
     cell_v, coordinate_v = locate_pressure(tables, p_valve)
     s_valve, pv_valve = entropy_and_pv_at(tables, cell_v, coordinate_v, h0)
     cell_1, coordinate_1 = locate_pressure(tables, p1)
     # every wide-open group expands alike: from the valve outlet (p_valve, h0) to p1
-    open_flux = c.nozzle_discharge_coefficient * flow_coefficient * nozzle_flow_function(
+    open_flux = cs.nozzle_discharge_coefficient * flow_coefficient * nozzle_flow_function(
         p1 / p_valve, KAPPA_SUPERHEATED) * p_valve / math.sqrt(pv_valve)
-    h_open, drop_open = _nozzle_group_expansion(c, tables, cell_1, coordinate_1, h0, s_valve,
+    h_open, drop_open = _nozzle_group_expansion(cs, tables, cell_1, coordinate_1, h0, s_valve,
                                                 friction_coefficient)
     remaining = flow
     mixed = 0.0
     available = 0.0
     arc = 0.0
     segments = 0.0
-    for level in range(c.level_area.size):
+    for level in range(cs.level_area.size):
         if remaining <= 0.0:
             throttled[level] = p1
             continue
-        area = flow_coefficient * c.nozzle_discharge_coefficient * c.level_area[level]
-        wide_open = open_flux * c.level_area[level]
+        area = flow_coefficient * cs.nozzle_discharge_coefficient * cs.level_area[level]
+        wide_open = open_flux * cs.level_area[level]
         if wide_open <= remaining * (1.0 + 1e-12):
             level_flow, p_level, h_level, drop = wide_open, p_valve, h_open, drop_open
         else:
@@ -222,27 +239,27 @@ def _control_stage(c, tables, flow, p_throttle, h0, p1, params, throttled, out):
             p_level = _throttled_pressure(remaining, area, p1, p_valve, h0, tables,
                                           throttled[level])
             h_level, drop = _nozzle_group_expansion(
-                c, tables, cell_1, coordinate_1, h0, ph_property(tables, PH_S, p_level, h0),
+                cs, tables, cell_1, coordinate_1, h0, ph_property(tables, PH_S, p_level, h0),
                 friction_coefficient)
         throttled[level] = p_level
         remaining -= level_flow
         # a part-open valve's arc counts in proportion to its flow, so the admission losses
         # change continuously as a valve opens (a barely open group is almost an idle arc)
         opening = level_flow / wide_open
-        arc += c.level_arc[level] * opening
-        segments += c.level_segments[level] * opening
+        arc += cs.level_arc[level] * opening
+        segments += cs.level_segments[level] * opening
         mixed += level_flow * h_level
         available += level_flow * drop
     if remaining > 1e-9 * flow:
         out[0] = STATUS_OVER_CAPACITY
         return h0
     mean_drop = available / flow
-    x_a = c.cs_blade_speed / math.sqrt(2.0 * mean_drop)
-    sector_end = SECTOR_END_CONSTANT * segments / (arc * c.cs_diameter) * x_a
+    x_a = cs.blade_speed / math.sqrt(2.0 * mean_drop)
+    sector_end = SECTOR_END_CONSTANT * segments / (arc * cs.diameter) * x_a
     h_mix = mixed / flow
     density = 1.0 / ph_property_at(tables, PH_V, cell_1, coordinate_1, p1, h_mix)
-    windage = windage_power(c.cs_windage_area, 1.0 - arc, density, c.cs_blade_speed)
-    disc = DISC_FRICTION_CONSTANT * density * c.cs_blade_speed**3 * c.cs_diameter**2
+    windage = windage_power(cs.windage_area, 1.0 - arc, density, cs.blade_speed)
+    disc = DISC_FRICTION_CONSTANT * density * cs.blade_speed**3 * cs.diameter**2
     loss_power = sector_end * available + friction_coefficient * (windage + disc)
     h1 = h_mix + loss_power / flow
     out[0] = STATUS_OK
@@ -252,35 +269,36 @@ def _control_stage(c, tables, flow, p_throttle, h0, p1, params, throttled, out):
     return h1
 
 
-@njit(cache=True, inline="always")
-def _group_heat(c, tables, group, p_mean, h_mean, flow, params, first_sweep, metal_old,
-                inverse_dt, surface, base, response, group_temperature, work, properties):
-    """Heat (W) the casing and rotor of ``group`` take from the steam in this time step.
+@njit(cache=True)
+def _setup_group_metal(metal, tables, group, p_mean, h_mean, flow, htc_multiplier, metal_old,
+                       inverse_dt, surface, base, response, work, properties):
+    """Steam-side coefficients and the implicit metal step of one group; its steam T (K).
 
-    On a sample's first sweep the steam-side coefficients are evaluated and the implicit metal
-    step of both chains is set up affine in the steam temperature (``surface`` conductances W/K,
-    ``base`` and ``response`` temperatures); later sweeps only evaluate it. The group's steam
-    temperature (K) is kept in ``group_temperature`` for the commit.
+    Run once per sample (first sweep): sets ``surface`` conductances (W/K) and the ``base`` and
+    ``response`` temperatures of the group's casing and rotor chains, so that later sweeps only
+    evaluate :func:`_group_heat`.
     """
-    if first_sweep:
-        ph_properties(tables, p_mean, h_mean, properties)
-        temperature = properties[PH_T]
-        v, mu, k, cp = properties[PH_V], properties[PH_MU], properties[PH_K], properties[PH_CP]
-        axial = flow * v / c.group_flow_area[group]
-        d_h = c.group_hydraulic_diameter[group]
-        relative = rotor_relative_velocity(axial, c.group_rotor_speed[group])
-        for body in range(2):
-            velocity = axial if body == CASING else relative
-            chain = 2 * group + body
-            steam_is_heated = metal_old[chain, 0] > temperature
-            htc = params[2] * dittus_boelter_htc(velocity, d_h, v, mu, k, cp, steam_is_heated)
-            surface[chain] = c.metal_area[chain] / (1.0 / htc + c.metal_half_cell_resistance[chain])
-            prepare_chain(chain, metal_old, c.metal_capacity, c.metal_conductance, surface[chain],
-                          c.metal_outer_conductance[chain], c.ambient_temperature, inverse_dt,
-                          base, response, work)
-    else:
-        temperature = ph_property(tables, PH_T, p_mean, h_mean)
-    group_temperature[group] = temperature
+    ph_properties(tables, p_mean, h_mean, properties)
+    temperature = properties[PH_T]
+    v, mu, k, cp = properties[PH_V], properties[PH_MU], properties[PH_K], properties[PH_CP]
+    axial = flow * v / metal.flow_area[group]
+    relative = rotor_relative_velocity(axial, metal.rotor_speed[group])
+    for body in range(2):
+        velocity = axial if body == CASING else relative
+        chain = 2 * group + body
+        steam_is_heated = metal_old[chain, 0] > temperature
+        htc = htc_multiplier * dittus_boelter_htc(velocity, metal.hydraulic_diameter[group], v,
+                                                  mu, k, cp, steam_is_heated)
+        surface[chain] = metal.area[chain] / (1.0 / htc + metal.half_cell_resistance[chain])
+        prepare_chain(chain, metal_old, metal.capacity, metal.conductance, surface[chain],
+                      metal.outer_conductance[chain], metal.ambient_temperature, inverse_dt,
+                      base, response, work)
+    return temperature
+
+
+@njit(cache=True)
+def _group_heat(group, temperature, surface, base, response):
+    """Heat (W) the casing and rotor of ``group`` take from steam at ``temperature`` (K)."""
     heat = 0.0
     for chain in range(2 * group, 2 * group + 2):
         heat += surface_heat(surface[chain], base[chain, 0], response[chain, 0], temperature)
@@ -293,6 +311,7 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
                   group_temperature, work, cs_out, properties, result, max_iter):
     """Solve one sample and advance ``metal`` (K) in place; returns a status code."""
     n = c.stage_capacity.size
+    control, metal_constants = c.control, c.metal
     flow_coefficient = params[0]
     previous_p1 = pressures[0]  # the warm start: unchanged inputs converge in one sweep
     previous_h_exhaust = enthalpies[n]
@@ -306,21 +325,27 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             stage_flow = flow * flow_fraction
             pressures[i] = stodola_inlet_pressure(
                 stage_flow, flow_coefficient * c.stage_capacity[i], pressures[i + 1], inlet_pv[i])
-        if not pressures[0] < p0 * (1.0 - c.valve_pressure_drop):
+        if not pressures[0] < p0 * (1.0 - control.valve_pressure_drop):
             return STATUS_PRESSURE_INVERSION
         if not pressure_in_range(tables, pressures[0]):
             return STATUS_OUT_OF_TABLES
         # 2. control stage
-        h1 = _control_stage(c, tables, flow, p0, h0, pressures[0], params, throttled, cs_out)
+        h1 = _control_stage(control, tables, flow, p0, h0, pressures[0], params, throttled,
+                            cs_out)
         if cs_out[0] != STATUS_OK:
             return int(cs_out[0])
         if not 0.0 <= ph_domain_position(tables, pressures[0], h1) <= 1.0:
             return STATUS_OUT_OF_TABLES
         heat_total = 0.0
         g = c.group_ending_at_stage[0]
-        heat = _group_heat(c, tables, g, pressures[0], h1, flow, params, iteration == 0, metal,
-                           inverse_dt, surface, base, response, group_temperature, work,
-                           properties)
+        if iteration == 0:
+            temperature = _setup_group_metal(metal_constants, tables, g, pressures[0], h1, flow,
+                                             params[2], metal, inverse_dt, surface, base,
+                                             response, work, properties)
+        else:
+            temperature = ph_property(tables, PH_T, pressures[0], h1)
+        group_temperature[g] = temperature
+        heat = _group_heat(g, temperature, surface, base, response)
         heat_total += heat
         enthalpies[0] = h1 - heat / flow
         power = cs_out[1]
@@ -334,7 +359,7 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             drop = enthalpies[i] - enthalpy_ps_at(tables, cell_in, coordinate_in, s_in)
             velocity_ratio = c.stage_blade_speed[i] / math.sqrt(2.0 * drop)
             efficiency = stage_efficiency(velocity_ratio, c.stage_optimum_ratio[i],
-                                          c.efficiency_scale * c.stage_peak_efficiency[i],
+                                          c.stage_peak_efficiency[i],
                                           params[1] * c.stage_friction_loss[i])
             h_out = enthalpies[i] - efficiency * drop
             power += stage_flow * efficiency * drop
@@ -343,9 +368,14 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
                 first = c.group_first_stage[g]
                 p_mean = math.sqrt(pressures[first - 1] * pressures[i + 1])
                 h_mean = 0.5 * (enthalpies[first - 1] + h_out)
-                heat = _group_heat(c, tables, g, p_mean, h_mean, stage_flow, params,
-                                   iteration == 0, metal, inverse_dt, surface, base,
-                                   response, group_temperature, work, properties)
+                if iteration == 0:
+                    temperature = _setup_group_metal(metal_constants, tables, g, p_mean, h_mean,
+                                                     stage_flow, params[2], metal, inverse_dt,
+                                                     surface, base, response, work, properties)
+                else:
+                    temperature = ph_property(tables, PH_T, p_mean, h_mean)
+                group_temperature[g] = temperature
+                heat = _group_heat(g, temperature, surface, base, response)
                 heat_total += heat
                 h_out -= heat / stage_flow
             enthalpies[i + 1] = h_out
@@ -397,9 +427,9 @@ def _metal_energy(c, metal):
     chains, nodes = metal.shape
     for chain in range(chains):
         for j in range(nodes):
-            content += c.metal_capacity[chain, j] * metal[chain, j]
-        loss += c.metal_outer_conductance[chain] * (metal[chain, nodes - 1]
-                                                    - c.ambient_temperature)
+            content += c.metal.capacity[chain, j] * metal[chain, j]
+        loss += c.metal.outer_conductance[chain] * (metal[chain, nodes - 1]
+                                                    - c.metal.ambient_temperature)
     return content, loss
 
 
@@ -427,7 +457,7 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, pressures,
     chains, nodes = metal.shape
     surface, base, response = np.zeros(chains), np.zeros(metal.shape), np.zeros(metal.shape)
     group_temperature, work = np.zeros(chains // 2), np.empty(nodes)
-    throttled = np.empty(c.level_area.size)
+    throttled = np.empty(c.control.level_area.size)
     throttled[:] = p0[0]
     cs_out = np.zeros(4)
     properties = np.empty(6)
