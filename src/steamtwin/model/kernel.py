@@ -4,14 +4,14 @@ At each sample the steam path is algebraic (quasi-steady); only the metal carrie
 loop therefore solves, sample by sample, warm-started from the previous sample:
 
 1. a backward sweep of Stodola's law from the HP-exhaust pressure gives the stage pressures and
-   the control-stage pressure (specific volumes from the previous iterate);
+   the control-stage pressure (each stage's p·v from the previous sweep);
 2. the control stage distributes the flow over the nozzle groups in valve order, throttling the
    group whose valve is part open, expands each group and mixes them (``steampath``);
 3. a forward sweep expands the pressure stages; at the end of each stage group the steam gives
    heat to that group's casing and rotor (implicit-Euler conduction step, ``metal``), which is
    taken from the steam enthalpy there;
-4. 1–3 repeat until the control-stage pressure and exhaust enthalpy stop changing; then the
-   metal state is committed.
+4. 1–3 repeat until the estimated error left in the control-stage pressure and the exhaust
+   enthalpy is below the tolerances below; then the metal state is committed.
 
 Heat given to the metal in a step is exactly what the implicit metal step stores or loses
 through the lagging, so energy is conserved to round-off at every sample.
