@@ -281,27 +281,25 @@ def _sliding_pressure(table: _Table) -> SlidingPressureLine:
         raise SpecError(
             f"{where}: load_fraction has {len(loads)} values but pressure has {len(pressures)}"
         )
-    try:
-        load_values = tuple(
-            parse_quantity(value, "", f"{where}.load_fraction[{i}]")
-            for i, value in enumerate(loads)
-        )
-    except UnitError as error:
-        raise SpecError(str(error)) from None
+    load_values = _quantities(loads, "", f"{where}.load_fraction")
     if any(b <= a for a, b in itertools.pairwise(load_values)) or not (
         load_values[0] >= 0.0 and load_values[-1] <= 1.2
     ):
         raise SpecError(f"{where}.load_fraction must increase within 0…1.2, got {list(loads)}")
-    try:
-        pressure_values = tuple(
-            parse_quantity(value, "Pa", f"{where}.pressure[{i}]")
-            for i, value in enumerate(pressures)
-        )
-    except UnitError as error:
-        raise SpecError(str(error)) from None
+    pressure_values = _quantities(pressures, "Pa", f"{where}.pressure")
     if any(not 1e5 <= p <= 25e6 for p in pressure_values):
         raise SpecError(f"{where}.pressure values must lie within 0.1…25 MPa")
     return SlidingPressureLine(load_values, pressure_values)
+
+
+def _quantities(values: list, si_unit: str, where: str) -> tuple[float, ...]:
+    """Each entry of a TOML array in ``si_unit``; errors name the entry."""
+    try:
+        return tuple(
+            parse_quantity(value, si_unit, f"{where}[{i}]") for i, value in enumerate(values)
+        )
+    except UnitError as error:
+        raise SpecError(str(error)) from None
 
 
 def _sensors(document: _Table) -> tuple[str, ...]:
