@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import typer
+from rich.console import Console
 
 from steamtwin.dcs.canonical_csv import CsvFormatError, read_canonical_csv, write_canonical_csv
 from steamtwin.model.fom import FullOrderModel, InputError
@@ -27,11 +28,16 @@ def simulate(
 
     Example: steamtwin simulate --turbine reference --inputs inputs.csv --out outputs.csv
     """
+    console = Console(stderr=True)
     try:
         spec = load_spec(turbine)
         parameters = ModelParameters.from_json(params) if params else ModelParameters()
         frame = read_canonical_csv(inputs, required=INPUT_SIGNALS)
-        outputs = FullOrderModel(spec).simulate(frame, parameters)
+        model = FullOrderModel(spec)
+        with console.status("preparing the model (the first run compiles it, ~20 s)"):
+            _ = model.design_
+        with console.status(f"simulating {len(frame)} samples"):
+            outputs = model.simulate(frame, parameters)
     except (SpecError, ParameterError, CsvFormatError, InputError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=2) from None
