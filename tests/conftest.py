@@ -3,9 +3,16 @@
 from __future__ import annotations
 
 import pytest
+from hypothesis import settings
 
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.spec import TurbineSpec, load_spec
+
+# Property tests draw the same examples on every run (CI included): a failure is reproducible
+# and a green run stays green. Run with --hypothesis-profile=explore to search afresh.
+settings.register_profile("deterministic", derandomize=True, print_blob=True)
+settings.register_profile("explore", max_examples=500)
+settings.load_profile("deterministic")
 
 
 @pytest.fixture(scope="session")

@@ -31,9 +31,10 @@ INPUT_RANGES = {
     "hp_exhaust_pressure": (0.1e6, 20.0e6, "Pa"),
 }
 
-# Below this share of rated flow (start-up, no-load) the velocity-ratio and partial-admission
-# loss correlations are outside the range they were fitted to (Kang et al.; Spencer, Cotton &
-# Cannon 1963 cover 25–100 % of rated flow); deep peak shaving stays above 25 %.
+# Below this share of rated flow (start-up, no-load) windage and ventilation dominate the
+# stages and the velocity-ratio and partial-admission loss correlations, made for loaded
+# operation, lose their meaning (the control stage's efficiency heads below zero); deep peak
+# shaving stays above 25 %.
 MINIMUM_FLOW_FRACTION = 0.15
 
 _STATUS_TEXT = {
