@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
 from hypothesis import settings
 
@@ -9,10 +11,10 @@ from steamtwin.model.fom import FullOrderModel
 from steamtwin.spec import TurbineSpec, load_spec
 
 # Property tests draw the same examples on every run (CI included): a failure is reproducible
-# and a green run stays green. Run with --hypothesis-profile=explore to search afresh.
+# and a green run stays green. HYPOTHESIS_PROFILE=explore searches afresh with more examples.
 settings.register_profile("deterministic", derandomize=True, print_blob=True)
-settings.register_profile("explore", max_examples=500)
-settings.load_profile("deterministic")
+settings.register_profile("explore", max_examples=300)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "deterministic"))
 
 
 @pytest.fixture(scope="session")
