@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import typer
 
+from steamtwin.cli.dcs import dcs_app
 from steamtwin.cli.demo import demo
 from steamtwin.cli.simulate import simulate
 from steamtwin.cli.turbine import turbine_app
@@ -16,5 +17,6 @@ app = typer.Typer(
     add_completion=False,
 )
 app.add_typer(turbine_app, name="turbine")
+app.add_typer(dcs_app, name="dcs")
 app.command()(simulate)
 app.command()(demo)

@@ -1,0 +1,50 @@
+"""``steamtwin dcs``: plant historian data — quality check of an export against its tag map."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import typer
+
+from steamtwin.dcs.quality import check_quality
+from steamtwin.dcs.readers import HistorianFormatError, read_historian
+from steamtwin.dcs.tagmap import TagMapError, load_tag_map
+from steamtwin.model.simulator import INPUT_SIGNALS
+
+dcs_app = typer.Typer(help="Plant historian (DCS) data.", no_args_is_help=True)
+
+
+@dcs_app.command("check")
+def check(
+    data: Path = typer.Argument(..., help="Historian export: CSV or Parquet, wide or long."),
+    tags: Path = typer.Option(..., help="Tag map (TOML): column/tag, unit, range per signal."),
+    json_out: Path | None = typer.Option(None, "--json", help="Also write the report as JSON."),
+    require: str = typer.Option(
+        ",".join(INPUT_SIGNALS), help="Comma-separated canonical signals that must be present."
+    ),
+) -> None:
+    """Print the data-quality report of a historian export; exit code 1 if it has errors.
+
+    Example: steamtwin dcs check history.parquet --tags tags.toml --json quality.json
+    """
+    try:
+        tag_map = load_tag_map(tags)
+        historian = read_historian(data, tag_map)
+    except (TagMapError, HistorianFormatError) as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=2) from None
+    specs = tag_map.signals.values()
+    report = check_quality(
+        historian.signals,
+        required=tuple(name.strip() for name in require.split(",") if name.strip()),
+        ranges={s.signal: s.valid_range_si for s in specs if s.valid_range_si is not None},
+        declared_units={s.signal: s.unit for s in specs},
+        tag_names={s.signal: s.column for s in specs},
+        source=str(data),
+    )
+    typer.echo(report.to_text())
+    if json_out is not None:
+        json_out.write_text(json.dumps(report.to_dict(), indent=2) + "\n", encoding="utf-8")
+    if not report.ok:
+        raise typer.Exit(code=1)
