@@ -14,7 +14,7 @@ runner = CliRunner()
 
 
 @pytest.mark.parametrize(
-    "command", [[], ["turbine", "show"], ["simulate"], ["demo"], ["dcs", "check"]]
+    "command", [[], ["turbine", "show"], ["simulate"], ["demo"], ["dcs", "check"], ["plant"]]
 )
 def test_every_command_has_help_with_an_example(command):
     result = runner.invoke(app, [*command, "--help"])

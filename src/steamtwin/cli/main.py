@@ -6,6 +6,7 @@ import typer
 
 from steamtwin.cli.dcs import dcs_app
 from steamtwin.cli.demo import demo
+from steamtwin.cli.plant import plant
 from steamtwin.cli.simulate import simulate
 from steamtwin.cli.turbine import turbine_app
 
@@ -19,4 +20,5 @@ app = typer.Typer(
 app.add_typer(turbine_app, name="turbine")
 app.add_typer(dcs_app, name="dcs")
 app.command()(simulate)
+app.command()(plant)
 app.command()(demo)
