@@ -8,17 +8,27 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from steamtwin.model.metal import dittus_boelter_htc, prepare_chain, surface_heat
+from steamtwin.model.metal import (
+    dittus_boelter_htc,
+    factor_chain,
+    finish_chain,
+    prepare_chain,
+    surface_heat,
+    surface_response,
+)
 
 K, RHO, C = 34.0, 7800.0, 600.0  # low-alloy steel near 500 °C (ASME II-D Group C)
 
 
 def _step(old, capacity, conductance, surface, outer, fluid, ambient, inverse_dt):
     """One implicit step of a single chain: (heat from the fluid W, new temperatures K)."""
-    base, response = np.empty((1, old.size)), np.empty((1, old.size))
-    prepare_chain(0, old[np.newaxis], capacity[np.newaxis], conductance[np.newaxis], surface,
-                  outer, ambient, inverse_dt, base, response, np.empty(old.size))
-    return surface_heat(surface, base[0, 0], response[0, 0], fluid), base[0] + response[0] * fluid
+    pivot, rhs, new = np.empty((1, old.size)), np.empty((1, old.size)), np.empty((1, old.size))
+    factor_chain(0, capacity[np.newaxis], conductance[np.newaxis], outer, inverse_dt, pivot)
+    prepare_chain(0, old[np.newaxis], capacity[np.newaxis], conductance[np.newaxis], outer,
+                  ambient, inverse_dt, pivot, rhs)
+    base, response = surface_response(surface, pivot[0, 0], rhs[0, 0])
+    finish_chain(0, base + response * fluid, conductance[np.newaxis], pivot, rhs, new)
+    return surface_heat(surface, base, response, fluid), new[0]
 
 
 def _wall(depth, nodes, area=1.0):
@@ -103,11 +113,13 @@ def test_chains_are_independent_rows():
     old = np.array([np.linspace(700.0, 650.0, 8), np.full(8, 600.0)])
     capacity = np.array([walls[0][0], walls[1][0]])
     conductance = np.array([walls[0][1], walls[1][1]])
-    base, response = np.empty((2, 8)), np.empty((2, 8))
+    pivot, rhs, new = np.empty((2, 8)), np.empty((2, 8)), np.empty((2, 8))
     for chain in (1, 0):
-        prepare_chain(chain, old, capacity, conductance, 2000.0, 0.5, 308.0, 0.1, base, response,
-                      np.empty(8))
+        factor_chain(chain, capacity, conductance, 0.5, 0.1, pivot)
+        prepare_chain(chain, old, capacity, conductance, 0.5, 308.0, 0.1, pivot, rhs)
     for chain in (0, 1):
+        base, response = surface_response(2000.0, pivot[chain, 0], rhs[chain, 0])
+        finish_chain(chain, base + response * 750.0, conductance, pivot, rhs, new)
         _, alone = _step(old[chain], capacity[chain], conductance[chain], 2000.0, 0.5, 750.0,
                          308.0, 0.1)
-        assert np.allclose(base[chain] + response[chain] * 750.0, alone, rtol=0, atol=1e-12)
+        assert np.allclose(new[chain], alone, rtol=0, atol=1e-12)

@@ -27,9 +27,12 @@ from numba import njit
 
 from steamtwin.model.metal import (
     dittus_boelter_htc,
+    factor_chain,
+    finish_chain,
     prepare_chain,
     rotor_relative_velocity,
     surface_heat,
+    surface_response,
 )
 from steamtwin.model.steampath import (
     DISC_FRICTION_CONSTANT,
@@ -154,24 +157,29 @@ class KernelConstants(NamedTuple):
 
 
 @njit(cache=True)
-def _nozzle_group_flow(area, p1, pressure, h0, tables):
-    """Flow (kg/s) of a nozzle group fed at ``pressure`` (Pa) with enthalpy h0, back pressure p1."""
+def _nozzle_group_flow(area, p1, pressure, specific_volume):
+    """Flow (kg/s) of a nozzle group fed at ``pressure`` (Pa) with ``specific_volume`` (m³/kg).
+
+    Scalars only: a compiled helper taking the table arrays would increment and decrement their
+    reference counts at every evaluation.
+    """
     return area * nozzle_flow_function(p1 / pressure, KAPPA_SUPERHEATED) * math.sqrt(
-        pressure / ph_property(tables, PH_V, pressure, h0))
+        pressure / specific_volume)
 
 
 @njit(cache=True)
-def _throttled_pressure(flow, area, p1, p_valve, h0, tables, guess):
+def _throttled_pressure(flow, area, p1, p_valve, wide_open, h0, tables, guess):
     """Pressure after a part-open valve whose nozzle group must pass ``flow`` (kg/s).
 
-    Secant iteration from the previous sample's answer, kept inside the bracket (p1, p_valve]
-    by bisection; the flow function rises monotonically with the valve-outlet pressure.
+    ``wide_open`` is the group's flow at ``p_valve`` (kg/s). Secant iteration from the previous
+    sample's answer, kept inside the bracket (p1, p_valve] by bisection; the flow function rises
+    monotonically with the valve-outlet pressure.
     """
     low, high = p1, p_valve
-    if _nozzle_group_flow(area, p1, high, h0, tables) <= flow:
+    if wide_open <= flow:
         return high
     x0 = min(max(guess, low + 1e-3 * (high - low)), high - 1e-3 * (high - low))
-    f0 = _nozzle_group_flow(area, p1, x0, h0, tables) - flow
+    f0 = _nozzle_group_flow(area, p1, x0, ph_property(tables, PH_V, x0, h0)) - flow
     if abs(f0) <= THROTTLE_TOLERANCE * flow:
         return x0
     x1 = x0 + 1e-4 * (high - low) * (-1.0 if f0 > 0.0 else 1.0)
@@ -180,7 +188,7 @@ def _throttled_pressure(flow, area, p1, p_valve, h0, tables, guess):
             high = min(high, x0)
         else:
             low = max(low, x0)
-        f1 = _nozzle_group_flow(area, p1, x1, h0, tables) - flow
+        f1 = _nozzle_group_flow(area, p1, x1, ph_property(tables, PH_V, x1, h0)) - flow
         if abs(f1) <= THROTTLE_TOLERANCE * flow:
             return x1
         if f1 > 0.0:
@@ -205,16 +213,16 @@ def _nozzle_group_expansion(cs, tables, cell_1, coordinate_1, h0, s_in, friction
 
 
 @njit(cache=True)
-def _control_stage(cs, tables, flow, p_throttle, h0, p1, params, throttled, out):
+def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params, throttled,
+                   out):
     """Expand the nozzle groups to ``p1``; returns the mixed outlet enthalpy (J/kg).
 
-    ``out`` receives [status, power W, efficiency, active arc]; ``throttled`` holds each level's
-    valve-outlet pressure (warm start in, solution out).
+    The wide-open valves pass steam at ``p_valve`` (Pa) with entropy ``s_valve`` and p·v
+    ``pv_valve`` (J/kg), set once per sample. ``out`` receives [status, power W, efficiency,
+    active arc]; ``throttled`` holds each level's valve-outlet pressure (warm start in, solution
+    out).
     """
     flow_coefficient, friction_coefficient = params[0], params[1]
-    p_valve = p_throttle * (1.0 - cs.valve_pressure_drop)
-    cell_v, coordinate_v = locate_pressure(tables, p_valve)
-    s_valve, pv_valve = entropy_and_pv_at(tables, cell_v, coordinate_v, h0)
     cell_1, coordinate_1 = locate_pressure(tables, p1)
     # every wide-open group expands alike: from the valve outlet (p_valve, h0) to p1
     open_flux = cs.nozzle_discharge_coefficient * flow_coefficient * nozzle_flow_function(
@@ -236,7 +244,7 @@ def _control_stage(cs, tables, flow, p_throttle, h0, p1, params, throttled, out)
             level_flow, p_level, h_level, drop = wide_open, p_valve, h_open, drop_open
         else:
             level_flow = remaining
-            p_level = _throttled_pressure(remaining, area, p1, p_valve, h0, tables,
+            p_level = _throttled_pressure(remaining, area, p1, p_valve, wide_open, h0, tables,
                                           throttled[level])
             h_level, drop = _nozzle_group_expansion(
                 cs, tables, cell_1, coordinate_1, h0, ph_property(tables, PH_S, p_level, h0),
@@ -270,15 +278,16 @@ def _control_stage(cs, tables, flow, p_throttle, h0, p1, params, throttled, out)
 
 
 @njit(cache=True)
-def _setup_group_metal(metal, tables, group, p_mean, h_mean, flow, htc_multiplier, metal_old,
-                       inverse_dt, surface, base, response, work, properties):
+def _setup_group_metal(metal, group, flow, htc_multiplier, metal_old, pivot, rhs, surface,
+                       properties):
     """Steam-side coefficients and the implicit metal step of one group; its steam T (K).
 
-    Run once per sample (first sweep): sets ``surface`` conductances (W/K) and the ``base`` and
-    ``response`` temperatures of the group's casing and rotor chains, so that later sweeps only
-    evaluate :func:`_group_heat`.
+    Run once per sample (first sweep) with the group's mean steam ``properties`` (PH_*): sets
+    row ``surface[chain]`` of the group's casing and rotor chains to [steam-side conductance W/K,
+    base K, response] of the new surface temperature base + response·T_steam, so that later
+    sweeps only evaluate :func:`_group_heat`. The caller looks the properties up: every array
+    handed to a compiled call costs reference counting, and the tables are five.
     """
-    ph_properties(tables, p_mean, h_mean, properties)
     temperature = properties[PH_T]
     v, mu, k, cp = properties[PH_V], properties[PH_MU], properties[PH_K], properties[PH_CP]
     axial = flow * v / metal.flow_area[group]
@@ -289,33 +298,44 @@ def _setup_group_metal(metal, tables, group, p_mean, h_mean, flow, htc_multiplie
         steam_is_heated = metal_old[chain, 0] > temperature
         htc = htc_multiplier * dittus_boelter_htc(velocity, metal.hydraulic_diameter[group], v,
                                                   mu, k, cp, steam_is_heated)
-        surface[chain] = metal.area[chain] / (1.0 / htc + metal.half_cell_resistance[chain])
-        prepare_chain(chain, metal_old, metal.capacity, metal.conductance, surface[chain],
-                      metal.outer_conductance[chain], metal.ambient_temperature, inverse_dt,
-                      base, response, work)
+        conductance = metal.area[chain] / (1.0 / htc + metal.half_cell_resistance[chain])
+        surface[chain, 0] = conductance
+        surface[chain, 1], surface[chain, 2] = surface_response(conductance, pivot[chain, 0],
+                                                                rhs[chain, 0])
     return temperature
 
 
 @njit(cache=True)
-def _group_heat(group, temperature, surface, base, response):
+def _group_heat(group, temperature, surface):
     """Heat (W) the casing and rotor of ``group`` take from steam at ``temperature`` (K)."""
     heat = 0.0
     for chain in range(2 * group, 2 * group + 2):
-        heat += surface_heat(surface[chain], base[chain, 0], response[chain, 0], temperature)
+        heat += surface_heat(surface[chain, 0], surface[chain, 1], surface[chain, 2], temperature)
     return heat
 
 
 @njit(cache=True)
 def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressures,
-                  enthalpies, inlet_pv, throttled, metal, surface, base, response,
-                  group_temperature, work, cs_out, properties, result, max_iter):
-    """Solve one sample and advance ``metal`` (K) in place; returns a status code."""
+                  enthalpies, inlet_pv, throttled, metal, pivot, rhs, surface, group_temperature,
+                  cs_out, properties, result, max_iter):
+    """Solve one sample and advance ``metal`` (K) in place; returns a status code.
+
+    ``pivot`` holds the metal chains factored for this step (:func:`factor_chain`).
+    """
     n = c.stage_capacity.size
     control, metal_constants = c.control, c.metal
+    for chain in range(metal.shape[0]):
+        prepare_chain(chain, metal, metal_constants.capacity, metal_constants.conductance,
+                      metal_constants.outer_conductance[chain],
+                      metal_constants.ambient_temperature, inverse_dt, pivot, rhs)
     flow_coefficient = params[0]
     previous_p1 = pressures[0]  # the warm start: unchanged inputs converge in one sweep
     previous_h_exhaust = enthalpies[n]
     last_change_p = last_change_h = 0.0
+    # the state after the wide-open valves depends on the inputs only
+    p_valve = p0 * (1.0 - control.valve_pressure_drop)
+    cell_v, coordinate_v = locate_pressure(tables, p_valve)
+    s_valve, pv_valve = entropy_and_pv_at(tables, cell_v, coordinate_v, h0)
     for iteration in range(max_iter):
         # 1. backward Stodola sweep
         pressures[n] = p_exhaust
@@ -325,13 +345,13 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             stage_flow = flow * flow_fraction
             pressures[i] = stodola_inlet_pressure(
                 stage_flow, flow_coefficient * c.stage_capacity[i], pressures[i + 1], inlet_pv[i])
-        if not pressures[0] < p0 * (1.0 - control.valve_pressure_drop):
+        if not pressures[0] < p_valve:
             return STATUS_PRESSURE_INVERSION
         if not pressure_in_range(tables, pressures[0]):
             return STATUS_OUT_OF_TABLES
         # 2. control stage
-        h1 = _control_stage(control, tables, flow, p0, h0, pressures[0], params, throttled,
-                            cs_out)
+        h1 = _control_stage(control, tables, flow, p_valve, s_valve, pv_valve, h0, pressures[0],
+                            params, throttled, cs_out)
         if cs_out[0] != STATUS_OK:
             return int(cs_out[0])
         if not 0.0 <= ph_domain_position(tables, pressures[0], h1) <= 1.0:
@@ -339,13 +359,13 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
         heat_total = 0.0
         g = c.group_ending_at_stage[0]
         if iteration == 0:
-            temperature = _setup_group_metal(metal_constants, tables, g, pressures[0], h1, flow,
-                                             params[2], metal, inverse_dt, surface, base,
-                                             response, work, properties)
+            ph_properties(tables, pressures[0], h1, properties)
+            temperature = _setup_group_metal(metal_constants, g, flow, params[2], metal, pivot,
+                                             rhs, surface, properties)
         else:
             temperature = ph_property(tables, PH_T, pressures[0], h1)
         group_temperature[g] = temperature
-        heat = _group_heat(g, temperature, surface, base, response)
+        heat = _group_heat(g, temperature, surface)
         heat_total += heat
         enthalpies[0] = h1 - heat / flow
         power = cs_out[1]
@@ -369,13 +389,13 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
                 p_mean = math.sqrt(pressures[first - 1] * pressures[i + 1])
                 h_mean = 0.5 * (enthalpies[first - 1] + h_out)
                 if iteration == 0:
-                    temperature = _setup_group_metal(metal_constants, tables, g, p_mean, h_mean,
-                                                     stage_flow, params[2], metal, inverse_dt,
-                                                     surface, base, response, work, properties)
+                    ph_properties(tables, p_mean, h_mean, properties)
+                    temperature = _setup_group_metal(metal_constants, g, stage_flow, params[2],
+                                                     metal, pivot, rhs, surface, properties)
                 else:
                     temperature = ph_property(tables, PH_T, p_mean, h_mean)
                 group_temperature[g] = temperature
-                heat = _group_heat(g, temperature, surface, base, response)
+                heat = _group_heat(g, temperature, surface)
                 heat_total += heat
                 h_out -= heat / stage_flow
             enthalpies[i + 1] = h_out
@@ -404,7 +424,8 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             result[0] = pressures[0]
             result[1] = ph_property(tables, PH_T, pressures[0], enthalpies[0])
             result[2] = ph_property(tables, PH_T, p_exhaust, enthalpies[n])
-            _commit_metal(base, response, group_temperature, metal)
+            _commit_metal(metal_constants.conductance, pivot, rhs, surface, group_temperature,
+                          metal)
             result[3] = metal[2 * c.sensor_group + CASING, 0]
             result[4] = power
             result[5] = heat_total
@@ -434,12 +455,11 @@ def _metal_energy(c, metal):
 
 
 @njit(cache=True)
-def _commit_metal(base, response, group_temperature, metal):
+def _commit_metal(conductance, pivot, rhs, surface, group_temperature, metal):
     """Metal temperatures (K) at the end of the step, from the converged steam temperatures."""
-    chains, nodes = metal.shape
-    for chain in range(chains):
-        for j in range(nodes):
-            metal[chain, j] = base[chain, j] + response[chain, j] * group_temperature[chain // 2]
+    for chain in range(metal.shape[0]):
+        surface_temperature = surface[chain, 1] + surface[chain, 2] * group_temperature[chain // 2]
+        finish_chain(chain, surface_temperature, conductance, pivot, rhs, metal)
 
 
 @njit(cache=True)
@@ -454,9 +474,10 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, pressures,
     sample.
     """
     n_samples = p0.size
-    chains, nodes = metal.shape
-    surface, base, response = np.zeros(chains), np.zeros(metal.shape), np.zeros(metal.shape)
-    group_temperature, work = np.zeros(chains // 2), np.empty(nodes)
+    chains = metal.shape[0]
+    surface, pivot, rhs = np.zeros((chains, 3)), np.zeros(metal.shape), np.zeros(metal.shape)
+    group_temperature = np.zeros(chains // 2)
+    factored_inverse_dt = math.nan
     throttled = np.empty(c.control.level_area.size)
     throttled[:] = p0[0]
     cs_out = np.zeros(4)
@@ -473,22 +494,29 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, pressures,
         if not 0.0 <= ph_domain_position(tables, p0[k], h0) <= 1.0:
             status[k] = STATUS_OUT_OF_TABLES
             return k
+        # the first sample is steady (infinite step); the chains are factored anew only when the
+        # step length changes
+        inverse_dt = 0.0 if k == 0 else 1.0 / time_step[k]
+        if inverse_dt != factored_inverse_dt:
+            for chain in range(chains):
+                factor_chain(chain, c.metal.capacity, c.metal.conductance,
+                             c.metal.outer_conductance[chain], inverse_dt, pivot)
+            factored_inverse_dt = inverse_dt
         if k == 0:
             # steady start: repeat the infinite-step (steady) metal solution to equilibrium
             code = STATUS_OK
             for _ in range(50):
                 before = metal.copy()
                 code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], params, 0.0,
-                                     pressures, enthalpies, inlet_pv, throttled, metal,
-                                     surface, base, response, group_temperature, work, cs_out,
-                                     properties, results[k], 200)
+                                     pressures, enthalpies, inlet_pv, throttled, metal, pivot,
+                                     rhs, surface, group_temperature, cs_out, properties,
+                                     results[k], 200)
                 if code != STATUS_OK or np.abs(metal - before).max() < 1e-9:
                     break
         else:
-            code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], params,
-                                 1.0 / time_step[k], pressures, enthalpies, inlet_pv, throttled,
-                                 metal, surface, base, response, group_temperature, work,
-                                 cs_out, properties, results[k], 200)
+            code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], params, inverse_dt,
+                                 pressures, enthalpies, inlet_pv, throttled, metal, pivot, rhs,
+                                 surface, group_temperature, cs_out, properties, results[k], 200)
         status[k] = code
         if code != STATUS_OK:
             return k

@@ -49,54 +49,78 @@ def rotor_relative_velocity(axial_velocity: float, rotor_surface_speed: float) -
 
 
 @njit(cache=True)
-def prepare_chain(chain: int, old: np.ndarray, capacity: np.ndarray, conductance: np.ndarray,
-                  surface_conductance: float, outer_conductance: float,
-                  ambient_temperature: float, inverse_dt: float, base: np.ndarray,
-                  response: np.ndarray, work: np.ndarray) -> None:
-    """Set up one implicit-Euler step of chain ``chain``, affine in the steam temperature.
+def factor_chain(chain: int, capacity: np.ndarray, conductance: np.ndarray,
+                 outer_conductance: float, inverse_dt: float, pivot: np.ndarray) -> None:
+    """Eliminate the implicit-Euler matrix of chain ``chain`` from the lagging end to the steam.
 
-    Row ``chain`` of the 2-D arrays describes the chain: ``old`` temperatures (K), ``capacity``
-    (J/K), ``conductance`` (W/K) between nodes j and j+1. Afterwards its new temperatures are
-    ``base[chain] + response[chain]·T_steam`` (K) whatever steam temperature the steam path settles
-    on, so iterating the steam path costs no further solves. Node 0 faces the steam through
-    ``surface_conductance`` (W/K), the last node the surroundings through ``outer_conductance``
-    (W/K); ``inverse_dt`` in 1/s (0 gives the steady state). ``work`` is scratch of a chain's
-    length. Thomas algorithm on the symmetric tridiagonal system (off-diagonals −conductance).
-    Rows are indexed element-wise, never sliced: slices are array views whose reference counting
-    costs more than the solve.
+    Row ``chain`` of the 2-D arrays describes the chain: ``capacity`` (J/K) of its nodes,
+    ``conductance`` (W/K) between nodes j and j+1. Node 0 faces the steam, the last node the
+    surroundings through ``outer_conductance`` (W/K); ``inverse_dt`` in 1/s (0 gives the steady
+    state). Thomas algorithm on the symmetric tridiagonal system (off-diagonals −conductance),
+    run towards node 0 so that the steam-side conductance, which changes every sample, enters
+    only node 0's pivot: everything here depends on the step length alone and is done once per
+    run. ``pivot[chain, j]`` receives 1/pivot of node j ≥ 1 and ``pivot[chain, 0]`` node 0's
+    pivot without the steam-side conductance (W/K). Rows are indexed element-wise, never sliced:
+    slices are array views whose reference counting costs more than the solve.
     """
-    n = old.shape[1]
-    for j in range(n):
-        storage = capacity[chain, j] * inverse_dt
-        work[j] = storage  # diagonal
-        base[chain, j] = storage * old[chain, j]
-        response[chain, j] = 0.0
+    n = capacity.shape[1]
+    for j in range(n - 1, -1, -1):
+        diagonal = capacity[chain, j] * inverse_dt
         if j > 0:
-            work[j] += conductance[chain, j - 1]
+            diagonal += conductance[chain, j - 1]
         if j < n - 1:
-            work[j] += conductance[chain, j]
-    work[0] += surface_conductance
-    response[chain, 0] = surface_conductance
-    work[n - 1] += outer_conductance
-    base[chain, n - 1] += outer_conductance * ambient_temperature
-    for j in range(1, n):
-        factor = conductance[chain, j - 1] / work[j - 1]
-        work[j] -= factor * conductance[chain, j - 1]
-        base[chain, j] += factor * base[chain, j - 1]
-        response[chain, j] += factor * response[chain, j - 1]
-    inverse = 1.0 / work[n - 1]
-    base[chain, n - 1] *= inverse
-    response[chain, n - 1] *= inverse
-    for j in range(n - 2, -1, -1):
-        inverse = 1.0 / work[j]
-        base[chain, j] = (base[chain, j] + conductance[chain, j] * base[chain, j + 1]) * inverse
-        response[chain, j] = (
-            response[chain, j] + conductance[chain, j] * response[chain, j + 1]) * inverse
+            g = conductance[chain, j]
+            diagonal += g - g * g * pivot[chain, j + 1]
+        else:
+            diagonal += outer_conductance
+        pivot[chain, j] = 1.0 / diagonal if j > 0 else diagonal
+
+
+@njit(cache=True)
+def prepare_chain(chain: int, old: np.ndarray, capacity: np.ndarray, conductance: np.ndarray,
+                  outer_conductance: float, ambient_temperature: float, inverse_dt: float,
+                  pivot: np.ndarray, rhs: np.ndarray) -> None:
+    """Eliminate the right-hand side of a step from ``old`` temperatures (K) of chain ``chain``.
+
+    With ``pivot`` from :func:`factor_chain` (same step); ``rhs[chain]`` receives the eliminated
+    right-hand side (W). Independent of the steam, so done once per sample; no divisions.
+    """
+    n = capacity.shape[1]
+    for j in range(n - 1, -1, -1):
+        value = capacity[chain, j] * inverse_dt * old[chain, j]
+        if j < n - 1:
+            value += conductance[chain, j] * pivot[chain, j + 1] * rhs[chain, j + 1]
+        else:
+            value += outer_conductance * ambient_temperature
+        rhs[chain, j] = value
+
+
+@njit(cache=True)
+def surface_response(surface_conductance: float, pivot_surface: float, rhs_surface: float
+                     ) -> tuple[float, float]:
+    """The new surface temperature as ``base + response·T_steam`` (K), for any steam T (K).
+
+    ``pivot_surface`` and ``rhs_surface`` are node 0's from :func:`factor_chain` and
+    :func:`prepare_chain`, ``surface_conductance`` (W/K) the steam side's; so iterating the steam
+    path costs no further solves.
+    """
+    inverse = 1.0 / (pivot_surface + surface_conductance)
+    return rhs_surface * inverse, surface_conductance * inverse
 
 
 @njit(cache=True)
 def surface_heat(surface_conductance: float, base_surface: float, response_surface: float,
                  fluid_temperature: float) -> float:
-    """Heat (W) a chain set up by :func:`prepare_chain` takes from steam at that temperature (K)."""
+    """Heat (W) a chain takes from steam at that temperature (K), with :func:`surface_response`."""
     return surface_conductance * (
         fluid_temperature - (base_surface + response_surface * fluid_temperature))
+
+
+@njit(cache=True)
+def finish_chain(chain: int, surface_temperature: float, conductance: np.ndarray,
+                 pivot: np.ndarray, rhs: np.ndarray, new: np.ndarray) -> None:
+    """Back-substitute the new temperatures (K) of chain ``chain`` into ``new[chain]``."""
+    new[chain, 0] = surface_temperature
+    for j in range(1, new.shape[1]):
+        new[chain, j] = (rhs[chain, j] + conductance[chain, j - 1] * new[chain, j - 1]) * pivot[
+            chain, j]
