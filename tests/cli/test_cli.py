@@ -14,7 +14,8 @@ runner = CliRunner()
 
 
 @pytest.mark.parametrize(
-    "command", [[], ["turbine", "show"], ["simulate"], ["demo"], ["dcs", "check"], ["plant"]]
+    "command",
+    [[], ["turbine", "show"], ["simulate"], ["demo"], ["dcs", "check"], ["plant"], ["calibrate"]],
 )
 def test_every_command_has_help_with_an_example(command):
     result = runner.invoke(app, [*command, "--help"])

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import typer
 
+from steamtwin.cli.calibrate import calibrate
 from steamtwin.cli.dcs import dcs_app
 from steamtwin.cli.demo import demo
 from steamtwin.cli.plant import plant
@@ -21,4 +22,5 @@ app.add_typer(turbine_app, name="turbine")
 app.add_typer(dcs_app, name="dcs")
 app.command()(simulate)
 app.command()(plant)
+app.command()(calibrate)
 app.command()(demo)

@@ -1,0 +1,174 @@
+"""Calibrator: fit the three model parameters to measured windows with the method's GA."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from pymoo.core.algorithm import Algorithm
+
+from steamtwin.calibration.ga import RemutationRepair, make_ga
+from steamtwin.calibration.objective import (
+    DEFAULT_SENSORS,
+    MAX_INPUT_GAP_S,
+    PARAMETER_NAMES,
+    CalibrationProblem,
+    fitness,
+)
+from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
+from steamtwin.model.simulator import Simulator
+
+__all__ = ["Calibrator", "ProgressCallback"]
+
+ProgressCallback = Callable[[float, str], None]
+"""``progress(fraction_done, message)``, fraction in 0…1 (as elsewhere in steamtwin)."""
+
+
+class Calibrator:
+    """GA calibration of flow, friction and heat-transfer coefficients against DCS temperatures.
+
+    The constructor stores its arguments; :meth:`fit` validates them, runs the GA and sets
+    ``params_`` (:class:`ModelParameters`), ``rmse_`` (K), ``history_`` (one row per
+    generation), ``n_evaluations_``, ``window_info_`` (per window: samples, filled and dropped
+    input rows, excluded measured samples), ``n_penalised_`` and ``repair_counts_``.
+    Same ``seed`` → same result. Evaluation is serial.
+    """
+
+    def __init__(self, simulator: Simulator, *,
+                 bounds: Mapping[str, tuple[float, float]] | None = None,
+                 sensors: Sequence[str] = DEFAULT_SENSORS,
+                 weights: Mapping[str, float] | Sequence[float] | None = None,
+                 population: int = 50, generations: int = 200,
+                 crossover_probability: float = 0.9, crossover_eta: float = 15.0,
+                 mutation_probability: float | None = None, mutation_eta: float = 20.0,
+                 tournament_size: int = 2, seed: int = 0,
+                 progress: ProgressCallback | None = None,
+                 max_input_gap_s: float = MAX_INPUT_GAP_S) -> None:
+        self.simulator = simulator
+        self.bounds = bounds
+        self.sensors = sensors
+        self.weights = weights
+        self.population = population
+        self.generations = generations
+        self.crossover_probability = crossover_probability
+        self.crossover_eta = crossover_eta
+        self.mutation_probability = mutation_probability
+        self.mutation_eta = mutation_eta
+        self.tournament_size = tournament_size
+        self.seed = seed
+        self.progress = progress
+        self.max_input_gap_s = max_input_gap_s
+
+    # -- pieces (seams for parallel evaluation, checkpointing and other modes) ---------------
+
+    def _problem(self, windows: Sequence[pd.DataFrame]) -> CalibrationProblem:
+        return CalibrationProblem(self.simulator, windows, bounds=self.bounds,
+                                  sensors=self.sensors, weights=self.weights,
+                                  max_input_gap_s=self.max_input_gap_s)
+
+    def _algorithm(self, problem: CalibrationProblem) -> tuple[Algorithm, RemutationRepair]:
+        repair = RemutationRepair(eta=self.mutation_eta)
+        algorithm = make_ga(
+            problem.n_var, population=self.population,
+            crossover_probability=self.crossover_probability, crossover_eta=self.crossover_eta,
+            mutation_probability=self.mutation_probability, mutation_eta=self.mutation_eta,
+            tournament_size=self.tournament_size, repair=repair,
+        )
+        return algorithm, repair
+
+    def _validate(self) -> None:
+        for name in ("population", "generations", "tournament_size", "seed"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | np.integer):
+                raise TypeError(f"{name} must be an integer (got {value!r})")
+        if self.generations < 1:
+            raise ValueError(f"generations must be ≥ 1 (got {self.generations})")
+        if self.tournament_size > self.population:
+            raise ValueError("tournament_size must not exceed population")
+
+    # -- public API -------------------------------------------------------------------------
+
+    def fit(self, windows: Sequence[pd.DataFrame]) -> Calibrator:
+        """Calibrate against measured windows (canonical SI signals); returns self."""
+        self._validate()
+        problem = self._problem(windows)
+        algorithm, repair = self._algorithm(problem)
+        algorithm.setup(problem, termination=("n_gen", self.generations), seed=int(self.seed),
+                        verbose=False, save_history=False)
+        rows: list[dict[str, object]] = []
+        while algorithm.has_next():
+            algorithm.next()
+            rows.append(self._history_row(algorithm, problem, repair))
+            if self.progress is not None:
+                done = int(rows[-1]["generation"])
+                self.progress(done / self.generations,
+                              f"generation {done}/{self.generations}: best RMSE "
+                              f"{rows[-1]['best_rmse']:.3f} K")
+        best = algorithm.opt[0]
+        self.params_ = problem.parameters(best.X)
+        self.rmse_ = float(best.F[0])
+        self.history_ = pd.DataFrame(rows).set_index("generation")
+        self.n_evaluations_ = problem.n_evaluations
+        self.n_penalised_ = problem.n_penalised
+        self.repair_counts_ = {"out_of_bounds": repair.n_out_of_bounds,
+                               "remutations": repair.n_remutations, "clipped": repair.n_clipped}
+        self.window_info_ = pd.DataFrame([
+            {"start": w.inputs.index[0], "end": w.inputs.index[-1], "samples": len(w.inputs),
+             "filled_rows": w.filled_rows, "dropped_rows": w.dropped_rows,
+             **{f"excluded:{s}": n for s, n in zip(problem.sensors, w.excluded, strict=True)}}
+            for w in problem.windows
+        ])
+        return self
+
+    @staticmethod
+    def _history_row(algorithm: Algorithm, problem: CalibrationProblem,
+                     repair: RemutationRepair) -> dict[str, object]:
+        rmse = algorithm.pop.get("F")[:, 0]
+        best = algorithm.opt[0]
+        best_rmse = float(best.F[0])
+        return {
+            "generation": int(algorithm.n_gen) - 1,  # pymoo counts ahead; 1 = initial population
+            "best_rmse": best_rmse,
+            "mean_rmse": float(np.mean(rmse)),
+            "best_fitness": fitness(best_rmse),
+            "mean_fitness": float(np.mean(fitness(rmse))),
+            **dict(zip(PARAMETER_NAMES, (float(v) for v in best.X), strict=True)),
+            "evaluations": problem.n_evaluations,
+            "penalised": problem.n_penalised,
+            "remutations": repair.n_remutations,
+        }
+
+    def rmse(self, windows: Sequence[pd.DataFrame], params: ModelParameters | None = None
+             ) -> float:
+        """Weighted RMSE (K) of ``params`` (default: the empirical 1, 1, 1) on ``windows``."""
+        problem = self._problem(windows)
+        return problem.rmse(params or ModelParameters())
+
+    def save(self, path: str | Path) -> tuple[Path, Path]:
+        """Write the parameters JSON (readable by ``ModelParameters.from_json``) and history.
+
+        The history goes to ``<path stem>.history.csv`` next to it; returns both paths.
+        """
+        if not hasattr(self, "params_"):
+            raise RuntimeError("Calibrator is not fitted; call fit(windows) first")
+        path = Path(path)
+        document = {
+            "parameters": asdict(self.params_),
+            "bounds": {name: list(bounds) for name, bounds in PARAMETER_BOUNDS.items()},
+            "calibration": {
+                "rmse_K": self.rmse_,
+                "sensors": list(self.sensors),
+                "population": self.population,
+                "generations": self.generations,
+                "seed": self.seed,
+                "evaluations": self.n_evaluations_,
+            },
+        }
+        path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+        history = path.with_name(f"{path.stem}.history.csv")
+        self.history_.to_csv(history)
+        return path, history

@@ -1,0 +1,292 @@
+"""The calibration objective: RMSE (K) between simulated and measured DCS temperatures.
+
+Method (Wang et al.): the GA's fitness is ``1 / (RMSE + ε)``. Maximising it is equivalent to
+minimising the RMSE, which is what :class:`CalibrationProblem` hands pymoo (``F = RMSE``); the
+fitness is reported alongside (:func:`fitness`).
+
+Objective
+    ``RMSE = sqrt(Σ_s w_s Σ_i (T_sim − T_meas)² / Σ_s w_s n_s)`` over all windows and the selected
+    sensors ``s`` (K), pooled: every valid sample counts once, so longer windows weigh more.
+    Weights are relative (default 1 each). Measured NaN samples are excluded and counted.
+
+Missing inputs (explicit choice)
+    Rows before the first row with every input valid are dropped (counted as ``dropped_rows``).
+    Later NaN inputs are filled forward from the last valid value when the dropout lasts at most
+    ``max_input_gap_s`` (default 60 s, a few boiler-side time constants shorter than any input
+    dynamics the HP temperatures follow) and counted (``filled_rows``); a longer dropout is a
+    ``ValueError`` naming window, signal and time — split the window instead.
+
+Infeasible candidates
+    When the simulator rejects a candidate (``ValueError``, e.g. the FOM's ``InputError`` for a
+    flow coefficient too low to pass rated flow) or returns non-finite temperatures at valid
+    samples, the evaluation scores :data:`PENALTY_RMSE` = 1000 K: finite, so the GA keeps
+    ranking, and far above any feasible RMSE (temperature errors of a feasible model are tens of
+    K at most), so penalised candidates always lose tournaments and never survive elitism.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+from pymoo.core.problem import ElementwiseProblem
+
+from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
+from steamtwin.model.simulator import Simulator
+
+__all__ = [
+    "DEFAULT_SENSORS",
+    "FITNESS_EPSILON",
+    "MAX_INPUT_GAP_S",
+    "PARAMETER_NAMES",
+    "PENALTY_RMSE",
+    "CalibrationProblem",
+    "PreparedWindow",
+    "check_bounds",
+    "fitness",
+    "prepare_window",
+    "window_rmse",
+]
+
+DEFAULT_SENSORS: tuple[str, ...] = (
+    "control_stage_temperature",
+    "hp_exhaust_temperature",
+    "hp_inner_casing_temperature",
+)
+"""Measured temperatures (K) the method fits against."""
+
+PARAMETER_NAMES: tuple[str, ...] = tuple(PARAMETER_BOUNDS)
+"""Decision variables, in this order: the three :class:`ModelParameters` fields."""
+
+PENALTY_RMSE = 1.0e3
+"""Objective (K) of a candidate the simulator rejects (see the module docstring)."""
+
+FITNESS_EPSILON = 1.0e-6
+"""ε (K) in the method's fitness ``1 / (RMSE + ε)``."""
+
+MAX_INPUT_GAP_S = 60.0
+"""Longest input dropout (s) filled forward; longer ones are an error."""
+
+
+def fitness(rmse: float | np.ndarray) -> float | np.ndarray:
+    """The method's fitness ``1 / (RMSE + ε)`` (1/K) of an RMSE in K."""
+    value = 1.0 / (np.asarray(rmse, dtype=float) + FITNESS_EPSILON)
+    return float(value) if value.ndim == 0 else value
+
+
+def check_bounds(bounds: Mapping[str, tuple[float, float]] | None
+                 ) -> dict[str, tuple[float, float]]:
+    """Search bounds per parameter: ``bounds`` (partial allowed) within PARAMETER_BOUNDS."""
+    result = dict(PARAMETER_BOUNDS)
+    for name, pair in (bounds or {}).items():
+        if name not in PARAMETER_BOUNDS:
+            raise ValueError(f"bounds: unknown parameter {name!r}; known: {list(PARAMETER_NAMES)}")
+        low, high = (float(v) for v in pair)
+        phys_low, phys_high = PARAMETER_BOUNDS[name]
+        if not phys_low <= low < high <= phys_high:
+            raise ValueError(
+                f"bounds[{name!r}] = ({low}, {high}) must satisfy {phys_low} ≤ low < high ≤ "
+                f"{phys_high} (the physical bounds)"
+            )
+        result[name] = (low, high)
+    return result
+
+
+@dataclass(frozen=True)
+class PreparedWindow:
+    """One measured window ready for evaluation.
+
+    ``inputs``: the simulator's input columns (SI) after dropping/filling; ``measured``:
+    (n, n_sensors) measured temperatures (K), NaN where excluded; ``filled_rows``: rows with a
+    forward-filled input; ``dropped_rows``: leading rows dropped; ``excluded``: NaN measured
+    samples per sensor.
+    """
+
+    inputs: pd.DataFrame
+    measured: np.ndarray
+    filled_rows: int
+    dropped_rows: int
+    excluded: tuple[int, ...]
+
+
+def _seconds(index: pd.Index) -> np.ndarray:
+    if isinstance(index, pd.DatetimeIndex):
+        return (index - index[0]).total_seconds().to_numpy(dtype=float)
+    if isinstance(index, pd.TimedeltaIndex):
+        return index.total_seconds().to_numpy(dtype=float)
+    return np.asarray(index, dtype=float)
+
+
+def prepare_window(window: pd.DataFrame, simulator: Simulator, sensors: Sequence[str],
+                   max_input_gap_s: float = MAX_INPUT_GAP_S, name: str = "window"
+                   ) -> PreparedWindow:
+    """Select, check and gap-fill one window (see the module docstring for the NaN policy)."""
+    if not isinstance(window, pd.DataFrame) or window.empty:
+        raise ValueError(f"{name}: expected a non-empty DataFrame of canonical SI signals")
+    needed = [*simulator.input_signals, *sensors]
+    missing = [column for column in needed if column not in window.columns]
+    if missing:
+        raise ValueError(f"{name}: lacks column(s) {missing}")
+    inputs = window[list(simulator.input_signals)].apply(pd.to_numeric, errors="coerce")
+    complete = inputs.notna().all(axis=1).to_numpy()
+    if not complete.any():
+        raise ValueError(f"{name}: no row has every input {list(simulator.input_signals)}")
+    first = int(np.argmax(complete))
+    inputs = inputs.iloc[first:]
+    seconds = _seconds(inputs.index)
+    for column in inputs.columns:
+        valid = inputs[column].notna().to_numpy()
+        last_valid = pd.Series(np.where(valid, seconds, np.nan)).ffill().to_numpy()
+        gap = seconds - last_valid
+        too_long = np.flatnonzero(gap > max_input_gap_s)
+        if too_long.size:
+            row = int(too_long[0])
+            raise ValueError(
+                f"{name}: input {column!r} is missing for more than {max_input_gap_s:g} s at "
+                f"{inputs.index[row]}; split the window around the dropout"
+            )
+    filled_rows = int((~inputs.notna().all(axis=1)).sum())
+    inputs = inputs.ffill()
+    measured = window[list(sensors)].iloc[first:].apply(pd.to_numeric, errors="coerce")
+    values = measured.to_numpy(dtype=float, copy=True)
+    values[~np.isfinite(values)] = np.nan
+    excluded = tuple(int(n) for n in np.isnan(values).sum(axis=0))
+    empty = [s for s, n in zip(sensors, excluded, strict=True) if n == len(values)]
+    if empty:
+        raise ValueError(f"{name}: sensor(s) {empty} have no valid measured sample")
+    return PreparedWindow(inputs=inputs, measured=values, filled_rows=filled_rows,
+                          dropped_rows=first, excluded=excluded)
+
+
+def _squared_errors(prepared: PreparedWindow, simulated: pd.DataFrame, sensors: Sequence[str]
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Per-sensor sum of squared errors (K²) and valid-sample counts; ValueError on NaN output."""
+    missing = [s for s in sensors if s not in simulated.columns]
+    if missing:
+        raise KeyError(f"the simulator does not predict {missing}")
+    predicted = simulated[list(sensors)].to_numpy(dtype=float)
+    valid = ~np.isnan(prepared.measured)
+    if not np.isfinite(predicted[valid]).all():
+        raise ValueError("the simulator returned non-finite temperatures")
+    error = np.where(valid, predicted - np.where(valid, prepared.measured, 0.0), 0.0)
+    return (error**2).sum(axis=0), valid.sum(axis=0)
+
+
+def _weights(sensors: Sequence[str], weights: Mapping[str, float] | Sequence[float] | None
+             ) -> np.ndarray:
+    if weights is None:
+        result = np.ones(len(sensors))
+    elif isinstance(weights, Mapping):
+        unknown = set(weights) - set(sensors)
+        if unknown:
+            raise ValueError(f"weights for unselected sensor(s) {sorted(unknown)}")
+        result = np.array([float(weights.get(s, 1.0)) for s in sensors])
+    else:
+        result = np.asarray(weights, dtype=float)
+        if result.shape != (len(sensors),):
+            raise ValueError(f"expected {len(sensors)} weights, got {len(result)}")
+    if not (np.isfinite(result).all() and (result >= 0).all() and result.sum() > 0):
+        raise ValueError("weights must be finite, ≥ 0 and not all zero")
+    return result
+
+
+class CalibrationProblem(ElementwiseProblem):
+    """Single-objective pymoo problem: minimise the weighted RMSE (K) over measured windows.
+
+    Variables ``x`` = (flow, friction, heat-transfer coefficient), dimensionless, within
+    ``bounds`` (default :data:`PARAMETER_BOUNDS`). Evaluation is serial (pymoo's default
+    elementwise runner); ``n_evaluations`` and ``n_penalised`` count evaluations.
+    """
+
+    def __init__(self, simulator: Simulator, windows: Sequence[pd.DataFrame], *,
+                 bounds: Mapping[str, tuple[float, float]] | None = None,
+                 sensors: Sequence[str] = DEFAULT_SENSORS,
+                 weights: Mapping[str, float] | Sequence[float] | None = None,
+                 max_input_gap_s: float = MAX_INPUT_GAP_S, **kwargs: object) -> None:
+        if isinstance(windows, pd.DataFrame) or len(windows) == 0:
+            raise ValueError("windows must be a non-empty list of DataFrames")
+        self.sensors = tuple(sensors)
+        if not self.sensors or len(set(self.sensors)) != len(self.sensors):
+            raise ValueError("sensors must be a non-empty list of distinct signal names")
+        unknown = [s for s in self.sensors if s not in simulator.output_signals]
+        if unknown:
+            raise ValueError(f"sensor(s) {unknown} are not predicted by the simulator "
+                             f"(it predicts {list(simulator.output_signals)})")
+        self.simulator = simulator
+        self.weights = _weights(self.sensors, weights)
+        self.parameter_bounds = check_bounds(bounds)
+        self.windows = tuple(
+            prepare_window(w, simulator, self.sensors, max_input_gap_s, name=f"window {i}")
+            for i, w in enumerate(windows)
+        )
+        self.n_evaluations = 0
+        self.n_penalised = 0
+        self.last_error: str | None = None
+        low = np.array([self.parameter_bounds[n][0] for n in PARAMETER_NAMES])
+        high = np.array([self.parameter_bounds[n][1] for n in PARAMETER_NAMES])
+        super().__init__(n_var=len(PARAMETER_NAMES), n_obj=1, xl=low, xu=high, **kwargs)
+
+    def parameters(self, x: Sequence[float]) -> ModelParameters:
+        """The :class:`ModelParameters` of a decision vector."""
+        return ModelParameters(**{n: float(v) for n, v in zip(PARAMETER_NAMES, x, strict=True)})
+
+    def squared_errors(self, params: ModelParameters) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per window: per-sensor sum of squared errors (K²) and counts; raises if rejected."""
+        return [
+            _squared_errors(w, self.simulator.simulate(w.inputs, params), self.sensors)
+            for w in self.windows
+        ]
+
+    def rmse(self, params: ModelParameters) -> float:
+        """Weighted pooled RMSE (K) of ``params``; :data:`PENALTY_RMSE` if rejected."""
+        self.n_evaluations += 1
+        try:
+            parts = self.squared_errors(params)
+        except ValueError as error:
+            self.n_penalised += 1
+            self.last_error = str(error)
+            return PENALTY_RMSE
+        sse = sum(p[0] for p in parts)
+        count = sum(p[1] for p in parts)
+        return float(np.sqrt((self.weights * sse).sum() / (self.weights * count).sum()))
+
+    def _evaluate(self, x: np.ndarray, out: dict, *args: object, **kwargs: object) -> None:
+        out["F"] = self.rmse(self.parameters(x))
+
+
+def window_rmse(simulator: Simulator, windows: Sequence[pd.DataFrame],
+                params: ModelParameters | None = None, *,
+                sensors: Sequence[str] = DEFAULT_SENSORS,
+                weights: Mapping[str, float] | Sequence[float] | None = None,
+                max_input_gap_s: float = MAX_INPUT_GAP_S) -> pd.DataFrame:
+    """Per-window RMSE breakdown (K) for reports.
+
+    One row per window: ``start``, ``end``, ``rmse`` (weighted, K; NaN if the simulator
+    rejects the window, reason in ``error``), ``rmse:<sensor>`` (K), ``samples``,
+    ``filled_rows``, ``dropped_rows`` and ``excluded:<sensor>`` (NaN measured samples).
+    """
+    params = params or ModelParameters()
+    problem = CalibrationProblem(simulator, windows, sensors=sensors, weights=weights,
+                                 max_input_gap_s=max_input_gap_s)
+    rows = []
+    for prepared in problem.windows:
+        row: dict[str, object] = {
+            "start": prepared.inputs.index[0], "end": prepared.inputs.index[-1],
+            "samples": len(prepared.inputs), "filled_rows": prepared.filled_rows,
+            "dropped_rows": prepared.dropped_rows, "error": "",
+        }
+        try:
+            simulated = simulator.simulate(prepared.inputs, params)
+            sse, count = _squared_errors(prepared, simulated, problem.sensors)
+        except ValueError as error:
+            sse, count = np.full(len(problem.sensors), np.nan), np.ones(len(problem.sensors))
+            row["error"] = str(error)
+        w = problem.weights
+        row["rmse"] = float(np.sqrt((w * sse).sum() / (w * count).sum()))
+        for s, e, n, x in zip(problem.sensors, sse, count, prepared.excluded, strict=True):
+            row[f"rmse:{s}"] = float(np.sqrt(e / n))
+            row[f"excluded:{s}"] = x
+        rows.append(row)
+    return pd.DataFrame(rows)
