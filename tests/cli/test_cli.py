@@ -8,6 +8,8 @@ import pytest
 from typer.testing import CliRunner
 
 from steamtwin.cli.main import app
+from steamtwin.dcs.plant import KKS_TAGS, plant_tag_map
+from steamtwin.dcs.tagmap import write_tag_map
 from steamtwin.model.operating import load_profile_inputs
 
 runner = CliRunner()
@@ -79,50 +81,26 @@ def test_demo_writes_its_files_from_the_model(tmp_path, reference_model, referen
     assert (tmp_path / "ramp_simulation.png").stat().st_size > 10_000
 
 
-TAGS_TOML = """
-[historian]
-layout = "wide"
-time_column = "Timestamp"
-time_zone = "Asia/Shanghai"
-
-[signals.main_steam_pressure]
-column = "10LBA10CP001"
-unit = "MPa"
-range = [0.0, 25.0]
-
-[signals.main_steam_temperature]
-column = "10LBA10CT001"
-unit = "degC"
-
-[signals.main_steam_flow]
-column = "10LBA10CF001"
-unit = "t/h"
-
-[signals.hp_exhaust_pressure]
-column = "10LBC10CP001"
-unit = "MPa"
-"""
-
-
 def _historian_csv(path, pressure_mpa):
+    """Ten minutes of the four model inputs under the virtual plant's KKS tags, wire units."""
     times = pd.date_range("2026-03-01 10:00:00", periods=600, freq="1s")
     rng = np.random.default_rng(3)
     pd.DataFrame({
         "Timestamp": times.strftime("%Y-%m-%d %H:%M:%S"),
-        "10LBA10CP001": pressure_mpa + rng.normal(0, 0.01, times.size),
-        "10LBA10CT001": 538.0 + rng.normal(0, 0.5, times.size),
-        "10LBA10CF001": 1000.0 + rng.normal(0, 5.0, times.size),
-        "10LBC10CP001": 2.2 + rng.normal(0, 0.005, times.size),
+        KKS_TAGS["main_steam_pressure"]: pressure_mpa + rng.normal(0, 0.01, times.size),
+        KKS_TAGS["main_steam_temperature"]: 538.0 + rng.normal(0, 0.5, times.size),
+        KKS_TAGS["main_steam_flow"]: 1000.0 + rng.normal(0, 5.0, times.size),
+        KKS_TAGS["hp_exhaust_pressure"]: 2.2 + rng.normal(0, 0.005, times.size),
     }).to_csv(path, index=False)
 
 
 @pytest.mark.parametrize(("pressure", "exit_code", "expected"), [
     (11.0, 0, "0 error(s), 0 warning(s)"),
-    (110.0, 1, "bar"),  # a bar reading declared as MPa
+    (110.0, 1, "bar"),  # a bar reading declared as MPa (the range 0–25 MPa flags it too)
 ])
 def test_dcs_check_reports_and_exits(tmp_path, pressure, exit_code, expected):
     tags, data, report = tmp_path / "tags.toml", tmp_path / "history.csv", tmp_path / "q.json"
-    tags.write_text(TAGS_TOML)
+    write_tag_map(plant_tag_map(), tags)
     _historian_csv(data, pressure)
     result = runner.invoke(app, ["dcs", "check", str(data), "--tags", str(tags),
                                  "--json", str(report)])
@@ -133,7 +111,8 @@ def test_dcs_check_reports_and_exits(tmp_path, pressure, exit_code, expected):
 
 def test_dcs_check_names_a_bad_tag_map(tmp_path):
     tags = tmp_path / "tags.toml"
-    tags.write_text(TAGS_TOML.replace('unit = "t/h"', 'unit = "MPa"'))
+    write_tag_map(plant_tag_map(), tags)
+    tags.write_text(tags.read_text().replace('unit = "t/h"', 'unit = "MPa"'))
     result = runner.invoke(app, ["dcs", "check", str(tmp_path / "x.csv"), "--tags", str(tags)])
     assert result.exit_code == 2
     assert "main_steam_flow" in result.output and "MPa" in result.output
