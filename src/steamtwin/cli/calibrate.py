@@ -28,7 +28,11 @@ def _pick_windows(data: pd.DataFrame, window: list[str] | None, rated_load_w: fl
             start, sep, end = text.partition("/")
             if not sep or not start or not end:
                 raise ValueError(f"--window {text!r}: expected START/END (ISO 8601 times)")
-            picked.append(select_window(data, pd.Timestamp(start), pd.Timestamp(end)))
+            try:
+                bounds = pd.Timestamp(start), pd.Timestamp(end)
+            except ValueError as error:
+                raise ValueError(f"--window {text!r}: {error} (expected ISO 8601 times)") from None
+            picked.append(select_window(data, *bounds))
         return picked
     if "load" not in data.columns:
         raise ValueError(
