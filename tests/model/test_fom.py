@@ -277,3 +277,26 @@ def test_low_flow_coefficient_cannot_pass_rated_flow_at_rated_pressure(reference
         reference_model.simulate(frame, ModelParameters(flow_coefficient=0.9))
     assert reference_model.simulate(frame, ModelParameters(flow_coefficient=0.95)).notna().all(
         axis=None)
+
+
+def test_default_convergence_is_far_below_dcs_resolution(reference_model, reference_spec):
+    """Noisy 30-min ramp: default tolerances vs sweeps converged to 1e-11 / 1e-5 J/kg."""
+    from steamtwin.model.fom import FullOrderModel
+
+    load = ramp_profile(1.0, 0.5, 0.05, 60.0, 600.0)[:1800]
+    frame = load_profile_inputs(reference_spec, load)
+    random = np.random.default_rng(3)
+    for column, sigma in {"main_steam_pressure": 2e4, "main_steam_temperature": 1.0,
+                          "main_steam_flow": 2.5, "hp_exhaust_pressure": 4e3}.items():
+        frame[column] += random.normal(0.0, sigma, len(frame))
+    tight = FullOrderModel(reference_spec, pressure_tolerance=1e-11, enthalpy_tolerance=1e-5)
+    exact = tight.simulate(frame)
+    default = reference_model.simulate(frame)
+    temperatures = ["control_stage_temperature", "hp_exhaust_temperature",
+                    "hp_inner_casing_temperature"]
+    assert (default[temperatures] - exact[temperatures]).abs().to_numpy().max() < 0.01  # K
+    relative_p1 = (default.control_stage_pressure / exact.control_stage_pressure - 1).abs()
+    assert relative_p1.max() < 1e-4
+    assert (default.hp_power / exact.hp_power - 1).abs().max() < 1e-4
+    with pytest.raises(ValueError, match="tolerance"):
+        FullOrderModel(reference_spec, pressure_tolerance=0.0).simulate(frame)

@@ -72,13 +72,18 @@ class FullOrderModel:
 
     ``simulate(inputs, params)`` maps canonical boundary conditions (SI) to canonical sensor
     predictions (SI). The design step (constants from the spec's heat balance) runs on first use
-    and is cached in ``design_``.
+    and is cached in ``design_``. ``pressure_tolerance`` (relative) and ``enthalpy_tolerance``
+    (J/kg) bound the estimated error each sample's sweeps leave (see ``model.kernel``).
     """
 
     input_signals = INPUT_SIGNALS
 
-    def __init__(self, spec: TurbineSpec) -> None:
+    def __init__(self, spec: TurbineSpec, *,
+                 pressure_tolerance: float = kernel.PRESSURE_TOLERANCE,
+                 enthalpy_tolerance: float = kernel.ENTHALPY_TOLERANCE) -> None:
         self.spec = spec
+        self.pressure_tolerance = pressure_tolerance
+        self.enthalpy_tolerance = enthalpy_tolerance
 
     @property
     def output_signals(self) -> tuple[str, ...]:
@@ -197,9 +202,13 @@ class FullOrderModel:
         stage_t = np.zeros((rows, stages + 1))
         parameter_array = np.array([params.flow_coefficient, params.friction_coefficient,
                                     params.heat_transfer_coefficient])
+        tolerance = np.array([self.pressure_tolerance, self.enthalpy_tolerance], dtype=float)
+        if not (np.isfinite(tolerance).all() and (tolerance > 0).all()):
+            raise ValueError(f"pressure_tolerance and enthalpy_tolerance must be finite and > 0 "
+                             f"(got {self.pressure_tolerance!r}, {self.enthalpy_tolerance!r})")
         solved = kernel.run_kernel(constants, steam_tables(), time_step, p0, t0, flow, p_exhaust,
-                                   parameter_array, pressures, enthalpies, metal, results, status,
-                                   stage_p, stage_t)
+                                   parameter_array, tolerance, pressures, enthalpies, metal,
+                                   results, status, stage_p, stage_t)
         if solved < n:
             raise InputError(
                 f"inputs row {solved} ({inputs.index[solved]}): {_STATUS_TEXT[int(status[solved])]}"
