@@ -9,7 +9,7 @@ import pytest
 from steamtwin.calibration import Calibrator
 from steamtwin.model.parameters import ModelParameters
 
-SMALL = {"population": 8, "generations": 4}
+SMALL = {"population": 8, "generations": 4, "workers": 1}
 
 
 @pytest.fixture(scope="module")

@@ -16,15 +16,23 @@ def test_calibrate_command(plant_run, tmp_path):
     app.command()(calibrate)
     app.command("other")(lambda: None)  # keep 'calibrate' a sub-command
     start, end = plant_run.measured.index[-300], plant_run.measured.index[-1]
-    result = CliRunner().invoke(app, [
+    arguments = [
         "calibrate", "--data", str(paths["historian"]), "--tags", str(paths["tag_map"]),
         "--out", str(tmp_path / "params.json"), "--population", "6", "--generations", "2",
-        "--window", f"{start.isoformat()}/{end.isoformat()}",
-    ])
+        "--window", f"{start.isoformat()}/{end.isoformat()}", "--workers", "1",
+    ]
+    result = CliRunner().invoke(app, arguments)
     assert result.exit_code == 0, result.output
     assert "RMSE before" in result.output
-    ModelParameters.from_json(tmp_path / "params.json")
+    fitted = ModelParameters.from_json(tmp_path / "params.json")
     assert (tmp_path / "params.history.csv").exists()
+    assert (tmp_path / "params.checkpoint").exists()
+    (tmp_path / "params.json").unlink()
+    resumed = CliRunner().invoke(app, [*arguments, "--resume"])
+    assert resumed.exit_code == 0, resumed.output
+    assert ModelParameters.from_json(tmp_path / "params.json") == fitted
+    other_seed = CliRunner().invoke(app, [*arguments, "--resume", "--seed", "9"])
+    assert other_seed.exit_code == 2 and "other settings or data" in other_seed.output
 
     no_window = CliRunner().invoke(app, [
         "calibrate", "--data", str(paths["historian"]), "--tags", str(paths["tag_map"]),

@@ -34,7 +34,8 @@ def test_objective_equals_hand_computed_rmse(linear_simulator):
     params = ModelParameters(1.0, 1.0, 1.0)  # predictions 700, 610, 655 K
     weights = {"control_stage_temperature": 2.0, "hp_exhaust_temperature": 1.0,
                "hp_inner_casing_temperature": 0.5}
-    problem = CalibrationProblem(linear_simulator, [window, window.iloc[:3]], weights=weights)
+    problem = CalibrationProblem(linear_simulator, [window, window.iloc[:3]], weights=weights,
+                                 min_samples=1)
     # squared errors of the valid samples, per sensor, both windows pooled
     cs = [*[0, 1, 1, 0, 4], *[0, 1]]        # NaN at row 2 excluded
     ex = [*[1, 4, 1, 0], *[1, 4, 1]]        # NaN at rows 3, 4 excluded
@@ -44,8 +45,8 @@ def test_objective_equals_hand_computed_rmse(linear_simulator):
     rmse = problem.rmse(params)
     assert rmse == pytest.approx(expected, rel=1e-12)
     out: dict = {}
-    problem._evaluate(np.array([1.0, 1.0, 1.0]), out)
-    assert out["F"] == pytest.approx(expected, rel=1e-12)
+    problem._evaluate(np.array([[1.0, 1.0, 1.0]]), out)
+    assert out["F"][0, 0] == pytest.approx(expected, rel=1e-12)
     assert problem.windows[0].excluded == (1, 2, 0)
     assert problem.n_evaluations == 2
     assert fitness(rmse) == pytest.approx(1.0 / (expected + FITNESS_EPSILON))
@@ -53,7 +54,7 @@ def test_objective_equals_hand_computed_rmse(linear_simulator):
 
 def test_selected_sensor_only(linear_simulator):
     problem = CalibrationProblem(linear_simulator, [small_window()],
-                                 sensors=["hp_inner_casing_temperature"])
+                                 sensors=["hp_inner_casing_temperature"], min_samples=1)
     assert problem.rmse(ModelParameters()) == pytest.approx(np.sqrt(2 / 6))
 
 
@@ -61,7 +62,7 @@ def test_input_dropouts_filled_forward_and_counted(linear_simulator):
     window = small_window()
     window.loc[window.index[0], "main_steam_flow"] = np.nan  # leading: dropped
     window.loc[window.index[3], "main_steam_temperature"] = np.nan  # short: filled
-    problem = CalibrationProblem(linear_simulator, [window])
+    problem = CalibrationProblem(linear_simulator, [window], min_samples=1)
     prepared = problem.windows[0]
     assert prepared.dropped_rows == 1 and prepared.filled_rows == 1
     assert len(prepared.inputs) == 5 and not prepared.inputs.isna().any().any()
@@ -73,7 +74,7 @@ def test_input_dropouts_filled_forward_and_counted(linear_simulator):
 
 
 def test_infeasible_parameters_give_the_penalty(linear_simulator):
-    problem = CalibrationProblem(linear_simulator, [small_window()])
+    problem = CalibrationProblem(linear_simulator, [small_window()], min_samples=1)
     assert problem.rmse(ModelParameters(flow_coefficient=0.9)) == PENALTY_RMSE
     assert problem.n_penalised == 1 and "valves" in problem.last_error
 
@@ -96,9 +97,18 @@ def test_bounds_checked():
 
 def test_window_rmse_breakdown(linear_simulator):
     window = small_window()
-    table = window_rmse(linear_simulator, [window, window.iloc[:3]])
+    table = window_rmse(linear_simulator, [window, window.iloc[:3]], min_samples=1)
     assert list(table["samples"]) == [6, 3]
     assert table.loc[1, "rmse:control_stage_temperature"] == pytest.approx(np.sqrt(1 / 2))
     assert table.loc[0, "excluded:hp_exhaust_temperature"] == 2
-    rejected = window_rmse(linear_simulator, [window], ModelParameters(flow_coefficient=0.9))
+    rejected = window_rmse(linear_simulator, [window], ModelParameters(flow_coefficient=0.9),
+                           min_samples=1)
     assert np.isnan(rejected.loc[0, "rmse"]) and "valves" in rejected.loc[0, "error"]
+
+
+def test_too_short_window_and_missing_sensor_are_named(linear_simulator):
+    with pytest.raises(ValueError, match=r"window 0: 6 usable rows .* fewer than the 60"):
+        CalibrationProblem(linear_simulator, [small_window()])
+    no_casing = small_window().drop(columns="hp_inner_casing_temperature")
+    with pytest.raises(ValueError, match=r"window 0: lacks column\(s\) \['hp_inner_casing"):
+        CalibrationProblem(linear_simulator, [no_casing], min_samples=1)

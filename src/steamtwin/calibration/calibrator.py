@@ -6,15 +6,23 @@ import json
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pandas as pd
 from pymoo.core.algorithm import Algorithm
 
+from steamtwin.calibration.checkpoint import (
+    load_checkpoint,
+    run_fingerprint,
+    save_checkpoint,
+)
+from steamtwin.calibration.evaluation import make_evaluator
 from steamtwin.calibration.ga import RemutationRepair, make_ga
 from steamtwin.calibration.objective import (
     DEFAULT_SENSORS,
     MAX_INPUT_GAP_S,
+    MIN_WINDOW_SAMPLES,
     PARAMETER_NAMES,
     CalibrationProblem,
     fitness,
@@ -35,7 +43,12 @@ class Calibrator:
     ``params_`` (:class:`ModelParameters`), ``rmse_`` (K), ``history_`` (one row per
     generation), ``n_evaluations_``, ``window_info_`` (per window: samples, filled and dropped
     input rows, excluded measured samples), ``n_penalised_`` and ``repair_counts_``.
-    Same ``seed`` → same result. Evaluation is serial.
+    Same ``seed`` → same result, whatever evaluates the candidates.
+
+    ``workers``: local processes (default every core; 1 = in this process); ``scheduler``: a
+    Dask scheduler address or ``distributed.Client`` (overrides ``workers``). ``checkpoint``:
+    a file rewritten after every generation; ``fit(windows, resume=True)`` continues from it
+    and ends with the same result as an uninterrupted run.
     """
 
     def __init__(self, simulator: Simulator, *,
@@ -47,7 +60,9 @@ class Calibrator:
                  mutation_probability: float | None = None, mutation_eta: float = 20.0,
                  tournament_size: int = 2, seed: int = 0,
                  progress: ProgressCallback | None = None,
-                 max_input_gap_s: float = MAX_INPUT_GAP_S) -> None:
+                 max_input_gap_s: float = MAX_INPUT_GAP_S,
+                 min_samples: int = MIN_WINDOW_SAMPLES, workers: int | None = None,
+                 scheduler: Any = None, checkpoint: str | Path | None = None) -> None:
         self.simulator = simulator
         self.bounds = bounds
         self.sensors = sensors
@@ -62,13 +77,18 @@ class Calibrator:
         self.seed = seed
         self.progress = progress
         self.max_input_gap_s = max_input_gap_s
+        self.min_samples = min_samples
+        self.workers = workers
+        self.scheduler = scheduler
+        self.checkpoint = checkpoint
 
     # -- pieces (seams for parallel evaluation, checkpointing and other modes) ---------------
 
     def _problem(self, windows: Sequence[pd.DataFrame]) -> CalibrationProblem:
         return CalibrationProblem(self.simulator, windows, bounds=self.bounds,
                                   sensors=self.sensors, weights=self.weights,
-                                  max_input_gap_s=self.max_input_gap_s)
+                                  max_input_gap_s=self.max_input_gap_s,
+                                  min_samples=self.min_samples)
 
     def _algorithm(self, problem: CalibrationProblem) -> tuple[Algorithm, RemutationRepair]:
         repair = RemutationRepair(eta=self.mutation_eta)
@@ -92,22 +112,52 @@ class Calibrator:
 
     # -- public API -------------------------------------------------------------------------
 
-    def fit(self, windows: Sequence[pd.DataFrame]) -> Calibrator:
-        """Calibrate against measured windows (canonical SI signals); returns self."""
+    def _settings(self) -> dict[str, object]:
+        """Everything that shapes the GA's course (for the checkpoint fingerprint)."""
+        return {name: getattr(self, name) for name in (
+            "bounds", "sensors", "weights", "population", "generations",
+            "crossover_probability", "crossover_eta", "mutation_probability", "mutation_eta",
+            "tournament_size", "seed", "max_input_gap_s", "min_samples")}
+
+    def fit(self, windows: Sequence[pd.DataFrame], resume: bool = False) -> Calibrator:
+        """Calibrate against measured windows (canonical SI signals); returns self.
+
+        ``resume=True`` continues from ``checkpoint`` (an error if there is none, or if it was
+        written for other settings or data); a finished checkpoint just gives its result.
+        """
         self._validate()
+        if resume and self.checkpoint is None:
+            raise ValueError("resume needs a checkpoint file")
         problem = self._problem(windows)
-        algorithm, repair = self._algorithm(problem)
-        algorithm.setup(problem, termination=("n_gen", self.generations), seed=int(self.seed),
-                        verbose=False, save_history=False)
-        rows: list[dict[str, object]] = []
-        while algorithm.has_next():
-            algorithm.next()
-            rows.append(self._history_row(algorithm, problem, repair))
-            if self.progress is not None:
-                done = int(rows[-1]["generation"])
-                self.progress(done / self.generations,
-                              f"generation {done}/{self.generations}: best RMSE "
-                              f"{rows[-1]['best_rmse']:.3f} K")
+        fingerprint = run_fingerprint(self._settings(), problem.objective)
+        checkpoint = None if self.checkpoint is None else Path(self.checkpoint)
+        if resume:
+            state = load_checkpoint(checkpoint, problem, fingerprint)
+            algorithm, rows = state.algorithm, state.history
+            problem.n_evaluations, problem.n_penalised = state.evaluations, state.penalised
+            repair = algorithm.repair
+        else:
+            algorithm, repair = self._algorithm(problem)
+            algorithm.setup(problem, termination=("n_gen", self.generations),
+                            seed=int(self.seed), verbose=False, save_history=False)
+            rows = []
+        evaluator = make_evaluator(self.workers, self.scheduler)
+        evaluator.start(problem.objective)
+        problem.evaluator = evaluator
+        try:
+            while algorithm.has_next():
+                algorithm.next()
+                rows.append(self._history_row(algorithm, problem, repair))
+                if checkpoint is not None:
+                    save_checkpoint(checkpoint, algorithm, problem, rows, fingerprint)
+                if self.progress is not None:
+                    done = int(rows[-1]["generation"])
+                    self.progress(done / self.generations,
+                                  f"generation {done}/{self.generations}: best RMSE "
+                                  f"{rows[-1]['best_rmse']:.3f} K")
+        finally:
+            problem.evaluator = None
+            evaluator.close()
         best = algorithm.opt[0]
         self.params_ = problem.parameters(best.X)
         self.rmse_ = float(best.F[0])
@@ -116,6 +166,7 @@ class Calibrator:
         self.n_penalised_ = problem.n_penalised
         self.repair_counts_ = {"out_of_bounds": repair.n_out_of_bounds,
                                "remutations": repair.n_remutations, "clipped": repair.n_clipped}
+        self.population_ = algorithm.pop.get("X").copy()
         self.window_info_ = pd.DataFrame([
             {"start": w.inputs.index[0], "end": w.inputs.index[-1], "samples": len(w.inputs),
              "filled_rows": w.filled_rows, "dropped_rows": w.dropped_rows,

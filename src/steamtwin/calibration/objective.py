@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
-from pymoo.core.problem import ElementwiseProblem
+from pymoo.core.problem import Problem
 
 from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
 from steamtwin.model.simulator import Simulator
@@ -40,13 +40,17 @@ __all__ = [
     "DEFAULT_SENSORS",
     "FITNESS_EPSILON",
     "MAX_INPUT_GAP_S",
+    "MIN_WINDOW_SAMPLES",
     "PARAMETER_NAMES",
     "PENALTY_RMSE",
     "CalibrationProblem",
+    "Evaluation",
+    "Objective",
     "PreparedWindow",
     "check_bounds",
     "fitness",
     "prepare_window",
+    "squared_errors",
     "window_rmse",
 ]
 
@@ -68,6 +72,10 @@ FITNESS_EPSILON = 1.0e-6
 
 MAX_INPUT_GAP_S = 60.0
 """Longest input dropout (s) filled forward; longer ones are an error."""
+
+MIN_WINDOW_SAMPLES = 60
+"""Fewest usable rows a window may have. The RMSE of n samples of noise σ has a standard error
+of about σ/√(2n) (the chi distribution's spread); 60 samples keep it under 10 % of σ."""
 
 
 def fitness(rmse: float | np.ndarray) -> float | np.ndarray:
@@ -120,8 +128,8 @@ def _seconds(index: pd.Index) -> np.ndarray:
 
 
 def prepare_window(window: pd.DataFrame, simulator: Simulator, sensors: Sequence[str],
-                   max_input_gap_s: float = MAX_INPUT_GAP_S, name: str = "window"
-                   ) -> PreparedWindow:
+                   max_input_gap_s: float = MAX_INPUT_GAP_S, name: str = "window",
+                   min_samples: int = MIN_WINDOW_SAMPLES) -> PreparedWindow:
     """Select, check and gap-fill one window (see the module docstring for the NaN policy)."""
     if not isinstance(window, pd.DataFrame) or window.empty:
         raise ValueError(f"{name}: expected a non-empty DataFrame of canonical SI signals")
@@ -135,6 +143,10 @@ def prepare_window(window: pd.DataFrame, simulator: Simulator, sensors: Sequence
         raise ValueError(f"{name}: no row has every input {list(simulator.input_signals)}")
     first = int(np.argmax(complete))
     inputs = inputs.iloc[first:]
+    if len(inputs) < min_samples:
+        raise ValueError(
+            f"{name}: {len(inputs)} usable rows ({window.index[first]} … {window.index[-1]}), "
+            f"fewer than the {min_samples} a calibration window needs; take a longer window")
     seconds = _seconds(inputs.index)
     for column in inputs.columns:
         valid = inputs[column].notna().to_numpy()
@@ -160,7 +172,7 @@ def prepare_window(window: pd.DataFrame, simulator: Simulator, sensors: Sequence
                           dropped_rows=first, excluded=excluded)
 
 
-def _squared_errors(prepared: PreparedWindow, simulated: pd.DataFrame, sensors: Sequence[str]
+def squared_errors(prepared: PreparedWindow, simulated: pd.DataFrame, sensors: Sequence[str]
                     ) -> tuple[np.ndarray, np.ndarray]:
     """Per-sensor sum of squared errors (K²) and valid-sample counts; ValueError on NaN output."""
     missing = [s for s in sensors if s not in simulated.columns]
@@ -192,75 +204,149 @@ def _weights(sensors: Sequence[str], weights: Mapping[str, float] | Sequence[flo
     return result
 
 
-class CalibrationProblem(ElementwiseProblem):
+@dataclass(frozen=True)
+class Evaluation:
+    """One candidate's result: ``rmse`` (K; :data:`PENALTY_RMSE` if rejected) and why."""
+
+    rmse: float
+    error: str = ""
+
+    @property
+    def penalised(self) -> bool:
+        """True when the simulator rejected the candidate."""
+        return bool(self.error)
+
+
+@dataclass(frozen=True)
+class Objective:
+    """What scores a candidate: weighted pooled RMSE (K) of ``simulator`` over ``windows``.
+
+    Picklable and self-contained: this is what evaluators send to their workers once.
+    """
+
+    simulator: Simulator
+    windows: tuple[PreparedWindow, ...]
+    sensors: tuple[str, ...]
+    weights: np.ndarray
+
+    def parameters(self, x: Sequence[float]) -> ModelParameters:
+        """The :class:`ModelParameters` of a decision vector (order: PARAMETER_NAMES)."""
+        return ModelParameters(**{n: float(v) for n, v in zip(PARAMETER_NAMES, x, strict=True)})
+
+    def squared_errors(self, params: ModelParameters) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per window: per-sensor sum of squared errors (K²) and counts; raises if rejected."""
+        return [squared_errors(w, self.simulator.simulate(w.inputs, params), self.sensors)
+                for w in self.windows]
+
+    def evaluate(self, x: Sequence[float]) -> Evaluation:
+        """Score one decision vector; a rejected candidate scores :data:`PENALTY_RMSE`."""
+        try:
+            parts = self.squared_errors(self.parameters(x))
+        except ValueError as error:
+            return Evaluation(PENALTY_RMSE, str(error) or type(error).__name__)
+        sse = sum(p[0] for p in parts)
+        count = sum(p[1] for p in parts)
+        return Evaluation(float(np.sqrt((self.weights * sse).sum()
+                                        / (self.weights * count).sum())))
+
+    def evaluate_many(self, rows: np.ndarray) -> list[Evaluation]:
+        """Score each row of ``rows`` (n, 3) in order."""
+        return [self.evaluate(row) for row in np.atleast_2d(rows)]
+
+
+class CalibrationProblem(Problem):
     """Single-objective pymoo problem: minimise the weighted RMSE (K) over measured windows.
 
     Variables ``x`` = (flow, friction, heat-transfer coefficient), dimensionless, within
-    ``bounds`` (default :data:`PARAMETER_BOUNDS`). Evaluation is serial (pymoo's default
-    elementwise runner); ``n_evaluations`` and ``n_penalised`` count evaluations.
+    ``bounds`` (default :data:`PARAMETER_BOUNDS`). Each generation's candidates go to
+    ``evaluator`` as one batch (see :mod:`steamtwin.calibration.evaluation`; ``None``
+    evaluates in this process). ``n_evaluations`` and ``n_penalised`` count evaluations;
+    ``last_error`` keeps the last rejection's reason.
     """
 
     def __init__(self, simulator: Simulator, windows: Sequence[pd.DataFrame], *,
                  bounds: Mapping[str, tuple[float, float]] | None = None,
                  sensors: Sequence[str] = DEFAULT_SENSORS,
                  weights: Mapping[str, float] | Sequence[float] | None = None,
-                 max_input_gap_s: float = MAX_INPUT_GAP_S, **kwargs: object) -> None:
+                 max_input_gap_s: float = MAX_INPUT_GAP_S, evaluator: object = None,
+                 min_samples: int = MIN_WINDOW_SAMPLES) -> None:
         if isinstance(windows, pd.DataFrame) or len(windows) == 0:
             raise ValueError("windows must be a non-empty list of DataFrames")
-        self.sensors = tuple(sensors)
-        if not self.sensors or len(set(self.sensors)) != len(self.sensors):
+        sensors = tuple(sensors)
+        if not sensors or len(set(sensors)) != len(sensors):
             raise ValueError("sensors must be a non-empty list of distinct signal names")
-        unknown = [s for s in self.sensors if s not in simulator.output_signals]
+        unknown = [s for s in sensors if s not in simulator.output_signals]
         if unknown:
             raise ValueError(f"sensor(s) {unknown} are not predicted by the simulator "
                              f"(it predicts {list(simulator.output_signals)})")
-        self.simulator = simulator
-        self.weights = _weights(self.sensors, weights)
-        self.parameter_bounds = check_bounds(bounds)
-        self.windows = tuple(
-            prepare_window(w, simulator, self.sensors, max_input_gap_s, name=f"window {i}")
+        prepared = tuple(
+            prepare_window(w, simulator, sensors, max_input_gap_s, name=f"window {i}",
+                           min_samples=min_samples)
             for i, w in enumerate(windows)
         )
+        self.objective = Objective(simulator, prepared, sensors, _weights(sensors, weights))
+        self.parameter_bounds = check_bounds(bounds)
+        self.evaluator = evaluator
         self.n_evaluations = 0
         self.n_penalised = 0
         self.last_error: str | None = None
         low = np.array([self.parameter_bounds[n][0] for n in PARAMETER_NAMES])
         high = np.array([self.parameter_bounds[n][1] for n in PARAMETER_NAMES])
-        super().__init__(n_var=len(PARAMETER_NAMES), n_obj=1, xl=low, xu=high, **kwargs)
+        super().__init__(n_var=len(PARAMETER_NAMES), n_obj=1, xl=low, xu=high)
+
+    @property
+    def simulator(self) -> Simulator:
+        """The model being calibrated."""
+        return self.objective.simulator
+
+    @property
+    def sensors(self) -> tuple[str, ...]:
+        """Measured signals in the objective."""
+        return self.objective.sensors
+
+    @property
+    def weights(self) -> np.ndarray:
+        """Relative weight of each sensor."""
+        return self.objective.weights
+
+    @property
+    def windows(self) -> tuple[PreparedWindow, ...]:
+        """The prepared windows."""
+        return self.objective.windows
 
     def parameters(self, x: Sequence[float]) -> ModelParameters:
         """The :class:`ModelParameters` of a decision vector."""
-        return ModelParameters(**{n: float(v) for n, v in zip(PARAMETER_NAMES, x, strict=True)})
+        return self.objective.parameters(x)
 
-    def squared_errors(self, params: ModelParameters) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Per window: per-sensor sum of squared errors (K²) and counts; raises if rejected."""
-        return [
-            _squared_errors(w, self.simulator.simulate(w.inputs, params), self.sensors)
-            for w in self.windows
-        ]
+    def evaluate_candidates(self, candidates: np.ndarray) -> np.ndarray:
+        """RMSE (K) of each row of ``candidates`` (n, 3), counted, via the evaluator."""
+        rows = np.atleast_2d(np.asarray(candidates, dtype=float))
+        if self.evaluator is None:
+            results = self.objective.evaluate_many(rows)
+        else:
+            results = self.evaluator.evaluate(rows)
+        self.n_evaluations += len(results)
+        for result in results:
+            if result.penalised:
+                self.n_penalised += 1
+                self.last_error = result.error
+        return np.array([result.rmse for result in results])
 
     def rmse(self, params: ModelParameters) -> float:
         """Weighted pooled RMSE (K) of ``params``; :data:`PENALTY_RMSE` if rejected."""
-        self.n_evaluations += 1
-        try:
-            parts = self.squared_errors(params)
-        except ValueError as error:
-            self.n_penalised += 1
-            self.last_error = str(error)
-            return PENALTY_RMSE
-        sse = sum(p[0] for p in parts)
-        count = sum(p[1] for p in parts)
-        return float(np.sqrt((self.weights * sse).sum() / (self.weights * count).sum()))
+        x = [getattr(params, name) for name in PARAMETER_NAMES]
+        return float(self.evaluate_candidates(np.array([x]))[0])
 
     def _evaluate(self, x: np.ndarray, out: dict, *args: object, **kwargs: object) -> None:
-        out["F"] = self.rmse(self.parameters(x))
+        out["F"] = self.evaluate_candidates(x)[:, None]
 
 
 def window_rmse(simulator: Simulator, windows: Sequence[pd.DataFrame],
                 params: ModelParameters | None = None, *,
                 sensors: Sequence[str] = DEFAULT_SENSORS,
                 weights: Mapping[str, float] | Sequence[float] | None = None,
-                max_input_gap_s: float = MAX_INPUT_GAP_S) -> pd.DataFrame:
+                max_input_gap_s: float = MAX_INPUT_GAP_S,
+                min_samples: int = MIN_WINDOW_SAMPLES) -> pd.DataFrame:
     """Per-window RMSE breakdown (K) for reports.
 
     One row per window: ``start``, ``end``, ``rmse`` (weighted, K; NaN if the simulator
@@ -269,7 +355,7 @@ def window_rmse(simulator: Simulator, windows: Sequence[pd.DataFrame],
     """
     params = params or ModelParameters()
     problem = CalibrationProblem(simulator, windows, sensors=sensors, weights=weights,
-                                 max_input_gap_s=max_input_gap_s)
+                                 max_input_gap_s=max_input_gap_s, min_samples=min_samples)
     rows = []
     for prepared in problem.windows:
         row: dict[str, object] = {
@@ -279,7 +365,7 @@ def window_rmse(simulator: Simulator, windows: Sequence[pd.DataFrame],
         }
         try:
             simulated = simulator.simulate(prepared.inputs, params)
-            sse, count = _squared_errors(prepared, simulated, problem.sensors)
+            sse, count = squared_errors(prepared, simulated, problem.sensors)
         except ValueError as error:
             sse, count = np.full(len(problem.sensors), np.nan), np.ones(len(problem.sensors))
             row["error"] = str(error)

@@ -57,12 +57,22 @@ def calibrate(
     window: list[str] | None = typer.Option(
         None, help="START/END (ISO 8601) of a window to fit; repeatable. Default: steady 2-h "
         "windows of 'load'."),
+    workers: int | None = typer.Option(
+        None, min=1, help="Local worker processes evaluating the GA's candidates (default: "
+        "every core; 1 = no pool)."),
+    scheduler: str | None = typer.Option(
+        None, help="Dask scheduler address (e.g. tcp://10.0.0.5:8786): evaluate on that "
+        "cluster instead of local processes."),
+    resume: bool = typer.Option(
+        False, "--resume", help="Continue from the checkpoint a killed run left "
+        "(<out stem>.checkpoint next to --out); same settings and data give the same result."),
 ) -> None:
     """Calibrate flow, friction and heat-transfer coefficients against DCS temperatures.
 
     Reads and cleans the historian export, picks the windows, runs the genetic algorithm and
     writes the parameters (readable by 'steamtwin simulate --params') plus the per-generation
-    history, then prints the RMSE before (empirical parameters) and after calibration.
+    history, then prints the RMSE before (empirical parameters) and after calibration. A
+    checkpoint is rewritten after every generation; --resume continues a killed run.
 
     Example: steamtwin calibrate --data plant-data/historian.parquet --tags plant-data/tags.toml --out params.json
     """  # noqa: E501
@@ -92,9 +102,11 @@ def calibrate(
                 bar.update(task, completed=fraction, description=message)
 
             calibrator = Calibrator(model, population=population, generations=generations,
-                                    seed=seed, progress=progress)
+                                    seed=seed, progress=progress, workers=workers,
+                                    scheduler=scheduler,
+                                    checkpoint=out.with_name(f"{out.stem}.checkpoint"))
             before = calibrator.rmse(windows, ModelParameters())
-            calibrator.fit(windows)
+            calibrator.fit(windows, resume=resume)
     except (SpecError, TagMapError, HistorianFormatError, ValueError, KeyError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=2) from None
