@@ -300,3 +300,29 @@ def test_default_convergence_is_far_below_dcs_resolution(reference_model, refere
     assert (default.hp_power / exact.hp_power - 1).abs().max() < 1e-4
     with pytest.raises(ValueError, match="tolerance"):
         FullOrderModel(reference_spec, pressure_tolerance=0.0).simulate(frame)
+
+
+def test_casing_thermocouple_reading_converges_with_the_node_count(reference_model,
+                                                                    reference_spec):
+    """The thermocouple is read at a physical depth, so refining the wall changes it little."""
+    from steamtwin.dcs.plant import PlantModel
+    from steamtwin.model.design import CASING_THERMOCOUPLE_DEPTH, _thermocouple_position
+
+    assert _thermocouple_position(0.225, 8) == (-1, pytest.approx(0.014 / 0.0140625))
+    node, weight = _thermocouple_position(0.225, 16)
+    assert node == 0 and (node + 0.5 + weight) * 0.225 / 16 == pytest.approx(
+        CASING_THERMOCOUPLE_DEPTH)
+
+    class Fine(PlantModel):
+        metal_nodes = 16
+
+    class Finer(PlantModel):
+        metal_nodes = 32
+
+    frame = load_profile_inputs(reference_spec, ramp_profile(1.0, 0.5, 0.05, 60.0, 900.0))
+    readings = [model.simulate(frame)["hp_inner_casing_temperature"].to_numpy()
+                for model in (reference_model, Fine(reference_spec), Finer(reference_spec))]
+    coarse_error = np.abs(readings[0] - readings[2]).max()
+    fine_error = np.abs(readings[1] - readings[2]).max()
+    assert coarse_error < 1.5  # K, during a 5 %/min ramp
+    assert fine_error < 0.5 * coarse_error

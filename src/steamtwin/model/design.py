@@ -32,6 +32,12 @@ from steamtwin.spec import SpecError, TurbineSpec
 from steamtwin.steam import if97
 
 METAL_NODES = 8
+# Depth (m) of the inner-casing metal thermocouple under the bore. Metal thermocouples of HP
+# inner casings sit in drilled holes near the steam-side surface so that they see the bore's
+# transients (they feed the thermal-stress limiter); 14 mm is an assumed installation depth
+# (it was node 0's centre, L/16 of the reference unit's 225 mm wall, before the reading became
+# an interpolation at a physical depth that does not change with the node count).
+CASING_THERMOCOUPLE_DEPTH = 0.014
 EFFICIENCY_SCALE_RANGE = (0.8, 1.2)
 
 
@@ -96,6 +102,10 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         area[2 * g], area[2 * g + 1] = group.casing_area, group.rotor_area
         rotor_radius = 2.0 * group.rotor_mass / (spec.rotor_material.density * group.rotor_area)
         rotor_speed[g] = omega * rotor_radius
+    sensor_group = [group.name for group in groups].index(spec.casing_sensor_group)
+    sensor_node, sensor_weight = _thermocouple_position(
+        groups[sensor_group].casing_mass
+        / (spec.casing_material.density * groups[sensor_group].casing_area), metal_nodes)
     control = ControlStageConstants(
         valve_pressure_drop=design.valve_pressure_drop,
         nozzle_discharge_coefficient=cs.nozzle_discharge_coefficient,
@@ -138,7 +148,9 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         group_ending_at_stage=np.array(
             [next((g for g, group in enumerate(groups) if group.stages[-1] == stage), -1)
              for stage in range(n + 1)], dtype=np.int64),
-        sensor_group=[group.name for group in groups].index(spec.casing_sensor_group),
+        sensor_group=sensor_group,
+        sensor_node=sensor_node,
+        sensor_weight=sensor_weight,
     )
 
 
@@ -157,6 +169,20 @@ def _nozzle_area_per_arc(spec: TurbineSpec, control_stage_pressure: float) -> fl
         cs.nozzle_discharge_coefficient * psi * math.sqrt(p_valve / v_valve)
     )
     return area / open_arc
+
+
+def _thermocouple_position(wall_depth: float, nodes: int) -> tuple[int, float]:
+    """(node, weight) of the casing thermocouple at :data:`CASING_THERMOCOUPLE_DEPTH`.
+
+    Node j's centre lies (j + ½)·Δx under the bore (Δx = wall depth / nodes); node −1 stands for
+    the bore surface. The reading is node + weight·(next − node), linear in depth.
+    """
+    dx = wall_depth / nodes
+    depth = min(CASING_THERMOCOUPLE_DEPTH, wall_depth - dx / 2.0)
+    if depth <= dx / 2.0:
+        return -1, depth / (dx / 2.0)
+    node = min(int(depth / dx - 0.5), nodes - 2)
+    return node, (depth - (node + 0.5) * dx) / dx
 
 
 def _plane_wall(mass, area, material, insulation, nodes):

@@ -156,6 +156,8 @@ class KernelConstants(NamedTuple):
     group_first_stage: np.ndarray  # int, 0 = control stage
     group_ending_at_stage: np.ndarray  # int per stage 0…n: the group that ends there, or -1
     sensor_group: int
+    sensor_node: int  # the thermocouple lies between node sensor_node and the next (-1: wall)
+    sensor_weight: float  # linear weight of the deeper of the two
 
 
 @njit(cache=True)
@@ -429,7 +431,7 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             result[2] = ph_property(tables, PH_T, p_exhaust, enthalpies[n])
             _commit_metal(metal_constants.conductance, pivot, rhs, surface, group_temperature,
                           metal)
-            result[3] = metal[2 * c.sensor_group + CASING, 0]
+            result[3] = _casing_thermocouple(c, metal, surface, group_temperature)
             result[4] = power
             result[5] = heat_total
             result[6] = extraction_energy
@@ -441,6 +443,25 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             result[12], result[13] = _metal_energy(c, metal)
             return STATUS_OK
     return STATUS_NO_CONVERGENCE
+
+
+@njit(cache=True)
+def _casing_thermocouple(c, metal, surface, group_temperature):
+    """Casing metal temperature (K) at the thermocouple's depth, linear between neighbours.
+
+    Node j's temperature belongs to its cell centre, (j + ½)·Δx under the bore; above node 0 the
+    neighbour is the bore surface, where the steam-side flux q = G·(T_steam − T_0) gives
+    T_wall = T_0 + q·r_half/A. Interpolating at a physical depth keeps the reading independent of
+    the node count (second order in Δx).
+    """
+    chain = 2 * c.sensor_group + CASING
+    j = c.sensor_node
+    if j >= 0:
+        return metal[chain, j] + c.sensor_weight * (metal[chain, j + 1] - metal[chain, j])
+    node_0 = metal[chain, 0]
+    flux = surface[chain, 0] * (group_temperature[c.sensor_group] - node_0)
+    wall = node_0 + flux * c.metal.half_cell_resistance[chain] / c.metal.area[chain]
+    return wall + c.sensor_weight * (node_0 - wall)
 
 
 @njit(cache=True)
