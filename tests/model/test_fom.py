@@ -326,3 +326,27 @@ def test_casing_thermocouple_reading_converges_with_the_node_count(reference_mod
     fine_error = np.abs(readings[1] - readings[2]).max()
     assert coarse_error < 1.5  # K, during a 5 %/min ramp
     assert fine_error < 0.5 * coarse_error
+
+
+def test_parameters_varying_in_time(reference_model, reference_spec):
+    frame = load_profile_inputs(reference_spec, np.full(1200, 0.5))
+    constant = ModelParameters(0.97, 1.2, 1.3)
+    schedule = pd.DataFrame({"flow_coefficient": 0.97, "friction_coefficient": 1.2,
+                             "heat_transfer_coefficient": 1.3}, index=frame.index)
+    fixed = reference_model.simulate(frame, constant)
+    varying = reference_model.simulate_varying(frame, schedule).outputs
+    pd.testing.assert_frame_equal(fixed, varying)
+    # a step in the flow coefficient half-way: before it nothing changes, after it the
+    # control-stage pressure settles where a constant 0.94 puts it (algebraic steam path)
+    schedule.loc[schedule.index[600]:, "flow_coefficient"] = 0.94
+    stepped = reference_model.simulate_varying(frame, schedule).outputs
+    pd.testing.assert_frame_equal(stepped.iloc[:600], fixed.iloc[:600])
+    low = reference_model.simulate(frame, ModelParameters(0.94, 1.2, 1.3))
+    assert stepped.control_stage_pressure.iloc[600] == pytest.approx(
+        low.control_stage_pressure.iloc[600], rel=1e-4)
+    with pytest.raises(InputError, match="flow_coefficient' row 3"):
+        bad = schedule.copy()
+        bad.iloc[3, 0] = 0.5
+        reference_model.simulate_varying(frame, bad)
+    with pytest.raises(InputError, match="one row per input row"):
+        reference_model.simulate_varying(frame, schedule.iloc[:10])

@@ -162,6 +162,18 @@ class PlantTruth:
         if not 0.0 <= self.gland_leakage_rated < 0.1:
             raise ValueError("gland_leakage_rated must lie within [0, 0.1)")
 
+    @property
+    def twin_equivalent(self) -> ModelParameters:
+        """The parameters with which the twin, which has no gland leakage, matches this plant.
+
+        The twin is fed the measured flow m, of which λ leaks past the stages; Stodola's law
+        m·(1 − λ) = φ·K·sqrt(…) reads m = φ/(1 − λ)·K·sqrt(…) to the twin, so the flow coefficient
+        it can identify is φ/(1 − λ) (λ at rated load; it varies by < 0.05 % of flow with load).
+        Friction and heat-transfer coefficients carry over unchanged.
+        """
+        return replace(self.parameters, flow_coefficient=self.parameters.flow_coefficient
+                       / (1.0 - self.gland_leakage_rated))
+
 
 def plant_spec(spec: TurbineSpec) -> TurbineSpec:
     """The plant's spec: one metal group per stage, each group's mass and area split evenly."""
@@ -502,6 +514,7 @@ def write_plant(run: PlantRun, out_dir: str | Path, layout: str = "wide",
     document = {
         "scenario": run.scenario,
         "parameters": asdict(run.truth.parameters),
+        "twin_equivalent_parameters": asdict(run.truth.twin_equivalent),
         "gland_leakage_rated": run.truth.gland_leakage_rated,
         "faults_config": asdict(run.truth.faults),
         "structure": list(STRUCTURE_NOTES),

@@ -9,7 +9,7 @@ and inner casing per stage group (``metal``), solved sample by sample in a compi
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from functools import cached_property
 
 import numpy as np
@@ -17,7 +17,7 @@ import pandas as pd
 
 from steamtwin.model import kernel
 from steamtwin.model.design import EFFICIENCY_SCALE_RANGE, DesignConstants, kernel_constants
-from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import SpecError, TurbineSpec
 from steamtwin.steam import if97
@@ -174,8 +174,31 @@ class FullOrderModel:
         """Like :meth:`simulate`, plus diagnostics and (``stages=True``) per-stage states."""
         return self._run(self.design_.kernel, inputs, params or ModelParameters(), stages)
 
+    def simulate_varying(self, inputs: pd.DataFrame, parameters: pd.DataFrame,
+                         stages: bool = False) -> SimulationResult:
+        """Like :meth:`simulate_detailed` with parameters that change in time (e.g. fouling).
+
+        ``parameters`` has the :class:`ModelParameters` fields as columns (dimensionless) and
+        one row per input row; each row must lie within the parameter bounds.
+        """
+        names = [f.name for f in fields(ModelParameters)]
+        missing = [name for name in names if name not in parameters.columns]
+        if missing or len(parameters) != len(inputs):
+            raise InputError(f"parameters need the columns {names} and one row per input row "
+                             f"(got columns {list(parameters.columns)}, {len(parameters)} rows "
+                             f"for {len(inputs)} inputs)")
+        schedule = parameters[names].to_numpy(dtype=float)
+        for j, name in enumerate(names):
+            low, high = PARAMETER_BOUNDS[name]
+            outside = np.flatnonzero(~((schedule[:, j] >= low) & (schedule[:, j] <= high)))
+            if outside.size:
+                row = int(outside[0])
+                raise InputError(f"parameters column {name!r} row {row}: {schedule[row, j]!r} "
+                                 f"outside [{low}, {high}]")
+        return self._run(self.design_.kernel, inputs, schedule, stages)
+
     def _run(self, constants: kernel.KernelConstants, inputs: pd.DataFrame,
-             params: ModelParameters, detail: bool) -> SimulationResult:
+             params: ModelParameters | np.ndarray, detail: bool) -> SimulationResult:
         columns, time_step = _validated_inputs(inputs)
         p0, t0, flow, p_exhaust = (columns[name] for name in INPUT_SIGNALS)
         minimum_flow = MINIMUM_FLOW_FRACTION * self.spec.design.main_steam_flow
@@ -200,8 +223,11 @@ class FullOrderModel:
         rows = n if detail else 0
         stage_p = np.zeros((rows, stages + 1))
         stage_t = np.zeros((rows, stages + 1))
-        parameter_array = np.array([params.flow_coefficient, params.friction_coefficient,
-                                    params.heat_transfer_coefficient])
+        if isinstance(params, ModelParameters):
+            parameter_array = np.array([[params.flow_coefficient, params.friction_coefficient,
+                                         params.heat_transfer_coefficient]])
+        else:
+            parameter_array = np.ascontiguousarray(params, dtype=float)
         tolerance = np.array([self.pressure_tolerance, self.enthalpy_tolerance], dtype=float)
         if not (np.isfinite(tolerance).all() and (tolerance > 0).all()):
             raise ValueError(f"pressure_tolerance and enthalpy_tolerance must be finite and > 0 "

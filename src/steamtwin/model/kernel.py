@@ -491,11 +491,13 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                enthalpies, metal, results, status, stage_pressures, stage_temperatures):
     """Simulate a series; the first sample starts from steady metal (equilibrium).
 
-    ``pressures``/``enthalpies`` (stages + 1) carry the warm start in and the last solution out;
-    ``metal`` (chains, nodes) the metal temperatures (K), chain 2·group + CASING/ROTOR. Fills
-    ``results`` (samples × N_RESULTS), ``status`` (samples,), and, when they have rows, the
-    per-stage outlet pressures and temperatures (samples × stages + 1). Stops at the first failed
-    sample.
+    ``params`` (rows, 3): flow, friction and heat-transfer coefficients, one row for the whole
+    series or one per sample; ``tolerance`` (relative pressure, J/kg) bounds each sample's
+    estimated convergence error. ``pressures``/``enthalpies`` (stages + 1) carry the warm start
+    in and the last solution out; ``metal`` (chains, nodes) the metal temperatures (K), chain
+    2·group + CASING/ROTOR. Fills ``results`` (samples × N_RESULTS), ``status`` (samples,), and,
+    when they have rows, the per-stage outlet pressures and temperatures (samples × stages + 1).
+    Stops at the first failed sample.
     """
     n_samples = p0.size
     chains = metal.shape[0]
@@ -510,7 +512,12 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
     inlet_pv = np.empty(pressures.size - 1)
     for i in range(inlet_pv.size):
         inlet_pv[i] = pressures[i] * ph_property(tables, PH_V, pressures[i], enthalpies[i])
+    current = params[0].copy()
+    varying = params.shape[0] > 1
     for k in range(n_samples):
+        if varying:
+            for j in range(current.size):
+                current[j] = params[k, j]
         if not pressure_in_range(tables, p0[k]) or not pressure_in_range(tables, p_exhaust[k]):
             status[k] = STATUS_OUT_OF_TABLES
             return k
@@ -531,14 +538,14 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
             code = STATUS_OK
             for _ in range(50):
                 before = metal.copy()
-                code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], params, 0.0,
+                code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], current, 0.0,
                                      pressures, enthalpies, inlet_pv, throttled, metal, pivot,
                                      rhs, surface, group_temperature, cs_out, properties,
                                      tolerance, results[k], 200)
                 if code != STATUS_OK or np.abs(metal - before).max() < 1e-9:
                     break
         else:
-            code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], params, inverse_dt,
+            code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], current, inverse_dt,
                                  pressures, enthalpies, inlet_pv, throttled, metal, pivot, rhs,
                                  surface, group_temperature, cs_out, properties, tolerance,
                                  results[k], 200)
