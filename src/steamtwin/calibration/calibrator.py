@@ -30,7 +30,7 @@ from steamtwin.calibration.objective import (
 from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
 from steamtwin.model.simulator import Simulator
 
-__all__ = ["Calibrator", "ProgressCallback"]
+__all__ = ["Calibrator", "ProgressCallback", "write_parameters"]
 
 ProgressCallback = Callable[[float, str], None]
 """``progress(fraction_done, message)``, fraction in 0…1 (as elsewhere in steamtwin)."""
@@ -206,20 +206,24 @@ class Calibrator:
         """
         if not hasattr(self, "params_"):
             raise RuntimeError("Calibrator is not fitted; call fit(windows) first")
-        path = Path(path)
-        document = {
-            "parameters": asdict(self.params_),
-            "bounds": {name: list(bounds) for name, bounds in PARAMETER_BOUNDS.items()},
-            "calibration": {
-                "rmse_K": self.rmse_,
-                "sensors": list(self.sensors),
-                "population": self.population,
-                "generations": self.generations,
-                "seed": self.seed,
-                "evaluations": self.n_evaluations_,
-            },
-        }
-        path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
-        history = path.with_name(f"{path.stem}.history.csv")
-        self.history_.to_csv(history)
-        return path, history
+        settings = {"mode": "ga", "population": self.population,
+                    "generations": self.generations, "seed": self.seed}
+        return write_parameters(path, self.params_, self.rmse_, self.sensors,
+                                self.n_evaluations_, settings, self.history_)
+
+
+def write_parameters(path: str | Path, params: ModelParameters, rmse: float,
+                     sensors: Sequence[str], evaluations: int, settings: dict[str, object],
+                     history: pd.DataFrame) -> tuple[Path, Path]:
+    """Parameters JSON (``ModelParameters.from_json`` reads it) + ``<stem>.history.csv``."""
+    path = Path(path)
+    document = {
+        "parameters": asdict(params),
+        "bounds": {name: list(bounds) for name, bounds in PARAMETER_BOUNDS.items()},
+        "calibration": {"rmse_K": rmse, "sensors": list(sensors), "evaluations": evaluations,
+                        **settings},
+    }
+    path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+    history_path = path.with_name(f"{path.stem}.history.csv")
+    history.to_csv(history_path)
+    return path, history_path

@@ -26,6 +26,7 @@ from pymoo.core.problem import Problem
 from pymoo.core.repair import Repair
 from pymoo.operators.crossover.sbx import SBX
 from pymoo.operators.mutation.pm import PM
+from pymoo.operators.sampling.rnd import FloatRandomSampling
 from pymoo.operators.selection.tournament import TournamentSelection, compare
 
 __all__ = ["RemutationRepair", "make_ga", "polynomial_perturbation", "tournament_by_fitness"]
@@ -114,11 +115,12 @@ class RemutationRepair(Repair):
 def make_ga(n_var: int, *, population: int = 50, crossover_probability: float = 0.9,
             crossover_eta: float = 15.0, mutation_probability: float | None = None,
             mutation_eta: float = 20.0, tournament_size: int = 2,
-            repair: Repair | None = None) -> GA:
+            repair: Repair | None = None, initial_population: np.ndarray | None = None) -> GA:
     """The method's GA for ``n_var`` variables (see the module docstring for the defaults).
 
     ``mutation_probability`` per variable, default ``1/n_var``; ``repair`` defaults to a
-    :class:`RemutationRepair` with ``eta = mutation_eta``.
+    :class:`RemutationRepair` with ``eta = mutation_eta``; ``initial_population`` (rows of
+    variables) warm-starts the GA instead of uniform random sampling.
     """
     if n_var < 1 or population < 2 or tournament_size < 2:
         raise ValueError("need n_var ≥ 1, population ≥ 2 and tournament_size ≥ 2")
@@ -129,8 +131,11 @@ def make_ga(n_var: int, *, population: int = 50, crossover_probability: float = 
             raise ValueError(f"{name} must lie within [0, 1] (got {value!r})")
     if not (crossover_eta > 0 and mutation_eta > 0):
         raise ValueError("crossover_eta and mutation_eta must be > 0")
+    sampling = FloatRandomSampling() if initial_population is None else np.atleast_2d(
+        np.asarray(initial_population, dtype=float))
     return GA(
         pop_size=population,
+        sampling=sampling,
         selection=TournamentSelection(func_comp=tournament_by_fitness, pressure=tournament_size),
         crossover=SBX(prob=crossover_probability, eta=crossover_eta),
         mutation=PM(prob=1.0, prob_var=p_m, eta=mutation_eta),

@@ -82,6 +82,7 @@ __all__ = [
     "SCENARIOS",
     "TEMPERATURE_DIP_PER_RATE",
     "TEMPERATURE_LAG_S",
+    "ParameterDrift",
     "PlantModel",
     "PlantRun",
     "PlantTruth",
@@ -145,18 +146,45 @@ ProgressCallback = Callable[[float, str], None]
 
 
 @dataclass(frozen=True)
+class ParameterDrift:
+    """A change of the true parameters during a run: from the run's parameters to ``target``,
+    linearly over ``over_hours`` starting ``at_hours`` after the start (e.g. deposits building up
+    and lowering the flow coefficient; accelerated to hours so that one day can show it)."""
+
+    at_hours: float
+    over_hours: float
+    target: ModelParameters
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.at_hours) and self.at_hours >= 0.0
+                and math.isfinite(self.over_hours) and self.over_hours >= 0.0):
+            raise ValueError("at_hours and over_hours must be finite and ≥ 0")
+
+    def schedule(self, start: ModelParameters, seconds: np.ndarray) -> pd.DataFrame:
+        """Parameters (columns of ModelParameters) at each time ``seconds`` after the start."""
+        begin, duration = self.at_hours * 3600.0, self.over_hours * 3600.0
+        share = (np.clip((seconds - begin) / duration, 0.0, 1.0) if duration > 0.0
+                 else (seconds >= begin).astype(float))
+        before, after = asdict(start), asdict(self.target)
+        return pd.DataFrame({name: before[name] + share * (after[name] - before[name])
+                             for name in before})
+
+
+@dataclass(frozen=True)
 class PlantTruth:
     """Hidden truth of the virtual plant.
 
     ``parameters``: the FOM parameters of the real unit; ``gland_leakage_rated``: HP front-gland
     leakage as a fraction of main-steam flow at rated load; ``faults``: fault injection of the
-    instruments (:class:`~steamtwin.dcs.sensors.FaultConfig`).
+    instruments (:class:`~steamtwin.dcs.sensors.FaultConfig`); ``drift``: an optional change
+    of the parameters during the run (:class:`ParameterDrift`).
     """
 
     parameters: ModelParameters = field(default_factory=lambda: ModelParameters(
         flow_coefficient=0.965, friction_coefficient=1.3, heat_transfer_coefficient=1.4))
     gland_leakage_rated: float = 0.015
     faults: FaultConfig = field(default_factory=FaultConfig)
+    drift: ParameterDrift | None = None
 
     def __post_init__(self) -> None:
         if not 0.0 <= self.gland_leakage_rated < 0.1:
@@ -402,11 +430,18 @@ def run_plant(scenario: str, *, hours: float | None = None, seed: int = 0,
                    "p_exhaust": design.hp_exhaust_pressure, "flow": design.main_steam_flow}
     flow = inputs["main_steam_flow"].to_numpy()
     leakage = np.full(flow.size, truth.gland_leakage_rated)
+    schedule = None
+    if truth.drift is not None:
+        schedule = truth.drift.schedule(truth.parameters, np.arange(flow.size, dtype=float))
+        schedule.index = inputs.index
     outputs = pd.DataFrame()
     for k in range(2):  # fixed-point pass on the leakage, which depends on p1 and T1
         report(0.2 + 0.3 * k, f"plant run, pass {k + 1} of 2")
         stage_inputs = inputs.assign(main_steam_flow=flow * (1.0 - leakage))
-        outputs = model.simulate(stage_inputs, truth.parameters)
+        if schedule is None:
+            outputs = model.simulate(stage_inputs, truth.parameters)
+        else:
+            outputs = model.simulate_varying(stage_inputs, schedule).outputs
         leakage = gland_leakage_fraction(
             outputs["control_stage_pressure"].to_numpy(),
             outputs["control_stage_temperature"].to_numpy(),
@@ -415,6 +450,8 @@ def run_plant(scenario: str, *, hours: float | None = None, seed: int = 0,
     outputs = outputs.assign(load=generator_power(outputs["hp_power"].to_numpy(), spec))
     true_inputs = inputs.assign(load_demand=demand, stage_flow=flow * (1.0 - leakage),
                                 gland_leakage_fraction=leakage)
+    if schedule is not None:  # the true parameters over time, for judging online calibration
+        true_inputs = true_inputs.join(schedule.add_prefix("true_"))
     report(0.8, "instruments")
     sensed = [name for name in KKS_TAGS if name in spec.sensors]
     true_frame = inputs.join(outputs)[sensed]
@@ -517,6 +554,7 @@ def write_plant(run: PlantRun, out_dir: str | Path, layout: str = "wide",
         "twin_equivalent_parameters": asdict(run.truth.twin_equivalent),
         "gland_leakage_rated": run.truth.gland_leakage_rated,
         "faults_config": asdict(run.truth.faults),
+        "drift": None if run.truth.drift is None else asdict(run.truth.drift),
         "structure": list(STRUCTURE_NOTES),
         "sensors": _json_ready(run.injected.sensors),
         "injected_faults": _json_ready(run.injected.faults.set_index("signal")),

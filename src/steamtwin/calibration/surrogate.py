@@ -1,0 +1,241 @@
+"""Surrogate-assisted calibration: the GA searches a cheap RBF surrogate, the model checks it.
+
+Method (the usual surrogate-based optimisation loop: Jones, Schonlau & Welch 1998, *J. Global
+Optim.* 13:455; Forrester, Sóbester & Keane 2008, *Engineering Design via Surrogate Modelling*,
+ch. 3 and 7; Regis & Shoemaker 2005 for RBF surrogates):
+
+1. **Initial design**: a Latin hypercube of ``initial_samples`` points in the bounds (default
+   10 per variable, Loeppky, Sacks & Welch 2009), evaluated with the model.
+2. **Surrogate**: an RBF interpolant (``scipy.interpolate.RBFInterpolator``, thin-plate spline
+   plus a linear polynomial) of ``log(RMSE)`` over the bounds scaled to the unit cube. The log
+   makes the steep walls around the valley as smooth as its floor; rejected candidates (penalty
+   RMSE) enter at twice the worst feasible RMSE, so the surrogate steers away from them without
+   a 1000-K cliff.
+3. **GA on the surrogate**: the method's GA (:func:`~steamtwin.calibration.ga.make_ga`), which
+   costs milliseconds here.
+4. **Infill**: the surrogate optimum, the next-best distinct members of the GA's final
+   population, and one space-filling point (the farthest of a random set from every evaluated
+   point) are evaluated with the model, as one parallel batch, and added to the data.
+5. Repeat 2–4 until the best model-evaluated RMSE has improved by less than
+   ``improvement_tolerance`` for ``patience`` rounds, or ``max_evaluations`` is spent.
+
+The result is always a model-evaluated point, never a surrogate prediction; ``n_evaluations_``
+is what the model was asked for.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from pymoo.core.problem import Problem
+from pymoo.optimize import minimize
+from scipy.interpolate import RBFInterpolator
+from scipy.stats import qmc
+
+from steamtwin.calibration.calibrator import ProgressCallback, write_parameters
+from steamtwin.calibration.evaluation import make_evaluator
+from steamtwin.calibration.ga import make_ga
+from steamtwin.calibration.objective import (
+    DEFAULT_SENSORS,
+    MAX_INPUT_GAP_S,
+    MIN_WINDOW_SAMPLES,
+    PARAMETER_NAMES,
+    PENALTY_RMSE,
+    CalibrationProblem,
+    fitness,
+)
+from steamtwin.model.simulator import Simulator
+
+__all__ = ["SurrogateCalibrator"]
+
+_MIN_SEPARATION = 1e-4  # unit-cube distance below which a candidate repeats an evaluated point
+_CANDIDATE_SEPARATION = 0.02  # between infill points of one batch (unit cube)
+
+
+class _SurrogateProblem(Problem):
+    """The surrogate as a vectorised pymoo problem (unit-cube variables)."""
+
+    def __init__(self, surrogate: RBFInterpolator, n_var: int) -> None:
+        super().__init__(n_var=n_var, n_obj=1, xl=np.zeros(n_var), xu=np.ones(n_var))
+        self.surrogate = surrogate
+
+    def _evaluate(self, x: np.ndarray, out: dict, *args: object, **kwargs: object) -> None:
+        out["F"] = self.surrogate(np.atleast_2d(x))[:, None]
+
+
+class SurrogateCalibrator:
+    """Calibrate with far fewer model runs: GA on an RBF surrogate with model-run infill.
+
+    Same objective, bounds and evaluators as :class:`~steamtwin.calibration.Calibrator`. After
+    :meth:`fit`: ``params_``, ``rmse_`` (K, model-evaluated), ``n_evaluations_`` (model runs),
+    ``history_`` (per round: model runs so far, best RMSE and fitness, the surrogate's own
+    prediction at its optimum, best parameters), ``samples_`` (every model-evaluated point and
+    its RMSE).
+    """
+
+    def __init__(self, simulator: Simulator, *,
+                 bounds: Mapping[str, tuple[float, float]] | None = None,
+                 sensors: Sequence[str] = DEFAULT_SENSORS,
+                 weights: Mapping[str, float] | Sequence[float] | None = None,
+                 initial_samples: int | None = None, infill_per_round: int = 4,
+                 max_evaluations: int = 400, patience: int = 4,
+                 improvement_tolerance: float = 0.005, population: int = 50,
+                 generations: int = 100, seed: int = 0, workers: int | None = None,
+                 scheduler: Any = None, progress: ProgressCallback | None = None,
+                 max_input_gap_s: float = MAX_INPUT_GAP_S,
+                 min_samples: int = MIN_WINDOW_SAMPLES) -> None:
+        self.simulator = simulator
+        self.bounds = bounds
+        self.sensors = sensors
+        self.weights = weights
+        self.initial_samples = initial_samples
+        self.infill_per_round = infill_per_round
+        self.max_evaluations = max_evaluations
+        self.patience = patience
+        self.improvement_tolerance = improvement_tolerance
+        self.population = population
+        self.generations = generations
+        self.seed = seed
+        self.workers = workers
+        self.scheduler = scheduler
+        self.progress = progress
+        self.max_input_gap_s = max_input_gap_s
+        self.min_samples = min_samples
+
+    def _validate(self, n_var: int) -> int:
+        initial = 10 * n_var if self.initial_samples is None else self.initial_samples
+        for name, value, low in (("initial_samples", initial, n_var + 2),
+                                 ("infill_per_round", self.infill_per_round, 1),
+                                 ("patience", self.patience, 1),
+                                 ("population", self.population, 2),
+                                 ("generations", self.generations, 1)):
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
+                raise ValueError(f"{name} must be an integer ≥ {low} (got {value!r})")
+        if not isinstance(self.max_evaluations, int | np.integer) or (
+                self.max_evaluations < initial + self.infill_per_round):
+            raise ValueError(f"max_evaluations must be an integer ≥ initial_samples + "
+                             f"infill_per_round = {initial + self.infill_per_round} "
+                             f"(got {self.max_evaluations!r})")
+        if not self.improvement_tolerance >= 0.0:
+            raise ValueError("improvement_tolerance must be ≥ 0 (K)")
+        return int(initial)
+
+    def fit(self, windows: Sequence[pd.DataFrame]) -> SurrogateCalibrator:
+        """Calibrate against measured windows (canonical SI signals); returns self."""
+        problem = CalibrationProblem(self.simulator, windows, bounds=self.bounds,
+                                     sensors=self.sensors, weights=self.weights,
+                                     max_input_gap_s=self.max_input_gap_s,
+                                     min_samples=self.min_samples)
+        n_var = problem.n_var
+        initial = self._validate(n_var)
+        low, high = np.asarray(problem.xl, float), np.asarray(problem.xu, float)
+        random = np.random.default_rng(self.seed)
+        evaluator = make_evaluator(self.workers, self.scheduler)
+        evaluator.start(problem.objective)
+        problem.evaluator = evaluator
+        unit = qmc.LatinHypercube(d=n_var, seed=random).random(initial)
+        values = np.empty(0)
+        points = np.empty((0, n_var))
+        rows: list[dict[str, object]] = []
+        try:
+            points, values = self._evaluate(problem, unit, low, high, points, values)
+            stale, best, round_number = 0, float(values.min()), 0
+            while points.shape[0] < self.max_evaluations and stale < self.patience:
+                round_number += 1
+                surrogate = _fit_surrogate(points, values)
+                result = minimize(
+                    _SurrogateProblem(surrogate, n_var),
+                    make_ga(n_var, population=self.population),
+                    termination=("n_gen", self.generations),
+                    seed=int(random.integers(2**31 - 1)), verbose=False)
+                budget = min(self.infill_per_round, self.max_evaluations - points.shape[0])
+                infill = _infill(result.pop.get("X"), result.pop.get("F")[:, 0], points,
+                                 budget, random)
+                if infill.shape[0] == 0:
+                    break  # the surrogate has nothing new to ask the model
+                points, values = self._evaluate(problem, infill, low, high, points, values)
+                improved = best - float(values.min()) > self.improvement_tolerance
+                best = min(best, float(values.min()))
+                stale = 0 if improved else stale + 1
+                rows.append(self._history_row(round_number, points, values, low, high,
+                                              float(np.exp(result.F[0]))))
+                if self.progress is not None:
+                    self.progress(min(1.0, points.shape[0] / self.max_evaluations),
+                                  f"surrogate round {round_number}: {points.shape[0]} model "
+                                  f"runs, best RMSE {best:.3f} K")
+        finally:
+            problem.evaluator = None
+            evaluator.close()
+        best_index = int(np.argmin(values))
+        self.params_ = problem.parameters(low + points[best_index] * (high - low))
+        self.rmse_ = float(values[best_index])
+        self.n_evaluations_ = problem.n_evaluations
+        self.n_penalised_ = problem.n_penalised
+        self.history_ = pd.DataFrame(rows).set_index("round") if rows else pd.DataFrame()
+        self.samples_ = pd.DataFrame(low + points * (high - low), columns=list(PARAMETER_NAMES))
+        self.samples_["rmse"] = values
+        return self
+
+    @staticmethod
+    def _evaluate(problem: CalibrationProblem, unit: np.ndarray, low: np.ndarray,
+                  high: np.ndarray, points: np.ndarray, values: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+        rmse = problem.evaluate_candidates(low + unit * (high - low))
+        return np.vstack([points, unit]), np.concatenate([values, rmse])
+
+    @staticmethod
+    def _history_row(round_number: int, points: np.ndarray, values: np.ndarray,
+                     low: np.ndarray, high: np.ndarray, predicted: float) -> dict[str, object]:
+        best = int(np.argmin(values))
+        x = low + points[best] * (high - low)
+        return {"round": round_number, "evaluations": int(points.shape[0]),
+                "best_rmse": float(values[best]), "best_fitness": fitness(float(values[best])),
+                "surrogate_optimum_rmse": predicted,
+                **dict(zip(PARAMETER_NAMES, (float(v) for v in x), strict=True))}
+
+    def save(self, path: str | Path) -> tuple[Path, Path]:
+        """Write the parameters JSON and the per-round history CSV (``<stem>.history.csv``)."""
+        if not hasattr(self, "params_"):
+            raise RuntimeError("SurrogateCalibrator is not fitted; call fit(windows) first")
+        settings = {"mode": "surrogate", "seed": self.seed,
+                    "initial_samples": self.initial_samples,
+                    "infill_per_round": self.infill_per_round,
+                    "max_evaluations": self.max_evaluations}
+        return write_parameters(path, self.params_, self.rmse_, self.sensors,
+                                self.n_evaluations_, settings, self.history_)
+
+
+def _fit_surrogate(points: np.ndarray, values: np.ndarray) -> RBFInterpolator:
+    """Thin-plate RBF of log RMSE; rejected points enter at twice the worst feasible RMSE."""
+    feasible = values < PENALTY_RMSE
+    ceiling = 2.0 * values[feasible].max() if feasible.any() else PENALTY_RMSE
+    target = np.log(np.minimum(values, ceiling))
+    return RBFInterpolator(points, target, kernel="thin_plate_spline", degree=1)
+
+
+def _infill(population: np.ndarray, predicted: np.ndarray, evaluated: np.ndarray, budget: int,
+            random: np.random.Generator) -> np.ndarray:
+    """Up to ``budget`` new points: surrogate-best distinct members, then one space filler."""
+    chosen: list[np.ndarray] = []
+    exploit = budget - 1 if budget > 1 else budget
+    for index in np.argsort(predicted):
+        x = np.clip(population[index], 0.0, 1.0)
+        if np.min(np.linalg.norm(evaluated - x, axis=1)) < _MIN_SEPARATION:
+            continue
+        if chosen and np.min(np.linalg.norm(np.array(chosen) - x, axis=1)) < (
+                _CANDIDATE_SEPARATION):
+            continue
+        chosen.append(x)
+        if len(chosen) == exploit:
+            break
+    if len(chosen) < budget:
+        pool = random.random((2000, evaluated.shape[1]))
+        known = np.vstack([evaluated, *chosen]) if chosen else evaluated
+        distance = np.min(np.linalg.norm(pool[:, None, :] - known[None, :, :], axis=2), axis=1)
+        chosen.append(pool[int(np.argmax(distance))])
+    return np.array(chosen)
+
