@@ -8,6 +8,7 @@ from steamtwin.cli.calibrate import calibrate
 from steamtwin.cli.dcs import dcs_app
 from steamtwin.cli.demo import demo
 from steamtwin.cli.plant import plant
+from steamtwin.cli.rom import rom_app
 from steamtwin.cli.simulate import simulate
 from steamtwin.cli.turbine import turbine_app
 
@@ -20,6 +21,7 @@ app = typer.Typer(
 )
 app.add_typer(turbine_app, name="turbine")
 app.add_typer(dcs_app, name="dcs")
+app.add_typer(rom_app, name="rom")
 app.command()(simulate)
 app.command()(plant)
 app.command()(calibrate)

@@ -1,0 +1,172 @@
+"""``steamtwin rom build | predict | info``: the blade-temperature reduced-order model."""
+
+from __future__ import annotations
+
+import json
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import typer
+from rich.console import Console
+from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+from steamtwin.blade.mesh import MeshError
+from steamtwin.dcs.readers import HistorianFormatError, read_historian
+from steamtwin.dcs.tagmap import TagMapError, load_tag_map
+from steamtwin.model.fom import InputError
+from steamtwin.model.parameters import ModelParameters, ParameterError
+from steamtwin.rom.estimator import ExtrapolationWarning
+from steamtwin.rom.reconstruction import DISTANCE, FLAG_EXTRAPOLATED, FLAG_INVALID
+from steamtwin.rom.romfile import RomFileError, load_rom, save_rom
+from steamtwin.spec import SpecError, load_spec
+
+rom_app = typer.Typer(help="Build and use the blade-temperature ROM (POD + RBF).",
+                      no_args_is_help=True)
+
+
+def _progress_bar(console: Console, description: str):
+    columns = (TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn())
+    bar = Progress(*columns, console=console, transient=True)
+    task = bar.add_task(description, total=1.0)
+    return bar, lambda fraction: bar.update(task, completed=fraction)
+
+
+@rom_app.command("build")
+def build(
+    out: Path = typer.Option(..., help="ROM file to write (.npz)."),
+    turbine: str = typer.Option("reference", help="'reference' or a turbine spec TOML."),
+    params: Path | None = typer.Option(None, help="Parameter JSON (default: empirical)."),
+    snapshots: int = typer.Option(32, help="Number of snapshots (4 load levels)."),
+    energy: float = typer.Option(0.992, help="POD energy kept (0-1]."),
+    mesh: Path | None = typer.Option(None, help="Blade volume mesh (.msh/.vtu); default: "
+                                     "meshed from the spec."),
+    element_size: float | None = typer.Option(None, help="Element size (m) when meshing."),
+    workers: int | None = typer.Option(None, help="Local worker processes (default: CPUs)."),
+    scheduler: str | None = typer.Option(None, help="Dask scheduler address, e.g. "
+                                         "tcp://host:8786 (default: local processes)."),
+    seed: int = typer.Option(0, help="Seed of the design of experiments."),
+    layout: str = typer.Option("lhs", help="Design per load level: lhs, corners or bands."),
+) -> None:
+    """Generate blade-field snapshots with the FOM + FEM and fit the POD-RBF ROM.
+
+    Example: steamtwin rom build --turbine reference --params params.json --snapshots 32 --out rom.npz
+    """  # noqa: E501
+    from steamtwin.geometry.meshing import blade_volume_mesh
+    from steamtwin.geometry.volume_mesh import read_volume_mesh
+    from steamtwin.rom.build import build_rom
+
+    console = Console(stderr=True)
+    try:
+        spec = load_spec(turbine)
+        parameters = ModelParameters.from_json(params) if params else ModelParameters()
+        with console.status("meshing the control-stage blade"):
+            volume = (read_volume_mesh(mesh) if mesh is not None
+                      else blade_volume_mesh(spec, "hp1", element_size=element_size))
+        bar, progress = _progress_bar(console, f"{snapshots} snapshots")
+        with bar:
+            bundle, _ = build_rom(spec, volume, parameters, n_snapshots=snapshots,
+                                  energy=energy, max_workers=workers, scheduler=scheduler,
+                                  seed=seed, layout=layout, progress=progress)
+    except (SpecError, ParameterError, InputError, MeshError, ValueError, OSError) as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=2) from None
+    save_rom(bundle, out)
+    rom = bundle.rom
+    typer.echo(f"wrote {out}: {rom.n_modes_} modes ({rom.energy_captured_:.6f} of the energy) "
+               f"on {rom.mean_.size} nodes from {rom.centres_.shape[0]} snapshots")
+
+
+_WIRE = {"K": ("degC", lambda v: v - 273.15), "Pa": ("MPa", lambda v: v / 1e6),
+         "W": ("MW", lambda v: v / 1e6)}
+
+
+def _si_unit(name: str) -> str:
+    if name.endswith("pressure"):
+        return "Pa"
+    if name.endswith("power") or name == "load":
+        return "W"
+    return "K"
+
+
+@rom_app.command("predict")
+def predict(
+    rom: Path = typer.Option(..., help="ROM file (.npz) from 'steamtwin rom build'."),
+    data: Path = typer.Option(..., help="Historian export: CSV or Parquet, wide or long."),
+    tags: Path = typer.Option(..., help="Tag map (TOML) of the historian export."),
+    out: Path = typer.Option(..., help="CSV of predictions per sample (°C, MPa, MW + flags)."),
+    fields_every: int | None = typer.Option(None, help="Also reconstruct the field every N "
+                                            "samples (needs --vtu-dir)."),
+    vtu_dir: Path | None = typer.Option(None, help="Folder for the fields as VTU (ParaView)."),
+) -> None:
+    """Predict steam-path sensors and blade temperatures for every sample of DCS data.
+
+    Samples with missing inputs are flagged (rom_invalid_input) and left empty; samples
+    outside the snapshots' range are flagged (rom_extrapolated) with their distance.
+
+    Example: steamtwin rom predict --rom rom.npz --data plant-data/historian.parquet --tags plant-data/tags.toml --out monitored.csv --fields-every 600 --vtu-dir fields
+    """  # noqa: E501
+    from steamtwin.rom.reconstruction import predict_series, write_vtu
+
+    if (fields_every is None) != (vtu_dir is None):
+        typer.echo("error: --fields-every and --vtu-dir go together", err=True)
+        raise typer.Exit(code=2)
+    try:
+        bundle = load_rom(rom)
+        historian = read_historian(data, load_tag_map(tags))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ExtrapolationWarning)
+            result = predict_series(bundle, historian.signals, fields_every=fields_every)
+    except (RomFileError, TagMapError, HistorianFormatError, ValueError, OSError) as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=2) from None
+    for warning in caught:
+        typer.echo(f"warning: {warning.message}", err=True)
+    table = result.sensors
+    wire = pd.DataFrame(index=table.index)
+    for name in table.columns:
+        if name in (FLAG_INVALID, FLAG_EXTRAPOLATED, DISTANCE):
+            wire[name] = table[name]
+            continue
+        unit, convert = _WIRE[_si_unit(name)]
+        wire[f"{name} [{unit}]"] = convert(table[name])
+    wire.index.name = "time"
+    wire.to_csv(out)
+    typer.echo(f"wrote {len(wire)} samples to {out} ({int(table[FLAG_INVALID].sum())} invalid, "
+               f"{int(table[FLAG_EXTRAPOLATED].sum())} extrapolated)")
+    if vtu_dir is not None:
+        vtu_dir.mkdir(parents=True, exist_ok=True)
+        for row, field in result.fields.items():
+            stamp = pd.Timestamp(table.index[row]).strftime("%Y%m%dT%H%M%S")
+            write_vtu(bundle.mesh, {"temperature_K": field}, vtu_dir / f"field_{row:06d}_"
+                      f"{stamp}.vtu")
+        typer.echo(f"wrote {len(result.fields)} field(s) to {vtu_dir}")
+
+
+@rom_app.command("info")
+def info(rom: Path = typer.Argument(..., help="ROM file (.npz).")) -> None:
+    """Print what a ROM file holds: modes, energy, inputs and their range, sensors, provenance.
+
+    Example: steamtwin rom info rom.npz
+    """
+    try:
+        bundle = load_rom(rom)
+    except RomFileError as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=2) from None
+    model = bundle.rom
+    typer.echo(f"ROM {rom}: {model.n_modes_} modes, energy {model.energy_captured_:.6f} "
+               f"(threshold {model.energy}), kernel {model.kernel}, "
+               f"{model.centres_.shape[0]} snapshots")
+    typer.echo(f"mesh: {bundle.mesh.points.shape[0]} nodes, {bundle.mesh.tetrahedra.shape[0]} "
+               f"tetrahedra; field range over the snapshots {model.field_range_:.2f} K")
+    for name, low, span in zip(model.input_names_, model.input_min_, model.input_span_,
+                               strict=True):
+        unit, convert = _WIRE[_si_unit(name)]
+        typer.echo(f"input {name}: {convert(low):.3f} … {convert(low + span):.3f} {unit}")
+    typer.echo(f"steam-path sensors: {', '.join(model.sensor_names_) or '-'}")
+    typer.echo(f"blade probes: {', '.join(f'{k} (node {v})' for k, v in bundle.probes.items())}")
+    singular = np.array2string(model.singular_values_[: model.n_modes_ + 2], precision=4)
+    typer.echo(f"singular values: {singular}")
+    typer.echo("provenance: " + json.dumps(bundle.provenance, indent=2, sort_keys=True))

@@ -1,0 +1,216 @@
+"""The ROM file: one self-describing ``.npz`` (no pickles) with modes, map, mesh and sensors.
+
+Arrays (SI units): ``modes`` (r, N), ``mean`` (N,), ``singular_values``, ``coefficients``
+(m, r), ``centres`` (m, d) scaled snapshot conditions, ``sensor_values`` (m, s),
+``input_min``/``input_span``/``input_weights`` (d,), ``snapshot_conditions`` (m, c) with
+``condition_names``, the mesh (``points``, ``tetrahedra``, ``boundary_triangles``,
+``boundary_regions``, ``region_names``), the sensor layout (``sensor_names`` steam-path signals,
+``probe_names``/``probe_nodes`` blade nodes), the RBF settings, ``format_version`` and
+``provenance`` (a JSON string). :func:`load_rom` reads with ``allow_pickle=False`` and checks
+every key, dtype, shape and the version before building the model.
+"""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from steamtwin.blade.mesh import REGIONS, MeshError, SolidMesh, checked_mesh
+from steamtwin.rom.estimator import PodRbfRom
+
+FORMAT = "steamtwin-pod-rbf-rom"
+FORMAT_VERSION = 1
+
+
+class RomFileError(ValueError):
+    """A ROM file is unreadable, corrupt, of another version or inconsistent."""
+
+
+@dataclass
+class BladeRom:
+    """A fitted :class:`PodRbfRom` with its mesh, sensor layout and provenance.
+
+    ``probes`` maps blade probe names to node indices; ``conditions`` holds the snapshots'
+    conditions (SI) and ``provenance`` how the ROM was made (JSON-serialisable).
+    """
+
+    rom: PodRbfRom
+    mesh: SolidMesh
+    probes: dict[str, int]
+    conditions: pd.DataFrame
+    provenance: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def sensor_names(self) -> tuple[str, ...]:
+        """Steam-path sensors the ROM predicts (canonical names, SI)."""
+        return self.rom.sensor_names_
+
+
+def probe_nodes(mesh: SolidMesh) -> dict[str, int]:
+    """Virtual blade thermocouples: per region, the boundary node nearest its area centroid."""
+    probes = {}
+    points = mesh.points
+    for index, name in enumerate(REGIONS):
+        triangles = mesh.boundary_triangles[mesh.boundary_regions == index]
+        if triangles.size == 0:
+            continue
+        corners = points[triangles]
+        area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0],
+                                             corners[:, 2] - corners[:, 0]), axis=1)
+        centroid = (area[:, None] * corners.mean(axis=1)).sum(axis=0) / area.sum()
+        nodes = np.unique(triangles)
+        probes[f"blade_{name}"] = int(nodes[np.argmin(np.linalg.norm(points[nodes] - centroid,
+                                                                     axis=1))])
+    return probes
+
+
+def _text_array(values) -> np.ndarray:
+    return np.array([str(v) for v in values], dtype=np.str_) if len(values) else np.zeros(
+        0, dtype="<U1")
+
+
+def save_rom(bundle: BladeRom, path: str | Path) -> Path:
+    """Write ``bundle`` to ``path`` (``.npz``, compressed); returns the path written."""
+    rom = bundle.rom
+    rom._check_fitted()
+    path = Path(path)
+    conditions = bundle.conditions.select_dtypes("number")
+    arrays = {
+        "format": np.array(FORMAT),
+        "format_version": np.array(FORMAT_VERSION, dtype=np.int64),
+        "modes": rom.modes_, "mean": rom.mean_, "singular_values": rom.singular_values_,
+        "coefficients": rom.coefficients_, "centres": rom.centres_,
+        "sensor_values": rom.sensor_values_, "sensor_names": _text_array(rom.sensor_names_),
+        "input_names": _text_array(rom.input_names_), "input_min": rom.input_min_,
+        "input_span": rom.input_span_, "input_weights": rom.input_weights_,
+        "energy": np.array(float(rom.energy)), "energy_captured": np.array(rom.energy_captured_),
+        "field_range": np.array(rom.field_range_),
+        "kernel": np.array(rom.kernel), "smoothing": np.array(float(rom.smoothing)),
+        "degree": np.array(-1 if rom.degree is None else int(rom.degree), dtype=np.int64),
+        "epsilon": np.array(np.nan if rom.epsilon is None else float(rom.epsilon)),
+        "input_scaling": np.array(rom.input_scaling),
+        "points": bundle.mesh.points, "tetrahedra": bundle.mesh.tetrahedra,
+        "boundary_triangles": bundle.mesh.boundary_triangles,
+        "boundary_regions": bundle.mesh.boundary_regions,
+        "region_names": _text_array(REGIONS),
+        "probe_names": _text_array(list(bundle.probes)),
+        "probe_nodes": np.array(list(bundle.probes.values()), dtype=np.int64),
+        "snapshot_conditions": conditions.to_numpy(dtype=float),
+        "condition_names": _text_array(list(conditions.columns)),
+        "provenance": np.array(json.dumps(bundle.provenance, sort_keys=True, default=str)),
+    }
+    with path.open("wb") as handle:
+        np.savez_compressed(handle, **arrays)
+    return path
+
+
+_REQUIRED = {
+    # name: (kind, ndim)   kind "f" float, "i" integer, "U" text
+    "format": ("U", 0), "format_version": ("i", 0), "modes": ("f", 2), "mean": ("f", 1),
+    "singular_values": ("f", 1), "coefficients": ("f", 2), "centres": ("f", 2),
+    "sensor_values": ("f", 2), "sensor_names": ("U", 1), "input_names": ("U", 1),
+    "input_min": ("f", 1), "input_span": ("f", 1), "input_weights": ("f", 1), "energy": ("f", 0),
+    "energy_captured": ("f", 0), "field_range": ("f", 0), "kernel": ("U", 0),
+    "smoothing": ("f", 0), "degree": ("i", 0), "epsilon": ("f", 0), "input_scaling": ("U", 0),
+    "points": ("f", 2), "tetrahedra": ("i", 2), "boundary_triangles": ("i", 2),
+    "boundary_regions": ("i", 1), "region_names": ("U", 1), "probe_names": ("U", 1),
+    "probe_nodes": ("i", 1), "snapshot_conditions": ("f", 2), "condition_names": ("U", 1),
+    "provenance": ("U", 0),
+}
+
+
+def _read_arrays(path: Path) -> dict[str, np.ndarray]:
+    try:
+        with np.load(path, allow_pickle=False) as archive:
+            arrays = {name: archive[name] for name in archive.files}
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as error:
+        raise RomFileError(f"{path}: not a readable ROM file ({error})") from None
+    if "format" not in arrays or arrays["format"].dtype.kind != "U" or str(
+            arrays["format"]) != FORMAT:
+        raise RomFileError(f"{path}: not a steamtwin ROM file (no format tag {FORMAT!r})")
+    version = arrays.get("format_version")
+    if version is None or version.dtype.kind not in "iu" or int(version) != FORMAT_VERSION:
+        raise RomFileError(f"{path}: ROM format version {version!r} is not supported (this "
+                           f"steamtwin reads version {FORMAT_VERSION}); rebuild the ROM")
+    for name, (kind, ndim) in _REQUIRED.items():
+        if name not in arrays:
+            raise RomFileError(f"{path}: missing array {name!r}")
+        array = arrays[name]
+        kinds = {"f": "f", "i": "iu", "U": "U"}[kind]
+        if array.dtype.kind not in kinds or array.ndim != ndim:
+            raise RomFileError(f"{path}: array {name!r} has dtype {array.dtype} and {array.ndim} "
+                               f"dimension(s), expected kind {kind!r} with {ndim}")
+    return arrays
+
+
+def _check_shapes(path: Path, a: dict[str, np.ndarray]) -> None:
+    r, n = a["modes"].shape
+    m, d = a["centres"].shape
+    expected = {
+        "mean": (n,), "coefficients": (m, r), "sensor_values": (m, a["sensor_names"].size),
+        "input_names": (d,), "input_min": (d,), "input_span": (d,), "input_weights": (d,),
+        "points": (n, 3), "probe_nodes": (a["probe_names"].size,),
+        "snapshot_conditions": (m, a["condition_names"].size),
+        "boundary_regions": (a["boundary_triangles"].shape[0],),
+    }
+    for name, shape in expected.items():
+        if a[name].shape != shape:
+            raise RomFileError(f"{path}: array {name!r} has shape {a[name].shape}, expected "
+                               f"{shape} (modes {a['modes'].shape}, centres {(m, d)})")
+    if a["singular_values"].size < r:
+        raise RomFileError(f"{path}: fewer singular values than modes")
+    if tuple(a["region_names"]) != REGIONS:
+        raise RomFileError(f"{path}: region names {tuple(a['region_names'])} differ from "
+                           f"{REGIONS}")
+    if a["probe_nodes"].size and (a["probe_nodes"].min() < 0 or a["probe_nodes"].max() >= n):
+        raise RomFileError(f"{path}: probe_nodes index nodes outside the mesh")
+    numeric = ("modes", "mean", "coefficients", "centres", "sensor_values", "input_min",
+               "input_span", "input_weights", "points")
+    for name in numeric:
+        if not np.all(np.isfinite(a[name])):
+            raise RomFileError(f"{path}: array {name!r} holds NaN or infinite values")
+    if np.any(a["input_span"] <= 0) or np.any(a["input_weights"] <= 0):
+        raise RomFileError(f"{path}: input_span and input_weights must be positive")
+    gram = a["modes"] @ a["modes"].T
+    if not np.allclose(gram, np.eye(r), atol=1e-6):
+        raise RomFileError(f"{path}: the modes are not orthonormal (corrupt data)")
+
+
+def load_rom(path: str | Path) -> BladeRom:
+    """Read and validate a ROM file; raises :class:`RomFileError` saying what is wrong."""
+    path = Path(path)
+    a = _read_arrays(path)
+    _check_shapes(path, a)
+    try:
+        provenance = json.loads(str(a["provenance"]))
+    except json.JSONDecodeError as error:
+        raise RomFileError(f"{path}: provenance is not valid JSON ({error})") from None
+    degree = int(a["degree"])
+    epsilon = float(a["epsilon"])
+    try:
+        rom = PodRbfRom(energy=float(a["energy"]), kernel=str(a["kernel"]),
+                        smoothing=float(a["smoothing"]), degree=None if degree < 0 else degree,
+                        epsilon=None if np.isnan(epsilon) else epsilon,
+                        input_scaling=str(a["input_scaling"]))
+        rom._check_hyperparameters()
+        rom.restore(
+            modes=a["modes"], mean=a["mean"], singular_values=a["singular_values"],
+            coefficients=a["coefficients"], centres=a["centres"],
+            input_names=tuple(a["input_names"]), input_min=a["input_min"],
+            input_span=a["input_span"], input_weights=a["input_weights"],
+            sensor_names=tuple(a["sensor_names"]), sensor_values=a["sensor_values"],
+            energy_captured=float(a["energy_captured"]), field_range=float(a["field_range"]))
+        mesh = checked_mesh(SolidMesh(a["points"], a["tetrahedra"], a["boundary_triangles"],
+                                      a["boundary_regions"]))
+    except (ValueError, MeshError, np.linalg.LinAlgError) as error:
+        raise RomFileError(f"{path}: inconsistent ROM data ({error})") from None
+    conditions = pd.DataFrame(a["snapshot_conditions"], columns=list(a["condition_names"]))
+    probes = {str(k): int(v) for k, v in zip(a["probe_names"], a["probe_nodes"], strict=True)}
+    return BladeRom(rom=rom, mesh=mesh, probes=probes, conditions=conditions,
+                    provenance=provenance)

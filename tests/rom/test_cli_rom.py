@@ -1,0 +1,64 @@
+"""``steamtwin rom build | info | predict`` end to end on a coarse blade."""
+
+from __future__ import annotations
+
+import meshio
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from steamtwin.cli.rom import rom_app
+from steamtwin.dcs.plant import run_plant, write_plant
+
+
+@pytest.fixture(scope="module")
+def plant_files(tmp_path_factory):
+    run = run_plant("deep-peak-50", hours=0.1, seed=2)
+    return write_plant(run, tmp_path_factory.mktemp("plant"), file_format="csv"), run
+
+
+def test_help_has_examples():
+    runner = CliRunner()
+    for command in ("build", "predict", "info"):
+        result = runner.invoke(rom_app, [command, "--help"])
+        assert result.exit_code == 0 and "Example:" in result.output
+
+
+def test_build_info_predict(tmp_path, plant_files, reference_model):
+    runner = CliRunner()
+    rom_path = tmp_path / "rom.npz"
+    built = runner.invoke(rom_app, ["build", "--turbine", "reference", "--snapshots", "8",
+                                    "--element-size", "0.006", "--workers", "1",
+                                    "--energy", "0.9999", "--out", str(rom_path)])
+    assert built.exit_code == 0, built.output
+    assert "modes" in built.output and rom_path.exists()
+    info = runner.invoke(rom_app, ["info", str(rom_path)])
+    assert info.exit_code == 0, info.output
+    assert "main_steam_pressure" in info.output and "provenance" in info.output
+    paths, run = plant_files
+    out = tmp_path / "monitored.csv"
+    predicted = runner.invoke(rom_app, [
+        "predict", "--rom", str(rom_path), "--data", str(paths["historian"]),
+        "--tags", str(paths["tag_map"]), "--out", str(out), "--fields-every", "200",
+        "--vtu-dir", str(tmp_path / "vtu")])
+    assert predicted.exit_code == 0, predicted.output
+    table = pd.read_csv(out, index_col="time")
+    assert len(table) == len(run.measured)
+    assert "control_stage_temperature [degC]" in table.columns
+    assert "blade_leading_edge [degC]" in table.columns
+    assert {"rom_invalid_input", "rom_extrapolated"} <= set(table.columns)
+    valid = ~table["rom_invalid_input"]
+    assert table.loc[valid, "blade_leading_edge [degC]"].between(400, 560).all()
+    files = sorted((tmp_path / "vtu").glob("*.vtu"))
+    assert files and "temperature_K" in meshio.read(files[0]).point_data
+
+
+def test_errors_are_reported(tmp_path):
+    runner = CliRunner()
+    bad = tmp_path / "bad.npz"
+    bad.write_bytes(b"not a zip")
+    result = runner.invoke(rom_app, ["info", str(bad)])
+    assert result.exit_code == 2 and "not a readable ROM file" in result.output
+    result = runner.invoke(rom_app, ["predict", "--rom", str(bad), "--data", "x.csv",
+                                     "--tags", "t.toml", "--out", "o.csv", "--fields-every", "5"])
+    assert result.exit_code == 2 and "go together" in result.output
