@@ -19,6 +19,7 @@ from steamtwin.calibration.checkpoint import (
 )
 from steamtwin.calibration.evaluation import make_evaluator
 from steamtwin.calibration.ga import RemutationRepair, make_ga
+from steamtwin.calibration.identifiability import check_identifiability
 from steamtwin.calibration.objective import (
     DEFAULT_SENSORS,
     MAX_INPUT_GAP_S,
@@ -42,7 +43,10 @@ class Calibrator:
     The constructor stores its arguments; :meth:`fit` validates them, runs the GA and sets
     ``params_`` (:class:`ModelParameters`), ``rmse_`` (K), ``history_`` (one row per
     generation), ``n_evaluations_``, ``window_info_`` (per window: samples, filled and dropped
-    input rows, excluded measured samples), ``n_penalised_`` and ``repair_counts_``.
+    input rows, excluded measured samples), ``n_penalised_``, ``repair_counts_``,
+    ``population_`` (final GA population) and ``identifiability_`` (per parameter, see
+    :mod:`~steamtwin.calibration.identifiability`; an :class:`IdentifiabilityWarning` is issued
+    for each parameter the windows cannot identify).
     Same ``seed`` → same result, whatever evaluates the candidates.
 
     ``workers``: local processes (default every core; 1 = in this process); ``scheduler``: a
@@ -167,6 +171,7 @@ class Calibrator:
         self.repair_counts_ = {"out_of_bounds": repair.n_out_of_bounds,
                                "remutations": repair.n_remutations, "clipped": repair.n_clipped}
         self.population_ = algorithm.pop.get("X").copy()
+        self.identifiability_ = check_identifiability(problem, self.params_, self.rmse_)
         self.window_info_ = pd.DataFrame([
             {"start": w.inputs.index[0], "end": w.inputs.index[-1], "samples": len(w.inputs),
              "filled_rows": w.filled_rows, "dropped_rows": w.dropped_rows,

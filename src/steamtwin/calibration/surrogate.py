@@ -39,6 +39,7 @@ from scipy.stats import qmc
 from steamtwin.calibration.calibrator import ProgressCallback, write_parameters
 from steamtwin.calibration.evaluation import make_evaluator
 from steamtwin.calibration.ga import make_ga
+from steamtwin.calibration.identifiability import check_identifiability
 from steamtwin.calibration.objective import (
     DEFAULT_SENSORS,
     MAX_INPUT_GAP_S,
@@ -178,6 +179,7 @@ class SurrogateCalibrator:
         self.history_ = pd.DataFrame(rows).set_index("round") if rows else pd.DataFrame()
         self.samples_ = pd.DataFrame(low + points * (high - low), columns=list(PARAMETER_NAMES))
         self.samples_["rmse"] = values
+        self.identifiability_ = check_identifiability(problem, self.params_, self.rmse_)
         return self
 
     @staticmethod
