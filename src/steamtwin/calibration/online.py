@@ -124,6 +124,7 @@ class OnlineCalibrator:
             if isinstance(value, bool) or not isinstance(value, int) or value < low:
                 raise ValueError(f"{name} must be an integer ≥ {low} (got {value!r})")
         self.store_ = self.store if self.store is not None else ParameterStore()
+        self.store_.swap(self.store_.get())  # the live file exists from the start
         self._buffer = pd.DataFrame()
         self._next_due: pd.Timestamp | None = None
         self._population: np.ndarray | None = None

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import typer
 
-from steamtwin.cli.calibrate import calibrate
+from steamtwin.cli.calibrate import calibrate, calibrate_online
 from steamtwin.cli.dcs import dcs_app
 from steamtwin.cli.demo import demo
 from steamtwin.cli.plant import plant
@@ -25,4 +25,5 @@ app.add_typer(rom_app, name="rom")
 app.command()(simulate)
 app.command()(plant)
 app.command()(calibrate)
+app.command("calibrate-online")(calibrate_online)
 app.command()(demo)

@@ -1,0 +1,155 @@
+"""Calibration results as files: the method's Table 6, Table 7, Figure 7 and Figure 8 (CSV + PNG).
+
+* Table 6 — RMSE (K) per condition with the empirical constants (1, 1, 1) and with the calibrated
+  parameters, and the reduction in %.
+* Table 7 — sensitivity of the calibrated RMSE to the GA's settings: population P, crossover
+  probability p_c and mutation probability p_m, one varied at a time around the base run.
+* Figure 7 — convergence: best and mean RMSE (and fitness 1/(RMSE+ε)) per generation.
+* Figure 8 — predicted vs measured temperatures over a window, before and after calibration.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+
+from steamtwin.calibration.objective import DEFAULT_SENSORS, window_rmse
+from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.simulator import Simulator
+
+__all__ = ["convergence_figure", "ga_sensitivity_table", "rmse_table",
+           "temperature_comparison_figure", "trajectory_figure"]
+
+_LABELS = {"control_stage_temperature": "control-stage steam",
+           "hp_exhaust_temperature": "HP-exhaust steam",
+           "hp_inner_casing_temperature": "inner-casing metal"}
+
+
+def rmse_table(simulator: Simulator, conditions: Mapping[str, Sequence[pd.DataFrame]],
+               params: ModelParameters, *, sensors: Sequence[str] = DEFAULT_SENSORS,
+               min_samples: int = 60) -> pd.DataFrame:
+    """Table 6: per condition, RMSE (K) with empirical constants and calibrated, reduction (%).
+
+    ``conditions`` maps a name (e.g. "30 % load") to its windows; per-sensor RMSEs follow.
+    """
+    rows = []
+    for name, windows in conditions.items():
+        before = window_rmse(simulator, windows, ModelParameters(), sensors=sensors,
+                             min_samples=min_samples)
+        after = window_rmse(simulator, windows, params, sensors=sensors,
+                            min_samples=min_samples)
+        row: dict[str, object] = {"condition": name, "samples": int(after["samples"].sum())}
+        row["rmse_empirical_K"] = _pooled(before, "rmse")
+        row["rmse_calibrated_K"] = _pooled(after, "rmse")
+        row["reduction_pct"] = 100.0 * (1.0 - row["rmse_calibrated_K"] / row["rmse_empirical_K"])
+        for sensor in sensors:
+            row[f"empirical:{sensor}"] = _pooled(before, f"rmse:{sensor}")
+            row[f"calibrated:{sensor}"] = _pooled(after, f"rmse:{sensor}")
+        rows.append(row)
+    return pd.DataFrame(rows).set_index("condition")
+
+
+def _pooled(table: pd.DataFrame, column: str) -> float:
+    """Sample-weighted pooled RMSE over a window_rmse table's rows."""
+    weights = table["samples"].to_numpy(dtype=float)
+    return float(np.sqrt(np.sum(weights * table[column].to_numpy() ** 2) / weights.sum()))
+
+
+def ga_sensitivity_table(fit: Callable[[dict[str, object]], object],
+                         base: Mapping[str, object],
+                         variations: Mapping[str, Sequence[object]] | None = None
+                         ) -> pd.DataFrame:
+    """Table 7: the calibrated RMSE for each GA setting varied alone around ``base``.
+
+    ``fit(settings)`` runs one calibration and returns a fitted calibrator (``rmse_``,
+    ``params_``, ``n_evaluations_``); default variations: P ∈ {30, 50, 80}, p_c ∈ {0.6, 0.8,
+    0.9}, p_m ∈ {0.1, 1/3, 0.5}, as in the method's Table 7.
+    """
+    variations = variations or {"population": (30, 50, 80),
+                                "crossover_probability": (0.6, 0.8, 0.9),
+                                "mutation_probability": (0.1, 1.0 / 3.0, 0.5)}
+    rows = []
+    for setting, values in variations.items():
+        for value in values:
+            fitted = fit({**base, setting: value})
+            p = fitted.params_
+            rows.append({"setting": setting, "value": value, "rmse_K": fitted.rmse_,
+                         "evaluations": fitted.n_evaluations_,
+                         "flow_coefficient": p.flow_coefficient,
+                         "friction_coefficient": p.friction_coefficient,
+                         "heat_transfer_coefficient": p.heat_transfer_coefficient})
+    return pd.DataFrame(rows)
+
+
+def convergence_figure(history: pd.DataFrame, path: str | Path) -> Path:
+    """Figure 7: best and mean RMSE (K, left) and fitness (1/K, right) per generation."""
+    path = Path(path)
+    figure = Figure(figsize=(10, 4))
+    left, right = figure.subplots(1, 2)
+    generation = history.index.to_numpy()
+    left.plot(generation, history["best_rmse"], label="best")
+    left.plot(generation, history["mean_rmse"], label="population mean")
+    left.set(xlabel="generation", ylabel="RMSE (K)", yscale="log", title="RMSE")
+    right.plot(generation, history["best_fitness"], label="best")
+    right.plot(generation, history["mean_fitness"], label="population mean")
+    right.set(xlabel="generation", ylabel="fitness 1/(RMSE + ε) (1/K)", title="fitness")
+    for axes in (left, right):
+        axes.grid(alpha=0.3)
+        axes.legend()
+    figure.suptitle("GA convergence (Figure 7)")
+    figure.tight_layout()
+    figure.savefig(path, dpi=120)
+    return path
+
+
+def temperature_comparison_figure(simulator: Simulator, window: pd.DataFrame,
+                                  params: ModelParameters, path: str | Path, *,
+                                  sensors: Sequence[str] = DEFAULT_SENSORS,
+                                  title: str = "") -> Path:
+    """Figure 8: measured vs predicted temperatures (°C) with empirical and calibrated
+    parameters, one panel per sensor, over ``window`` (canonical SI signals)."""
+    path = Path(path)
+    inputs = window[list(simulator.input_signals)].ffill().bfill()
+    before = simulator.simulate(inputs, ModelParameters())
+    after = simulator.simulate(inputs, params)
+    hours = (window.index - window.index[0]).total_seconds() / 3600.0
+    figure = Figure(figsize=(10, 2.8 * len(sensors)))
+    axes = figure.subplots(len(sensors), 1, sharex=True)
+    for ax, sensor in zip(np.atleast_1d(axes), sensors, strict=True):
+        ax.plot(hours, window[sensor] - 273.15, color="0.5", lw=0.6, label="measured")
+        ax.plot(hours, before[sensor] - 273.15, lw=1.2, label="empirical constants")
+        ax.plot(hours, after[sensor] - 273.15, lw=1.2, label="calibrated")
+        ax.set(ylabel=f"{_LABELS.get(sensor, sensor)} (°C)")
+        ax.grid(alpha=0.3)
+    np.atleast_1d(axes)[0].legend(loc="best", fontsize=8)
+    np.atleast_1d(axes)[-1].set(xlabel="time (h)")
+    figure.suptitle(title or "Predicted vs measured temperatures (Figure 8)")
+    figure.tight_layout()
+    figure.savefig(path, dpi=120)
+    return path
+
+
+def trajectory_figure(trajectory: pd.DataFrame, path: str | Path,
+                      truth: pd.DataFrame | None = None) -> Path:
+    """Online calibration: each parameter and the RMSE per update over time (``truth``, if
+    given, holds true parameter columns on a time index to draw alongside)."""
+    path = Path(path)
+    names = ["flow_coefficient", "friction_coefficient", "heat_transfer_coefficient", "rmse"]
+    figure = Figure(figsize=(10, 8))
+    axes = figure.subplots(len(names), 1, sharex=True)
+    for ax, name in zip(axes, names, strict=True):
+        ax.plot(trajectory.index, trajectory[name], marker="o", lw=1, label="online")
+        if truth is not None and name in truth.columns:
+            ax.plot(truth.index, truth[name], color="0.4", lw=1, label="truth")
+            ax.legend(fontsize=8)
+        ax.set(ylabel=name.replace("_", " ") + (" (K)" if name == "rmse" else ""))
+        ax.grid(alpha=0.3)
+    axes[-1].set(xlabel="time (window end)")
+    figure.suptitle("Online calibration: parameter trajectory")
+    figure.tight_layout()
+    figure.savefig(path, dpi=120)
+    return path
