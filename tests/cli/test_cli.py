@@ -11,13 +11,17 @@ from steamtwin.cli.main import app
 from steamtwin.dcs.plant import KKS_TAGS, plant_tag_map
 from steamtwin.dcs.tagmap import write_tag_map
 from steamtwin.model.operating import load_profile_inputs
+from steamtwin.model.parameters import ModelParameters
 
 runner = CliRunner()
 
 
 @pytest.mark.parametrize(
     "command",
-    [[], ["turbine", "show"], ["simulate"], ["demo"], ["dcs", "check"], ["plant"], ["calibrate"]],
+    [[], ["turbine", "show"], ["simulate"], ["demo"], ["dcs", "check"], ["plant"], ["calibrate"],
+     ["calibrate-online"], ["rom", "build"], ["rom", "predict"], ["rom", "info"],
+     ["geometry", "scan"], ["geometry", "preprocess"], ["geometry", "mesh"],
+     ["geometry", "assemble"], ["geometry", "uncertainty"]],
 )
 def test_every_command_has_help_with_an_example(command):
     result = runner.invoke(app, [*command, "--help"])
@@ -68,9 +72,18 @@ def test_simulate_reports_bad_rows_without_traceback(tmp_path):
 
 
 def test_demo_writes_its_files_from_the_model(tmp_path, reference_model, reference_spec):
-    result = runner.invoke(app, ["demo", "--out", str(tmp_path)])
+    result = runner.invoke(app, ["demo", "--out", str(tmp_path), "--hold-hours", "0.2",
+                                 "--evaluations", "40", "--snapshots", "8"])
     assert result.exit_code == 0, result.output
     assert "skipped (not built yet)" in result.output
+    table6 = pd.read_csv(tmp_path / "table6_rmse.csv", index_col="condition")
+    assert list(table6.index) == ["30 % load", "50 % load"]
+    params = ModelParameters.from_json(tmp_path / "params.json")
+    assert f"flow {params.flow_coefficient:.4f}" in result.output
+    monitored = pd.read_csv(tmp_path / "monitored_50.csv")
+    assert len(monitored) == 720 and monitored["hp_exhaust_temperature"].notna().all()
+    assert (tmp_path / "rom.npz").stat().st_size > 0
+    assert (tmp_path / "figure8_temperatures.png").stat().st_size > 10_000
     line = pd.read_csv(tmp_path / "off_design_line.csv")
     assert list(line["load_fraction"]) == [0.3, 0.5, 0.75, 1.0]
     rated = reference_model.simulate(load_profile_inputs(reference_spec, [1.0])).iloc[0]

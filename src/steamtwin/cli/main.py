@@ -7,6 +7,7 @@ import typer
 from steamtwin.cli.calibrate import calibrate, calibrate_online
 from steamtwin.cli.dcs import dcs_app
 from steamtwin.cli.demo import demo
+from steamtwin.cli.geometry import geometry_app
 from steamtwin.cli.plant import plant
 from steamtwin.cli.rom import rom_app
 from steamtwin.cli.simulate import simulate
@@ -21,6 +22,7 @@ app = typer.Typer(
 )
 app.add_typer(turbine_app, name="turbine")
 app.add_typer(dcs_app, name="dcs")
+app.add_typer(geometry_app, name="geometry")
 app.add_typer(rom_app, name="rom")
 app.command()(simulate)
 app.command()(plant)

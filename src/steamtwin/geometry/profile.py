@@ -497,6 +497,12 @@ class Blade:
         return out
 
     @cached_property
+    def reference_mesh(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """See :func:`reference_surface`."""
+        count = math.ceil(self.design.span / REFERENCE_SPAN_SPACING) + 1
+        return self.surface_mesh(REFERENCE_PROFILE_SPACING, span_count=count)
+
+    @cached_property
     def volume(self) -> float:
         """Exact volume (m³): mean area × ∫ scale² dr (area scales with the chord squared)."""
         r = np.linspace(self.design.hub_radius, self.design.tip_radius, 2001)
@@ -595,6 +601,6 @@ REFERENCE_SPAN_SPACING = 5e-4
 
 
 def reference_surface(blade: Blade) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The fine triangulation standing in for the exact surface in scans and deviations."""
-    count = math.ceil(blade.design.span / REFERENCE_SPAN_SPACING) + 1
-    return blade.surface_mesh(REFERENCE_PROFILE_SPACING, span_count=count)
+    """The fine triangulation standing in for the exact surface in scans and deviations
+    (computed once per blade object; treat the arrays as read-only)."""
+    return blade.reference_mesh

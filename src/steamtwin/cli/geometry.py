@@ -1,0 +1,214 @@
+"""``steamtwin geometry``: virtual blade scans, scan preprocessing and blade meshes."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import typer
+
+geometry_app = typer.Typer(
+    help="Blade geometry: virtual scans, scan preprocessing, simulation meshes.",
+    no_args_is_help=True,
+)
+
+
+def _fail(message: str) -> None:
+    typer.echo(f"error: {message}", err=True)
+    raise typer.Exit(code=2)
+
+
+def _spec(turbine: str):  # returns a steamtwin.spec.TurbineSpec
+    from steamtwin.spec import SpecError, load_spec
+
+    try:
+        return load_spec(turbine)
+    except (SpecError, OSError, ValueError) as error:
+        _fail(f"cannot load turbine {turbine!r}: {error}")
+        raise  # unreachable, keeps type checkers calm
+
+
+@geometry_app.command()
+def scan(
+    row: str = typer.Option("hp1", help="Blade row: hp1…hp13 (HP rotor) or ip1…ip9 (IP stator)."),
+    out: Path = typer.Option(..., help="Folder for view_NN.ply, scan.json and truth/."),
+    turbine: str = typer.Option("reference", help="Built-in turbine name or spec TOML path."),
+    points: int = typer.Option(150_000, help="Total points over all views."),
+    views: int = typer.Option(8, help="Number of partial views."),
+    outliers: float = typer.Option(0.02, help="Share of outliers (0.01-0.03 typical)."),
+    seed: int = typer.Option(0, help="Seed of the scanner's random generator."),
+    file_format: str = typer.Option("ply", help="'ply' or 'pcd'."),
+) -> None:
+    """Scan the ground-truth blade of ROW with the virtual handheld scanner (±0.05 mm).
+
+    Each view is in the scanner's own frame; the true poses go to OUT/truth/ (do not read them
+    when reconstructing).
+
+    Example: steamtwin geometry scan --row hp1 --points 150000 --seed 1 --out scan-hp1
+    """
+    from steamtwin.geometry.profile import GeometryError, make_blade
+    from steamtwin.geometry.scanner import ScannerSettings, scan_blade, write_scan
+
+    if file_format not in ("ply", "pcd"):
+        _fail(f"--file-format must be 'ply' or 'pcd' (got {file_format!r})")
+    spec = _spec(turbine)
+    try:
+        blade = make_blade(spec, row)
+        settings = ScannerSettings(views=views, points=points, outlier_share=outliers)
+        result = scan_blade(blade, settings, rng=seed)
+    except (GeometryError, ValueError) as error:
+        _fail(str(error))
+    paths = write_scan(result, out, file_format=file_format)
+    total = sum(len(v.points) for v in result.views)
+    typer.echo(f"wrote {len(paths)} views of row {row} ({total} points) to {out}")
+
+
+@geometry_app.command()
+def preprocess(
+    folder: Path = typer.Argument(..., help="Scan folder written by 'geometry scan'."),
+    out: Path = typer.Option(..., help="Fused, downsampled cloud (.ply, .pcd or .xyz)."),
+    target_points: int = typer.Option(80_000, help="Points kept after downsampling."),
+    report: Path | None = typer.Option(None, help="Report base path (writes .json)."),
+    turbine: str = typer.Option("reference", help="Turbine of the nominal blade (report)."),
+) -> None:
+    """Clean, smooth, register and fuse the views of a scan folder into one cloud.
+
+    With --report, the fused cloud is best-fitted to the nominal blade of the scanned row and
+    its deviation (mean, RMS, max, Hausdorff) is reported with what each step removed.
+
+    Example: steamtwin geometry preprocess scan-hp1 --out hp1-fused.ply --report hp1-report
+    """
+    from steamtwin.geometry.fidelity import align_to_nominal, surface_deviation
+    from steamtwin.geometry.pointcloud import PointCloudError, read_point_cloud, write_point_cloud
+    from steamtwin.geometry.preprocess import PreprocessSettings, preprocess_views, transform
+    from steamtwin.geometry.profile import make_blade
+
+    manifest_path = folder / "scan.json"
+    if not manifest_path.is_file():
+        _fail(f"{manifest_path}: no scan manifest (is {folder} a 'geometry scan' folder?)")
+    try:
+        manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
+        views = [read_point_cloud(folder / name) for name in manifest["views"]]
+    except (PointCloudError, KeyError, json.JSONDecodeError) as error:
+        _fail(f"{manifest_path}: {error}")
+    tracked = manifest.get("tracked_poses")
+    try:
+        fused, _, steps = preprocess_views(views, PreprocessSettings(target_points=target_points),
+                                           initial_poses=tracked)
+    except ValueError as error:
+        _fail(str(error))
+    write_point_cloud(fused, out)
+    typer.echo(f"fused {sum(steps.input_points)} points of {len(views)} views into "
+               f"{len(fused)} points: {out}")
+    typer.echo(f"  outliers removed per view: {steps.outliers_removed}")
+    if report is not None:
+        blade = make_blade(_spec(turbine), manifest["row"])
+        pose, fit_rms = align_to_nominal(fused, blade)
+        deviation = surface_deviation(blade, transform(fused, pose))
+        document = {"row": manifest["row"], "steps": steps.as_dict(),
+                    "best_fit_rms_mm": fit_rms * 1e3,
+                    "deviation_mm": {"mean": deviation.mean * 1e3, "rms": deviation.rms * 1e3,
+                                     "max": deviation.max * 1e3,
+                                     "hausdorff": deviation.hausdorff * 1e3,
+                                     "p95": deviation.p95 * 1e3}}
+        path = report.with_suffix(".json")
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(document, indent=2), encoding="utf-8")
+        typer.echo(f"  deviation from the nominal blade: mean {deviation.mean * 1e3:.4f} mm, "
+                   f"RMS {deviation.rms * 1e3:.4f} mm, max {deviation.max * 1e3:.4f} mm; "
+                   f"report {path}")
+
+
+@geometry_app.command()
+def mesh(
+    row: str = typer.Option("hp1", help="Blade row to mesh (hp1…hp13, ip1…ip9)."),
+    out: Path = typer.Option(..., help="Volume mesh file (.msh gmsh 4.1 or .vtu)."),
+    turbine: str = typer.Option("reference", help="Built-in turbine name or spec TOML path."),
+    element_size: float | None = typer.Option(None, help="Target element size in mm."),
+) -> None:
+    """Tetrahedral (gmsh HXT) mesh of the blade of ROW, with a quality report.
+
+    Boundary faces carry the regions root, tip, pressure_side, suction_side, leading_edge and
+    trailing_edge. (Meshing a reconstructed STL is not implemented yet.)
+
+    Example: steamtwin geometry mesh --row hp1 --out blade.msh
+    """
+    from steamtwin.geometry.meshing import blade_volume_mesh, mesh_quality
+    from steamtwin.geometry.profile import GeometryError
+    from steamtwin.geometry.volume_mesh import MeshError, write_volume_mesh
+
+    spec = _spec(turbine)
+    size = None if element_size is None else element_size * 1e-3
+    try:
+        volume_mesh = blade_volume_mesh(spec, row, element_size=size)
+        write_volume_mesh(volume_mesh, out)
+    except (GeometryError, MeshError) as error:
+        _fail(str(error))
+    quality = mesh_quality(volume_mesh)
+    typer.echo(f"wrote {out}: {quality.node_count} nodes, {quality.tetrahedron_count} tetrahedra")
+    typer.echo(f"  min dihedral angle {quality.min_dihedral_angle:.1f}°, max aspect ratio "
+               f"{quality.max_aspect_ratio:.2f}, volume {quality.total_volume * 1e6:.3f} cm³")
+
+
+@geometry_app.command()
+def assemble(
+    turbine: str = typer.Option("reference", help="Built-in turbine name or spec TOML path."),
+    out: Path = typer.Option(..., help="Assembly STL; per-component STLs are written beside it."),
+    rows: str = typer.Option("all", help="Comma-separated rows (e.g. hp1,hp2) or 'all'."),
+    spacing: float = typer.Option(2.0, help="Blade triangulation spacing in mm."),
+) -> None:
+    """Place blade rows, rotor and casing on the turbine centreline and write STL files.
+
+    Example: steamtwin geometry assemble --turbine reference --rows hp1,hp2 --out assembly.stl
+    """
+    from steamtwin.geometry.assembly import build_assembly, write_assembly
+    from steamtwin.geometry.profile import ROWS
+
+    chosen = ROWS if rows == "all" else tuple(r.strip() for r in rows.split(","))
+    unknown = [r for r in chosen if r not in ROWS]
+    if unknown:
+        _fail(f"unknown row(s) {unknown}; known rows: {', '.join(ROWS)}")
+    if not 0.1 <= spacing <= 20.0:
+        _fail(f"--spacing must lie within 0.1-20 mm (got {spacing})")
+    spec = _spec(turbine)
+    components = build_assembly(spec, rows=chosen, spacing=spacing * 1e-3)
+    paths = write_assembly(components, out)
+    triangles = sum(len(c.triangles) for c in components)
+    typer.echo(f"wrote {len(components)} components ({triangles} triangles): "
+               + ", ".join(str(p) for p in paths))
+
+
+@geometry_app.command()
+def uncertainty(
+    row: str = typer.Option("hp1", help="Blade row whose scan error is studied."),
+    turbine: str = typer.Option("reference", help="Built-in turbine name or spec TOML path."),
+    samples: int = typer.Option(20, help="Monte Carlo samples."),
+    bound: float = typer.Option(0.05, help="Scan error bound in mm (uniform within ±bound)."),
+    seed: int = typer.Option(0, help="Seed of the random generator."),
+    out: Path | None = typer.Option(None, help="JSON file for the result."),
+) -> None:
+    """Propagate ±BOUND scan errors through the throat area into the full-order model and
+    report the HP-exhaust temperature spread at the design point.
+
+    Example: steamtwin geometry uncertainty --row hp1 --samples 20 --out uncertainty.json
+    """
+    from steamtwin.geometry.profile import GeometryError, make_blade
+    from steamtwin.geometry.uncertainty import scan_uncertainty
+    from steamtwin.model.fom import FullOrderModel
+
+    if samples < 2 or not 0.0 < bound <= 1.0:
+        _fail(f"--samples must be >= 2 and --bound within (0, 1] mm (got {samples}, {bound})")
+    spec = _spec(turbine)
+    try:
+        blade = make_blade(spec, row)
+    except GeometryError as error:
+        _fail(str(error))
+    result = scan_uncertainty(blade, FullOrderModel(spec), samples=samples, bound=bound * 1e-3,
+                              rng=seed)
+    document = result.as_dict()
+    if out is not None:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(document, indent=2), encoding="utf-8")
+    typer.echo(f"throat-area multiplier {document['throat_area_ratio_min']:.5f}…"
+               f"{document['throat_area_ratio_max']:.5f}; HP-exhaust temperature spread "
+               f"{document['hp_exhaust_temperature_spread_K']:.3f} K over {samples} samples")

@@ -1,0 +1,255 @@
+"""A virtual handheld laser scanner: partial, noisy, outlier-ridden views of a blade.
+
+Each view looks at the ground-truth blade from one camera position; rays are cast against the
+exact surface (a fine triangulation, open3d ``RaycastingScene``), so the blade hides parts of
+itself (self-occlusion). Every hit is displaced along its ray by a truncated Gaussian error,
+σ = 0.025 mm cut at ±0.05 mm: a scanner specified at ±0.05 mm as a 2σ bound (the way handheld
+scanners state volumetric accuracy, VDI/VDE 2634-2). A share of outliers (1–3 %) is scattered
+uniformly through the view's bounding box, and every view is expressed in its own unknown frame
+(a random rigid motion), as a handheld scanner does before registration.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from steamtwin.geometry.profile import Blade, reference_surface
+
+#: Files of a scan folder: views as ``view_00.ply`` …, settings in ``scan.json`` and the hidden
+#: truth (view poses) in ``truth/poses.json``; reconstruction must not read ``truth/``.
+MANIFEST = "scan.json"
+
+
+@dataclass(frozen=True)
+class ScannerSettings:
+    """Scanner hyper-parameters (lengths in m).
+
+    ``points`` is the total number of points over all views; ``noise_sigma`` and ``noise_bound``
+    the range error's standard deviation and truncation; ``outlier_share`` the share of points
+    that are outliers (1–3 % for handheld scanners on shiny metal); ``distance`` the camera
+    stand-off as a multiple of the blade's bounding-sphere radius. ``tracking_angle`` and
+    ``tracking_offset`` bound the error of the pose the scanner reports for each view (its
+    positioning-target tracking, before any registration): a rotation of that angle about a
+    random axis and a shift of that length in a random direction. The defaults (0.5 mrad, i.e.
+    0.05 mm at the 0.1 m stand-off, and 0.05 mm) are the order of the volumetric accuracy that
+    positioning-target tracking of metrology handheld scanners is accepted at (VDI/VDE 2634-3).
+    """
+
+    views: int = 8
+    points: int = 150_000
+    noise_sigma: float = 0.025e-3
+    noise_bound: float = 0.05e-3
+    outlier_share: float = 0.02
+    distance: float = 3.0
+    tracking_angle: float = 5e-4  # rad, error of the scanner's own pose estimate
+    tracking_offset: float = 0.05e-3  # m
+
+    def validate(self) -> None:
+        problems = []
+        if self.views < 2:
+            problems.append(f"views = {self.views} (need >= 2)")
+        if self.points < 100 * self.views:
+            problems.append(f"points = {self.points} (need >= 100 per view)")
+        if not 0.0 <= self.outlier_share <= 0.2:
+            problems.append(f"outlier_share = {self.outlier_share} (expected 0-0.2)")
+        if not 0.0 <= self.noise_sigma <= 1e-3 or not 0.0 <= self.noise_bound <= 1e-3:
+            problems.append(f"noise {self.noise_sigma}/{self.noise_bound} m (expected <= 1 mm)")
+        if problems:
+            raise ValueError("invalid scanner settings: " + "; ".join(problems))
+
+
+@dataclass(frozen=True)
+class ScanView:
+    """One view: points (n, 3) in the view's own frame and its hidden pose.
+
+    The view frame is the scanner's: camera at the origin, viewing along +z. ``pose`` (4×4) maps
+    view-frame points to the blade frame; ``is_outlier`` marks the injected
+    outliers (truth, for tests); ``camera`` is the camera position in the blade frame (m).
+    ``tracked_pose`` is the scanner's own, erroneous estimate of ``pose`` (the user sees it).
+    """
+
+    points: np.ndarray
+    pose: np.ndarray
+    tracked_pose: np.ndarray
+    is_outlier: np.ndarray
+    camera: np.ndarray
+
+
+@dataclass(frozen=True)
+class Scan:
+    """All views of one blade and the settings that made them."""
+
+    row: str
+    views: tuple[ScanView, ...]
+    settings: ScannerSettings
+    seed: int | None = None
+    extra: dict = field(default_factory=dict)
+
+
+def blade_raycasting_scene(blade: Blade) -> object:
+    """An open3d ``RaycastingScene`` holding the exact blade surface (see
+    :func:`~steamtwin.geometry.profile.reference_surface`)."""
+    import open3d as o3d
+
+    vertices, triangles, _ = reference_surface(blade)
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(vertices.astype(np.float32)),
+                        o3d.core.Tensor(triangles.astype(np.uint32)))
+    return scene
+
+
+def random_rotation(rng: np.random.Generator) -> np.ndarray:
+    """A uniformly distributed rotation matrix (Shoemake's quaternion method)."""
+    u1, u2, u3 = rng.random(3)
+    q = np.array([math.sqrt(1 - u1) * math.sin(2 * math.pi * u2),
+                  math.sqrt(1 - u1) * math.cos(2 * math.pi * u2),
+                  math.sqrt(u1) * math.sin(2 * math.pi * u3),
+                  math.sqrt(u1) * math.cos(2 * math.pi * u3)])
+    x, y, z, w = q
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def _look_at(camera: np.ndarray, target: np.ndarray, roll: float) -> np.ndarray:
+    """Rotation whose columns are the camera axes (x, y, z = viewing direction) in the blade
+    frame, rolled by ``roll`` rad about the viewing direction."""
+    z = (target - camera) / np.linalg.norm(target - camera)
+    x = np.cross(z, [0.0, 0.0, 1.0] if abs(z[2]) < 0.9 else [1.0, 0.0, 0.0])
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    c, s = math.cos(roll), math.sin(roll)
+    return np.column_stack([c * x + s * y, -s * x + c * y, z])
+
+
+def camera_positions(centre: np.ndarray, radius: float, count: int) -> np.ndarray:
+    """``count`` camera positions around the blade: a ring around the span axis (z) at
+    alternating ±35° elevation, so both caps and every side are seen by some view."""
+    azimuth = 2.0 * math.pi * (np.arange(count) + 0.5) / count
+    elevation = np.radians(np.where(np.arange(count) % 2 == 0, 35.0, -35.0))
+    direction = np.column_stack([np.cos(elevation) * np.cos(azimuth),
+                                 np.cos(elevation) * np.sin(azimuth), np.sin(elevation)])
+    return centre + radius * direction
+
+
+def scan_blade(blade: Blade, settings: ScannerSettings | None = None,
+               rng: np.random.Generator | int | None = None,
+               progress: Callable[[float], None] | None = None) -> Scan:
+    """Scan ``blade`` with the virtual scanner (seeded by ``rng``: a Generator or a seed)."""
+    import open3d as o3d
+
+    settings = settings or ScannerSettings()
+    settings.validate()
+    seed = rng if isinstance(rng, int) else None
+    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    scene = blade_raycasting_scene(blade)
+    vertices, _, _ = blade.surface_mesh(2e-3)
+    centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
+    sphere = float(np.linalg.norm(vertices - centre, axis=1).max())
+    cameras = camera_positions(centre, settings.distance * sphere, settings.views)
+    per_view = settings.points // settings.views
+    views = []
+    for k, camera in enumerate(cameras):
+        inliers_wanted = round(per_view * (1.0 - settings.outlier_share))
+        hits = np.empty((0, 3))
+        rays_cast = 0
+        while len(hits) < inliers_wanted:
+            # rays towards random points of the bounding sphere's disc facing the camera
+            count = max(1000, int(1.3 * (inliers_wanted - len(hits)) * (rays_cast + 1000)
+                                  / max(len(hits), 1000)))
+            axis = (centre - camera) / np.linalg.norm(centre - camera)
+            e1 = np.cross(axis, [0.0, 0.0, 1.0] if abs(axis[2]) < 0.9 else [1.0, 0.0, 0.0])
+            e1 /= np.linalg.norm(e1)
+            e2 = np.cross(axis, e1)
+            rho = sphere * np.sqrt(rng.random(count))
+            phi = 2.0 * math.pi * rng.random(count)
+            targets = centre + (rho * np.cos(phi))[:, None] * e1 + (rho * np.sin(phi))[:, None] * e2
+            dirs = targets - camera
+            dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+            rays = np.column_stack([np.repeat(camera[None], count, axis=0), dirs])
+            answer = scene.cast_rays(o3d.core.Tensor(rays.astype(np.float32)))
+            t_hit = answer["t_hit"].numpy().astype(np.float64)
+            ok = np.isfinite(t_hit)
+            error = _truncated_normal(rng, int(ok.sum()), settings.noise_sigma,
+                                      settings.noise_bound)
+            new = camera + dirs[ok] * (t_hit[ok] + error)[:, None]
+            hits = np.concatenate([hits, new])
+            rays_cast += count
+        hits = hits[:inliers_wanted]
+        outlier_count = per_view - inliers_wanted
+        lo, hi = hits.min(axis=0), hits.max(axis=0)
+        margin = 0.05 * (hi - lo)
+        outliers = rng.uniform(lo - margin, hi + margin, size=(outlier_count, 3))
+        points = np.concatenate([hits, outliers])
+        is_outlier = np.concatenate([np.zeros(len(hits), bool), np.ones(outlier_count, bool)])
+        order = rng.permutation(len(points))
+        points, is_outlier = points[order], is_outlier[order]
+        # the view's frame is the scanner's own: camera at the origin looking along +z, with a
+        # random roll about the viewing axis; its pose in the blade frame is unknown to the user
+        rotation = _look_at(camera, centre, float(rng.uniform(0.0, 2.0 * math.pi)))
+        pose = np.eye(4)  # view frame -> blade frame: x_blade = R x_view + camera
+        pose[:3, :3] = rotation
+        pose[:3, 3] = camera
+        local = (points - camera) @ rotation
+        tracked = _perturbed(pose, settings.tracking_angle, settings.tracking_offset, rng)
+        views.append(ScanView(points=local, pose=pose, tracked_pose=tracked,
+                              is_outlier=is_outlier, camera=camera))
+        if progress is not None:
+            progress((k + 1) / len(cameras))
+    return Scan(row=blade.row, views=tuple(views), settings=settings, seed=seed)
+
+
+def _perturbed(pose: np.ndarray, angle: float, offset: float,
+               rng: np.random.Generator) -> np.ndarray:
+    """``pose`` rotated by ``angle`` about a random axis and shifted by ``offset`` (m)."""
+    axis = rng.normal(size=3)
+    axis /= np.linalg.norm(axis)
+    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
+    rotation = np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k @ k
+    direction = rng.normal(size=3)
+    out = pose.copy()
+    out[:3, :3] = rotation @ pose[:3, :3]
+    out[:3, 3] = pose[:3, 3] + offset * direction / np.linalg.norm(direction)
+    return out
+
+
+def _truncated_normal(rng: np.random.Generator, count: int, sigma: float,
+                      bound: float) -> np.ndarray:
+    """Normal samples N(0, σ²) redrawn until they lie within ±bound."""
+    values = rng.normal(0.0, sigma, count) if sigma > 0.0 else np.zeros(count)
+    bad = np.abs(values) > bound
+    while np.any(bad):
+        values[bad] = rng.normal(0.0, sigma, int(bad.sum()))
+        bad = np.abs(values) > bound
+    return values
+
+
+def write_scan(scan: Scan, folder: str | Path, file_format: str = "ply") -> list[Path]:
+    """Write the views as ``view_NN.ply``/``.pcd``, ``scan.json`` (settings and the scanner's
+    tracked poses) and the hidden ``truth/poses.json``."""
+    from steamtwin.geometry.pointcloud import write_point_cloud
+
+    if file_format not in ("ply", "pcd"):
+        raise ValueError(f"file_format must be 'ply' or 'pcd' (got {file_format!r})")
+    folder = Path(folder)
+    (folder / "truth").mkdir(parents=True, exist_ok=True)
+    paths = []
+    for k, view in enumerate(scan.views):
+        path = folder / f"view_{k:02d}.{file_format}"
+        write_point_cloud(view.points, path)
+        paths.append(path)
+    manifest = {"row": scan.row, "seed": scan.seed, "units": "m",
+                "views": [p.name for p in paths], "settings": asdict(scan.settings),
+                "tracked_poses": [v.tracked_pose.tolist() for v in scan.views]}
+    (folder / MANIFEST).write_text(json.dumps(manifest, indent=2), encoding="utf-8")
+    truth = {"poses": [v.pose.tolist() for v in scan.views],
+             "outliers": [int(v.is_outlier.sum()) for v in scan.views],
+             "cameras": [v.camera.tolist() for v in scan.views]}
+    (folder / "truth" / "poses.json").write_text(json.dumps(truth), encoding="utf-8")
+    return paths
