@@ -149,7 +149,7 @@ def warn_unidentifiable(table: pd.DataFrame) -> list[str]:
             f"best, not a measurement. Add windows where it acts (the heat-transfer coefficient "
             f"needs load ramps; the friction coefficient several loads)."
         )
-        warnings.warn(message, IdentifiabilityWarning, stacklevel=3)
+        warnings.warn(message, IdentifiabilityWarning, stacklevel=4)
         messages.append(message)
     return messages
 
