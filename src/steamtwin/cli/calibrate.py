@@ -32,6 +32,21 @@ from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import SpecError, load_spec
 
 
+def _read_cleaned(data: Path, tags: Path) -> pd.DataFrame:
+    """The historian export as canonical SI signals, cleaned (every change flagged, counted)."""
+    tag_map = load_tag_map(tags)
+    historian = read_historian(data, tag_map)
+    specs = tag_map.signals.values()
+    return clean(
+        historian.signals,
+        required=INPUT_SIGNALS,
+        ranges={s.signal: s.valid_range_si for s in specs if s.valid_range_si is not None},
+        declared_units={s.signal: s.unit for s in specs},
+        tag_names={s.signal: s.column for s in specs},
+        source=str(data),
+    ).data
+
+
 def _pick_windows(data: pd.DataFrame, window: list[str] | None, rated_load_w: float
                   ) -> list[pd.DataFrame]:
     if window:
@@ -107,17 +122,7 @@ def calibrate(
         raise typer.Exit(code=2)
     try:
         spec = load_spec(turbine)
-        tag_map = load_tag_map(tags)
-        historian = read_historian(data, tag_map)
-        specs = tag_map.signals.values()
-        cleaned = clean(
-            historian.signals,
-            required=INPUT_SIGNALS,
-            ranges={s.signal: s.valid_range_si for s in specs if s.valid_range_si is not None},
-            declared_units={s.signal: s.unit for s in specs},
-            tag_names={s.signal: s.column for s in specs},
-            source=str(data),
-        ).data
+        cleaned = _read_cleaned(data, tags)
         windows = _pick_windows(cleaned, window, spec.design.generator_power)
         model = FullOrderModel(spec)
         with console.status("preparing the model (the first run compiles it, ~20 s)"):
@@ -228,15 +233,7 @@ def calibrate_online(
     console = Console(stderr=True)
     try:
         spec = load_spec(turbine)
-        tag_map = load_tag_map(tags)
-        historian = read_historian(data, tag_map)
-        specs = tag_map.signals.values()
-        cleaned = clean(
-            historian.signals, required=INPUT_SIGNALS,
-            ranges={s.signal: s.valid_range_si for s in specs if s.valid_range_si is not None},
-            declared_units={s.signal: s.unit for s in specs},
-            tag_names={s.signal: s.column for s in specs}, source=str(data),
-        ).data
+        cleaned = _read_cleaned(data, tags)
         out.mkdir(parents=True, exist_ok=True)
         model = FullOrderModel(spec)
         with console.status("preparing the model (the first run compiles it, ~20 s)"):
