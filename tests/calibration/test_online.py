@@ -56,6 +56,8 @@ def test_online_logs_an_update_it_cannot_run(reference_model, fouling_day):
         online.update(data.iloc[:10])
     with pytest.raises(ValueError, match="window_s"):
         OnlineCalibrator(reference_model, window_s=0.0).run(data)
+    with pytest.raises(ValueError, match="chunk_s"):
+        OnlineCalibrator(reference_model).run(data, chunk_s=0.0)
 
 
 def test_parameter_store_swaps_whole_sets():

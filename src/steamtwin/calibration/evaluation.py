@@ -47,8 +47,6 @@ class Evaluator(Protocol):
 class SerialEvaluator:
     """Evaluates in the calling process, one candidate after the other."""
 
-    workers = 1
-
     def start(self, objective: Objective) -> None:
         """Keep ``objective``."""
         self._objective = objective
@@ -152,11 +150,6 @@ class DaskEvaluator:
                              f"(got {self.scheduler!r})")
         self._workers = max(1, len(self._client.scheduler_info()["workers"]))
         [self._objective] = self._client.scatter([objective], broadcast=True, hash=False)
-
-    @property
-    def workers(self) -> int:
-        """Number of workers seen when the evaluator started."""
-        return getattr(self, "_workers", 0)
 
     def evaluate(self, candidates: np.ndarray) -> list[Evaluation]:
         """Results for the rows of ``candidates``, in order."""

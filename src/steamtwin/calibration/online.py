@@ -167,6 +167,8 @@ class OnlineCalibrator:
             ) -> OnlineCalibrator:
         """Replay ``data`` — a long frame, cut into ``chunk_s``-second chunks, or an iterable of
         chunks (a stream) — through :meth:`update`; returns self."""
+        if not (isinstance(chunk_s, int | float) and np.isfinite(chunk_s) and chunk_s > 0):
+            raise ValueError(f"chunk_s must be a positive number of seconds (got {chunk_s!r})")
         self._start()
         if isinstance(data, pd.DataFrame):
             if not isinstance(data.index, pd.DatetimeIndex) or data.empty:
