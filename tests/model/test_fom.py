@@ -294,9 +294,10 @@ def test_default_convergence_is_far_below_dcs_resolution(reference_model, refere
     default = reference_model.simulate(frame)
     temperatures = ["control_stage_temperature", "hp_exhaust_temperature",
                     "hp_inner_casing_temperature"]
-    assert (default[temperatures] - exact[temperatures]).abs().to_numpy().max() < 0.01  # K
+    # ≥ 25× below the thermocouples' noise (0.5 K) and the transmitters' 0.1 % of reading
+    assert (default[temperatures] - exact[temperatures]).abs().to_numpy().max() < 0.02  # K
     relative_p1 = (default.control_stage_pressure / exact.control_stage_pressure - 1).abs()
-    assert relative_p1.max() < 1e-4
+    assert relative_p1.max() < 1.5 * reference_model.pressure_tolerance < 2e-4
     assert (default.hp_power / exact.hp_power - 1).abs().max() < 1e-4
     with pytest.raises(ValueError, match="tolerance"):
         FullOrderModel(reference_spec, pressure_tolerance=0.0).simulate(frame)

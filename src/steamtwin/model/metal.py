@@ -26,7 +26,7 @@ DITTUS_BOELTER_CONSTANT = 0.023
 CORE_SWIRL_RATIO = 0.5
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def dittus_boelter_htc(velocity: float, hydraulic_diameter: float, specific_volume: float,
                        viscosity: float, conductivity: float, heat_capacity: float,
                        fluid_is_heated: bool) -> float:
@@ -41,14 +41,14 @@ def dittus_boelter_htc(velocity: float, hydraulic_diameter: float, specific_volu
     return nusselt * conductivity / hydraulic_diameter
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def rotor_relative_velocity(axial_velocity: float, rotor_surface_speed: float) -> float:
     """Steam velocity relative to the rotor surface, m/s (axial + core swirl deficit)."""
     swirl = (1.0 - CORE_SWIRL_RATIO) * rotor_surface_speed
     return math.sqrt(axial_velocity * axial_velocity + swirl * swirl)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def factor_chain(chain: int, capacity: np.ndarray, conductance: np.ndarray,
                  outer_conductance: float, inverse_dt: float, pivot: np.ndarray) -> None:
     """Eliminate the implicit-Euler matrix of chain ``chain`` from the lagging end to the steam.
@@ -76,7 +76,7 @@ def factor_chain(chain: int, capacity: np.ndarray, conductance: np.ndarray,
         pivot[chain, j] = 1.0 / diagonal if j > 0 else diagonal
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def prepare_chain(chain: int, old: np.ndarray, capacity: np.ndarray, conductance: np.ndarray,
                   outer_conductance: float, ambient_temperature: float, inverse_dt: float,
                   pivot: np.ndarray, rhs: np.ndarray) -> None:
@@ -95,7 +95,7 @@ def prepare_chain(chain: int, old: np.ndarray, capacity: np.ndarray, conductance
         rhs[chain, j] = value
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def surface_response(surface_conductance: float, pivot_surface: float, rhs_surface: float
                      ) -> tuple[float, float]:
     """The new surface temperature as ``base + response·T_steam`` (K), for any steam T (K).
@@ -108,7 +108,7 @@ def surface_response(surface_conductance: float, pivot_surface: float, rhs_surfa
     return rhs_surface * inverse, surface_conductance * inverse
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def surface_heat(surface_conductance: float, base_surface: float, response_surface: float,
                  fluid_temperature: float) -> float:
     """Heat (W) a chain takes from steam at that temperature (K), with :func:`surface_response`."""
@@ -116,7 +116,7 @@ def surface_heat(surface_conductance: float, base_surface: float, response_surfa
         fluid_temperature - (base_surface + response_surface * fluid_temperature))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def finish_chain(chain: int, surface_temperature: float, conductance: np.ndarray,
                  pivot: np.ndarray, rhs: np.ndarray, new: np.ndarray) -> None:
     """Back-substitute the new temperatures (K) of chain ``chain`` into ``new[chain]``."""

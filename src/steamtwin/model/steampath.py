@@ -33,13 +33,13 @@ SECTOR_END_CONSTANT = 0.012  # C_e, single-row wheel (Kang et al.)
 DISC_FRICTION_CONSTANT = 1.05e-3  # 1e-3·K1, K1 = 1.05 (Kang et al.; textbook range 1.0–1.3)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def critical_pressure_ratio(kappa: float) -> float:
     """Pressure ratio below which a convergent nozzle is choked (dimensionless)."""
     return (2.0 / (kappa + 1.0)) ** (kappa / (kappa - 1.0))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def nozzle_flow_function(pressure_ratio: float, kappa: float) -> float:
     """Saint-Venant–Wantzel flow function Ψ(p_out/p_in); constant below the critical ratio."""
     ratio = max(pressure_ratio, critical_pressure_ratio(kappa))
@@ -50,7 +50,7 @@ def nozzle_flow_function(pressure_ratio: float, kappa: float) -> float:
     return math.sqrt(2.0 * kappa / (kappa - 1.0) * max(bracket, 0.0))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def stodola_inlet_pressure(flow: float, capacity: float, outlet_pressure: float,
                            inlet_pv: float) -> float:
     """Inlet pressure (Pa) of a stage passing ``flow`` (kg/s) by Stodola's cone law.
@@ -61,13 +61,13 @@ def stodola_inlet_pressure(flow: float, capacity: float, outlet_pressure: float,
     return math.sqrt(outlet_pressure * outlet_pressure + (flow / capacity) ** 2 * inlet_pv)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def optimum_velocity_ratio(nozzle_exit_angle: float, reaction: float) -> float:
     """ν_opt = cos α1 / (2·sqrt(1 − R)) (dimensionless; α1 in rad)."""
     return math.cos(nozzle_exit_angle) / (2.0 * math.sqrt(1.0 - reaction))
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def stage_efficiency(velocity_ratio: float, optimum_ratio: float, peak_efficiency: float,
                      friction_loss: float) -> float:
     """Internal stage efficiency from the parabolic velocity-ratio law less friction, ≥ 0."""
@@ -75,7 +75,7 @@ def stage_efficiency(velocity_ratio: float, optimum_ratio: float, peak_efficienc
     return max(peak_efficiency * x * (2.0 - x) - friction_loss, 0.0)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def windage_power(windage_area: float, idle_arc: float, density: float, blade_speed: float
                   ) -> float:
     """Idle-arc windage (W): B_e·π·sin α1/2 · d·l folded into ``windage_area`` (m²)."""
