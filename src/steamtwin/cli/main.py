@@ -12,6 +12,7 @@ from steamtwin.cli.plant import plant
 from steamtwin.cli.rom import rom_app
 from steamtwin.cli.simulate import simulate
 from steamtwin.cli.turbine import turbine_app
+from steamtwin.cli.validate import validate
 
 app = typer.Typer(
     name="steamtwin",
@@ -28,4 +29,5 @@ app.command()(simulate)
 app.command()(plant)
 app.command()(calibrate)
 app.command("calibrate-online")(calibrate_online)
+app.command()(validate)
 app.command()(demo)

@@ -1,0 +1,221 @@
+"""``steamtwin validate``: the blade-temperature ROM against plant data, as an HTML report."""
+
+from __future__ import annotations
+
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import typer
+from rich.console import Console
+
+from steamtwin.dcs.quality import QualityReport, clean
+from steamtwin.dcs.readers import HistorianFormatError, read_historian
+from steamtwin.dcs.tagmap import TagMap, TagMapError, load_tag_map
+from steamtwin.dcs.windows import find_steady_windows, select_window
+from steamtwin.model.parameters import ModelParameters, ParameterError
+from steamtwin.model.simulator import INPUT_SIGNALS
+from steamtwin.rom.estimator import ExtrapolationWarning
+from steamtwin.rom.romfile import BladeRom, RomFileError, load_rom
+from steamtwin.rom.snapshots import SnapshotSet, generate_snapshots
+from steamtwin.spec import SpecError, TurbineSpec, load_spec
+from steamtwin.validation.html import NotesSection, Section, TableSection
+from steamtwin.validation.monitor import validate as run_validation
+
+STEADY_TOLERANCE = 0.02  # ± fraction of rated load for the automatic window search
+
+
+def validate(
+    rom: Path = typer.Option(..., help="ROM file (.npz) from 'steamtwin rom build'."),
+    data: Path = typer.Option(..., help="Historian export: CSV or Parquet, wide or long."),
+    tags: Path = typer.Option(..., help="Tag map (TOML) of the historian export (columns/tags "
+                              "and their units)."),
+    report: Path = typer.Option(..., help="Folder for report.html, report.json, CSV tables "
+                                "and PNG figures."),
+    window: list[str] | None = typer.Option(
+        None, help="START/END (ISO 8601) of a validation window; repeatable. Default: the "
+        "last --hours of every steady-load span of at least --hours."),
+    hours: float = typer.Option(2.0, min=0.05, help="Length of the automatically found "
+                                "windows (h)."),
+    turbine: str = typer.Option("reference", help="'reference' or a turbine spec TOML (rated "
+                                "load for the window search; the FOM for --field-check)."),
+    field_check: bool = typer.Option(
+        False, "--field-check", help="Also solve the FOM blade field at each window's mean "
+        "conditions and compare it with the ROM's (Figure 9)."),
+) -> None:
+    """Compare the ROM's monitored temperatures with measured DCS data and write a report.
+
+    Reads the historian export with its tag map (units converted to SI there), cleans it
+    (spikes and out-of-range values rejected and counted, nothing filled), picks the windows,
+    replays the ROM over them and writes Table 5 (operating conditions), Table 8 (mean/max
+    absolute deviation, RMSE and relative error per sensor and window), Figure 10 (HP-exhaust
+    tracking) and the ROM's provenance. Prints one line per window.
+
+    Example: steamtwin validate --rom rom.npz --data plant-data/historian.parquet --tags plant-data/tags.toml --report validation
+    """  # noqa: E501
+    console = Console(stderr=True)
+    timings: dict[str, float] = {}
+    try:
+        clock = time.perf_counter()
+        bundle = load_rom(rom)
+        spec = load_spec(turbine)
+        timings["load ROM and turbine"] = time.perf_counter() - clock
+        clock = time.perf_counter()
+        tag_map = load_tag_map(tags)
+        needed = _needed_signals(bundle, field_check)
+        signals, quality = _read_cleaned(data, tag_map, needed)
+        timings["read and clean data"] = time.perf_counter() - clock
+        clock = time.perf_counter()
+        windows = _pick_windows(signals, window, hours, spec.design.generator_power)
+        _check_windows(bundle, windows)
+        timings["window selection"] = time.perf_counter() - clock
+        reference = None
+        if field_check:
+            clock = time.perf_counter()
+            with console.status("solving the FOM blade field at each window's conditions"):
+                reference = _reference_fields(bundle, spec, windows)
+            timings["FOM blade fields (Figure 9)"] = time.perf_counter() - clock
+        rated_mw = spec.design.generator_power / 1e6
+        settings = {
+            "ROM file": str(rom), "data": str(data), "tag map": str(tags),
+            "tag map layout": tag_map.layout, "turbine": spec.name,
+            "windows from": "--window" if window else (
+                f"steady load (± {STEADY_TOLERANCE:.0%} of rated {rated_mw:g} MW) over "
+                f"≥ {hours:g} h, the last {hours:g} h of each span"),
+            "samples read": len(signals),
+        }
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", ExtrapolationWarning)
+            with console.status("monitoring the windows and writing the report"):
+                result = run_validation(bundle, windows, report, settings=settings,
+                                        timings=timings, field_check=reference,
+                                        extra_sections=_quality_sections(quality))
+    except (RomFileError, SpecError, TagMapError, HistorianFormatError, ParameterError,
+            ValueError, OSError) as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=2) from None
+    for warning in caught:
+        typer.echo(f"warning: {warning.message}", err=True)
+    table8 = result.tables["table8_deviation"]
+    shown = table8["signal"].iloc[0]  # the HP exhaust when the data hold it
+    for row in table8[table8["signal"] == shown].itertuples(index=False):
+        typer.echo(f"{row.window}: {shown} mean abs deviation {row.mean_abs_deviation_K:.2f} K, "
+                   f"max {row.max_abs_deviation_K:.2f} K, RMSE {row.rmse_K:.2f} K "
+                   f"({row.n_used} of {row.n_samples} samples used)")
+    typer.echo(f"wrote {report / 'report.html'} (+ report.json, "
+               f"{len(result.tables)} CSV tables, figures)")
+
+
+def _needed_signals(bundle: BladeRom, field_check: bool) -> tuple[str, ...]:
+    """Signals the run cannot do without: the ROM's inputs (+ the FOM's for --field-check)."""
+    needed = [str(name) for name in bundle.rom.input_names_]
+    if field_check:
+        needed += [name for name in INPUT_SIGNALS if name not in needed]
+    return tuple(needed)
+
+
+def _read_cleaned(data: Path, tag_map: TagMap, needed: tuple[str, ...]
+                  ) -> tuple[pd.DataFrame, QualityReport]:
+    """The export as cleaned canonical SI signals; errors name the tag map or the file's tag."""
+    unmapped = [name for name in needed if name not in tag_map.signals]
+    if unmapped:
+        raise ValueError(f"{tag_map.source}: the ROM needs signal(s) {unmapped}, which the tag "
+                         "map does not map; add [signals.<name>] with column and unit")
+    historian = read_historian(data, tag_map)
+    absent = {name: tag for name, tag in historian.missing_signals.items() if name in needed}
+    if absent:
+        kind = "column" if tag_map.layout == "wide" else "tag"
+        raise ValueError(f"{data}: no {kind} " + ", ".join(
+            f"{tag!r} (signal {name}, mapped in {tag_map.source})" for name, tag in absent.items())
+            + "; the ROM needs it")
+    specs = tag_map.signals.values()
+    cleaned = clean(
+        historian.signals, required=needed,
+        ranges={s.signal: s.valid_range_si for s in specs if s.valid_range_si is not None},
+        declared_units={s.signal: s.unit for s in specs},
+        tag_names={s.signal: s.column for s in specs}, source=str(data))
+    return cleaned.data, cleaned.report
+
+
+def _pick_windows(data: pd.DataFrame, window: list[str] | None, hours: float,
+                  rated_load_w: float) -> dict[str, pd.DataFrame]:
+    """Named windows: given START/END pairs, or the last ``hours`` of each steady-load span."""
+    picked: list[pd.DataFrame] = []
+    if window:
+        for text in window:
+            start, sep, end = text.partition("/")
+            if not sep or not start or not end:
+                raise ValueError(f"--window {text!r}: expected START/END (ISO 8601 times)")
+            try:
+                picked.append(select_window(data, pd.Timestamp(start), pd.Timestamp(end)))
+            except ValueError as error:
+                raise ValueError(f"--window {text!r}: {error}") from None
+    else:
+        if "load" not in data.columns:
+            raise ValueError("no --window given and the data have no 'load' signal, which the "
+                             "search for steady windows needs; map the generator load in the "
+                             "tag map or pass --window START/END")
+        duration = hours * 3600.0
+        steady = find_steady_windows(data, duration_s=duration, rated_load_w=rated_load_w,
+                                     tolerance=STEADY_TOLERANCE,
+                                     sub_window_s=min(600.0, duration / 4.0))
+        if not steady:
+            raise ValueError(f"no steady-load span of {hours:g} h found in the data; pass "
+                             "--window START/END")
+        for span in sorted(steady, key=lambda w: w.start):
+            end = pd.Timestamp(span.end)
+            picked.append(select_window(data, end - pd.Timedelta(seconds=duration), end))
+    return _named(picked, rated_load_w)
+
+
+def _named(frames: list[pd.DataFrame], rated_load_w: float) -> dict[str, pd.DataFrame]:
+    """Names by mean load ("50 % load"), told apart by start time when two share one."""
+    names = []
+    for i, frame in enumerate(frames):
+        load = frame["load"].to_numpy(dtype=float) if "load" in frame.columns else np.array([])
+        finite = load[np.isfinite(load)]
+        names.append(f"{100.0 * finite.mean() / rated_load_w:.0f} % load" if finite.size
+                     else f"window {i + 1}")
+    named = {}
+    for name, frame in zip(names, frames, strict=True):
+        if names.count(name) > 1:
+            name = f"{name}, {frame.index[0]:%Y-%m-%d %H:%M}"
+        named[name] = frame
+    return named
+
+
+def _check_windows(bundle: BladeRom, windows: dict[str, pd.DataFrame]) -> None:
+    """Every window needs at least one sample with all ROM inputs present."""
+    inputs = [str(name) for name in bundle.rom.input_names_]
+    for name, frame in windows.items():
+        if not np.isfinite(frame[inputs].to_numpy(dtype=float)).all(axis=1).any():
+            raise ValueError(f"window {name!r} ({frame.index[0]} … {frame.index[-1]}): no "
+                             f"sample has all ROM inputs {inputs} valid")
+
+
+def _reference_fields(bundle: BladeRom, spec: TurbineSpec,
+                      windows: dict[str, pd.DataFrame]) -> SnapshotSet:
+    """FOM blade fields at each window's mean boundary conditions, with the ROM's parameters."""
+    try:
+        params = ModelParameters(**bundle.provenance.get("model_parameters", {}))
+    except TypeError as error:
+        raise ValueError(f"the ROM's provenance holds unusable model_parameters ({error})"
+                         ) from None
+    conditions = pd.DataFrame([frame[list(INPUT_SIGNALS)].mean() for frame in windows.values()])
+    if conditions.isna().any().any():
+        raise ValueError("--field-check: a window has no valid sample of "
+                         f"{list(INPUT_SIGNALS)}")
+    return generate_snapshots(spec, bundle.mesh, conditions, params, max_workers=1)
+
+
+def _quality_sections(quality: QualityReport) -> list[Section]:
+    """The cleaning's findings as a table (or a note when there are none)."""
+    if not quality.findings:
+        return [NotesSection("Data quality", ("no findings",))]
+    columns = ("severity", "action", "kind", "signal", "tag", "count", "first_row", "message")
+    frame = pd.DataFrame([f.to_dict() for f in quality.findings], columns=list(columns))
+    return [TableSection("data_quality", frame,
+                         f"Data quality of the export: {len(quality.errors)} error(s), "
+                         f"{len(quality.warnings)} warning(s) (whole file, before windowing)")]

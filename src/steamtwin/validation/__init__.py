@@ -1,0 +1,33 @@
+"""Validation of the twin against plant data: metrics, tables, figures, HTML report.
+
+Modules: ``tables`` (Table 5 operating conditions, Table 8 deviations, ROM provenance),
+``figures`` (Figure 10 HP-exhaust tracking), ``html`` (the report writer: HTML + CSV + JSON),
+``monitor`` (ROM replay over windows and :func:`validate`, used by ``steamtwin validate`` and
+the demo), ``sensitivity`` (Sobol sensitivity) and ``noise`` (noise propagation).
+"""
+
+from steamtwin.validation.figures import exhaust_tracking_figure
+from steamtwin.validation.html import (
+    FigureSection,
+    NotesSection,
+    ReportError,
+    TableSection,
+    ValidationReport,
+)
+from steamtwin.validation.monitor import COMPARED_SIGNALS, monitor_windows, validate
+from steamtwin.validation.tables import deviation_table, operating_table, rom_provenance_table
+
+__all__ = [
+    "COMPARED_SIGNALS",
+    "FigureSection",
+    "NotesSection",
+    "ReportError",
+    "TableSection",
+    "ValidationReport",
+    "deviation_table",
+    "exhaust_tracking_figure",
+    "monitor_windows",
+    "operating_table",
+    "rom_provenance_table",
+    "validate",
+]

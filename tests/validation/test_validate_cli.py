@@ -1,0 +1,205 @@
+"""``steamtwin validate`` end to end: a tiny ROM, virtual-plant holds at 30 % and 50 % load.
+
+The same measurements written with another tag map (renamed tags, °F / psi / kPa / bar / kg/s /
+kW, another time zone, CSV) and in the long layout must give the same Table 8.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+import typer
+from typer.testing import CliRunner
+
+from steamtwin.cli.validate import validate
+from steamtwin.dcs.plant import plant_tag_map, run_plant
+from steamtwin.dcs.readers import canonical_to_historian
+from steamtwin.dcs.tagmap import TagMap, TagSpec, write_tag_map
+from steamtwin.geometry.meshing import blade_volume_mesh
+from steamtwin.rom.build import build_rom
+from steamtwin.rom.romfile import load_rom, save_rom
+from steamtwin.validation import NotesSection, monitor_windows
+from steamtwin.validation import validate as validate_windows
+
+app = typer.Typer()
+app.command()(validate)
+runner = CliRunner()
+
+OTHER_UNITS = {
+    "main_steam_pressure": "psi", "main_steam_temperature": "degF", "main_steam_flow": "kg/s",
+    "control_stage_pressure": "kPa", "control_stage_temperature": "degF",
+    "hp_exhaust_pressure": "bar", "hp_exhaust_temperature": "degF",
+    "hp_inner_casing_temperature": "K", "load": "kW",
+}
+
+
+@pytest.fixture(scope="module")
+def rom_file(tmp_path_factory, reference_spec):
+    mesh = blade_volume_mesh(reference_spec, "hp1", element_size=0.006)
+    bundle, _ = build_rom(reference_spec, mesh, n_snapshots=8, energy=0.9999, max_workers=1)
+    return save_rom(bundle, tmp_path_factory.mktemp("rom") / "rom.npz")
+
+
+@pytest.fixture(scope="module")
+def measured() -> pd.DataFrame:
+    """A 30 % hold one day before a 50 % hold (15-min holds, 1-s samples, SI)."""
+    parts = []
+    for load, days_before in ((30, 1), (50, 0)):
+        frame = run_plant(f"deep-peak-{load}", hours=0.25, seed=load).measured
+        parts.append(frame.set_axis(frame.index - pd.Timedelta(days=days_before)))
+    return pd.concat(parts)
+
+
+def _write(measured: pd.DataFrame, tag_map: TagMap, folder, suffix: str):
+    folder.mkdir(parents=True, exist_ok=True)
+    wide = canonical_to_historian(measured, tag_map)
+    if tag_map.layout == "long":
+        wide = wide.melt(id_vars=[tag_map.time_column], var_name=tag_map.tag_column,
+                         value_name=tag_map.value_column, ignore_index=False)
+        wide = wide.reset_index().sort_values("index", kind="stable").drop(columns="index")
+    data = folder / f"historian.{suffix}"
+    if suffix == "csv":
+        wide.to_csv(data, index=False)
+    else:
+        wide.to_parquet(data, index=False)
+    tags = folder / "tags.toml"
+    write_tag_map(tag_map, tags)
+    return data, tags
+
+
+def _renamed_map() -> TagMap:
+    signals = {name: TagSpec(signal=name, column=f"U1 {name.replace('_', ' ')}", unit=unit)
+               for name, unit in OTHER_UNITS.items()}
+    return TagMap(layout="wide", time_column="Zeit", time_zone="Europe/Berlin", tag_column=None,
+                  value_column=None, quality_column=None, signals=signals, source="other.toml")
+
+
+def _run(rom_file, data, tags, report, *extra: str):
+    result = runner.invoke(app, ["--rom", str(rom_file), "--data", str(data), "--tags",
+                                 str(tags), "--report", str(report), *extra])
+    return result
+
+
+def _report(folder) -> dict:
+    return json.loads((folder / "report.json").read_text(encoding="utf-8"))
+
+
+def test_help_has_an_example():
+    result = runner.invoke(app, ["--help"])
+    assert result.exit_code == 0 and "Example: steamtwin validate" in result.output
+
+
+def test_same_table8_from_other_tags_units_and_layout(tmp_path, rom_file, measured):
+    layouts = {
+        "plant": (plant_tag_map("wide"), "parquet"),
+        "other": (_renamed_map(), "csv"),
+        "long": (plant_tag_map("long"), "csv"),
+    }
+    tables = {}
+    for name, (tag_map, suffix) in layouts.items():
+        data, tags = _write(measured, tag_map, tmp_path / name, suffix)
+        extra = ("--field-check",) if name == "plant" else ()
+        result = _run(rom_file, data, tags, tmp_path / f"report-{name}", "--hours", "0.2", *extra)
+        assert result.exit_code == 0, result.output
+        tables[name] = pd.read_csv(tmp_path / f"report-{name}" / "table8_deviation.csv")
+        lines = [line for line in result.output.splitlines() if "mean abs deviation" in line]
+        assert len(lines) == 2 and lines[0].startswith("34 % load: hp_exhaust_temperature")
+    reference = tables["plant"]
+    assert list(reference["window"].unique()) == ["34 % load", "56 % load"]
+    assert set(reference["signal"]) == {"hp_exhaust_temperature", "control_stage_temperature",
+                                        "hp_inner_casing_temperature"}
+    assert (reference["n_used"] > 700).all()
+    numeric = reference.select_dtypes("number").columns
+    for name in ("other", "long"):
+        table = tables[name]
+        assert table[["signal", "window"]].equals(reference[["signal", "window"]])
+        np.testing.assert_allclose(table[numeric].to_numpy(float),
+                                   reference[numeric].to_numpy(float), rtol=1e-7, atol=1e-9)
+    folder = tmp_path / "report-plant"
+    for file in ("report.html", "table5_operating.csv", "rom_provenance.csv",
+                 "figure10_exhaust_tracking.png", "figure9_field_1.png", "figure9_field_2.png"):
+        assert (folder / file).stat().st_size > 0, file
+    document = _report(folder)
+    records = pd.DataFrame(document["tables"]["table8_deviation"]["records"])
+    pd.testing.assert_frame_equal(records, reference)
+    field_error = pd.DataFrame(document["tables"]["figure9_field_error"]["records"])
+    assert (field_error["max_abs_error_K"] < 10.0).all()
+    assert "FOM blade fields (Figure 9)" in document["timings_s"]
+
+
+def test_explicit_window(tmp_path, rom_file, measured):
+    data, tags = _write(measured, plant_tag_map("wide"), tmp_path / "data", "parquet")
+    result = _run(rom_file, data, tags, tmp_path / "report",
+                  "--window", "2026-03-01T00:30:00Z/2026-03-01T00:40:00Z")
+    assert result.exit_code == 0, result.output
+    table5 = pd.read_csv(tmp_path / "report" / "table5_operating.csv", index_col="window")
+    assert list(table5.index) == ["56 % load"]
+    assert table5.loc["56 % load", "samples"] == 600
+    assert pd.Timestamp(table5.loc["56 % load", "start"]) == pd.Timestamp("2026-03-01T00:30Z")
+    window = measured.loc["2026-03-01T00:30:00Z":"2026-03-01T00:39:59Z"]
+    assert table5.loc["56 % load", "main_steam_pressure_MPa_mean"] == pytest.approx(
+        window["main_steam_pressure"].mean() / 1e6, rel=1e-9)
+    json_table5 = pd.DataFrame(_report(tmp_path / "report")["tables"]["table5_operating"][
+        "records"]).set_index("window")
+    assert json_table5["main_steam_pressure_MPa_mean"].equals(
+        table5["main_steam_pressure_MPa_mean"])
+
+
+def test_clear_errors(tmp_path, rom_file, measured):
+    data, tags = _write(measured, plant_tag_map("wide"), tmp_path / "data", "parquet")
+    plant = plant_tag_map("wide")
+    unmapped = TagMap(**{**plant.__dict__, "signals": {
+        k: v for k, v in plant.signals.items() if k != "control_stage_pressure"}})
+    write_tag_map(unmapped, tmp_path / "unmapped.toml")
+    result = _run(rom_file, data, tmp_path / "unmapped.toml", tmp_path / "r1")
+    assert result.exit_code == 2
+    assert "unmapped.toml" in result.output and "control_stage_pressure" in result.output
+    wrong_tag = TagMap(**{**plant.__dict__, "signals": {
+        **plant.signals, "control_stage_pressure": TagSpec("control_stage_pressure",
+                                                           "10MAA99CP999", "MPa")}})
+    write_tag_map(wrong_tag, tmp_path / "wrong.toml")
+    result = _run(rom_file, data, tmp_path / "wrong.toml", tmp_path / "r2")
+    assert result.exit_code == 2
+    assert "'10MAA99CP999'" in result.output and "historian.parquet" in result.output
+    garbage = tmp_path / "garbage.parquet"
+    garbage.write_bytes(b"not parquet")
+    result = _run(rom_file, garbage, tags, tmp_path / "r3")
+    assert result.exit_code == 2 and "cannot read Parquet" in result.output
+    result = _run(rom_file, data, tags, tmp_path / "r4",
+                  "--window", "2026-02-28T12:00:00Z/2026-02-28T13:00:00Z")
+    assert result.exit_code == 2 and "holds no sample" in result.output
+    result = _run(rom_file, data, tags, tmp_path / "r5", "--window", "2026-03-01T00:30:00Z")
+    assert result.exit_code == 2 and "START/END" in result.output
+    result = _run(rom_file, data, tags, tmp_path / "r6", "--hours", "3")
+    assert result.exit_code == 2 and "no steady-load span" in result.output
+    bad_rom = tmp_path / "bad.npz"
+    bad_rom.write_bytes(b"not a zip")
+    result = _run(bad_rom, data, tags, tmp_path / "r7")
+    assert result.exit_code == 2 and "not a readable ROM file" in result.output
+    assert "Traceback" not in result.output
+
+
+@pytest.mark.filterwarnings("ignore::steamtwin.rom.estimator.ExtrapolationWarning")
+def test_library_validate_without_exhaust_and_with_extra_sections(tmp_path, rom_file, measured):
+    bundle = load_rom(rom_file)
+    window = measured.loc["2026-03-01T00:30:00Z":"2026-03-01T00:34:59Z"]
+    report = validate_windows(bundle, {"hold": window.drop(columns="hp_exhaust_temperature")},
+                              tmp_path, settings={"case": "no exhaust"},
+                              extra_sections=[NotesSection("from the caller", ("kept",))])
+    table8 = report.tables["table8_deviation"]
+    assert "hp_exhaust_temperature" not in set(table8["signal"])
+    assert not (tmp_path / "figure10_exhaust_tracking.png").exists()
+    document = json.loads((tmp_path / "report.json").read_text(encoding="utf-8"))
+    assert document["notes"][-1] == {"heading": "from the caller", "paragraphs": ["kept"]}
+    assert document["settings"]["case"] == "no exhaust"
+    monitored = monitor_windows(bundle, {"hold": window})["hold"]
+    assert {"rom_invalid_input", "rom_extrapolated"} <= set(monitored.columns)
+    with pytest.raises(ValueError, match="none of the ROM's steam-path temperatures"):
+        validate_windows(bundle, {"hold": window[["main_steam_pressure",
+                                                  "main_steam_temperature",
+                                                  "control_stage_pressure"]]}, tmp_path)
+    with pytest.raises(ValueError, match="lacks the ROM input"):
+        monitor_windows(bundle, {"hold": window.drop(columns="control_stage_pressure")})
