@@ -21,8 +21,8 @@ from steamtwin.rom.estimator import ExtrapolationWarning
 from steamtwin.rom.romfile import BladeRom, RomFileError, load_rom
 from steamtwin.rom.snapshots import SnapshotSet, generate_snapshots
 from steamtwin.spec import SpecError, TurbineSpec, load_spec
-from steamtwin.validation.html import NotesSection, Section, TableSection
 from steamtwin.validation.monitor import validate as run_validation
+from steamtwin.validation.tables import quality_section
 
 STEADY_TOLERANCE = 0.02  # ± fraction of rated load for the automatic window search
 
@@ -91,7 +91,9 @@ def validate(
             with console.status("monitoring the windows and writing the report"):
                 result = run_validation(bundle, windows, report, settings=settings,
                                         timings=timings, field_check=reference,
-                                        extra_sections=_quality_sections(quality))
+                                        extra_sections=[quality_section(
+                                            quality, "Data quality of the export (whole "
+                                            "file, before windowing)")])
     except (RomFileError, SpecError, TagMapError, HistorianFormatError, ParameterError,
             ValueError, OSError) as error:
         typer.echo(f"error: {error}", err=True)
@@ -208,14 +210,3 @@ def _reference_fields(bundle: BladeRom, spec: TurbineSpec,
         raise ValueError("--field-check: a window has no valid sample of "
                          f"{list(INPUT_SIGNALS)}")
     return generate_snapshots(spec, bundle.mesh, conditions, params, max_workers=1)
-
-
-def _quality_sections(quality: QualityReport) -> list[Section]:
-    """The cleaning's findings as a table (or a note when there are none)."""
-    if not quality.findings:
-        return [NotesSection("Data quality", ("no findings",))]
-    columns = ("severity", "action", "kind", "signal", "tag", "count", "first_row", "message")
-    frame = pd.DataFrame([f.to_dict() for f in quality.findings], columns=list(columns))
-    return [TableSection("data_quality", frame,
-                         f"Data quality of the export: {len(quality.errors)} error(s), "
-                         f"{len(quality.warnings)} warning(s) (whole file, before windowing)")]

@@ -15,19 +15,31 @@ from steamtwin.validation.html import (
     ValidationReport,
 )
 from steamtwin.validation.monitor import COMPARED_SIGNALS, monitor_windows, validate
-from steamtwin.validation.tables import deviation_table, operating_table, rom_provenance_table
+from steamtwin.validation.noise import noise_figure, noise_propagation
+from steamtwin.validation.sensitivity import SobolResult, sobol_indices
+from steamtwin.validation.tables import (
+    deviation_table,
+    operating_table,
+    quality_section,
+    rom_provenance_table,
+)
 
 __all__ = [
     "COMPARED_SIGNALS",
     "FigureSection",
     "NotesSection",
     "ReportError",
+    "SobolResult",
     "TableSection",
     "ValidationReport",
     "deviation_table",
     "exhaust_tracking_figure",
     "monitor_windows",
+    "noise_figure",
+    "noise_propagation",
     "operating_table",
+    "quality_section",
     "rom_provenance_table",
+    "sobol_indices",
     "validate",
 ]

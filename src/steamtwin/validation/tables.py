@@ -28,13 +28,15 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from steamtwin.dcs.quality import QualityReport
 from steamtwin.dcs.signals import SIGNALS
 from steamtwin.rom.reconstruction import FLAG_EXTRAPOLATED, FLAG_INVALID
 from steamtwin.rom.romfile import FORMAT_VERSION, BladeRom
 from steamtwin.units import convert
+from steamtwin.validation.html import NotesSection, Section, TableSection
 
-__all__ = ["OPERATING_SIGNALS", "deviation_table", "operating_table", "rom_provenance_table",
-           "unit_label"]
+__all__ = ["OPERATING_SIGNALS", "deviation_table", "operating_table", "quality_section",
+           "rom_provenance_table", "unit_label"]
 
 OPERATING_SIGNALS = (
     "load",
@@ -202,3 +204,15 @@ def _scalar(value: object) -> object:
     if isinstance(value, list | tuple):
         return ", ".join(str(v) for v in value)
     return value
+
+
+def quality_section(quality: QualityReport, caption: str, name: str = "data_quality"
+                    ) -> Section:
+    """The DCS cleaning's findings (what was rejected, where, how many) as a report table, or a
+    note saying there were none."""
+    if not quality.findings:
+        return NotesSection(caption, ("no findings",))
+    columns = ("severity", "action", "kind", "signal", "tag", "count", "first_row", "message")
+    frame = pd.DataFrame([f.to_dict() for f in quality.findings], columns=list(columns))
+    return TableSection(name, frame, f"{caption}: {len(quality.errors)} error(s), "
+                        f"{len(quality.warnings)} warning(s)")
