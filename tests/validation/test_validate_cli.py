@@ -203,3 +203,25 @@ def test_library_validate_without_exhaust_and_with_extra_sections(tmp_path, rom_
                                                   "control_stage_pressure"]]}, tmp_path)
     with pytest.raises(ValueError, match="lacks the ROM input"):
         monitor_windows(bundle, {"hold": window.drop(columns="control_stage_pressure")})
+
+
+def test_fom_monitoring_takes_the_roms_parameters_and_flags_missing_inputs(
+        rom_file, measured, reference_model):
+    from steamtwin.model.parameters import ModelParameters
+    from steamtwin.rom.romfile import load_rom
+    from steamtwin.validation.monitor import monitor_windows
+
+    bundle = load_rom(rom_file)
+    window = measured.iloc[:600].copy()
+    window.iloc[:5, window.columns.get_loc("hp_exhaust_pressure")] = np.nan  # no FOM start
+    by_fom = monitor_windows(bundle, {"w": window}, reference_model)["w"]
+    by_rom = monitor_windows(bundle, {"w": window})["w"]
+    params = ModelParameters(**bundle.provenance["model_parameters"])
+    direct = reference_model.simulate(window.iloc[5:], params)
+    np.testing.assert_allclose(by_fom["hp_exhaust_temperature"].iloc[5:],
+                               direct["hp_exhaust_temperature"], rtol=0, atol=1e-9)
+    assert by_fom["hp_exhaust_temperature"].iloc[:5].isna().all()
+    assert by_fom["rom_invalid_input"].iloc[:5].all()
+    assert not by_fom["rom_invalid_input"].iloc[5:].any()
+    probes = [name for name in bundle.probes]
+    pd.testing.assert_frame_equal(by_fom[probes], by_rom[probes])  # the blade stays the ROM's

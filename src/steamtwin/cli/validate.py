@@ -15,6 +15,7 @@ from steamtwin.dcs.quality import QualityReport, clean
 from steamtwin.dcs.readers import HistorianFormatError, read_historian
 from steamtwin.dcs.tagmap import TagMap, TagMapError, load_tag_map
 from steamtwin.dcs.windows import find_steady_windows, select_window
+from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import ModelParameters, ParameterError
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.rom.estimator import ExtrapolationWarning
@@ -41,6 +42,10 @@ def validate(
                                 "windows (h)."),
     turbine: str = typer.Option("reference", help="'reference' or a turbine spec TOML (rated "
                                 "load for the window search; the FOM for --field-check)."),
+    monitor: str = typer.Option(
+        "fom", help="What monitors the steam-path temperatures: 'fom' (the full-order model of "
+        "--turbine with the ROM's parameters; metal dynamics included) or 'rom' (the ROM's "
+        "steady map)."),
     field_check: bool = typer.Option(
         False, "--field-check", help="Also solve the FOM blade field at each window's mean "
         "conditions and compare it with the ROM's (Figure 9)."),
@@ -49,12 +54,17 @@ def validate(
 
     Reads the historian export with its tag map (units converted to SI there), cleans it
     (spikes and out-of-range values rejected and counted, nothing filled), picks the windows,
-    replays the ROM over them and writes Table 5 (operating conditions), Table 8 (mean/max
+    replays the twin over them — blade temperatures from the ROM, steam-path temperatures from
+    the full-order model with the ROM's parameters (--monitor fom) or the ROM (--monitor rom) —
+    and writes Table 5 (operating conditions), Table 8 (mean/max
     absolute deviation, RMSE and relative error per sensor and window), Figure 10 (HP-exhaust
     tracking) and the ROM's provenance. Prints one line per window.
 
     Example: steamtwin validate --rom rom.npz --data plant-data/historian.parquet --tags plant-data/tags.toml --report validation
     """  # noqa: E501
+    if monitor not in ("fom", "rom"):
+        typer.echo(f"error: --monitor must be 'fom' or 'rom' (got {monitor!r})", err=True)
+        raise typer.Exit(code=2)
     console = Console(stderr=True)
     timings: dict[str, float] = {}
     try:
@@ -64,7 +74,7 @@ def validate(
         timings["load ROM and turbine"] = time.perf_counter() - clock
         clock = time.perf_counter()
         tag_map = load_tag_map(tags)
-        needed = _needed_signals(bundle, field_check)
+        needed = _needed_signals(bundle, field_check or monitor == "fom")
         signals, quality = _read_cleaned(data, tag_map, needed)
         timings["read and clean data"] = time.perf_counter() - clock
         clock = time.perf_counter()
@@ -91,6 +101,8 @@ def validate(
             with console.status("monitoring the windows and writing the report"):
                 result = run_validation(bundle, windows, report, settings=settings,
                                         timings=timings, field_check=reference,
+                                        simulator=FullOrderModel(spec) if monitor == "fom"
+                                        else None,
                                         extra_sections=[quality_section(
                                             quality, "Data quality of the export (whole "
                                             "file, before windowing)")])
@@ -110,10 +122,10 @@ def validate(
                f"{len(result.tables)} CSV tables, figures)")
 
 
-def _needed_signals(bundle: BladeRom, field_check: bool) -> tuple[str, ...]:
-    """Signals the run cannot do without: the ROM's inputs (+ the FOM's for --field-check)."""
+def _needed_signals(bundle: BladeRom, with_model: bool) -> tuple[str, ...]:
+    """Signals the run cannot do without: the ROM's inputs (+ the FOM's when it runs)."""
     needed = [str(name) for name in bundle.rom.input_names_]
-    if field_check:
+    if with_model:
         needed += [name for name in INPUT_SIGNALS if name not in needed]
     return tuple(needed)
 

@@ -16,8 +16,11 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from steamtwin.calibration.objective import prepare_window
+from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.simulator import Simulator
 from steamtwin.rom.figure import field_comparison_figure
-from steamtwin.rom.reconstruction import predict_field, predict_series
+from steamtwin.rom.reconstruction import FLAG_INVALID, predict_field, predict_series
 from steamtwin.rom.romfile import BladeRom
 from steamtwin.rom.snapshots import SnapshotSet
 from steamtwin.units import convert
@@ -47,23 +50,48 @@ _DEFINITIONS = (
 )
 
 
-def monitor_windows(bundle: BladeRom,
-                    windows: Mapping[str, pd.DataFrame]) -> dict[str, pd.DataFrame]:
-    """ROM predictions (SI) with their flags for every sample of every window.
+def monitor_windows(bundle: BladeRom, windows: Mapping[str, pd.DataFrame],
+                    simulator: Simulator | None = None) -> dict[str, pd.DataFrame]:
+    """Monitored values (SI) with their flags for every sample of every window.
 
     Each frame is :attr:`SeriesPrediction.sensors` of
     :func:`~steamtwin.rom.reconstruction.predict_series`: the ROM's steam-path sensors, blade
     probes, ``rom_invalid_input``, ``rom_extrapolated`` and ``rom_extrapolation_distance``.
-    Inputs are used as measured (no filling); an ``ExtrapolationWarning`` per window that
-    leaves the snapshots' range.
+    The ROM's inputs are used as measured (no filling); an ``ExtrapolationWarning`` per window
+    that leaves the snapshots' range.
+
+    With ``simulator`` (the full-order model of the ROM's turbine), the steam-path signals it
+    outputs come from it instead, run over the window with the parameters the ROM was built
+    with (``provenance["model_parameters"]``): the FOM carries the metal's heat storage and
+    takes the HP-exhaust pressure, which the ROM's steady map from (p0, T0, p1) cannot. Its
+    inputs are gap-filled as in calibration (≤ 60 s held, longer gaps raise); rows before the
+    first complete input row are flagged ``rom_invalid_input``.
     """
+    params = _model_parameters(bundle) if simulator is not None else None
     monitored = {}
     for name, frame in windows.items():
         missing = [str(s) for s in bundle.rom.input_names_ if s not in frame.columns]
         if missing:
             raise ValueError(f"window {name!r} lacks the ROM input signal(s) {missing}")
-        monitored[name] = predict_series(bundle, frame).sensors
+        sensors = predict_series(bundle, frame).sensors
+        if simulator is not None:
+            prepared = prepare_window(frame, simulator, (), name=f"window {name!r}",
+                                      min_samples=1)
+            outputs = simulator.simulate(prepared.inputs, params)
+            for column in simulator.output_signals:
+                sensors[column] = outputs[column].reindex(sensors.index)
+            sensors[FLAG_INVALID] |= ~sensors.index.isin(outputs.index)
+        monitored[name] = sensors
     return monitored
+
+
+def _model_parameters(bundle: BladeRom) -> ModelParameters:
+    """The parameters the ROM was built with (its provenance)."""
+    values = bundle.provenance.get("model_parameters")
+    if not isinstance(values, dict):
+        raise ValueError("the ROM file records no model_parameters in its provenance; rebuild "
+                         "it with 'steamtwin rom build' or monitor with the ROM alone")
+    return ModelParameters(**values)
 
 
 def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str | Path, *,
@@ -72,7 +100,8 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
              timings: Mapping[str, float] | None = None,
              versions: Mapping[str, str] | None = None,
              field_check: SnapshotSet | None = None,
-             extra_sections: Sequence[Section] = ()) -> ValidationReport:
+             extra_sections: Sequence[Section] = (),
+             simulator: Simulator | None = None) -> ValidationReport:
     """Compare the ROM with measured windows and write the report into ``out_dir``.
 
     ``windows`` maps a name (e.g. "50 % load") to canonical SI data. ``settings``,
@@ -91,11 +120,12 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
     out_dir.mkdir(parents=True, exist_ok=True)
     stages = dict(timings or {})
     clock = time.perf_counter()
-    monitored = monitor_windows(bundle, windows)
+    monitored = monitor_windows(bundle, windows, simulator)
     stages["ROM prediction over the windows"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
-    signals = [s for s in COMPARED_SIGNALS if s in bundle.sensor_names
+    predicted = set(bundle.sensor_names) | set(simulator.output_signals if simulator else ())
+    signals = [s for s in COMPARED_SIGNALS if s in predicted
                and all(s in frame.columns for frame in windows.values())]
     if not signals:
         raise ValueError(f"the data hold none of the ROM's steam-path temperatures "
@@ -111,6 +141,10 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
         "windows": list(windows),
         "compared signals": signals,
         "ROM inputs": [str(name) for name in bundle.rom.input_names_],
+        "steam-path temperatures monitored by": (
+            "the full-order model with the ROM's parameters (metal dynamics, exhaust pressure)"
+            if simulator is not None else "the ROM's steady map from (p0, T0, p1)"),
+        "blade temperatures monitored by": "the ROM",
     })
     report.versions |= dict(versions or {})
     report.add_table("table5_operating", table5,
