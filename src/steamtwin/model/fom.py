@@ -9,6 +9,7 @@ and inner casing per stage group (``metal``), solved sample by sample in a compi
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, fields
 from functools import cached_property
 
@@ -17,6 +18,7 @@ import pandas as pd
 
 from steamtwin.model import kernel
 from steamtwin.model.design import EFFICIENCY_SCALE_RANGE, DesignConstants, kernel_constants
+from steamtwin.model.measurement import check_time_constants, lag_outputs
 from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import SpecError, TurbineSpec
@@ -74,16 +76,22 @@ class FullOrderModel:
     predictions (SI). The design step (constants from the spec's heat balance) runs on first use
     and is cached in ``design_``. ``pressure_tolerance`` (relative) and ``enthalpy_tolerance``
     (J/kg) bound the estimated error each sample's sweeps leave (see ``model.kernel``).
+    ``sensor_time_constants`` (output → τ in s, e.g.
+    :data:`~steamtwin.model.measurement.TYPICAL_TIME_CONSTANTS_S`): those outputs become what
+    their thermocouples read, a first-order lag of the computed temperature (``measurement``);
+    the diagnostics keep the computed values. Default: no lag.
     """
 
     input_signals = INPUT_SIGNALS
 
     def __init__(self, spec: TurbineSpec, *,
                  pressure_tolerance: float = kernel.PRESSURE_TOLERANCE,
-                 enthalpy_tolerance: float = kernel.ENTHALPY_TOLERANCE) -> None:
+                 enthalpy_tolerance: float = kernel.ENTHALPY_TOLERANCE,
+                 sensor_time_constants: Mapping[str, float] | None = None) -> None:
         self.spec = spec
         self.pressure_tolerance = pressure_tolerance
         self.enthalpy_tolerance = enthalpy_tolerance
+        self.sensor_time_constants = sensor_time_constants
 
     @property
     def output_signals(self) -> tuple[str, ...]:
@@ -244,6 +252,9 @@ class FullOrderModel:
             )
         diagnostics = pd.DataFrame(results, index=inputs.index, columns=kernel.RESULT_COLUMNS)
         outputs = diagnostics[list(self.output_signals)].copy()
+        lags = check_time_constants(self.sensor_time_constants, self.output_signals)
+        if lags:
+            outputs = lag_outputs(outputs, time_step, lags)
         stage_names = ["control_stage"] + [f"stage_{i}" for i in range(1, stages + 1)]
         return SimulationResult(
             outputs=outputs,
