@@ -59,7 +59,7 @@ def exhaust_tracking_figure(measured: Mapping[str, pd.DataFrame],
         deviation = monitored_degc - measured_degc
         top, bottom = axes[0, column], axes[1, column]
         top.plot(minutes, measured_degc, color="0.45", lw=0.7, label="measured (DCS)")
-        top.plot(minutes, monitored_degc, color="tab:red", lw=1.2, label="monitored (ROM)")
+        top.plot(minutes, monitored_degc, color="tab:red", lw=1.2, label="monitored (twin)")
         top.set(title=name, ylabel=f"{label} (°C)")
         top.legend(loc="best", fontsize=8)
         bottom.plot(minutes, deviation, color="tab:blue", lw=0.8)

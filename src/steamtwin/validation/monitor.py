@@ -38,7 +38,7 @@ COMPARED_SIGNALS = (
 """Steam-path temperatures Table 8 compares when the ROM predicts them and the data hold them."""
 
 _DEFINITIONS = (
-    "Deviation d = monitored (ROM) − measured (DCS), in K, over the samples where both are "
+    "Deviation d = monitored (twin) − measured (DCS), in K, over the samples where both are "
     "finite and the ROM input is valid. mean |d|, max |d| and RMSE = sqrt(mean d²) in K; "
     "mean d is the bias.",
     "relative_error_pct = 100 · mean |d| / mean measured temperature in °C (°C scale); "
@@ -151,7 +151,7 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
                      "Table 5 — operating conditions of the validation windows (DCS; MW, MPa, "
                      "°C, t/h)")
     report.add_table("table8_deviation", table8,
-                     "Table 8 — monitored (ROM) vs measured temperatures per measurement point "
+                     "Table 8 — monitored (twin) vs measured temperatures per measurement point "
                      "and window (K, %)")
     report.add_notes("Table 8: definitions", _DEFINITIONS)
     clock = time.perf_counter()
