@@ -71,27 +71,41 @@ def test_simulate_reports_bad_rows_without_traceback(tmp_path):
     assert "Traceback" not in result.output
 
 
-def test_demo_writes_its_files_from_the_model(tmp_path, reference_model, reference_spec):
-    result = runner.invoke(app, ["demo", "--out", str(tmp_path), "--hold-hours", "0.2",
-                                 "--evaluations", "40", "--snapshots", "8"])
+def test_demo_maps_its_options_and_prints_the_runs_figures(tmp_path, monkeypatch):
+    """The CLI's wiring; the chain itself is tested in tests/validation/test_demo_report.py."""
+    import steamtwin.cli.demo as demo_cli
+    from steamtwin.pipeline import STAGES, DemoResult
+
+    seen = {}
+
+    def fake_run(out, settings, progress):
+        seen["settings"] = settings
+        for stage in STAGES:
+            progress(stage, 0.0)
+            progress(stage, 1.0)
+        tables = {
+            "table6_rmse": pd.DataFrame({"condition": ["30 % load"], "rmse_empirical_K": [2.0],
+                                         "rmse_calibrated_K": [0.5], "reduction_pct": [75.0]}),
+            "table8_deviation": pd.DataFrame({"signal": ["hp_exhaust_temperature"],
+                                              "window": ["30 % load"],
+                                              "mean_abs_deviation_K": [0.21],
+                                              "max_abs_deviation_K": [1.22]}),
+        }
+        return DemoResult(out=out, report=None, params=ModelParameters(0.98, 1.2, 1.3),
+                          tables=tables, timings={stage: 1.0 for stage in STAGES},
+                          warnings=["IdentifiabilityWarning: test"])
+
+    monkeypatch.setattr(demo_cli, "run_demo", fake_run)
+    result = runner.invoke(app, ["demo", "--out", str(tmp_path), "--full", "--hold-hours",
+                                 "1.5", "--workers", "2", "--seed", "7"])
     assert result.exit_code == 0, result.output
-    assert "skipped (not built yet)" in result.output
-    table6 = pd.read_csv(tmp_path / "table6_rmse.csv", index_col="condition")
-    assert list(table6.index) == ["30 % load", "50 % load"]
-    params = ModelParameters.from_json(tmp_path / "params.json")
-    assert f"flow {params.flow_coefficient:.4f}" in result.output
-    monitored = pd.read_csv(tmp_path / "monitored_50.csv")
-    assert len(monitored) == 720 and monitored["hp_exhaust_temperature"].notna().all()
-    assert (tmp_path / "rom.npz").stat().st_size > 0
-    assert (tmp_path / "figure8_temperatures.png").stat().st_size > 10_000
-    line = pd.read_csv(tmp_path / "off_design_line.csv")
-    assert list(line["load_fraction"]) == [0.3, 0.5, 0.75, 1.0]
-    rated = reference_model.simulate(load_profile_inputs(reference_spec, [1.0])).iloc[0]
-    assert line["hp_power_MW"].iloc[-1] == pytest.approx(rated.hp_power / 1e6, rel=1e-5)
-    ramp = pd.read_csv(tmp_path / "ramp_simulation.csv")
-    assert ramp["main_steam_flow"].iloc[0] == pytest.approx(1800.0)
-    assert ramp["main_steam_flow"].iloc[-1] == pytest.approx(540.0)
-    assert (tmp_path / "ramp_simulation.png").stat().st_size > 10_000
+    settings = seen["settings"]
+    assert (settings.mode, settings.calibration, settings.snapshots) == ("full", "ga", 32)
+    assert (settings.hold_hours, settings.workers, settings.seed) == (1.5, 2, 7)
+    text = " ".join(result.output.split())  # rich wraps long lines
+    assert "flow 0.9800" in text and "2.00 → 0.50 K (−75 %)" in text
+    assert "mean abs deviation 0.21 K, max 1.22 K" in text
+    assert "warning: IdentifiabilityWarning: test" in text
 
 
 def _historian_csv(path, pressure_mpa):

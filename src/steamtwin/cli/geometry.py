@@ -1,4 +1,5 @@
-"""``steamtwin geometry``: virtual blade scans, scan preprocessing and blade meshes."""
+"""``steamtwin geometry``: virtual blade scans, scan preprocessing, surface reconstruction and
+blade meshes."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from pathlib import Path
 import typer
 
 geometry_app = typer.Typer(
-    help="Blade geometry: virtual scans, scan preprocessing, simulation meshes.",
+    help="Blade geometry: virtual scans, scan preprocessing, reconstruction, simulation meshes.",
     no_args_is_help=True,
 )
 
@@ -26,6 +27,21 @@ def _spec(turbine: str):  # returns a steamtwin.spec.TurbineSpec
     except (SpecError, OSError, ValueError) as error:
         _fail(f"cannot load turbine {turbine!r}: {error}")
         raise  # unreachable, keeps type checkers calm
+
+
+def _read_scan(folder: Path) -> tuple[list, dict]:
+    """The views (m) and the manifest of a 'geometry scan' folder."""
+    from steamtwin.geometry.pointcloud import PointCloudError, read_point_cloud
+
+    manifest_path = folder / "scan.json"
+    if not manifest_path.is_file():
+        _fail(f"{manifest_path}: no scan manifest (is {folder} a 'geometry scan' folder?)")
+    try:
+        manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
+        views = [read_point_cloud(folder / name) for name in manifest["views"]]
+    except (PointCloudError, KeyError, json.JSONDecodeError) as error:
+        _fail(f"{manifest_path}: {error}")
+    return views, manifest
 
 
 @geometry_app.command()
@@ -79,18 +95,11 @@ def preprocess(
     Example: steamtwin geometry preprocess scan-hp1 --out hp1-fused.ply --report hp1-report
     """
     from steamtwin.geometry.fidelity import align_to_nominal, surface_deviation
-    from steamtwin.geometry.pointcloud import PointCloudError, read_point_cloud, write_point_cloud
+    from steamtwin.geometry.pointcloud import write_point_cloud
     from steamtwin.geometry.preprocess import PreprocessSettings, preprocess_views, transform
     from steamtwin.geometry.profile import make_blade
 
-    manifest_path = folder / "scan.json"
-    if not manifest_path.is_file():
-        _fail(f"{manifest_path}: no scan manifest (is {folder} a 'geometry scan' folder?)")
-    try:
-        manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
-        views = [read_point_cloud(folder / name) for name in manifest["views"]]
-    except (PointCloudError, KeyError, json.JSONDecodeError) as error:
-        _fail(f"{manifest_path}: {error}")
+    views, manifest = _read_scan(folder)
     tracked = manifest.get("tracked_poses")
     try:
         fused, _, steps = preprocess_views(views, PreprocessSettings(target_points=target_points),
@@ -120,27 +129,134 @@ def preprocess(
 
 
 @geometry_app.command()
+def reconstruct(
+    source: Path = typer.Argument(..., help="Scan folder ('geometry scan') or fused cloud "
+                                           "(.ply, .pcd, .xyz; m)."),
+    out: Path = typer.Option(..., help="Watertight blade STL (binary, m; the region of each "
+                                       "triangle in its attribute word)."),
+    report: Path | None = typer.Option(None, help="Report base path: writes .json, .csv and a "
+                                                  ".png deviation map (needs the row)."),
+    row: str | None = typer.Option(None, help="Row of the blade (default: from scan.json). "
+                                              "With a row the cloud is best-fitted to its "
+                                              "nominal blade; without, it must already be in "
+                                              "the blade frame."),
+    turbine: str = typer.Option("reference", help="Turbine of the nominal blade."),
+    target_points: int = typer.Option(80_000, help="Points kept by preprocessing (scan "
+                                                   "folders)."),
+    tolerance: float = typer.Option(0.02, help="RMS fit residual aimed at by knot insertion, "
+                                               "mm."),
+) -> None:
+    """Reconstruct a watertight blade surface (STL) from a scan folder or a fused cloud.
+
+    A scan folder is preprocessed first (as 'geometry preprocess'). The cloud is segmented by
+    region growing into root, tip, pressure side, suction side, leading and trailing edge; the
+    side is fitted by a periodic B-spline surface refined by knot insertion, the caps by planes.
+    With --report: deviation from the nominal blade and row metrics at hub, mid and tip.
+
+    Example: steamtwin geometry reconstruct scan-hp1 --out hp1.stl --report hp1-reconstruction
+    """
+    from steamtwin.geometry.fidelity import align_to_nominal
+    from steamtwin.geometry.pointcloud import PointCloudError, read_point_cloud
+    from steamtwin.geometry.preprocess import PreprocessSettings, preprocess_views, transform
+    from steamtwin.geometry.profile import GeometryError, make_blade
+    from steamtwin.geometry.reconstruct import (
+        ReconstructionSettings,
+        reconstruct_blade,
+        reconstruction_fidelity,
+        write_deviation_map,
+        write_reconstruction_report,
+        write_stl,
+    )
+    from steamtwin.geometry.segmentation import ReconstructionError
+
+    if not 0.0 < tolerance <= 1.0:
+        _fail(f"--tolerance must lie within (0, 1] mm (got {tolerance})")
+    if source.is_dir():
+        views, manifest = _read_scan(source)
+        row = row or manifest.get("row")
+        try:
+            cloud, _, steps = preprocess_views(
+                views, PreprocessSettings(target_points=target_points),
+                initial_poses=manifest.get("tracked_poses"))
+        except ValueError as error:
+            _fail(str(error))
+        typer.echo(f"fused {sum(steps.input_points)} points of {len(views)} views into "
+                   f"{len(cloud)} points")
+    else:
+        try:
+            cloud = read_point_cloud(source)
+        except PointCloudError as error:
+            _fail(str(error))
+    if report is not None and row is None:
+        _fail("--report needs the row of the blade (--row, or a scan folder)")
+    if row is not None:
+        try:
+            blade = make_blade(_spec(turbine), row)
+        except GeometryError as error:
+            _fail(str(error))
+        pose, fit_rms = align_to_nominal(cloud, blade)
+        cloud = transform(cloud, pose)
+        typer.echo(f"best fit to the nominal blade {row}: RMS {fit_rms * 1e3:.4f} mm")
+    try:
+        result = reconstruct_blade(cloud, ReconstructionSettings(tolerance=tolerance * 1e-3))
+    except ReconstructionError as error:
+        _fail(str(error))
+    write_stl(result, out)
+    summary = result.summary()
+    counts = ", ".join(f"{k} {v}" for k, v in summary["patch_points"].items())
+    typer.echo(f"wrote {out}: {summary['triangles']} triangles, watertight, volume "
+               f"{summary['volume_cm3']:.4f} cm³")
+    typer.echo(f"  points per patch: {counts}; left out by the fit: "
+               f"{summary['trimmed_by_fit']}")
+    typer.echo(f"  side fit: RMS {summary['side_fit_rms_mm']:.4f} mm, max "
+               f"{summary['side_fit_max_mm']:.4f} mm, {summary['breakpoints']} knots round "
+               "the profile")
+    if report is not None:
+        extra = {"reconstruction": summary, "best_fit_rms_mm": fit_rms * 1e3}
+        fidelity = reconstruction_fidelity(blade, result.vertices, result.triangles,
+                                           extra=extra)
+        json_path, csv_path = write_reconstruction_report(fidelity, report)
+        png_path = write_deviation_map(result, report.with_suffix(".png"), blade)
+        d = fidelity.deviation
+        typer.echo(f"  deviation from the nominal blade: mean {d.mean * 1e3:.4f} mm, RMS "
+                   f"{d.rms * 1e3:.4f} mm, max {d.max * 1e3:.4f} mm, Hausdorff "
+                   f"{d.hausdorff * 1e3:.4f} mm")
+        for section in fidelity.extra["sections"]:
+            errors = ", ".join(f"{m['metric']} {m['error']:+.4f} {m['unit']}"
+                               for m in section["metrics"])
+            typer.echo(f"  {section['section']} ({section['radius_mm']:.1f} mm): {errors}")
+        typer.echo(f"  reports {json_path}, {csv_path}, {png_path}")
+
+
+@geometry_app.command()
 def mesh(
     row: str = typer.Option("hp1", help="Blade row to mesh (hp1…hp13, ip1…ip9)."),
     out: Path = typer.Option(..., help="Volume mesh file (.msh gmsh 4.1 or .vtu)."),
     turbine: str = typer.Option("reference", help="Built-in turbine name or spec TOML path."),
     element_size: float | None = typer.Option(None, help="Target element size in mm."),
+    stl: Path | None = typer.Option(None, help="Mesh this blade STL (from 'geometry "
+                                               "reconstruct') instead of the row's "
+                                               "ground truth."),
 ) -> None:
-    """Tetrahedral (gmsh HXT) mesh of the blade of ROW, with a quality report.
+    """Tetrahedral (gmsh HXT) mesh of the blade of ROW or of a reconstructed STL, with a
+    quality report.
 
     Boundary faces carry the regions root, tip, pressure_side, suction_side, leading_edge and
-    trailing_edge. (Meshing a reconstructed STL is not implemented yet.)
+    trailing_edge (from the STL's region attributes, or segmented when it has none).
 
     Example: steamtwin geometry mesh --row hp1 --out blade.msh
+    Example: steamtwin geometry mesh --stl hp1.stl --out hp1-measured.msh
     """
-    from steamtwin.geometry.meshing import blade_volume_mesh, mesh_quality
+    from steamtwin.geometry.meshing import blade_volume_mesh, mesh_quality, mesh_stl
     from steamtwin.geometry.profile import GeometryError
     from steamtwin.geometry.volume_mesh import MeshError, write_volume_mesh
 
-    spec = _spec(turbine)
     size = None if element_size is None else element_size * 1e-3
     try:
-        volume_mesh = blade_volume_mesh(spec, row, element_size=size)
+        if stl is not None:
+            volume_mesh = mesh_stl(stl, element_size=size)
+        else:
+            volume_mesh = blade_volume_mesh(_spec(turbine), row, element_size=size)
         write_volume_mesh(volume_mesh, out)
     except (GeometryError, MeshError) as error:
         _fail(str(error))

@@ -275,18 +275,6 @@ def truth_section(blade: Blade, radius: float | None = None) -> np.ndarray:
     return blade.place(blade.profile.dense[0], radius)[:, :2]
 
 
-def mesh_section(vertices: np.ndarray, triangles: np.ndarray, radius: float) -> np.ndarray:
-    """The closed section of a triangle mesh by the plane z = ``radius`` (x-y, m), longest loop."""
-    import trimesh
-
-    mesh = trimesh.Trimesh(vertices, triangles, process=False)
-    path = mesh.section(plane_origin=[0.0, 0.0, radius], plane_normal=[0.0, 0.0, 1.0])
-    if path is None:
-        raise ValueError(f"the mesh does not reach the plane z = {radius:.6g} m")
-    loops = [np.asarray(loop)[:, :2] for loop in path.discrete]
-    return max(loops, key=len)
-
-
 def section_pitch(blade: Blade, radius: float | None = None) -> float:
     """Blade pitch 2πr/N (m) at ``radius`` (default: mean)."""
     radius = blade.design.mean_radius if radius is None else radius

@@ -4,6 +4,8 @@ The blade is rebuilt in gmsh's OpenCASCADE kernel as a loft (``addThruSections``
 sections of the ground-truth blade; every section is a wire of the five Pritchard segments, so
 the loft has one face per segment plus root and tip caps, which become the boundary regions.
 The volume is meshed with the HXT algorithm (Marot, Pellerin & Remacle 2019, IJNME 117:967).
+A reconstructed blade (an STL whose triangles carry the regions) is lofted the same way through
+sections cut from its surface (:func:`mesh_stl`, :func:`mesh_surface`).
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -108,31 +111,38 @@ def mesh_blade(blade: Blade, *, element_size: float | None = None,
         occ.synchronize()
         report(0.2)
         face_region = _classify_faces(gmsh, blade, volume)
-        gmsh.option.setNumber("Mesh.MeshSizeMax", size)
-        gmsh.option.setNumber("Mesh.MeshSizeMin", size / 10.0)
-        gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", ELEMENTS_PER_TURN)
-        gmsh.option.setNumber("Mesh.Algorithm3D", 10)  # HXT
-        gmsh.option.setNumber("Mesh.Optimize", 1)
-        gmsh.model.mesh.generate(3)
+        points, tets, face_of_triangle = _mesh_volume(gmsh, volume, face_region, size)
         report(0.9)
-        node_tags, coords, _ = gmsh.model.mesh.getNodes()
-        index = np.full(int(node_tags.max()) + 1, -1, dtype=np.int64)
-        index[node_tags.astype(np.int64)] = np.arange(len(node_tags))
-        points = coords.reshape(-1, 3)
-        types, _, conn = gmsh.model.mesh.getElements(3, volume)
-        tets = np.concatenate([index[c.astype(np.int64)].reshape(-1, 4)
-                               for t, c in zip(types, conn, strict=True) if t == 4])
-        face_of_triangle = {}
-        for face, region in face_region.items():
-            types, _, conn = gmsh.model.mesh.getElements(2, face)
-            for t, c in zip(types, conn, strict=True):
-                if t == 2:
-                    for tri in index[c.astype(np.int64)].reshape(-1, 3):
-                        face_of_triangle[tuple(sorted(tri))] = region
     mesh = _assemble(points, tets, face_of_triangle)
     validate(mesh, f"volume mesh of {blade.row}")
     report(1.0)
     return mesh
+
+
+def _mesh_volume(gmsh: object, volume: int, face_region: dict[int, int], size: float
+                 ) -> tuple[np.ndarray, np.ndarray, dict[tuple[int, ...], int]]:
+    """Mesh the lofted ``volume`` (HXT, curvature-refined, ``size`` m); return the nodes (m),
+    the tetrahedra and the region of every boundary triangle (sorted node triple → region)."""
+    gmsh.option.setNumber("Mesh.MeshSizeMax", size)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", size / 10.0)
+    gmsh.option.setNumber("Mesh.MeshSizeFromCurvature", ELEMENTS_PER_TURN)
+    gmsh.option.setNumber("Mesh.Algorithm3D", 10)  # HXT
+    gmsh.option.setNumber("Mesh.Optimize", 1)
+    gmsh.model.mesh.generate(3)
+    node_tags, coords, _ = gmsh.model.mesh.getNodes()
+    index = np.full(int(node_tags.max()) + 1, -1, dtype=np.int64)
+    index[node_tags.astype(np.int64)] = np.arange(len(node_tags))
+    types, _, conn = gmsh.model.mesh.getElements(3, volume)
+    tets = np.concatenate([index[c.astype(np.int64)].reshape(-1, 4)
+                           for t, c in zip(types, conn, strict=True) if t == 4])
+    face_of_triangle = {}
+    for face, region in face_region.items():
+        types, _, conn = gmsh.model.mesh.getElements(2, face)
+        for t, c in zip(types, conn, strict=True):
+            if t == 2:
+                for tri in index[c.astype(np.int64)].reshape(-1, 3):
+                    face_of_triangle[tuple(sorted(tri))] = region
+    return coords.reshape(-1, 3), tets, face_of_triangle
 
 
 def _classify_faces(gmsh: object, blade: Blade, volume: int) -> dict[int, int]:
@@ -226,3 +236,216 @@ def mesh_quality(mesh: VolumeMesh) -> MeshQuality:
         total_volume=float(volumes.sum()),
         share_below_10_deg=float(np.mean(dihedral.min(axis=1) < 10.0)),
     )
+
+
+# --- meshing a reconstructed (STL) blade ---------------------------------------------------------
+
+#: Order of the side regions round a section, anticlockwise from the trailing edge.
+SIDE_ORDER = ("suction_side", "leading_edge", "pressure_side", "trailing_edge")
+
+
+def mesh_stl(path: str | Path, *, element_size: float | None = None,
+             progress: Callable[[float], None] | None = None) -> VolumeMesh:
+    """Tetrahedral mesh of a blade STL written by
+    :func:`~steamtwin.geometry.reconstruct.write_stl` (see :func:`mesh_surface`).
+
+    An STL without region attributes (from other software) is labelled by segmenting points
+    sampled on it (:func:`~steamtwin.geometry.segmentation.segment_blade`): each triangle takes
+    the patch of the sample nearest its centre.
+    """
+    from steamtwin.geometry.reconstruct import read_stl
+    from steamtwin.geometry.segmentation import ReconstructionError
+
+    path = Path(path)
+    try:
+        vertices, triangles, regions = read_stl(path)
+        if regions is None:
+            regions = label_triangles(vertices, triangles)
+    except ReconstructionError as error:
+        raise MeshError(str(error)) from None
+    return mesh_surface(vertices, triangles, regions, element_size=element_size,
+                        name=str(path), progress=progress)
+
+
+def label_triangles(vertices: np.ndarray, triangles: np.ndarray, samples: int = 60_000,
+                    rng: int = 0) -> np.ndarray:
+    """Region (index into REGIONS) of every triangle of a closed blade surface, from the
+    segmentation of ``samples`` points spread over it; −1 where the nearest sample has none."""
+    from scipy.spatial import cKDTree
+
+    from steamtwin.geometry.fidelity import surface_samples
+    from steamtwin.geometry.segmentation import segment_blade
+
+    points = surface_samples(vertices, triangles, samples, np.random.default_rng(rng))
+    labels = segment_blade(points).labels
+    _, nearest = cKDTree(points).query(vertices[triangles].mean(axis=1))
+    return labels[nearest]
+
+
+def mesh_surface(vertices: np.ndarray, triangles: np.ndarray, regions: np.ndarray, *,
+                 element_size: float | None = None, name: str = "reconstructed blade",
+                 progress: Callable[[float], None] | None = None) -> VolumeMesh:
+    """Tetrahedral mesh (HXT) of a closed blade surface whose triangles carry REGIONS labels.
+
+    Like :func:`mesh_blade`, the blade is lofted in OpenCASCADE through 7 sections: the root
+    and tip rims (the edges between the cap triangles and the side) and 5 planar cuts z = const
+    between them. Each section is split where its pieces change region into four splines
+    (suction side, leading edge, pressure side, trailing edge), so the loft's faces are the six
+    regions; each face takes the region of the surface triangle nearest its centre.
+    ``element_size`` (m; None: (volume / DEFAULT_CELLS)^(1/3)). Raises :class:`MeshError`.
+    """
+    import trimesh
+
+    from steamtwin.geometry.reconstruct import section_loops
+    from steamtwin.geometry.segmentation import ReconstructionError
+
+    vertices = np.asarray(vertices, dtype=np.float64)
+    triangles = np.asarray(triangles, dtype=np.int64)
+    regions = np.asarray(regions, dtype=np.int64)
+    missing = [r for k, r in enumerate(REGIONS) if not np.any(regions == k)]
+    if missing:
+        raise MeshError(f"{name}: no triangles of the region(s) {missing}")
+    surface = trimesh.Trimesh(vertices, triangles, process=False)
+    if not (surface.is_watertight and surface.volume > 0.0):
+        raise MeshError(f"{name}: the surface is not closed with outward normals")
+    report = progress or (lambda fraction: None)
+    root_rim = _rim(vertices, triangles, regions, REGIONS.index("root"))
+    tip_rim = _rim(vertices, triangles, regions, REGIONS.index("tip"))
+    chord = float(np.max(np.linalg.norm(root_rim[0][:, None, :2] - root_rim[0][None, ::7, :2],
+                                        axis=2)))
+    size = ((surface.volume / DEFAULT_CELLS) ** (1.0 / 3.0) if element_size is None
+            else float(element_size))
+    if not (math.isfinite(size) and chord / 500.0 <= size <= chord):
+        raise MeshError(f"element_size = {element_size!r} m is outside "
+                        f"[{chord / 500.0:.3g}, {chord:.3g}] m for {name}")
+    levels = np.linspace(root_rim[0][:, 2].max(), tip_rim[0][:, 2].min(), LOFT_SECTIONS)[1:-1]
+    sections = [root_rim]
+    for height in levels:
+        try:
+            points, faces = section_loops(vertices, triangles, float(height))[0]
+        except ReconstructionError as error:
+            raise MeshError(f"{name}: {error}") from None
+        sections.append((np.column_stack([points, np.full(len(points), height)]),
+                         regions[faces]))
+    sections.append(tip_rim)
+    with gmsh_session() as gmsh:
+        occ = gmsh.model.occ
+        wires = [_section_wire(occ, *_split_section(points, labels, name), chord)
+                 for points, labels in sections]
+        (volume,) = [tag for dim, tag in occ.addThruSections(wires, makeSolid=True,
+                                                             makeRuled=False) if dim == 3]
+        occ.synchronize()
+        report(0.2)
+        face_region = _classify_by_surface(gmsh, volume, vertices, triangles, regions, name)
+        points, tets, face_of_triangle = _mesh_volume(gmsh, volume, face_region, size)
+        report(0.9)
+    mesh = _assemble(points, tets, face_of_triangle)
+    validate(mesh, f"volume mesh of {name}")
+    report(1.0)
+    return mesh
+
+
+def _rim(vertices: np.ndarray, triangles: np.ndarray, regions: np.ndarray,
+         cap: int) -> tuple[np.ndarray, np.ndarray]:
+    """The closed loop (points (n, 3), region of the side triangle along each edge i → i + 1)
+    where the cap triangles of region ``cap`` meet the side."""
+    edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    owner = np.tile(np.arange(len(triangles)), 3)
+    key = np.sort(edges, axis=1)
+    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    if np.any(counts != 2):
+        raise MeshError("the surface has edges not shared by exactly two triangles")
+    on_cap = regions[owner] == cap
+    # rim edges: one cap and one side triangle
+    cap_side = np.bincount(inverse, weights=on_cap.astype(float), minlength=len(counts)) == 1
+    rim = cap_side[inverse] & on_cap
+    start, end = edges[rim, 0], edges[rim, 1]  # directed as in the cap triangles
+    side_of = {}
+    for k in np.flatnonzero(cap_side[inverse] & ~on_cap):
+        side_of[inverse[k]] = regions[owner[k]]
+    successor = dict(zip(start.tolist(), end.tolist(), strict=True))
+    region_of = {a: side_of[i] for a, i in zip(start.tolist(), inverse[rim].tolist(),
+                                               strict=True)}
+    if len(successor) != len(start):
+        raise MeshError(f"the rim of the {REGIONS[cap]} cap is not a simple loop")
+    loop = [start[0]]
+    while successor[loop[-1]] != loop[0]:
+        loop.append(successor[loop[-1]])
+        if len(loop) > len(start):
+            raise MeshError(f"the rim of the {REGIONS[cap]} cap is not a simple loop")
+    if len(loop) != len(start):
+        raise MeshError(f"the {REGIONS[cap]} cap has more than one rim")
+    return vertices[loop], np.array([region_of[v] for v in loop])
+
+
+def _split_section(points: np.ndarray, labels: np.ndarray, name: str
+                   ) -> tuple[np.ndarray, list[int]]:
+    """Anticlockwise loop starting at the first suction-side piece, and the indices where the
+    four side regions of :data:`SIDE_ORDER` start (labels are per piece i → i + 1)."""
+    x, y = points[:, 0], points[:, 1]
+    if np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y) < 0.0:  # clockwise: reverse
+        points = points[::-1]
+        labels = np.roll(labels[::-1], -1)
+    changes = np.flatnonzero(labels != np.roll(labels, 1))
+    runs = [int(labels[k]) for k in changes]
+    wanted = [REGIONS.index(r) for r in SIDE_ORDER]
+    first = runs.index(wanted[0]) if wanted[0] in runs else -1
+    if len(runs) != 4 or first < 0 or runs[first:] + runs[:first] != wanted:
+        found = [REGIONS[r] if r >= 0 else "none" for r in runs]
+        raise MeshError(f"{name}: a section at z = {points[0, 2]:.6g} m runs through the "
+                        f"regions {found}, expected {list(SIDE_ORDER)} once each")
+    shift = int(changes[first])
+    starts = [int((k - shift) % len(points)) for k in changes]
+    return np.roll(points, -shift, axis=0), sorted(starts)
+
+
+def _section_wire(occ: object, points: np.ndarray, starts: list[int], chord: float) -> int:
+    """An OpenCASCADE wire of one spline per region run, sharing the run end points."""
+    n = len(points)
+    corner = [occ.addPoint(*points[k]) for k in starts]
+    curves = []
+    for k, begin in enumerate(starts):
+        end = starts[(k + 1) % len(starts)] if k + 1 < len(starts) else n + starts[0]
+        run = points[np.arange(begin, end + 1) % n]
+        length = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(run, axis=0),
+                                                                  axis=1))])
+        count = int(np.clip(length[-1] / (chord / 60.0), 8, 60))
+        at = np.linspace(0.0, length[-1], count)[1:-1]
+        inner = np.column_stack([np.interp(at, length, run[:, j]) for j in range(3)])
+        tags = [occ.addPoint(*p) for p in inner]
+        curves.append(occ.addSpline([corner[k], *tags, corner[(k + 1) % len(starts)]]))
+    return occ.addWire(curves)
+
+
+def _classify_by_surface(gmsh: object, volume: int, vertices: np.ndarray,
+                         triangles: np.ndarray, regions: np.ndarray, name: str
+                         ) -> dict[int, int]:
+    """Region of every face of the lofted volume: the two flattest in z are the root (lower)
+    and tip caps; a side face takes the region of the surface triangle nearest its parametric
+    centre (which may lie off a curved cap's outline, never off a side face)."""
+    import open3d as o3d
+
+    faces = [face for _, face in gmsh.model.getBoundary([(3, volume)], oriented=False)]
+    boxes = np.array([gmsh.model.getBoundingBox(2, face) for face in faces])
+    order = np.argsort(boxes[:, 5] - boxes[:, 2])
+    caps = sorted(order[:2], key=lambda k: boxes[k, 2])
+    found = {faces[caps[0]]: REGIONS.index("root"), faces[caps[1]]: REGIONS.index("tip")}
+    sides = [faces[k] for k in order[2:]]
+    middles = []
+    for face in sides:
+        lo, hi = gmsh.model.getParametrizationBounds(2, face)
+        middles.append(gmsh.model.getValue(2, face, 0.5 * (np.asarray(lo) + np.asarray(hi))))
+    centre = vertices.mean(axis=0)
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(np.asarray(vertices - centre, np.float32)),
+                        o3d.core.Tensor(np.asarray(triangles, np.uint32)))
+    answer = scene.compute_closest_points(o3d.core.Tensor(
+        np.asarray(np.array(middles) - centre, np.float32)))
+    found.update(zip(sides, regions[answer["primitive_ids"].numpy().astype(np.int64)].tolist(),
+                     strict=True))
+    if sorted(found.values()) != list(range(len(REGIONS))):
+        raise MeshError(f"{name}: the loft's faces map to the regions "
+                        f"{[REGIONS[r] if r >= 0 else 'none' for r in found.values()]}, "
+                        "expected each region once")
+    return found

@@ -1,0 +1,623 @@
+"""Surface reconstruction of a scanned blade: patches → B-spline surfaces → watertight STL.
+
+Input: a fused, cleaned cloud in the blade frame (m; x axial, y tangential, z = radius; a fused
+scan is brought there by :func:`~steamtwin.geometry.fidelity.align_to_nominal`). Steps:
+
+1. :func:`~steamtwin.geometry.segmentation.segment_blade`: normals, curvature, region growing,
+   labels root/tip/pressure_side/suction_side/leading_edge/trailing_edge.
+2. Parameters of the side points: the turn fraction round the section from the chordwise
+   position and the side (:func:`initial_parameters`), mapped to the arc-length fraction ``s``
+   counted anticlockwise from the rear chord end. Both are unchanged by the twist and taper of a
+   stacked blade (a similarity of each section).
+3. The side is one periodic cubic B-spline surface (:mod:`~steamtwin.geometry.bspline`) whose
+   starting knots are dense on the leading- and trailing-edge patches (``edge_knot_spans`` per
+   edge) and graded to ``side_knot_spacing`` along the sides, then refined adaptively; each cap
+   is a least-squares plane (a degree-1 patch).
+4. The side is sampled on a grid — chordwise spacing from the curvature (chord sag ``sag``,
+   at most ``chordwise_spacing``), ``span_spacing`` along the span, the grid lines through the
+   patch boundaries — triangulated as a closed tube between the rims where it meets the cap
+   planes, and closed by ear-clipped caps; trimesh checks that it is watertight, consistently
+   wound and of positive volume.
+
+The patch of every triangle is written into the binary STL's per-triangle attribute word
+(region index + 1 of :data:`~steamtwin.geometry.volume_mesh.REGIONS`, 0 = none); STL readers
+that do not know this ignore it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from steamtwin.geometry.bspline import AdaptiveSurfaceFit, PeriodicSurface, clamped_knots
+from steamtwin.geometry.fidelity import FidelityReport
+from steamtwin.geometry.profile import Blade
+from steamtwin.geometry.segmentation import (
+    SIDE_REGIONS,
+    CapPlane,
+    ReconstructionError,
+    Segmentation,
+    SegmentationSettings,
+    fit_cap_plane,
+    segment_blade,
+)
+from steamtwin.geometry.volume_mesh import REGIONS
+
+#: Sections where row metrics are compared: fractions of the span from the hub ("hub", "mid",
+#: "tip"), 5 % inside the ends so that the cut stays clear of the cap rims.
+METRIC_SECTIONS = (("hub", 0.05), ("mid", 0.5), ("tip", 0.95))
+#: Points per group when measuring arc length along the sections (median of each group).
+GROUP = 7
+
+
+@dataclass(frozen=True)
+class ReconstructionSettings:
+    """Hyper-parameters of :func:`reconstruct_blade` (lengths in m).
+
+    ``tolerance`` is the RMS fit residual aimed at by knot insertion; points farther than
+    ``outlier_distance`` (and 5 robust standard deviations) from their surface are left out of
+    the fits; ``max_breaks`` bounds the knots round the profile; ``side_knot_spacing`` and
+    ``edge_knot_spans`` set the starting knots, ``spanwise_knot_spacing`` the knots along the
+    span; ``chordwise_spacing``, ``sag`` and ``span_spacing`` control the triangulation.
+    """
+
+    segmentation: SegmentationSettings = field(default_factory=SegmentationSettings)
+    tolerance: float = 0.02e-3
+    outlier_distance: float = 0.1e-3
+    max_breaks: int = 2000
+    side_knot_spacing: float = 6.0e-3
+    edge_knot_spans: int = 3
+    spanwise_knot_spacing: float = 15e-3
+    chordwise_spacing: float = 0.5e-3
+    sag: float = 1e-6
+    span_spacing: float = 1e-3
+
+
+@dataclass(frozen=True)
+class Reconstruction:
+    """A reconstructed blade: a closed triangulation and what it was made from.
+
+    ``vertices`` (m), ``triangles`` (outward), ``regions`` per triangle (index into REGIONS);
+    ``points`` the input cloud (m) and ``segmentation`` its per-point results; ``residuals``
+    the signed distance of every labelled point from its fitted patch (m, positive outside, in
+    the section plane for the side; NaN for unassigned points) — the deviation map;
+    ``inliers`` the points the fits kept; ``parameters`` the side points' ``s`` (NaN
+    elsewhere); ``boundaries`` the ``s`` where the side patches meet; ``fit_history`` the
+    refinement rounds of the side; ``ring_parameters`` the ``s`` of the vertices of every ring
+    (the vertices are the rings of the side grid, root to tip; the caps reuse the end rings).
+    """
+
+    vertices: np.ndarray
+    triangles: np.ndarray
+    regions: np.ndarray
+    points: np.ndarray
+    segmentation: Segmentation
+    surface: PeriodicSurface
+    root: CapPlane
+    tip: CapPlane
+    residuals: np.ndarray
+    inliers: np.ndarray
+    parameters: np.ndarray
+    boundaries: dict[str, float]
+    fit_history: list[dict]
+    ring_parameters: np.ndarray
+
+    @property
+    def volume(self) -> float:
+        """Enclosed volume (m³)."""
+        import trimesh
+
+        return float(trimesh.Trimesh(self.vertices, self.triangles, process=False).volume)
+
+    def summary(self) -> dict:
+        """Counts and fit figures in report units (mm)."""
+        labels = self.segmentation.labels
+        fitted = ~np.isnan(self.residuals)
+        side = np.isin(labels, [REGIONS.index(name) for name in SIDE_REGIONS])
+        kept_side = side & self.inliers
+        return {
+            "points": len(labels),
+            "patch_points": self.segmentation.counts(),
+            "trimmed_by_fit": int(np.sum(fitted & ~self.inliers)),
+            "side_fit_rms_mm": float(np.sqrt(np.mean(self.residuals[kept_side] ** 2))) * 1e3,
+            "side_fit_max_mm": float(np.abs(self.residuals[kept_side]).max()) * 1e3,
+            "root_cap_rms_mm": self.root.rms * 1e3,
+            "tip_cap_rms_mm": self.tip.rms * 1e3,
+            "breakpoints": len(self.surface.breaks),
+            "fit_history": [{**h, "rms": h["rms"] * 1e3, "max": h["max"] * 1e3}
+                            for h in self.fit_history],
+            "triangles": len(self.triangles),
+            "volume_cm3": self.volume * 1e6,
+        }
+
+
+def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | None = None
+                      ) -> Reconstruction:
+    """Reconstruct a watertight blade from a cloud in the blade frame (m).
+
+    Raises :class:`~steamtwin.geometry.segmentation.ReconstructionError` naming the problem
+    (empty, too small or flat cloud; missing caps or edges; a surface that does not close).
+    """
+    settings = settings or ReconstructionSettings()
+    segmentation = segment_blade(points, settings.segmentation)
+    points = np.asarray(points, dtype=np.float64)
+    labels = segmentation.labels
+    have = np.isin(labels, [REGIONS.index(name) for name in SIDE_REGIONS])
+    s0, perimeter = initial_parameters(points, segmentation, have)
+    boundaries = patch_boundaries(s0[have], labels[have])
+    breaks = initial_breaks(boundaries, perimeter, settings)
+    root, tip = _refit_caps(points, labels, segmentation)
+    z = points[have, 2]
+    z_lo, z_hi = _span_range(points[have], root, tip)
+    interior = max(0, math.ceil((z_hi - z_lo) / settings.spanwise_knot_spacing) - 1)
+    z_knots = clamped_knots(z_lo, z_hi, interior)
+    fit = AdaptiveSurfaceFit(tolerance=settings.tolerance, max_breaks=settings.max_breaks,
+                             outlier_distance=settings.outlier_distance)
+    fit.fit(s0[have], z, points[have, :2], breaks, z_knots)
+    surface = fit.surface_
+    parameters = np.full(len(points), np.nan)
+    parameters[have] = fit.parameters_
+    boundaries = patch_boundaries(fit.parameters_, labels[have])
+    residuals = np.full(len(points), np.nan)
+    inliers = np.zeros(len(points), dtype=bool)
+    residuals[have] = fit.residuals_
+    inliers[have] = fit.inliers_
+    for plane, name, outward in ((root, "root", -1.0), (tip, "tip", 1.0)):
+        on = labels == REGIONS.index(name)
+        residuals[on] = outward * (points[on, 2] - plane.height(points[on, :2]))
+        inliers[on] = np.abs(residuals[on]) <= max(5.0 * plane.rms, settings.outlier_distance)
+    vertices, triangles, regions, ring_s = triangulate(surface, root, tip, boundaries, settings)
+    check_closed(vertices, triangles)
+    return Reconstruction(vertices=vertices, triangles=triangles, regions=regions,
+                          points=points, segmentation=segmentation, surface=surface, root=root,
+                          tip=tip, residuals=residuals, inliers=inliers, parameters=parameters,
+                          boundaries=boundaries, fit_history=fit.history_,
+                          ring_parameters=ring_s)
+
+
+# --- parameters and knots ------------------------------------------------------------------------
+
+
+def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.ndarray
+                       ) -> tuple[np.ndarray, float]:
+    """Start parameter ``s`` ∈ [0, 1) of the points under ``mask`` (NaN elsewhere) and the
+    median section perimeter (m).
+
+    Going round anticlockwise from the rear chord end, the turn fraction θ = (1 − ξ)/2 above
+    the camber line (suction side) and (1 + ξ)/2 below it, with ξ the chordwise position:
+    monotone round the section, unchanged by twist and taper, and continuous at both ends of
+    the chord whichever side a point there is counted to. θ is then
+    mapped to the arc-length fraction measured on thin slabs spread over the span: the medians
+    of their points in θ order, in groups of :data:`GROUP` (robust to stray points), give a
+    polyline whose cumulative length is the arc length; the median over the slabs is used.
+    """
+    theta = np.full(len(points), np.nan)
+    xi = np.clip(segmentation.chordwise[mask], 0.0, 1.0)
+    suction = segmentation.camber[mask] >= 0.0
+    theta[mask] = np.mod(np.where(suction, 0.5 * (1.0 - xi), 0.5 * (1.0 + xi)), 1.0)
+    z = points[mask, 2]
+    grid = np.linspace(0.0, 1.0, 2001)
+    height = 2.0 * segmentation.spacing
+    fractions, perimeters = [], []
+    for centre in np.linspace(np.percentile(z, 10.0), np.percentile(z, 90.0), 9):
+        members = np.flatnonzero(mask)[np.abs(z - centre) < height]
+        if len(members) < 200:
+            continue
+        order = members[np.argsort(theta[members])]
+        groups = len(order) // GROUP
+        xy = np.median(points[order[: GROUP * groups], :2].reshape(groups, GROUP, 2), axis=1)
+        angle = theta[order[: GROUP * groups]].reshape(groups, GROUP).mean(axis=1)
+        steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
+        length = np.concatenate([[0.0], np.cumsum(steps)])
+        knots = np.concatenate([[0.0], angle, [1.0]])
+        values = np.concatenate([[0.0], length[:-1] + 0.5 * steps[-1], [length[-1]]])
+        fractions.append(np.interp(grid, knots, values / length[-1]))
+        perimeters.append(length[-1])
+    if not fractions:
+        raise ReconstructionError("too few side points to order them round the section")
+    mapping = np.maximum.accumulate(np.median(fractions, axis=0))
+    mapping = (mapping - mapping[0]) / (mapping[-1] - mapping[0])
+    s = np.full(len(points), np.nan)
+    s[mask] = np.mod(np.interp(theta[mask], grid, mapping), 1.0)
+    return s, float(np.median(perimeters))
+
+
+def _circular(s: np.ndarray, centre: float) -> np.ndarray:
+    """``s`` shifted into [centre − 0.5, centre + 0.5)."""
+    return np.mod(s - centre + 0.5, 1.0) + centre - 0.5
+
+
+def patch_boundaries(s: np.ndarray, labels: np.ndarray) -> dict[str, float]:
+    """Parameters ``s`` where the side patches meet, keyed ``"<before>|<after>"`` going round
+    the profile from the trailing edge (suction side, leading edge, pressure side): each
+    boundary is the threshold that best separates the two patches' points."""
+    ids = {name: REGIONS.index(name) for name in SIDE_REGIONS}
+    for name in ("leading_edge", "trailing_edge"):
+        if np.sum(labels == ids[name]) < 10:
+            raise ReconstructionError(f"no {name.replace('_', ' ')} found: fewer than 10 points "
+                                      "of high curvature at that end of the chord")
+    te = float(np.median(_circular(s[labels == ids["trailing_edge"]], 0.0)))
+    le = float(np.mod(np.median(_circular(s[labels == ids["leading_edge"]], 0.5)), 1.0))
+    order = ["trailing_edge", "suction_side", "leading_edge", "pressure_side"]
+    centres = {"trailing_edge": te, "leading_edge": le}
+    boundaries = {}
+    for a, b in zip(order, order[1:] + order[:1], strict=True):
+        # measure s from a quarter turn before the edge patch of the pair (edges are narrow)
+        base = centres[a] - 0.25 if a in centres else centres[b] - 0.75
+        sa = np.mod(s[labels == ids[a]] - base, 1.0)
+        sb = np.mod(s[labels == ids[b]] - base, 1.0)
+        boundaries[f"{a}|{b}"] = float(np.mod(base + _separation(sa, sb), 1.0))
+    return boundaries
+
+
+def _separation(before: np.ndarray, after: np.ndarray) -> float:
+    """Threshold t maximising #(before < t) + #(after ≥ t)."""
+    before, after = np.sort(before), np.sort(after)
+    candidates = np.concatenate([before, after])
+    score = np.searchsorted(before, candidates) + len(after) - np.searchsorted(after, candidates)
+    return float(candidates[np.argmax(score)])
+
+
+def initial_breaks(boundaries: dict[str, float], perimeter: float,
+                   settings: ReconstructionSettings) -> np.ndarray:
+    """Starting breakpoints in [0, 1): ``edge_knot_spans`` spans across each edge patch,
+    growing by half the distance from the edge up to ``side_knot_spacing`` along the sides."""
+    grid = np.linspace(0.0, 1.0, 20_001)
+    spacing = np.full(len(grid), settings.side_knot_spacing / perimeter)
+    for edge in ("trailing_edge", "leading_edge"):
+        lo = next(v for k, v in boundaries.items() if k.endswith(f"|{edge}"))
+        hi = next(v for k, v in boundaries.items() if k.startswith(f"{edge}|"))
+        width = np.mod(hi - lo, 1.0)
+        centre = lo + 0.5 * width
+        outside = np.maximum(np.abs(_circular(grid, centre) - centre) - 0.5 * width, 0.0)
+        spacing = np.minimum(spacing, width / settings.edge_knot_spans + 0.5 * outside)
+    density = np.concatenate([[0.0], np.cumsum(0.5 * (1 / spacing[1:] + 1 / spacing[:-1])
+                                               * np.diff(grid))])
+    count = max(8, math.ceil(density[-1]))
+    return np.interp(np.arange(count) * density[-1] / count, density, grid)
+
+
+def _refit_caps(points: np.ndarray, labels: np.ndarray, segmentation: Segmentation
+                ) -> tuple[CapPlane, CapPlane]:
+    """Cap planes fitted to all points labelled root or tip."""
+    planes = []
+    for name in ("root", "tip"):
+        on = labels == REGIONS.index(name)
+        planes.append(fit_cap_plane(points[on]) if on.sum() >= 3
+                      else getattr(segmentation, name))
+    return planes[0], planes[1]
+
+
+def _span_range(side: np.ndarray, root: CapPlane, tip: CapPlane) -> tuple[float, float]:
+    """z range (m) of the side surface: the side points and the cap planes over them."""
+    lo = min(side[:, 2].min(), root.height(side[:, :2]).min())
+    hi = max(side[:, 2].max(), tip.height(side[:, :2]).max())
+    margin = 1e-3 * (hi - lo)
+    return lo - margin, hi + margin
+
+
+# --- triangulation -------------------------------------------------------------------------------
+
+
+def _rim(surface: PeriodicSurface, plane: CapPlane, s: np.ndarray, start: float) -> np.ndarray:
+    """z of the side surface's intersection with a cap plane at every ``s``."""
+    z = np.full(len(s), start)
+    for _ in range(8):  # fixed point: the plane's slope is tiny
+        z = plane.height(surface(s, z))
+    return z
+
+
+def ring_parameters(surface: PeriodicSurface, levels: np.ndarray, boundaries: dict[str, float],
+                    spacing: float, sag: float) -> np.ndarray:
+    """Parameters ``s`` of the vertices round each section: chord sag ≤ ``sag`` on the most
+    curved of the sections at ``levels`` (spacing √(8 r sag), at most ``spacing``, m), with
+    vertices exactly on the patch boundaries."""
+    fine = np.linspace(0.0, 1.0, 40_000, endpoint=False)
+    curvature = np.zeros(len(fine))
+    speed = np.zeros(len(fine))
+    for z in levels:
+        d1, d2 = surface(fine, z, ds=1), surface(fine, z, ds=2)
+        norm = np.linalg.norm(d1, axis=1)
+        curvature = np.maximum(curvature,
+                               np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]) / norm**3)
+        speed = np.maximum(speed, norm)
+    # sag-limited, but never below 1/20 of the spacing (a fold of a failed fit would otherwise
+    # ask for millions of vertices)
+    step = np.clip(np.sqrt(8.0 * sag / np.maximum(curvature, 1e-12)), spacing / 20.0, spacing)
+    density = np.concatenate([[0.0], np.cumsum(speed / step)]) / len(fine)
+    count = max(16, math.ceil(density[-1]))
+    s = np.interp(np.arange(count) * density[-1] / count, density,
+                  np.append(fine, 1.0))
+    fixed = np.sort(np.mod(np.array(list(boundaries.values())), 1.0))
+    gap = 0.3 / count
+    distance = np.abs(np.mod(s[:, None] - fixed[None, :] + 0.5, 1.0) - 0.5)
+    s = s[distance.min(axis=1) > gap]
+    return np.sort(np.concatenate([s, fixed]))
+
+
+def triangulate(surface: PeriodicSurface, root: CapPlane, tip: CapPlane,
+                boundaries: dict[str, float], settings: ReconstructionSettings
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Closed triangulation of the side surface between the cap planes, and the caps.
+
+    Returns ``(vertices (n, 3) ring by ring, triangles (m, 3) outward, region per triangle,
+    s of the vertices of a ring)``.
+    """
+    from steamtwin.geometry.profile import GeometryError, _cap_triangles
+
+    z_mid = 0.5 * (surface.z_knots[0] + surface.z_knots[-1])
+    probe = np.linspace(0.0, 1.0, 64, endpoint=False)
+    z_root = float(np.mean(_rim(surface, root, probe, z_mid)))
+    z_tip = float(np.mean(_rim(surface, tip, probe, z_mid)))
+    if not z_tip > z_root:
+        raise ReconstructionError("the tip cap does not lie above the root cap")
+    s = ring_parameters(surface, np.linspace(z_root, z_tip, 5), boundaries,
+                        settings.chordwise_spacing, settings.sag)
+    n = len(s)
+    bottom, top = _rim(surface, root, s, z_root), _rim(surface, tip, s, z_tip)
+    levels = max(2, math.ceil((z_tip - z_root) / settings.span_spacing) + 1)
+    fraction = np.linspace(0.0, 1.0, levels)
+    z = bottom[None, :] + fraction[:, None] * (top - bottom)[None, :]
+    ss = np.broadcast_to(s, z.shape).ravel()
+    vertices = np.column_stack([surface(ss, z.ravel()), z.ravel()])
+    k = np.arange(n)
+    tris = []
+    for level in range(levels - 1):
+        a, b = level * n + k, level * n + (k + 1) % n
+        tris += [np.column_stack([a, b, b + n]), np.column_stack([a, b + n, a + n])]
+    side = np.concatenate(tris)
+    middle = np.mod(s + 0.5 * np.diff(np.append(s, 1.0 + s[0])), 1.0)
+    column_region = _regions_at(middle, boundaries)
+    side_region = np.tile(np.repeat(column_region[None, :], 2, axis=0).ravel(), levels - 1)
+    try:
+        cap = _cap_triangles(vertices[:n, :2])
+        cap_top = _cap_triangles(vertices[-n:, :2])
+    except GeometryError as error:
+        raise ReconstructionError(f"a cap outline of the fitted surface is not a simple "
+                                  f"polygon ({error}): the fitted side folds over itself — are "
+                                  "the sections too strongly cambered for the chordwise "
+                                  "parametrisation, or the cloud not in the blade frame?"
+                                  ) from None
+    triangles = np.concatenate([side, cap[:, ::-1], cap_top + (levels - 1) * n])
+    regions = np.concatenate([side_region, np.full(len(cap), REGIONS.index("root")),
+                              np.full(len(cap_top), REGIONS.index("tip"))])
+    return vertices, triangles.astype(np.int64), regions.astype(np.int64), s
+
+
+def _regions_at(s: np.ndarray, boundaries: dict[str, float]) -> np.ndarray:
+    """Side region (REGIONS index) at parameters ``s``."""
+    starts = sorted((value, key.split("|")[1]) for key, value in boundaries.items())
+    values = np.array([v for v, _ in starts])
+    names = [name for _, name in starts]
+    position = np.searchsorted(values, np.mod(s, 1.0), side="right") - 1  # −1: before the first
+    return np.array([REGIONS.index(names[p]) for p in position])
+
+
+def check_closed(vertices: np.ndarray, triangles: np.ndarray) -> None:
+    """Raise :class:`ReconstructionError` unless the triangulation is a watertight, consistently
+    wound surface enclosing a positive volume."""
+    import trimesh
+
+    mesh = trimesh.Trimesh(vertices, triangles, process=False)
+    problems = []
+    if not mesh.is_watertight:
+        problems.append("not watertight")
+    if not mesh.is_winding_consistent:
+        problems.append("inconsistent winding")
+    if not mesh.volume > 0.0:
+        problems.append(f"volume {mesh.volume:.3g} m³ is not positive")
+    if problems:
+        raise ReconstructionError("the reconstructed surface is " + ", ".join(problems))
+
+
+def section_loops(vertices: np.ndarray, triangles: np.ndarray, height: float
+                  ) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Closed loops where the plane z = ``height`` cuts a closed triangle mesh, longest first.
+
+    Each loop is ``(points (n, 2) x-y in m, face (n,))``: the piece from point i to point i + 1
+    lies on triangle ``face[i]``. A vertex on the plane counts as above it, so every cut
+    triangle has exactly two cut edges; each edge's point is computed once and the loops follow
+    the mesh's own edge-face topology.
+    """
+    above = vertices[:, 2] >= height
+    corners = triangles[:, [[0, 1], [1, 2], [2, 0]]]  # (m, 3, 2)
+    cut = above[corners[..., 0]] != above[corners[..., 1]]
+    faces = np.flatnonzero(cut.sum(axis=1) == 2)
+    if faces.size == 0:
+        raise ReconstructionError(f"the mesh does not reach the plane z = {height:.6g} m")
+    pairs = np.sort(corners[faces][cut[faces]].reshape(-1, 2), axis=1)  # two cut edges per face
+    unique, edge_of = np.unique(pairs, axis=0, return_inverse=True)
+    edge_of = edge_of.reshape(-1, 2)
+    a, b = vertices[unique[:, 0]], vertices[unique[:, 1]]
+    t = (height - a[:, 2]) / (b[:, 2] - a[:, 2])
+    crossing = a[:, :2] + t[:, None] * (b[:, :2] - a[:, :2])
+    # every cut edge joins the two cut faces that share it
+    if np.any(np.bincount(edge_of.ravel(), minlength=len(unique)) != 2):
+        raise ReconstructionError(f"the cut at z = {height:.6g} m is not closed: the mesh has "
+                                  "holes")
+    order = np.argsort(edge_of.ravel(), kind="stable")
+    owners = (order // 2).reshape(-1, 2)  # the two cut faces of every cut edge
+    visited = np.zeros(len(faces), dtype=bool)
+    loops = []
+    for start in range(len(faces)):
+        if visited[start]:
+            continue
+        chain, face_ids = [], []
+        face, edge = start, edge_of[start, 0]
+        while not visited[face]:
+            visited[face] = True
+            chain.append(edge)
+            face_ids.append(faces[face])
+            edge = edge_of[face, 1] if edge_of[face, 0] == edge else edge_of[face, 0]
+            face = owners[edge, 1] if owners[edge, 0] == face else owners[edge, 0]
+        loops.append((crossing[chain], np.array(face_ids)))
+    return sorted(loops, key=lambda loop: -len(loop[0]))
+
+
+# --- files ---------------------------------------------------------------------------------------
+
+
+def write_stl(reconstruction: Reconstruction, path: str | Path) -> Path:
+    """Write the triangulation as binary STL (m) with the region of each triangle in its
+    attribute word (REGIONS index + 1)."""
+    import trimesh
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    mesh = trimesh.Trimesh(reconstruction.vertices, reconstruction.triangles, process=False)
+    data = bytearray(trimesh.exchange.stl.export_stl(mesh))
+    records = np.frombuffer(data, dtype=np.uint8, offset=84).reshape(-1, 50)
+    records[:, 48:50] = np.frombuffer((reconstruction.regions + 1).astype("<u2").tobytes(),
+                                      dtype=np.uint8).reshape(-1, 2)
+    path.write_bytes(bytes(data))
+    return path
+
+
+def read_stl(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Vertices (m), triangles and regions (None when the file carries none) of a binary or
+    ASCII STL; vertices are merged. Raises :class:`ReconstructionError` naming the file."""
+    import trimesh
+
+    path = Path(path)
+    if not path.is_file():
+        raise ReconstructionError(f"{path}: no such STL file")
+    try:
+        mesh = trimesh.load_mesh(path, file_type="stl", process=False)
+    except Exception as error:  # trimesh raises assorted errors on malformed files
+        raise ReconstructionError(f"{path}: not a readable STL: {error}") from None
+    if len(mesh.faces) == 0:
+        raise ReconstructionError(f"{path}: the STL holds no triangles")
+    regions = None
+    raw = path.read_bytes()
+    count = int.from_bytes(raw[80:84], "little") if len(raw) >= 84 else -1
+    if len(raw) == 84 + 50 * count == 84 + 50 * len(mesh.faces):
+        words = np.frombuffer(raw, dtype=np.uint8, offset=84).reshape(-1, 50)[:, 48:50]
+        attribute = words.copy().view("<u2").ravel().astype(np.int64)
+        if np.all((attribute >= 1) & (attribute <= len(REGIONS))):
+            regions = attribute - 1
+    mesh.merge_vertices()
+    return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, np.int64), regions
+
+
+# --- fidelity ------------------------------------------------------------------------------------
+
+
+def reconstruction_fidelity(blade: Blade, vertices: np.ndarray, triangles: np.ndarray,
+                            samples: int = 100_000, rng: np.random.Generator | int | None = 0,
+                            extra: dict | None = None) -> FidelityReport:
+    """Deviation of a reconstructed surface from the exact blade and its row metrics.
+
+    The deviation is measured at ``samples`` points spread uniformly over the reconstructed
+    triangles (and back from as many on the exact surface for the Hausdorff distance); row
+    metrics of the sections at :data:`METRIC_SECTIONS` against the exact sections there — the
+    report's ``truth``/``measured`` are the mid-span ones, all three are in ``extra``.
+    """
+    from steamtwin.geometry.fidelity import (
+        section_metrics,
+        section_pitch,
+        surface_deviation,
+        surface_samples,
+        truth_section,
+    )
+
+    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    points = surface_samples(vertices, triangles, samples, rng)
+    deviation = surface_deviation(blade, points, vertices, triangles, samples=samples, rng=rng)
+    sections = {}
+    for name, fraction in METRIC_SECTIONS:
+        radius = blade.design.hub_radius + fraction * blade.design.span
+        pitch = section_pitch(blade, radius)
+        truth = section_metrics(truth_section(blade, radius), pitch)
+        measured = section_metrics(section_loops(vertices, triangles, radius)[0][0], pitch)
+        sections[name] = (radius, truth, measured)
+    _, truth, measured = sections["mid"]
+    report = FidelityReport(blade.row, deviation, truth, measured, dict(extra or {}))
+    report.extra["sections"] = [
+        {"section": name, "radius_mm": radius * 1e3,
+         "metrics": FidelityReport(blade.row, deviation, t, m, {}).metric_rows()}
+        for name, (radius, t, m) in sections.items()]
+    return report
+
+
+def write_reconstruction_report(report: FidelityReport, path: str | Path) -> tuple[Path, Path]:
+    """:func:`~steamtwin.geometry.fidelity.write_report`, with the hub and tip metrics added to
+    the CSV as ``<metric>@hub`` / ``<metric>@tip`` rows."""
+    import csv
+
+    from steamtwin.geometry.fidelity import write_report
+
+    json_path, csv_path = write_report(report, path)
+    with csv_path.open("a", newline="", encoding="utf-8") as handle:
+        writer = csv.DictWriter(handle, fieldnames=["metric", "unit", "truth", "measured",
+                                                    "error"])
+        for section in report.extra.get("sections", []):
+            if section["section"] == "mid":
+                continue
+            for row in section["metrics"]:
+                writer.writerow({**row, "metric": f"{row['metric']}@{section['section']}"})
+    return json_path, csv_path
+
+
+def write_deviation_map(reconstruction: Reconstruction, path: str | Path,
+                        blade: Blade | None = None) -> Path:
+    """PNG of the side unrolled (arc length round the mid-span section from the trailing edge ×
+    radius, mm): the fit residual of every side point and, with the exact ``blade``, the
+    distance of the reconstructed surface from it; colours in mm, patch boundaries marked."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from steamtwin.geometry.fidelity import blade_distance
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    surface = reconstruction.surface
+    fine = np.linspace(0.0, 1.0, 4001)
+    curve = surface(fine, 0.5 * (surface.z_knots[0] + surface.z_knots[-1]))
+    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(curve, axis=0), axis=1))])
+
+    def unrolled(s: np.ndarray) -> np.ndarray:
+        return np.interp(s, fine, arc) * 1e3
+
+    panels = 2 if blade is not None else 1
+    figure, axes = plt.subplots(panels, 1, figsize=(11, 3.6 * panels), squeeze=False)
+    chosen = ~np.isnan(reconstruction.parameters) & reconstruction.inliers
+    residual = reconstruction.residuals[chosen] * 1e3
+    limit = float(np.percentile(np.abs(residual), 99.0))
+    image = axes[0, 0].scatter(unrolled(reconstruction.parameters[chosen]),
+                               reconstruction.points[chosen, 2] * 1e3, c=residual, s=1.0,
+                               cmap="coolwarm", vmin=-limit, vmax=limit, rasterized=True)
+    figure.colorbar(image, ax=axes[0, 0], label="fit residual (mm, + outside)")
+    axes[0, 0].set_title("side points: distance from the fitted B-spline surface")
+    if blade is not None:
+        columns = reconstruction.ring_parameters
+        rings = reconstruction.vertices.reshape(-1, len(columns), 3)
+        deviation = blade_distance(blade, rings.reshape(-1, 3)).reshape(rings.shape[:2]) * 1e3
+        image = axes[1, 0].pcolormesh(np.broadcast_to(unrolled(columns), deviation.shape),
+                                      rings[:, :, 2] * 1e3, deviation, shading="gouraud",
+                                      cmap="viridis", vmin=0.0,
+                                      vmax=float(np.percentile(deviation, 99.5)),
+                                      rasterized=True)
+        figure.colorbar(image, ax=axes[1, 0], label="deviation (mm)")
+        axes[1, 0].set_title(f"reconstructed surface: distance from the exact blade "
+                             f"{blade.row}")
+    starts = sorted((value, key.split("|")[1]) for key, value in
+                    reconstruction.boundaries.items())
+    for ax in axes[:, 0]:
+        for k, (value, name) in enumerate(starts):
+            end = starts[k + 1][0] if k + 1 < len(starts) else starts[0][0] + 1.0
+            ax.axvline(float(unrolled(np.array([value]))[0]), color="k", lw=0.5, ls="--")
+            middle = float(unrolled(np.array([np.mod(0.5 * (value + end), 1.0)]))[0])
+            ax.annotate(name.replace("_", " "), (middle, 1.0), ha="center", va="bottom",
+                        xycoords=("data", "axes fraction"), fontsize=7)
+        ax.set_xlim(0.0, arc[-1] * 1e3)
+        ax.set_xlabel("arc length from the trailing edge, anticlockwise (mm)")
+        ax.set_ylabel("radius z (mm)")
+    figure.tight_layout()
+    figure.savefig(path, dpi=120)
+    plt.close(figure)
+    return path

@@ -1,0 +1,479 @@
+"""Normals, curvature and region growing of a blade cloud into labelled surface patches.
+
+The cloud is in the blade frame (m): x axial, y tangential, z = radius, sections are planes
+z = const. Steps:
+
+1. k-NN PCA per point (:func:`~steamtwin.geometry.preprocess.local_frames`, the estimate of
+   open3d's ``estimate_normals``): normal and surface variation λ0 / (λ0 + λ1 + λ2) (Pauly, Gross
+   & Kobbelt 2002). Normals are oriented by propagation along a minimum spanning tree
+   (Hoppe et al. 1992, SIGGRAPH) whose edges join only *tangential* neighbours — on a thin
+   trailing edge the nearest points of the opposite face lie along the normal and must not pass
+   their orientation on — then each connected part is turned outward by a majority vote.
+2. Largest principal curvature (1/m) from the least-squares shape operator that maps position
+   differences to normal differences over the neighbours (Kalogerakis et al. 2007, "Robust
+   statistical estimation of curvature on discretized surfaces", SGP).
+3. Region growing (Rabbani, van den Heuvel & Vosselman 2006, ISPRS V/5; PCL's
+   ``RegionGrowing``): seeds in order of increasing surface variation, a region grows to the
+   neighbours whose normal deviates less than the smoothness angle from the current point's and
+   continues from those below the curvature threshold.
+4. Labels (:data:`~steamtwin.geometry.volume_mesh.REGIONS`): the large segments with normals
+   along ∓z at the low/high end of the span are the root (hub) and tip caps; a plane fitted to
+   each, and every point on it, gives the cap patches. On a blade the side is one smooth segment
+   (neighbouring normals turn by less than the smoothness angle round the leading edge), so the
+   side points are labelled one by one: leading or trailing edge where the curvature radius is
+   below ``edge_radius_ratio`` × chord near the front or rear end of the section's chord — the
+   line from its most upstream to its most downstream point —, otherwise suction or pressure
+   side by the side of the camber line (midway between the two faces) they lie on. Next to the
+   cap rims, where neighbourhoods straddle the crease, a point takes the label of the nearest
+   point further along the span. Isolated points and points beyond the cap planes stay
+   unassigned; :meth:`Segmentation.counts` accounts for every point.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from steamtwin.geometry.pointcloud import PointCloudError, check_point_cloud
+from steamtwin.geometry.volume_mesh import REGIONS
+
+#: Label of points that belong to no patch.
+UNASSIGNED = -1
+#: Fewest points a blade cloud must have to be reconstructed.
+MIN_POINTS = 2000
+SIDE_REGIONS = ("pressure_side", "suction_side", "leading_edge", "trailing_edge")
+#: A point whose k-th neighbour is farther than this multiple of the median is isolated.
+ISOLATED = 3.0
+
+
+class ReconstructionError(ValueError):
+    """A cloud that cannot be segmented or reconstructed; the message names the problem."""
+
+
+@dataclass(frozen=True)
+class SegmentationSettings:
+    """Hyper-parameters of :func:`segment_blade` (angles in rad, lengths in m).
+
+    ``curvature_threshold`` bounds the surface variation of seed points (PCL's
+    ``setCurvatureThreshold``); ``edge_radius_ratio`` × chord is the largest radius of curvature
+    counted as leading/trailing edge; ``leading_band`` and ``trailing_band`` are the chordwise
+    fractions (0 at the front, 1 at the rear) inside which edges are looked for.
+    """
+
+    neighbours: int = 20
+    smoothness_angle: float = math.radians(8.0)
+    curvature_threshold: float = 0.02
+    min_segment_size: int = 50
+    edge_radius_ratio: float = 0.1
+    leading_band: float = 0.2
+    trailing_band: float = 0.9
+
+
+@dataclass(frozen=True)
+class CapPlane:
+    """A flat end face z = a + b·x + c·y (a in m) and the RMS of its points about it (m)."""
+
+    coefficients: np.ndarray
+    rms: float
+
+    def height(self, xy: np.ndarray) -> np.ndarray:
+        """z (m) of the plane above the points ``xy`` (n, 2)."""
+        a, b, c = self.coefficients
+        return a + b * xy[:, 0] + c * xy[:, 1]
+
+
+@dataclass(frozen=True)
+class Segmentation:
+    """Per-point results of :func:`segment_blade`.
+
+    ``normals`` outward (n, 3); ``variation`` surface variation; ``curvature`` largest principal
+    curvature (1/m); ``segments`` region-growing segment (largest first, −1 for points of
+    segments below the minimum size); ``labels`` index into REGIONS or −1 (unassigned);
+    ``spacing`` median distance to the nearest point (m); ``chord`` median distance between
+    the sections' front and rear ends (:func:`section_chords`, m);
+    ``chordwise`` position along the chord of each point's section (0 front, 1 rear end) and
+    ``camber`` its offset from the camber line in chords (> 0 on the suction side), both NaN
+    off the side.
+    """
+
+    normals: np.ndarray
+    variation: np.ndarray
+    curvature: np.ndarray
+    segments: np.ndarray
+    labels: np.ndarray
+    root: CapPlane
+    tip: CapPlane
+    spacing: float
+    chord: float
+    chordwise: np.ndarray
+    camber: np.ndarray
+    extra: dict = field(default_factory=dict)
+
+    def counts(self) -> dict[str, int]:
+        """Points per patch and unassigned points (they add up to the cloud size)."""
+        counts = {name: int(np.sum(self.labels == k)) for k, name in enumerate(REGIONS)}
+        counts["unassigned"] = int(np.sum(self.labels == UNASSIGNED))
+        return counts
+
+
+def check_blade_cloud(points: np.ndarray, source: str = "point cloud") -> np.ndarray:
+    """Validate a cloud for reconstruction: finite, at least :data:`MIN_POINTS` points, not flat.
+
+    Raises :class:`ReconstructionError` naming the problem.
+    """
+    try:
+        points = check_point_cloud(points, source)
+    except PointCloudError as error:
+        raise ReconstructionError(str(error)) from None
+    if len(points) < MIN_POINTS:
+        raise ReconstructionError(f"{source}: only {len(points)} points; reconstructing a "
+                                  f"blade needs at least {MIN_POINTS}")
+    centred = points - points.mean(axis=0)
+    singular = np.linalg.svd(centred[:: max(1, len(points) // 20000)], compute_uv=False)
+    if singular[2] < 1e-3 * singular[0]:
+        raise ReconstructionError(f"{source}: the cloud is flat (all points within "
+                                  f"{singular[2] / math.sqrt(len(centred)) * 1e3:.3g} mm of a "
+                                  "plane), not a blade")
+    return points
+
+
+def oriented_normals(points: np.ndarray, neighbours: int = 20
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Neighbour indices (n, k), outward unit normals (n, 3) and surface variation (n,).
+
+    Orientation: Hoppe et al. (1992) propagation over a minimum spanning tree with weights
+    1 − |n_i·n_j|, restricted to tangential neighbour pairs (the chord between them within 30°
+    of both tangent planes); every connected part of the tree then points the majority of its
+    normals away from the cloud's centroid.
+    """
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import (
+        breadth_first_order,
+        connected_components,
+        minimum_spanning_tree,
+    )
+
+    from steamtwin.geometry.preprocess import local_frames
+
+    index, normals, variation = local_frames(points, neighbours)
+    count = len(points)
+    i = np.repeat(np.arange(count), index.shape[1] - 1)
+    j = index[:, 1:].ravel()
+    chord = points[j] - points[i]
+    length = np.linalg.norm(chord, axis=1)
+    along_i = np.abs(np.einsum("ij,ij->i", normals[i], chord))
+    along_j = np.abs(np.einsum("ij,ij->i", normals[j], chord))
+    tangential = (length > 0.0) & (along_i < 0.5 * length) & (along_j < 0.5 * length)
+    lo = np.minimum(i, j)[tangential]
+    hi = np.maximum(i, j)[tangential]
+    _, unique = np.unique(lo * count + hi, return_index=True)
+    lo, hi = lo[unique], hi[unique]
+    weight = 1.0 - np.abs(np.einsum("ij,ij->i", normals[lo], normals[hi])) + 1e-9
+    tree = minimum_spanning_tree(coo_array((weight, (lo, hi)), shape=(count, count)).tocsr())
+    parts, part = connected_components(tree, directed=False)
+    # one breadth-first pass over the forest: a virtual root joined to one node of every part
+    first = np.unique(part, return_index=True)[1]
+    tree = tree.tocoo()
+    rows = np.concatenate([tree.row, np.full(parts, count)])
+    cols = np.concatenate([tree.col, first])
+    forest = coo_array((np.ones(len(rows)), (rows, cols)), shape=(count + 1, count + 1)).tocsr()
+    order, predecessor = breadth_first_order(forest, count, directed=False)
+    order = order[1:]
+    parent = predecessor[order]
+    agree = np.ones(len(order), dtype=bool)
+    inner = parent != count
+    agree[inner] = np.einsum("ij,ij->i", normals[order[inner]], normals[parent[inner]]) >= 0.0
+    flipped = [False] * (count + 1)  # parents come before their children in ``order``
+    for node, up, same in zip(order.tolist(), parent.tolist(), agree.tolist(), strict=True):
+        flipped[node] = flipped[up] != (not same)
+    flip = np.array(flipped[:count])
+    normals = np.where(flip[:, None], -normals, normals)
+    outward = np.einsum("ij,ij->i", normals, points - points.mean(axis=0)) > 0.0
+    votes = np.bincount(part, weights=np.where(outward, 1.0, -1.0), minlength=parts)
+    normals = np.where((votes[part] < 0.0)[:, None], -normals, normals)
+    return index, normals, variation
+
+
+def principal_curvature(points: np.ndarray, normals: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """Largest absolute principal curvature (1/m) of every point.
+
+    Least-squares shape operator S (2×2, tangent plane) with Δn ≈ S Δp over the neighbours
+    (Kalogerakis et al. 2007), symmetrised; its largest absolute eigenvalue.
+    """
+    neighbour = index[:, 1:]
+    helper = np.where(np.abs(normals[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    t1 = np.cross(normals, helper)
+    t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+    t2 = np.cross(normals, t1)
+    curvature = np.empty(len(points))
+    for start in range(0, len(points), 20_000):  # bounded memory
+        sl = slice(start, start + 20_000)
+        dp = points[neighbour[sl]] - points[sl, None, :]
+        dn = normals[neighbour[sl]] - normals[sl, None, :]
+        basis = np.stack([t1[sl], t2[sl]], axis=2)  # (m, 3, 2)
+        u = np.einsum("mki,mij->mkj", dp, basis)
+        w = np.einsum("mki,mij->mkj", dn, basis)
+        gram = np.einsum("mki,mkj->mij", u, u) + 1e-30 * np.eye(2)
+        shape = np.linalg.solve(gram, np.einsum("mki,mkj->mij", u, w))
+        shape = 0.5 * (shape + np.transpose(shape, (0, 2, 1)))
+        curvature[sl] = np.abs(np.linalg.eigvalsh(shape)).max(axis=1)
+    return curvature
+
+
+def region_growing(normals: np.ndarray, variation: np.ndarray, index: np.ndarray,
+                   smoothness_angle: float = math.radians(8.0),
+                   curvature_threshold: float = 0.02, min_size: int = 50) -> np.ndarray:
+    """Segment per point (largest segment 0, …), −1 for points of segments below ``min_size``.
+
+    PCL's region growing (Rabbani et al. 2006): unlabelled points start regions in order of
+    increasing surface variation; a point's neighbours (``index``) join its region when their
+    oriented normals deviate less than ``smoothness_angle`` (rad) from its own, and those with
+    surface variation below ``curvature_threshold`` continue the growth.
+    """
+    neighbour = index[:, 1:]
+    smooth = np.einsum("ij,ikj->ik", normals, normals[neighbour]) > math.cos(smoothness_angle)
+    allowed = [row[mask].tolist() for row, mask in zip(neighbour, smooth, strict=True)]
+    grows = (variation < curvature_threshold).tolist()
+    segment = [-1] * len(normals)
+    current = 0
+    for start in np.argsort(variation, kind="stable").tolist():
+        if segment[start] >= 0:
+            continue
+        segment[start] = current
+        queue = [start]  # the first point of a region is a seed whatever its curvature
+        while queue:
+            point = queue.pop()
+            for other in allowed[point]:
+                if segment[other] < 0:
+                    segment[other] = current
+                    if grows[other]:
+                        queue.append(other)
+        current += 1
+    segment = np.array(segment)
+    sizes = np.bincount(segment)
+    rank = np.full(len(sizes), -1)
+    big = np.flatnonzero(sizes >= min_size)
+    rank[big[np.argsort(-sizes[big], kind="stable")]] = np.arange(len(big))
+    return rank[segment]
+
+
+def fit_cap_plane(points: np.ndarray) -> CapPlane:
+    """Least-squares plane z = a + b x + c y through cap points, refitted without the points
+    beyond 4 robust standard deviations (1.4826 × median absolute residual)."""
+    design = np.column_stack([np.ones(len(points)), points[:, 0], points[:, 1]])
+    keep = np.ones(len(points), dtype=bool)
+    for _ in range(3):
+        coef = np.linalg.lstsq(design[keep], points[keep, 2], rcond=None)[0]
+        residual = points[:, 2] - design @ coef
+        scale = 1.4826 * np.median(np.abs(residual[keep])) + 1e-9
+        keep = np.abs(residual) < 4.0 * scale
+    return CapPlane(coefficients=coef, rms=float(np.sqrt(np.mean(residual[keep] ** 2))))
+
+
+def segment_blade(points: np.ndarray, settings: SegmentationSettings | None = None
+                  ) -> Segmentation:
+    """Normals, curvature, region-growing segments and patch labels of a blade cloud (m, blade
+    frame). Raises :class:`ReconstructionError` when the cloud is empty, too small, flat, or
+    shows no root or tip cap."""
+    from scipy.spatial import cKDTree
+
+    settings = settings or SegmentationSettings()
+    points = check_blade_cloud(points)
+    index, normals, variation = oriented_normals(points, settings.neighbours)
+    curvature = principal_curvature(points, normals, index)
+    segments = region_growing(normals, variation, index, settings.smoothness_angle,
+                              settings.curvature_threshold, settings.min_segment_size)
+    spacing = float(np.median(cKDTree(points).query(points[:: max(1, len(points) // 5000)],
+                                                    k=2)[0][:, 1]))
+    root, tip = _caps(points, normals, segments)
+    labels = np.full(len(points), UNASSIGNED)
+    band = {name: max(4.0 * plane.rms, 0.25 * spacing) for name, plane in
+            (("root", root), ("tip", tip))}
+    above_root = points[:, 2] - root.height(points[:, :2])
+    below_tip = tip.height(points[:, :2]) - points[:, 2]
+    labels[np.abs(above_root) <= band["root"]] = REGIONS.index("root")
+    labels[np.abs(below_tip) <= band["tip"]] = REGIONS.index("tip")
+    side = (above_root > band["root"]) & (below_tip > band["tip"])
+    reach = np.linalg.norm(points[index[:, -1]] - points, axis=1)
+    side &= reach < ISOLATED * np.median(reach)  # isolated points stay unassigned
+    # next to the cap rims the neighbourhoods straddle the crease: normals and curvature there
+    # are blends; those points take the label of the nearest side point beyond the rim zone
+    rim = side & (np.minimum(above_root, below_tip) < np.median(reach))
+    chord, chordwise, camber = _label_sides(points, normals, curvature, segments, side, rim,
+                                            labels, settings)
+    _smooth_labels(labels, index, side & ~rim)
+    _label_rims(points, labels, side & ~rim, rim)
+    return Segmentation(normals=normals, variation=variation, curvature=curvature,
+                        segments=segments, labels=labels, root=root, tip=tip, spacing=spacing,
+                        chord=chord, chordwise=chordwise, camber=camber,
+                        extra={"segments": int(segments.max() + 1),
+                               "fragment_points": int(np.sum(segments < 0))})
+
+
+def _caps(points: np.ndarray, normals: np.ndarray, segments: np.ndarray
+          ) -> tuple[CapPlane, CapPlane]:
+    """Planes of the root and tip caps: the large segments whose mean normal is within 20° of
+    −z (below mid-span) or +z (above)."""
+    count = int(segments.max()) + 1 if np.any(segments >= 0) else 0
+    big = segments >= 0
+    mean_normal = np.zeros((count, 3))
+    np.add.at(mean_normal, segments[big], normals[big])
+    mean_normal /= np.maximum(np.linalg.norm(mean_normal, axis=1, keepdims=True), 1e-300)
+    mean_z = np.bincount(segments[big], weights=points[big, 2], minlength=count)
+    mean_z /= np.maximum(np.bincount(segments[big], minlength=count), 1)
+    middle = 0.5 * (np.percentile(points[:, 2], 1.0) + np.percentile(points[:, 2], 99.0))
+    along = math.cos(math.radians(20.0))
+    planes = []
+    for name, sign, side in (("root", -1.0, mean_z < middle), ("tip", 1.0, mean_z > middle)):
+        chosen = np.flatnonzero((sign * mean_normal[:, 2] > along) & side)
+        if chosen.size == 0:
+            raise ReconstructionError(
+                f"no {name} cap found: no smooth patch with normals along "
+                f"{'-' if sign < 0 else '+'}z at the {'low' if sign < 0 else 'high'} end of the "
+                "span (is the cloud in the blade frame, z along the span, and are both end "
+                "faces scanned?)")
+        planes.append(fit_cap_plane(points[np.isin(segments, chosen)]))
+    return planes[0], planes[1]
+
+
+def section_chords(points: np.ndarray, mask: np.ndarray, slab: float
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Front and rear ends (x-y) of the sections, at every point's z.
+
+    The ends are the most upstream and the most downstream points (smallest and largest axial
+    x): on a Pritchard section they lie on the leading- and trailing-edge circles whatever the
+    stagger and camber (each edge arc faces through the axial direction), where the farthest
+    pair of points may end on the bulge of a strongly cambered suction side. The points under
+    ``mask`` are cut into slabs ``slab`` (m) high; in each, stray points (the 4th nearest
+    neighbour in the slab farther than 4 × the slab's median) are set aside and each end is the
+    mean of the three extreme points. The ends of all slabs are then fitted by cubics in z,
+    dropping slabs more than 3 robust standard deviations off (a hole in the scan or a stray
+    point moves one slab's end). Returns ``(front (n, 2), rear (n, 2), slab centres)``.
+    """
+    from scipy.spatial import cKDTree
+
+    z = points[mask, 2]
+    edges = np.arange(z.min(), z.max() + slab, slab)
+    centres, ends = [], []
+    for lo, hi in itertools.pairwise(edges):
+        xy = points[mask][(z >= lo) & (z < hi), :2]
+        if len(xy) < 20:
+            continue
+        fourth = cKDTree(xy).query(xy, k=5)[0][:, -1]
+        xy = xy[fourth < 4.0 * np.median(fourth)]
+        order = np.argsort(xy[:, 0])
+        centres.append(0.5 * (lo + hi))
+        ends.append(np.concatenate([xy[order[:3]].mean(axis=0), xy[order[-3:]].mean(axis=0)]))
+    if len(centres) < 2:
+        raise ReconstructionError("too few side points to find the sections' chords")
+    centres, ends = np.array(centres), np.array(ends)
+    scale = max(float(np.ptp(centres)), 1e-9)
+    u = (centres - centres.mean()) / scale
+    degree = min(3, len(centres) - 1)
+    keep = np.ones(len(centres), dtype=bool)
+    for _ in range(4):
+        coef = np.polynomial.polynomial.polyfit(u[keep], ends[keep], degree)
+        miss = np.linalg.norm(ends - np.polynomial.polynomial.polyval(u, coef).T, axis=1)
+        bound = 3.0 * 1.4826 * np.median(miss[keep]) + 1e-6 * scale
+        if np.array_equal(miss < bound, keep) or (miss < bound).sum() <= degree:
+            break
+        keep = miss < bound
+    fitted = np.polynomial.polynomial.polyval((points[:, 2] - centres.mean()) / scale, coef).T
+    return fitted[:, :2], fitted[:, 2:], centres
+
+
+def _label_sides(points: np.ndarray, normals: np.ndarray, curvature: np.ndarray,
+                 segments: np.ndarray, side: np.ndarray, rim: np.ndarray, labels: np.ndarray,
+                 settings: SegmentationSettings) -> tuple[float, np.ndarray, np.ndarray]:
+    """Label the side points off the rims in place (edges, suction, pressure).
+
+    Returns the median chord (m) and every side point's chordwise position and offset from the
+    camber line in chords (NaN elsewhere).
+    """
+    if np.sum(side & (segments >= 0)) < MIN_POINTS // 4:
+        raise ReconstructionError(f"only {int(np.sum(side & (segments >= 0)))} points between "
+                                  "the caps lie in smooth patches: too few to reconstruct the "
+                                  "blade's sides")
+    extent = float(np.ptp(points[side, 2]))
+    front, rear, _ = section_chords(points, side, max(extent / 40.0, 1e-4))
+    along = rear - front
+    chord = np.linalg.norm(along, axis=1)
+    direction = along / chord[:, None]
+    normal = np.column_stack([-direction[:, 1], direction[:, 0]])
+    offset = points[:, :2] - front
+    xi = np.einsum("ij,ij->i", offset, direction) / chord
+    eta = np.einsum("ij,ij->i", offset, normal)
+    if np.median(eta[side]) < 0.0:  # the camber side: where the section bulges
+        eta = -eta
+        normal = -normal
+    facing = np.einsum("ij,ij->i", normals[:, :2], normal) >= 0.0
+    camber = eta / chord - camber_line(np.clip(xi, 0.0, 1.0), eta / chord, facing, side)
+    inner = side & ~rim
+    edge = inner & (curvature > 1.0 / (settings.edge_radius_ratio * chord))
+    leading = edge & (xi < settings.leading_band)
+    trailing = edge & (xi > settings.trailing_band)
+    # neighbourhoods reaching onto an edge circle blend its curvature in: keep the points above
+    # half the edge's typical (upper-quartile) curvature
+    for band in (leading, trailing):
+        if np.any(band):
+            band &= curvature > 0.5 * np.percentile(curvature[band], 75.0)
+    sides = inner & ~leading & ~trailing
+    labels[sides & (camber >= 0.0)] = REGIONS.index("suction_side")
+    labels[sides & (camber < 0.0)] = REGIONS.index("pressure_side")
+    labels[leading] = REGIONS.index("leading_edge")
+    labels[trailing] = REGIONS.index("trailing_edge")
+    return (float(np.median(chord[side])), np.where(side, xi, np.nan),
+            np.where(side, camber, np.nan))
+
+
+def camber_line(xi: np.ndarray, eta: np.ndarray, facing: np.ndarray, mask: np.ndarray
+                ) -> np.ndarray:
+    """Offset (in chords) of the camber line from the chord at every point's chordwise position.
+
+    The camber line lies midway between the two faces: in 100 chordwise bins, the mean of the
+    median offsets ``eta`` of the points whose normals face the camber side (``facing``) and of
+    the others; bins lacking either face are interpolated. Twist and taper do not change it.
+    """
+    edges = np.linspace(0.0, 1.0, 101)
+    which = np.clip(np.searchsorted(edges, xi, side="right") - 1, 0, 99)
+    centres, middles = [], []
+    for k in range(100):
+        upper = mask & facing & (which == k)
+        lower = mask & ~facing & (which == k)
+        if upper.sum() >= 3 and lower.sum() >= 3:
+            centres.append(0.5 * (edges[k] + edges[k + 1]))
+            middles.append(0.5 * (np.median(eta[upper]) + np.median(eta[lower])))
+    if len(centres) < 10:
+        raise ReconstructionError("the side points do not show two faces along the chord: "
+                                  "not a blade")
+    return np.interp(xi, centres, middles)
+
+
+def _smooth_labels(labels: np.ndarray, index: np.ndarray, side: np.ndarray) -> None:
+    """One majority vote of the side labels over each side point's neighbours (in place)."""
+    side_ids = np.array([REGIONS.index(name) for name in SIDE_REGIONS])
+    labelled = side & np.isin(labels, side_ids)
+    onehot = np.zeros((len(labels), len(REGIONS)))
+    onehot[np.flatnonzero(labelled), labels[labelled]] = 1.0
+    votes = onehot[index].sum(axis=1)
+    best = np.argmax(votes, axis=1)
+    change = labelled & (votes[np.arange(len(labels)), best] > 0)
+    labels[change] = best[change]
+
+
+def _label_rims(points: np.ndarray, labels: np.ndarray, inner: np.ndarray,
+                rim: np.ndarray) -> None:
+    """Give the rim-zone points the label of the nearest labelled side point (in place), with
+    z shrunk tenfold so that the same place of the section a little further along the span
+    wins."""
+    from scipy.spatial import cKDTree
+
+    source = inner & (labels >= 0)
+    if not np.any(rim) or not np.any(source):
+        return
+    scale = np.array([1.0, 1.0, 0.1])
+    _, nearest = cKDTree(points[source] * scale).query(points[rim] * scale)
+    labels[rim] = labels[source][nearest]

@@ -1,0 +1,76 @@
+"""The demo end to end at a tiny size: every table and figure present, numbers from the run."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from steamtwin.pipeline import STAGES, DemoSettings, run_demo
+from steamtwin.validation.html import format_value
+
+TINY = DemoSettings.quick(hold_hours=0.25, scan_points=12_000, uncertainty_samples=2,
+                          evaluations=40, population=10, table7_generations=2, snapshots=8,
+                          held_out=4, sobol_n_base=8, noise_repeats=1, workers=1)
+
+
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory):
+    stages = []
+    result = run_demo(tmp_path_factory.mktemp("demo"), TINY,
+                      progress=lambda stage, fraction: stages.append((stage, fraction)))
+    return result, stages
+
+
+def test_every_stage_reports_progress_and_time(demo):
+    result, stages = demo
+    assert [s for s, f in stages if f == 0.0] == list(STAGES)
+    assert set(STAGES) <= set(result.timings)
+    assert all(result.timings[s] > 0.0 for s in STAGES)
+
+
+def test_report_holds_every_table_and_figure_of_the_method(demo):
+    result, _ = demo
+    document = json.loads((result.out / "report.json").read_text(encoding="utf-8"))
+    for table in ("table5_operating", "table6_rmse", "table7_ga_sensitivity",
+                  "table8_deviation", "sobol_indices", "noise_propagation",
+                  "geometry_fidelity", "scan_uncertainty", "figure9_field_error"):
+        assert document["tables"][table]["records"], table
+        assert (result.out / document["tables"][table]["csv"]).stat().st_size > 0
+    files = {figure["file"] for figure in document["figures"]}
+    for pattern in ("figure7", "figure8", "figure9", "figure10", "sobol", "noise",
+                    "deviation_map"):
+        matches = [name for name in files if name.startswith(pattern)]
+        assert matches, pattern
+        assert all((result.out / name).stat().st_size > 10_000 for name in matches)
+    html = (result.out / "report.html").read_text(encoding="utf-8")
+    for name in files:
+        assert f'src="{name}"' in html
+    assert set(STAGES) <= set(document["timings_s"])
+    assert document["versions"]["steamtwin"]
+
+
+def test_report_numbers_are_the_runs_own(demo):
+    result, _ = demo
+    document = json.loads((result.out / "report.json").read_text(encoding="utf-8"))
+    table6 = pd.DataFrame(document["tables"]["table6_rmse"]["records"])
+    expected = 100.0 * (1.0 - table6["rmse_calibrated_K"] / table6["rmse_empirical_K"])
+    np.testing.assert_allclose(table6["reduction_pct"], expected, rtol=1e-12)
+    pd.testing.assert_frame_equal(table6, result.tables["table6_rmse"].reset_index(drop=True),
+                                  check_dtype=False)
+    parameters = pd.DataFrame(document["tables"]["calibrated_parameters"]["records"])
+    calibrated = dict(zip(parameters["parameter"], parameters["calibrated"], strict=True))
+    assert calibrated["flow_coefficient"] == pytest.approx(result.params.flow_coefficient)
+    saved = json.loads((result.out / "params.json").read_text(encoding="utf-8"))
+    assert saved["parameters"]["flow_coefficient"] == pytest.approx(
+        result.params.flow_coefficient)
+    table8 = pd.DataFrame(document["tables"]["table8_deviation"]["records"])
+    exhaust = table8[table8["signal"] == "hp_exhaust_temperature"]
+    assert set(exhaust["window"]) == {"30 % load", "50 % load"}
+    assert (exhaust["n_used"] + exhaust["n_skipped_missing"] + exhaust["n_skipped_rom_invalid"]
+            == exhaust["n_samples"]).all()
+    html = (result.out / "report.html").read_text(encoding="utf-8")
+    for value in exhaust["max_abs_deviation_K"]:
+        assert f">{format_value(value)}<" in html
