@@ -117,3 +117,25 @@ def test_extrapolation_warns_with_distance(offset, axis):
     with warnings.catch_warnings():
         warnings.simplefilter("error", ExtrapolationWarning)
         rom.predict(physical(c[:1]))  # a snapshot's own condition: no warning
+
+
+def test_projection_tolerance_adds_modes_until_the_snapshots_fit():
+    c = conditions(25, 1)
+    x = field(c)
+    loose = PodRbfRom(energy=0.5).fit(x, physical(c), NAMES)
+    for tolerance in (0.5, 0.05, 1e-3):
+        rom = PodRbfRom(energy=0.5, projection_tolerance=tolerance).fit(x, physical(c), NAMES)
+        residual = x - rom.reconstruct(rom.project(x))
+        assert np.abs(residual).max() <= tolerance
+        fewer = PodRbfRom(energy=0.5, max_modes=rom.n_modes_ - 1).fit(x, physical(c), NAMES) \
+            if rom.n_modes_ > 1 else None
+        if fewer is not None and fewer.n_modes_ >= loose.n_modes_:
+            # the smallest such rank: one mode less leaves a snapshot outside the tolerance
+            assert np.abs(x - fewer.reconstruct(fewer.project(x))).max() > tolerance
+        assert rom.n_modes_ >= loose.n_modes_
+    assert PodRbfRom(energy=0.5, projection_tolerance=1e-3).fit(
+        x, physical(c), NAMES).n_modes_ > loose.n_modes_
+    with pytest.raises(ValueError, match="projection_tolerance"):
+        PodRbfRom(projection_tolerance=-1.0).fit(x, physical(c), NAMES)
+    with pytest.raises(ValueError, match="features"):
+        PodRbfRom(features="control_stage").fit(x, physical(c), NAMES)

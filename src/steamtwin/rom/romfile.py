@@ -1,8 +1,12 @@
 """The ROM file: one self-describing ``.npz`` (no pickles) with modes, map, mesh and sensors.
 
 Arrays (SI units): ``modes`` (r, N), ``mean`` (N,), ``singular_values``, ``coefficients``
-(m, r), ``centres`` (m, d) scaled snapshot conditions, ``sensor_values`` (m, s),
-``input_min``/``input_span``/``input_weights`` (d,), ``snapshot_conditions`` (m, c) with
+(m, r), ``centres`` (m, k) scaled RBF inputs of the snapshots, ``input_points`` (m, d) their
+scaled conditions, ``sensor_values`` (m, s), ``input_min``/``input_span``/``input_weights``
+(d,), ``feature_names``/``feature_min``/``feature_span``/``feature_weights`` (k,) of the RBF
+inputs, the physics-feature table (``feature_pressure_nodes``, ``feature_temperature_nodes``,
+``feature_flow_ratio_nodes``, ``feature_table``; empty without features, see
+:mod:`steamtwin.rom.features`), ``snapshot_conditions`` (m, c) with
 ``condition_names``, the mesh (``points``, ``tetrahedra``, ``boundary_triangles``,
 ``boundary_regions``, ``region_names``), the sensor layout (``sensor_names`` steam-path signals,
 ``probe_names``/``probe_nodes`` blade nodes), the RBF settings, ``format_version`` and
@@ -23,9 +27,10 @@ import pandas as pd
 
 from steamtwin.blade.mesh import REGIONS, MeshError, SolidMesh, checked_mesh
 from steamtwin.rom.estimator import PodRbfRom
+from steamtwin.rom.features import FEATURE_NAMES, feature_table_arrays, features_from_arrays
 
 FORMAT = "steamtwin-pod-rbf-rom"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: physics features, input_points, projection_tolerance
 
 
 class RomFileError(ValueError):
@@ -95,6 +100,12 @@ def save_rom(bundle: BladeRom, path: str | Path) -> Path:
         "degree": np.array(-1 if rom.degree is None else int(rom.degree), dtype=np.int64),
         "epsilon": np.array(np.nan if rom.epsilon is None else float(rom.epsilon)),
         "input_scaling": np.array(rom.input_scaling),
+        "projection_tolerance": np.array(np.nan if rom.projection_tolerance is None
+                                         else float(rom.projection_tolerance)),
+        "input_points": rom.input_points_,
+        "feature_names": _text_array(rom.feature_names_), "feature_min": rom.feature_min_,
+        "feature_span": rom.feature_span_, "feature_weights": rom.feature_weights_,
+        **feature_table_arrays(rom.features_),
         "points": bundle.mesh.points, "tetrahedra": bundle.mesh.tetrahedra,
         "boundary_triangles": bundle.mesh.boundary_triangles,
         "boundary_regions": bundle.mesh.boundary_regions,
@@ -121,7 +132,11 @@ _REQUIRED = {
     "points": ("f", 2), "tetrahedra": ("i", 2), "boundary_triangles": ("i", 2),
     "boundary_regions": ("i", 1), "region_names": ("U", 1), "probe_names": ("U", 1),
     "probe_nodes": ("i", 1), "snapshot_conditions": ("f", 2), "condition_names": ("U", 1),
-    "provenance": ("U", 0),
+    "provenance": ("U", 0), "projection_tolerance": ("f", 0), "input_points": ("f", 2),
+    "feature_names": ("U", 1), "feature_min": ("f", 1), "feature_span": ("f", 1),
+    "feature_weights": ("f", 1), "feature_pressure_nodes": ("f", 1),
+    "feature_temperature_nodes": ("f", 1), "feature_flow_ratio_nodes": ("f", 1),
+    "feature_table": ("f", 4),
 }
 
 
@@ -151,10 +166,13 @@ def _read_arrays(path: Path) -> dict[str, np.ndarray]:
 
 def _check_shapes(path: Path, a: dict[str, np.ndarray]) -> None:
     r, n = a["modes"].shape
-    m, d = a["centres"].shape
+    m, k = a["centres"].shape
+    d = a["input_names"].size
     expected = {
         "mean": (n,), "coefficients": (m, r), "sensor_values": (m, a["sensor_names"].size),
-        "input_names": (d,), "input_min": (d,), "input_span": (d,), "input_weights": (d,),
+        "input_min": (d,), "input_span": (d,), "input_weights": (d,), "input_points": (m, d),
+        "feature_names": (k,), "feature_min": (k,), "feature_span": (k,),
+        "feature_weights": (k,),
         "points": (n, 3), "probe_nodes": (a["probe_names"].size,),
         "snapshot_conditions": (m, a["condition_names"].size),
         "boundary_regions": (a["boundary_triangles"].shape[0],),
@@ -162,7 +180,8 @@ def _check_shapes(path: Path, a: dict[str, np.ndarray]) -> None:
     for name, shape in expected.items():
         if a[name].shape != shape:
             raise RomFileError(f"{path}: array {name!r} has shape {a[name].shape}, expected "
-                               f"{shape} (modes {a['modes'].shape}, centres {(m, d)})")
+                               f"{shape} (modes {a['modes'].shape}, centres {(m, k)}, "
+                               f"{d} inputs)")
     if a["singular_values"].size < r:
         raise RomFileError(f"{path}: fewer singular values than modes")
     if tuple(a["region_names"]) != REGIONS:
@@ -171,12 +190,26 @@ def _check_shapes(path: Path, a: dict[str, np.ndarray]) -> None:
     if a["probe_nodes"].size and (a["probe_nodes"].min() < 0 or a["probe_nodes"].max() >= n):
         raise RomFileError(f"{path}: probe_nodes index nodes outside the mesh")
     numeric = ("modes", "mean", "coefficients", "centres", "sensor_values", "input_min",
-               "input_span", "input_weights", "points")
+               "input_span", "input_weights", "points", "input_points", "feature_min",
+               "feature_span", "feature_weights", "feature_pressure_nodes",
+               "feature_temperature_nodes", "feature_flow_ratio_nodes", "feature_table")
     for name in numeric:
         if not np.all(np.isfinite(a[name])):
             raise RomFileError(f"{path}: array {name!r} holds NaN or infinite values")
-    if np.any(a["input_span"] <= 0) or np.any(a["input_weights"] <= 0):
-        raise RomFileError(f"{path}: input_span and input_weights must be positive")
+    if np.any(a["input_span"] <= 0) or np.any(a["input_weights"] <= 0) or np.any(
+            a["feature_span"] <= 0) or np.any(a["feature_weights"] <= 0):
+        raise RomFileError(f"{path}: input/feature spans and weights must be positive")
+    if a["feature_table"].size == 0:
+        same = {"feature_names": "input_names", "feature_min": "input_min",
+                "feature_span": "input_span", "feature_weights": "input_weights",
+                "centres": "input_points"}
+        for name, twin in same.items():
+            if a[name].shape != a[twin].shape or not np.array_equal(a[name], a[twin]):
+                raise RomFileError(f"{path}: without a feature table {name!r} must equal "
+                                   f"{twin!r}")
+    elif tuple(a["feature_names"]) != FEATURE_NAMES:
+        raise RomFileError(f"{path}: feature names {tuple(a['feature_names'])} differ from "
+                           f"{FEATURE_NAMES}")
     gram = a["modes"] @ a["modes"].T
     if not np.allclose(gram, np.eye(r), atol=1e-6):
         raise RomFileError(f"{path}: the modes are not orthonormal (corrupt data)")
@@ -194,10 +227,14 @@ def load_rom(path: str | Path) -> BladeRom:
     degree = int(a["degree"])
     epsilon = float(a["epsilon"])
     try:
+        tolerance = float(a["projection_tolerance"])
+        features = features_from_arrays(a, tuple(a["feature_names"]))
         rom = PodRbfRom(energy=float(a["energy"]), kernel=str(a["kernel"]),
                         smoothing=float(a["smoothing"]), degree=None if degree < 0 else degree,
                         epsilon=None if np.isnan(epsilon) else epsilon,
-                        input_scaling=str(a["input_scaling"]))
+                        input_scaling=str(a["input_scaling"]),
+                        projection_tolerance=None if np.isnan(tolerance) else tolerance,
+                        features=features)
         rom._check_hyperparameters()
         rom.restore(
             modes=a["modes"], mean=a["mean"], singular_values=a["singular_values"],
@@ -205,7 +242,10 @@ def load_rom(path: str | Path) -> BladeRom:
             input_names=tuple(a["input_names"]), input_min=a["input_min"],
             input_span=a["input_span"], input_weights=a["input_weights"],
             sensor_names=tuple(a["sensor_names"]), sensor_values=a["sensor_values"],
-            energy_captured=float(a["energy_captured"]), field_range=float(a["field_range"]))
+            energy_captured=float(a["energy_captured"]), field_range=float(a["field_range"]),
+            input_points=a["input_points"], feature_names=tuple(a["feature_names"]),
+            feature_min=a["feature_min"], feature_span=a["feature_span"],
+            feature_weights=a["feature_weights"], features=features)
         mesh = checked_mesh(SolidMesh(a["points"], a["tetrahedra"], a["boundary_triangles"],
                                       a["boundary_regions"]))
     except (ValueError, MeshError, np.linalg.LinAlgError) as error:
