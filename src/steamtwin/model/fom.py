@@ -64,7 +64,7 @@ class SimulationResult:
     """
 
     outputs: pd.DataFrame
-    diagnostics: pd.DataFrame
+    diagnostics: pd.DataFrame | None
     stage_pressures: pd.DataFrame | None
     stage_temperatures: pd.DataFrame | None
 
@@ -175,7 +175,8 @@ class FullOrderModel:
         The metal starts in equilibrium with the first sample. Raises :class:`InputError` naming
         the column and row of any input the model cannot take.
         """
-        return self.simulate_detailed(inputs, params, stages=False).outputs
+        return self._run(self.design_.kernel, inputs, params or ModelParameters(), False,
+                         diagnostics=False).outputs
 
     def simulate_detailed(self, inputs: pd.DataFrame, params: ModelParameters | None = None,
                           stages: bool = True) -> SimulationResult:
@@ -206,7 +207,8 @@ class FullOrderModel:
         return self._run(self.design_.kernel, inputs, schedule, stages)
 
     def _run(self, constants: kernel.KernelConstants, inputs: pd.DataFrame,
-             params: ModelParameters | np.ndarray, detail: bool) -> SimulationResult:
+             params: ModelParameters | np.ndarray, detail: bool, diagnostics: bool = True
+             ) -> SimulationResult:
         columns, time_step = _validated_inputs(inputs)
         p0, t0, flow, p_exhaust = (columns[name] for name in INPUT_SIGNALS)
         minimum_flow = MINIMUM_FLOW_FRACTION * self.spec.design.main_steam_flow
@@ -250,15 +252,17 @@ class FullOrderModel:
                 f"{t0[solved] - 273.15:.1f} °C, main_steam_flow {flow[solved] * 3.6:.0f} t/h, "
                 f"hp_exhaust_pressure {p_exhaust[solved] / 1e6:.3f} MPa)"
             )
-        diagnostics = pd.DataFrame(results, index=inputs.index, columns=kernel.RESULT_COLUMNS)
-        outputs = diagnostics[list(self.output_signals)].copy()
+        outputs = pd.DataFrame(
+            {name: results[:, kernel.RESULT_COLUMNS.index(name)] for name in self.output_signals},
+            index=inputs.index)
         lags = check_time_constants(self.sensor_time_constants, self.output_signals)
         if lags:
             outputs = lag_outputs(outputs, time_step, lags)
         stage_names = ["control_stage"] + [f"stage_{i}" for i in range(1, stages + 1)]
         return SimulationResult(
             outputs=outputs,
-            diagnostics=diagnostics,
+            diagnostics=pd.DataFrame(results, index=inputs.index, columns=kernel.RESULT_COLUMNS)
+            if diagnostics else None,
             stage_pressures=pd.DataFrame(stage_p, index=inputs.index, columns=stage_names)
             if detail else None,
             stage_temperatures=pd.DataFrame(stage_t, index=inputs.index, columns=stage_names)
@@ -295,14 +299,17 @@ def _validated_inputs(inputs: pd.DataFrame) -> tuple[dict[str, np.ndarray], np.n
             f"main_steam_pressure = {ratio[row]:.3f} ≥ 0.95: the HP section cannot expand"
         )
     p0, t0 = columns["main_steam_pressure"], columns["main_steam_temperature"]
-    t_min = lower_boundary_temperature(p0)
-    bad = np.flatnonzero(t0 <= t_min)
+    # the boundary rises with pressure (Tsat, then the B23 line), so rows hotter than the
+    # boundary at the series' highest pressure are superheated; only the others are looked up
+    near = np.flatnonzero(t0 <= lower_boundary_temperature(p0.max()))
+    bad = near[t0[near] <= lower_boundary_temperature(p0[near])]
     if bad.size:
         row = int(bad[0])
+        t_min = lower_boundary_temperature(p0[bad])
         raise InputError(
             f"inputs column 'main_steam_temperature' row {row} ({inputs.index[row]}): "
             f"{t0[row] - 273.15:.1f} °C is not superheated at {p0[row] / 1e6:.3f} MPa "
-            f"(must exceed {t_min[row] - 273.15:.1f} °C)"
+            f"(must exceed {t_min[0] - 273.15:.1f} °C)"
         )
     return columns, _time_steps(inputs.index)
 
