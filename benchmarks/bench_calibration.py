@@ -1,7 +1,8 @@
 """Benchmark: the method's GA (P = 50, G = 200) and the surrogate mode on the virtual plant.
 
-Run: python benchmarks/bench_calibration.py [--quick] — for each of the deep-peak-30 and
-deep-peak-50 scenarios, on the 2-h, 1-s hold as the DCS recorded it:
+Run: python benchmarks/bench_calibration.py [--quick] [--scenario NAME ...] — for each of the
+deep-peak-30 and deep-peak-50 scenarios (or those named), on the 2-h, 1-s hold as the DCS
+recorded it:
 
 * wall time of the full GA on the local process pool (every core), model evaluations;
 * RMSE with the empirical constants (1, 1, 1) and calibrated, the reduction in %;
@@ -37,6 +38,7 @@ from steamtwin.spec import load_spec
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--scenario", nargs="+", default=["deep-peak-30", "deep-peak-50"])
     arguments = parser.parse_args()
     population, generations = (20, 20) if arguments.quick else (50, 200)
     warnings.simplefilter("ignore", IdentifiabilityWarning)
@@ -44,7 +46,7 @@ def main() -> None:
     _ = model.design_
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python "
           f"{platform.python_version()}; GA P = {population}, G = {generations}")
-    for scenario in ("deep-peak-30", "deep-peak-50"):
+    for scenario in arguments.scenario:
         run = run_plant(scenario, seed=0)
         hold = run.measured.iloc[-7200:]
         true = run.true_outputs.loc[hold.index]

@@ -62,3 +62,23 @@ def test_errors_are_reported(tmp_path):
     result = runner.invoke(rom_app, ["predict", "--rom", str(bad), "--data", "x.csv",
                                      "--tags", "t.toml", "--out", "o.csv", "--fields-every", "5"])
     assert result.exit_code == 2 and "go together" in result.output
+
+
+def test_build_passes_the_accuracy_options(tmp_path, monkeypatch):
+    import steamtwin.rom.build as build_module
+
+    seen = {}
+
+    def fake_build_rom(spec, mesh, params, **options):
+        seen.update(options)
+        raise ValueError("stop here")
+
+    monkeypatch.setattr(build_module, "build_rom", fake_build_rom)
+    runner = CliRunner()
+    common = ["build", "--snapshots", "8", "--element-size", "0.006", "--out",
+              str(tmp_path / "rom.npz")]
+    result = runner.invoke(rom_app, common)
+    assert result.exit_code == 2 and "stop here" in result.output
+    assert seen["projection_tolerance"] == 0.1 and seen["physics_features"] is True
+    runner.invoke(rom_app, [*common, "--projection-tolerance", "0", "--no-physics-features"])
+    assert seen["projection_tolerance"] is None and seen["physics_features"] is False

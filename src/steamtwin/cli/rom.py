@@ -48,6 +48,11 @@ def build(
                                          "tcp://host:8786 (default: local processes)."),
     seed: int = typer.Option(0, help="Seed of the design of experiments."),
     layout: str = typer.Option("lhs", help="Design per load level: lhs, corners or bands."),
+    projection_tolerance: float = typer.Option(
+        0.1, help="Add POD modes until every snapshot projects within this (K); 0: energy only."),
+    physics_features: bool = typer.Option(
+        True, help="RBF on the governing stage's features (p0, T0, p1, T_cs, admitted arc) "
+        "instead of (p0, T0, p1)."),
 ) -> None:
     """Generate blade-field snapshots with the FOM + FEM and fit the POD-RBF ROM.
 
@@ -68,7 +73,9 @@ def build(
         with bar:
             bundle, _ = build_rom(spec, volume, parameters, n_snapshots=snapshots,
                                   energy=energy, max_workers=workers, scheduler=scheduler,
-                                  seed=seed, layout=layout, progress=progress)
+                                  seed=seed, layout=layout, progress=progress,
+                                  projection_tolerance=projection_tolerance or None,
+                                  physics_features=physics_features)
     except (SpecError, ParameterError, InputError, MeshError, ValueError, OSError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=2) from None
