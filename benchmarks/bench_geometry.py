@@ -1,8 +1,11 @@
 """Full-size geometry benchmark: 150k-point scan of hp1 -> preprocessing -> fidelity; surface
 reconstruction -> STL -> fidelity and mesh of the measured blade; meshing; scan-uncertainty
-study. Prints timings and the measured figures.
+study. Also: raw views -> STL wall time, statistical outlier removal against open3d's on the
+150k raw points, recovered view poses against the scanner's true ones. Prints timings and the
+measured figures as JSON.
 
-Run: python benchmarks/bench_geometry.py [row]
+Run: python benchmarks/bench_geometry.py [row] [seed] [--quick]   (--quick: no meshing and no
+uncertainty study)
 """
 
 from __future__ import annotations
@@ -15,7 +18,13 @@ import numpy as np
 
 from steamtwin.geometry.fidelity import align_to_nominal, surface_deviation
 from steamtwin.geometry.meshing import blade_volume_mesh, mesh_quality, mesh_stl
-from steamtwin.geometry.preprocess import PreprocessSettings, preprocess_views, transform
+from steamtwin.geometry.preprocess import (
+    PreprocessSettings,
+    pose_errors,
+    preprocess_views,
+    remove_statistical_outliers,
+    transform,
+)
 from steamtwin.geometry.profile import Blade, make_blade
 from steamtwin.geometry.reconstruct import reconstruct_blade, reconstruction_fidelity, write_stl
 from steamtwin.geometry.scanner import ScannerSettings, scan_blade
@@ -24,14 +33,15 @@ from steamtwin.model.fom import FullOrderModel
 from steamtwin.spec import load_spec
 
 
-def main(row: str = "hp1") -> dict:
+def main(row: str = "hp1", seed: int = 0, quick: bool = False) -> dict:
     spec = load_spec("reference")
     blade = make_blade(spec, row)
-    figures: dict = {"row": row}
+    figures: dict = {"row": row, "seed": seed}
 
     start = time.perf_counter()
-    scan = scan_blade(blade, ScannerSettings(points=150_000, views=8), rng=0)
+    scan = scan_blade(blade, ScannerSettings(points=150_000, views=8), rng=seed)
     figures["scan_s"] = time.perf_counter() - start
+    figures["outlier_removal"] = _outlier_removal(np.concatenate([v.points for v in scan.views]))
 
     start = time.perf_counter()
     fused, poses, report = preprocess_views(
@@ -48,9 +58,13 @@ def main(row: str = "hp1") -> dict:
         float(np.linalg.norm(transform(v.points, p) - transform(v.points, base @ v.pose),
                              axis=1).max()) * 1e3
         for v, p in zip(scan.views, poses, strict=True))
+    figures["pose_recovery"] = _pose_recovery(scan, poses)
+    figures["joint_icp"] = {"rms_mm": report.joint_rms * 1e3,
+                            "weak_directions": report.joint_weak_directions}
 
     start = time.perf_counter()
     pose, fit_rms = align_to_nominal(fused, blade)
+    figures["best_fit_s"] = time.perf_counter() - start
     deviation = surface_deviation(blade, transform(fused, pose))
     figures["fidelity_s"] = time.perf_counter() - start
     figures["fused_cloud_deviation_mm"] = {
@@ -62,7 +76,12 @@ def main(row: str = "hp1") -> dict:
                               axis=1)
     figures["best_fit_vs_truth_pose_max_mm"] = float(distance.max()) * 1e3
 
-    figures["reconstruction"] = _reconstruction(blade, transform(fused, pose))
+    figures["reconstruction"] = _reconstruction(blade, transform(fused, pose), quick)
+    figures["raw_views_to_stl_s"] = (figures["preprocess_s"] + figures["best_fit_s"]
+                                     + figures["reconstruction"]["reconstruct_s"]
+                                     + figures["reconstruction"]["write_stl_s"])
+    if quick:
+        return figures
 
     start = time.perf_counter()
     mesh = blade_volume_mesh(spec, row)
@@ -78,7 +97,52 @@ def main(row: str = "hp1") -> dict:
     return figures
 
 
-def _reconstruction(blade: Blade, cloud: np.ndarray) -> dict:
+def _outlier_removal(points: np.ndarray, repeats: int = 3) -> dict:
+    """Ours against open3d's ``remove_statistical_outlier`` (50 neighbours besides the point,
+    i.e. open3d's nb_neighbors = 51, std ratio 2) on the raw points: best of ``repeats`` wall
+    times (s) and whether the kept points agree one for one."""
+    import open3d as o3d
+
+    cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
+    ours_s, open3d_s = [], []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        _, mask = remove_statistical_outliers(points, 50, 2.0)
+        ours_s.append(time.perf_counter() - start)
+        start = time.perf_counter()
+        _, kept = cloud.remove_statistical_outlier(nb_neighbors=51, std_ratio=2.0)
+        open3d_s.append(time.perf_counter() - start)
+    reference = np.zeros(len(points), dtype=bool)
+    reference[np.asarray(kept, dtype=np.int64)] = True
+    return {"points": len(points), "ours_s": min(ours_s), "open3d_s": min(open3d_s),
+            "ratio": min(ours_s) / min(open3d_s), "removed": int(np.sum(~mask)),
+            "disagreeing_points": int(np.sum(mask != reference))}
+
+
+def _pose_recovery(scan: object, poses: list[np.ndarray]) -> dict:
+    """Recovered view poses against the scanner's true ones (:func:`pose_errors`; mm, deg):
+    all views (one gauge fit), the views sharing a cap (cameras above / below), and the
+    scanner's tracked poses for comparison."""
+    views = [v.points[~v.is_outlier] for v in scan.views]
+    truth = [v.pose for v in scan.views]
+
+    def summary(estimated: list[np.ndarray], pick: list[int]) -> dict:
+        errors = pose_errors([estimated[k] for k in pick], [truth[k] for k in pick],
+                             [views[k] for k in pick])
+        return {"translation_max_mm": float(errors["translation_m"].max() * 1e3),
+                "across_span_max_mm": float(errors["across_span_m"].max() * 1e3),
+                "span_max_mm": float(errors["span_m"].max() * 1e3),
+                "rotation_max_deg": float(errors["rotation_deg"].max()),
+                "point_max_mm": float(errors["max_point_m"].max() * 1e3)}
+
+    every = list(range(len(views)))
+    tracked = [v.tracked_pose for v in scan.views]
+    return {"all_views": summary(poses, every), "tracked_all_views": summary(tracked, every),
+            "tip_cap_views": summary(poses, every[0::2]),
+            "root_cap_views": summary(poses, every[1::2])}
+
+
+def _reconstruction(blade: Blade, cloud: np.ndarray, quick: bool = False) -> dict:
     """Surface reconstruction of the best-fitted fused cloud: patches, fit, deviation of the
     STL from the exact blade, row metrics and a volume mesh of the STL (mm, s)."""
     import tempfile
@@ -103,7 +167,11 @@ def _reconstruction(blade: Blade, cloud: np.ndarray) -> dict:
         section["section"]: {m["metric"]: m["error"] for m in section["metrics"]}
         for section in report.extra["sections"]}
     with tempfile.TemporaryDirectory() as folder:
+        start = time.perf_counter()
         path = write_stl(result, Path(folder) / "blade.stl")
+        figures["write_stl_s"] = time.perf_counter() - start
+        if quick:
+            return figures
         start = time.perf_counter()
         mesh = mesh_stl(path)
         figures["mesh_stl_s"] = time.perf_counter() - start
@@ -113,4 +181,7 @@ def _reconstruction(blade: Blade, cloud: np.ndarray) -> dict:
 
 
 if __name__ == "__main__":
-    print(json.dumps(main(*sys.argv[1:2]), indent=2, default=float))
+    arguments = [a for a in sys.argv[1:] if not a.startswith("--")]
+    row_name = arguments[0] if arguments else "hp1"
+    seed_value = int(arguments[1]) if len(arguments) > 1 else 0
+    print(json.dumps(main(row_name, seed_value, "--quick" in sys.argv), indent=2, default=float))

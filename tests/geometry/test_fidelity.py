@@ -11,6 +11,7 @@ import pytest
 from steamtwin.geometry.fidelity import (
     FidelityReport,
     align_to_nominal,
+    chord_line,
     section_metrics,
     section_pitch,
     surface_deviation,
@@ -28,15 +29,47 @@ def test_metrics_of_the_exact_section_reproduce_the_design(reference_spec, row: 
     metrics = section_metrics(truth_section(blade), section_pitch(blade))
     params = blade.profile.params
     assert metrics.throat == pytest.approx(params.throat, abs=1e-6)
-    # the chord is at least the Pritchard chord sqrt(Cx² + Ct²) (edges bulge past it)
-    assert metrics.chord >= math.hypot(params.axial_chord, params.tangential_chord) - 1e-6
     assert 2 * params.leading_edge_radius < metrics.max_thickness < params.pitch
+
+
+@pytest.mark.parametrize("row", ["hp1", "hp9", "ip3"])
+def test_chord_line_is_the_pressure_side_bitangent_of_the_edge_circles(reference_spec,
+                                                                        row: str) -> None:
+    """The chord line touches the leading- and trailing-edge circles of the exact section on
+    the pressure side; chord = projection of the section onto it; stagger = its direction."""
+    blade = make_blade(reference_spec, row)
+    radius = blade.design.mean_radius
+    polygon = truth_section(blade, radius)
+    lead, trail, concave = chord_line(polygon)
+    assert concave
+    direction = (trail - lead) / np.linalg.norm(trail - lead)
+    normal = np.array([-direction[1], direction[0]])
+    profile, params = blade.profile, blade.profile.params
+    _, scale, _ = blade.section_transform(radius)
+    centres = blade.place(np.array([profile.le_centre, profile.te_centre]), radius)[:, :2]
+    radii = scale * np.array([params.leading_edge_radius, params.trailing_edge_radius])
+    # both centres on the same side of the line, at their circle's radius (5 µm polyline)
+    offsets = (centres - lead) @ normal
+    np.testing.assert_allclose(np.abs(offsets), radii, atol=1e-7)
+    assert np.sign(offsets[0]) == np.sign(offsets[1])
+    # the line of the section bounds it: every section point on the circles' side of it
+    assert np.all(np.sign(offsets[0]) * ((polygon - lead) @ normal) > -1e-9)
+    metrics = section_metrics(polygon, section_pitch(blade, radius))
+    assert metrics.stagger == pytest.approx(math.atan2(direction[1], direction[0]), abs=1e-12)
+    # the extremes along the chord line: on the edge circles for the HP rows; the strongly
+    # cambered IP stator's suction side bulges upstream of its leading-edge circle
+    over_circles = (centres[1] - centres[0]) @ direction + radii.sum()
+    if row.startswith("hp"):
+        assert metrics.chord == pytest.approx(over_circles, abs=1e-7)
+    else:
+        assert metrics.chord > over_circles
 
 
 def test_metrics_of_a_circle_and_a_slot() -> None:
     t = np.linspace(0, 2 * np.pi, 4000, endpoint=False)
     circle = np.column_stack([0.01 * np.cos(t), 0.01 * np.sin(t)])
     m = section_metrics(circle, pitch=0.05)
+    assert not chord_line(circle)[2]  # convex: no bitangent, the diameter stands in
     assert m.chord == pytest.approx(0.02, rel=1e-5)
     assert m.max_thickness == pytest.approx(0.02, rel=1e-4)
     # throat: from the neighbour's rear 6 % (x > 8.8 mm) to this circle

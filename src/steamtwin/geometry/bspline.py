@@ -12,13 +12,17 @@ Fitting (Piegl & Tiller §9.4: least-squares approximation, refined by knot inse
 error bound is met): the coefficients solve the normal equations, with a small second-difference
 penalty (Eilers & Marx 1996, P-splines) that keeps spans without data determined and damps
 wiggles at the knot scale; points farther than 5 robust standard deviations and
-``outlier_distance`` are trimmed (10 × that while the knots are refined, then a last fit at the
-final knots); every point's ``s`` is then corrected by a Newton projection onto its section
-curve (Hoschek 1988, "Intrinsic parametrization for approximation", CAGD 5:27) and the fit
-repeated. Knots are then inserted in the middle of every knot span whose residual RMS exceeds
-the tolerance and the noise (1.5 × the median span RMS), until no span does — so the RMS is
-below the tolerance too, unless the noise is larger —, a round gains less than 3 % or the knot
-budget is spent. Residuals are distances within the section plane z = const (m).
+``outlier_distance`` are trimmed (while the knots are refined, per knot span: 5 robust standard
+deviations of the span's own residuals, between ``outlier_distance`` and 10 × that; then a
+last fit at the final knots); every point's ``s`` is then corrected by a Newton projection onto
+its section curve (Hoschek 1988, "Intrinsic parametrization for approximation", CAGD 5:27) and
+the fit repeated. Knots are then inserted in the middle of every knot span whose residual RMS
+exceeds the tolerance and the noise (1.5 × the median span RMS) and that holds enough points
+for two spans, until no span does — so the RMS is below the tolerance too, unless the noise is
+larger —, a round gains less than 3 % or the knot budget is spent. A round whose surface folds
+(a section crossing itself, :meth:`PeriodicSurface.folds`) is refitted with a 10 and 100 times
+stronger penalty, else the refinement stops at the previous knots. Residuals are distances
+within the section plane z = const (m).
 """
 
 from __future__ import annotations
@@ -117,6 +121,32 @@ class PeriodicSurface:
                 break
         return s
 
+    def folds(self, levels: int = 9, samples: int = 4000) -> bool:
+        """Whether a section curve at one of ``levels`` heights spread over the z knots (both
+        ends included) crosses itself: a loop or swallowtail, as left by spans that too few
+        points pin down. Each curve is a polyline of ``samples`` points."""
+        from scipy.spatial import cKDTree
+
+        s = np.linspace(0.0, 1.0, samples, endpoint=False)
+        for z in np.linspace(self.z_knots[0], self.z_knots[-1], levels):
+            start = self(s, np.full(samples, z))
+            step = np.roll(start, -1, axis=0) - start
+            length = np.linalg.norm(step, axis=1)
+            # segments that cross have midpoints closer than the longest segment
+            pairs = cKDTree(start + 0.5 * step).query_pairs(float(length.max()),
+                                                            output_type="ndarray")
+            i, j = pairs[:, 0], pairs[:, 1]
+            apart = np.abs(np.mod(j - i + samples // 2, samples) - samples // 2) > 1
+            i, j = i[apart], j[apart]
+            cross = step[i, 0] * step[j, 1] - step[i, 1] * step[j, 0]
+            w = start[j] - start[i]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                t = (w[:, 0] * step[j, 1] - w[:, 1] * step[j, 0]) / cross
+                u = (w[:, 0] * step[i, 1] - w[:, 1] * step[i, 0]) / cross
+            if np.any((cross != 0.0) & (t > 0.0) & (t < 1.0) & (u > 0.0) & (u < 1.0)):
+                return True
+        return False
+
     def residuals(self, xy: np.ndarray, z: np.ndarray, s: np.ndarray) -> np.ndarray:
         """Signed distances (m) of ``xy`` from the surface points at ``(s, z)``, positive
         outside (along the outward normal)."""
@@ -124,13 +154,13 @@ class PeriodicSurface:
 
 
 def fit_periodic_surface(s: np.ndarray, z: np.ndarray, xy: np.ndarray, breaks: np.ndarray,
-                         z_knots: np.ndarray, weights: np.ndarray | None = None
-                         ) -> PeriodicSurface:
+                         z_knots: np.ndarray, weights: np.ndarray | None = None,
+                         smoothing: float = PENALTY) -> PeriodicSurface:
     """Least-squares tensor-product fit of ``xy`` (n, 2) at parameters ``(s, z)``.
 
     Solves (AᵀWA + λP) c = AᵀW xy with A the tensor-product design matrix (rows are Kronecker
     products of the s and z bases) and P a second-difference penalty in both directions scaled
-    by :data:`PENALTY`.
+    by ``smoothing`` (relative to the mean diagonal of AᵀWA; default :data:`PENALTY`).
     """
     from scipy.sparse import csr_array, diags_array, eye_array, kron
     from scipy.sparse.linalg import spsolve
@@ -150,7 +180,7 @@ def fit_periodic_surface(s: np.ndarray, z: np.ndarray, xy: np.ndarray, breaks: n
     second_z = _second_difference(nz)
     penalty = (kron(second_s.T @ second_s, eye_array(nz))
                + kron(eye_array(m), second_z.T @ second_z))
-    scale = PENALTY * float(normal.diagonal().mean())
+    scale = smoothing * float(normal.diagonal().mean())
     rhs = design.T @ (w[:, None] * xy)
     solution = spsolve((normal + scale * penalty).tocsc(), rhs)
     return PeriodicSurface(breaks=np.asarray(breaks, dtype=float).copy(),
@@ -187,9 +217,11 @@ class AdaptiveSurfaceFit:
     ``tolerance`` is the RMS residual aimed at (m); ``max_breaks`` bounds the breakpoints round
     the profile; points farther than ``outlier_distance`` (m) and 5 robust standard deviations
     from the surface are trimmed; ``corrections`` is the number of fit/projection rounds per
-    knot vector; ``max_rounds`` bounds the refinement rounds. After :meth:`fit`: ``surface_``,
-    ``parameters_`` (corrected s), ``residuals_`` (signed, m), ``inliers_`` (mask of the points
-    kept by trimming) and ``history_`` (breakpoints and RMS of every round).
+    knot vector; ``max_rounds`` bounds the refinement rounds; a span is split only when it
+    holds twice ``min_span_points`` and twice 2 × the z basis functions. After :meth:`fit`:
+    ``surface_``, ``parameters_`` (corrected s), ``residuals_`` (signed, m), ``inliers_`` (mask
+    of the points kept by trimming) and ``history_`` (breakpoints, RMS, ``folded`` and the
+    penalty factor ``smoothing`` of every round).
     """
 
     tolerance: float = 0.02e-3
@@ -199,6 +231,7 @@ class AdaptiveSurfaceFit:
     max_rounds: int = 8
     min_span_points: int = 8
     history_: list[dict] = field(default_factory=list, init=False, repr=False)
+    _split_points: int = field(default=16, init=False, repr=False)
 
     def fit(self, s: np.ndarray, z: np.ndarray, xy: np.ndarray, breaks: np.ndarray,
             z_knots: np.ndarray) -> AdaptiveSurfaceFit:
@@ -221,25 +254,42 @@ class AdaptiveSurfaceFit:
         if z.min() < z_knots[0] or z.max() > z_knots[-1]:
             raise ValueError("z lies outside the z knot vector")
         self.history_ = []
-        best = None
+        # a span is split only when both halves keep, on average, enough points to pin down
+        # their coefficients: at least twice the z basis functions (each s span adds a column
+        # of them); on a sparse cloud thinner spans are held by a few points and fold
+        self._split_points = 2 * max(self.min_span_points, 2 * (len(z_knots) - DEGREE - 1))
+        candidates = []
         # while the knots are refined only gross outliers (10 × outlier_distance) are left out:
         # a point far from an early, still coarse surface is often just badly parametrised
         for _ in range(self.max_rounds):
-            _, s, residual, inliers = self._fit_knots(s, z, xy, breaks, z_knots,
-                                                      10.0 * self.outlier_distance)
-            rms = self._record(breaks, z_knots, residual, inliers)
-            if best is None or rms < best[0]:
-                best = (rms, breaks, s.copy())
+            # a knot vector whose surface folds is retried with a 10 and 100 times stronger
+            # penalty before the refinement stops at the coarser knots
+            for smoothing in (1.0, 10.0, 100.0):
+                surface, s_new, residual, inliers = self._fit_knots(
+                    s, z, xy, breaks, z_knots, 10.0 * self.outlier_distance, smoothing)
+                rms = self._record(breaks, z_knots, residual, inliers)
+                folded = surface.folds()
+                self.history_[-1].update(folded=folded, smoothing=smoothing)
+                if not folded:
+                    break
+            if folded and candidates:
+                break  # refinement went too far for the data: keep the coarser knots
+            s = s_new
+            candidates.append((rms, len(candidates), breaks, s.copy(), smoothing))
             if len(self.history_) > 1 and rms > (1.0 - MIN_GAIN) * self.history_[-2]["rms"]:
                 break
             refined = self._refine(breaks, s, residual, inliers)
             if refined is None:
                 break
             breaks = refined
-        _, breaks, s = best
-        self.surface_, self.parameters_, self.residuals_, self.inliers_ = self._fit_knots(
-            s, z, xy, breaks, z_knots, self.outlier_distance)
-        self._record(breaks, z_knots, self.residuals_, self.inliers_)
+        # the best round first; should its final fit (tighter trimming) fold, the coarser ones
+        for _, _, breaks, s, smoothing in sorted(candidates, key=lambda c: (c[0], c[1])):
+            self.surface_, self.parameters_, self.residuals_, self.inliers_ = self._fit_knots(
+                s, z, xy, breaks, z_knots, self.outlier_distance, smoothing)
+            self._record(breaks, z_knots, self.residuals_, self.inliers_)
+            self.history_[-1].update(folded=self.surface_.folds(), smoothing=smoothing)
+            if not self.history_[-1]["folded"]:
+                break
         return self
 
     def _record(self, breaks: np.ndarray, z_knots: np.ndarray, residual: np.ndarray,
@@ -251,17 +301,42 @@ class AdaptiveSurfaceFit:
         return rms
 
     def _fit_knots(self, s: np.ndarray, z: np.ndarray, xy: np.ndarray, breaks: np.ndarray,
-                   z_knots: np.ndarray, distance: float) -> tuple:
-        """Fit/projection rounds at fixed knots, leaving out the points farther than
-        ``distance`` (m) and 5 robust standard deviations."""
+                   z_knots: np.ndarray, distance: float, smoothing: float = 1.0) -> tuple:
+        """Fit/projection rounds at fixed knots (penalty ``smoothing`` × :data:`PENALTY`),
+        leaving out the points farther than ``distance`` (m) and 5 robust standard deviations
+        (see :meth:`_trim`)."""
         inliers = np.ones(len(s), dtype=bool)
         for _ in range(self.corrections):
-            surface = fit_periodic_surface(s, z, xy, breaks, z_knots, inliers.astype(float))
+            surface = fit_periodic_surface(s, z, xy, breaks, z_knots, inliers.astype(float),
+                                           smoothing * PENALTY)
             s = surface.project(xy, z, s)
             residual = surface.residuals(xy, z, s)
-            scale = 1.4826 * np.median(np.abs(residual[inliers]))
-            inliers = np.abs(residual) <= max(TRIM * scale, distance)
+            inliers = self._trim(breaks, s, residual, inliers, distance)
         return surface, s, residual, inliers
+
+    def _trim(self, breaks: np.ndarray, s: np.ndarray, residual: np.ndarray,
+              inliers: np.ndarray, distance: float) -> np.ndarray:
+        """Points kept: within 5 robust standard deviations (1.4826 × median |residual|) and
+        ``distance`` (m). With ``distance`` above ``outlier_distance`` (while the knots are
+        refined) the bound is set per knot span: ``outlier_distance`` or 5 robust standard
+        deviations of the span's own residuals, at most ``distance`` — a span the coarse
+        surface misses (an edge not yet resolved) keeps its points, while the stray points of a
+        sparse cloud (isolated, up to millimetres off) are left out everywhere else, where they
+        would pull the surface into folds."""
+        absolute = np.abs(residual)
+        bound = max(TRIM * 1.4826 * float(np.median(absolute[inliers])),
+                    self.outlier_distance)
+        if distance <= self.outlier_distance:
+            return absolute <= max(bound, distance)
+        span = np.clip(np.searchsorted(breaks, s, side="right") - 1, 0, len(breaks) - 1)
+        order = np.lexsort((absolute, span))
+        count = np.bincount(span, minlength=len(breaks))
+        start = np.concatenate([[0], np.cumsum(count)[:-1]])
+        median = np.zeros(len(breaks))
+        occupied = count > 0
+        median[occupied] = absolute[order[start[occupied] + (count[occupied] - 1) // 2]]
+        local = np.clip(TRIM * 1.4826 * median[span], bound, distance)
+        return absolute <= local
 
     def _refine(self, breaks: np.ndarray, s: np.ndarray, residual: np.ndarray,
                 inliers: np.ndarray) -> np.ndarray | None:
@@ -272,7 +347,7 @@ class AdaptiveSurfaceFit:
         square = np.bincount(span, weights=residual[inliers] ** 2, minlength=m)
         rms = np.sqrt(square / np.maximum(count, 1))
         limit = max(self.tolerance, NOISE_FACTOR * float(np.median(rms[count > 0])))
-        offending = np.flatnonzero((rms > limit) & (count >= self.min_span_points))
+        offending = np.flatnonzero((rms > limit) & (count >= self._split_points))
         if offending.size == 0 or m + offending.size > self.max_breaks:
             return None
         ends = np.append(breaks, 1.0 + breaks[0])

@@ -210,20 +210,41 @@ def _densify(polygon: np.ndarray, spacing: float) -> np.ndarray:
     return a[start] + t[:, None] * (b[start] - a[start])
 
 
-def section_metrics(polygon: np.ndarray, pitch: float) -> SectionMetrics:
-    """Row metrics of a closed section polyline (n, 2) in the unrolled x (axial) - y
-    (tangential) plane, with the neighbouring blade ``pitch`` (m) away in +y.
+def chord_line(polygon: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+    """The chord line of a closed section polyline (n, 2; m): its leading and trailing touch
+    points (m, the leading one upstream) and whether the section has a concave side to rest on.
 
-    chord = largest distance between two section points, stagger = its angle from the axial
-    direction, max thickness = diameter of the largest inscribed circle, throat = shortest
-    distance from the neighbour's trailing-edge region (its last 6 % of axial chord) to this
-    section (the cascade throat, Pritchard 1985).
+    The chord line is the double tangent (bitangent) of the section on its concave (pressure)
+    side: the line a straight edge laid against the pressure side touches at the leading and
+    trailing edges — the "caliper" chord line of blade inspection (Hexagon PC-DMIS Blade 6.0
+    help, *Chord Angle*, method CALIPER: "the line that will touch the CCV [concave] curve in two
+    places"; *Terms and Definitions*, chord line: "a line that is tangential to the concave side
+    of a blade section"). It is the longest edge of the section's convex hull, the one bridging
+    the concave side. It is well conditioned: an error ε of the surface at a touch point moves the
+    line by ε there, so its direction by ε / (distance between the touch points), where the
+    farthest pair of points slides round the edge circles by √(2 r ε).
+
+    A section without a concave side (its longest hull edge shorter than half its diameter:
+    a convex polygon such as a circle) has no bitangent; the farthest pair of points stands in.
     """
-    from matplotlib.path import Path as MplPath
-
     polygon = np.asarray(polygon, dtype=np.float64)
     hull = polygon[ConvexHull(polygon).vertices]
-    # farthest pair: on a thinned hull first, then among the neighbours of that pair
+    edges = np.roll(hull, -1, axis=0) - hull
+    length = np.linalg.norm(edges, axis=1)
+    longest = int(np.argmax(length))
+    first, second = hull[longest], hull[(longest + 1) % len(hull)]
+    diameter = _farthest_pair(hull)
+    concave = bool(length[longest] >= 0.5 * np.linalg.norm(diameter[1] - diameter[0]))
+    if not concave:
+        first, second = diameter
+    if first[0] > second[0]:
+        first, second = second, first
+    return first, second, concave
+
+
+def _farthest_pair(hull: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two hull points farthest apart: on a thinned hull first, then among the neighbours
+    of that pair."""
     k = max(1, len(hull) // 800)
     coarse = hull[::k]
     d = np.linalg.norm(coarse[:, None] - coarse[None], axis=2)
@@ -232,10 +253,29 @@ def section_metrics(polygon: np.ndarray, pitch: float) -> SectionMetrics:
     near_j = hull[np.arange(j * k - k, j * k + k + 1) % len(hull)]
     d = np.linalg.norm(near_i[:, None] - near_j[None], axis=2)
     a, b = np.unravel_index(np.argmax(d), d.shape)
-    first, second = near_i[a], near_j[b]
-    lead, trail = (first, second) if first[0] < second[0] else (second, first)
-    chord = float(d[a, b])
-    stagger = math.atan2(trail[1] - lead[1], trail[0] - lead[0])
+    return near_i[a], near_j[b]
+
+
+def section_metrics(polygon: np.ndarray, pitch: float) -> SectionMetrics:
+    """Row metrics of a closed section polyline (n, 2) in the unrolled x (axial) - y
+    (tangential) plane, with the neighbouring blade ``pitch`` (m) away in +y.
+
+    The chord line is the bitangent on the pressure side (:func:`chord_line`); stagger is its
+    angle from the axial direction, the normal of the cascade front (rad, positive towards +y;
+    Dixon & Hall, *Fluid Mechanics and Thermodynamics of Turbomachinery*, ch. 3, cascade
+    geometry); chord is the length of the section's projection onto the chord line (the
+    distance between the two perpendiculars to it that touch the leading and the trailing
+    edge: the caliper chord of PC-DMIS Blade 6.0, *Chord Length*). Max thickness = diameter of
+    the largest inscribed circle; throat = shortest distance from the neighbour's trailing-edge
+    region (its last 6 % of axial chord) to this section (the cascade throat, Pritchard 1985).
+    """
+    from matplotlib.path import Path as MplPath
+
+    polygon = np.asarray(polygon, dtype=np.float64)
+    lead, trail, _ = chord_line(polygon)
+    direction = (trail - lead) / np.linalg.norm(trail - lead)
+    stagger = math.atan2(direction[1], direction[0])
+    chord = float(np.ptp(polygon @ direction))
     dense = _densify(polygon, chord / 20_000)
     tree = cKDTree(dense)
     # largest inscribed circle: best of a grid inside the section, then refined

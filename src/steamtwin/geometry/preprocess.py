@@ -40,6 +40,8 @@ class PreprocessSettings:
     max_violation: float = 0.10  # free-space violation share above which a pose is rejected
     target_points: int = 80_000
     feature_share: float = 0.25  # share of the kept points reserved for high-curvature regions
+    joint_iterations: int = 12  # Gauss-Newton steps of the joint multi-view ICP
+    joint_stability: float = 1e-3  # joint ICP keeps directions weaker than this share fixed
 
 
 @dataclass
@@ -53,6 +55,8 @@ class PreprocessReport:
     pair_rmse: dict[str, float] = field(default_factory=dict)
     pose_graph_edges: int = 0
     pose_graph_pruned: int = 0
+    joint_rms: float = float("nan")
+    joint_weak_directions: int = 0
     fused_points: int = 0
     downsampled_points: int = 0
 
@@ -66,14 +70,38 @@ def _cloud(points: np.ndarray) -> object:
     return o3d.geometry.PointCloud(o3d.utility.Vector3dVector(np.asarray(points, np.float64)))
 
 
+def neighbour_mean_distances(points: np.ndarray, neighbours: int = 50) -> np.ndarray:
+    """Mean distance (m) of every point to its ``neighbours`` nearest *other* points (exact
+    k-d tree search, scipy's ``cKDTree`` on all cores)."""
+    from scipy.spatial import cKDTree
+
+    points = np.asarray(points, dtype=np.float64)
+    distance = cKDTree(points).query(points, k=neighbours + 1, workers=-1)[0]
+    return distance[:, 1:].mean(axis=1)  # column 0: the point itself (or a duplicate), at 0
+
+
 def remove_statistical_outliers(points: np.ndarray, neighbours: int = 50,
                                 std_ratio: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
-    """Drop points whose mean distance to their ``neighbours`` nearest is more than
-    ``std_ratio`` standard deviations above the cloud's mean (Rusu et al. 2008).
+    """Statistical outlier removal (Rusu et al. 2008, PCL's ``StatisticalOutlierRemoval``):
+    drop the points whose mean distance to their ``neighbours`` nearest other points
+    (:func:`neighbour_mean_distances`) exceeds the mean of those distances over the cloud plus
+    ``std_ratio`` sample standard deviations (n − 1).
+
+    open3d's ``remove_statistical_outlier(nb_neighbors=k)`` counts the point itself among its k
+    neighbours (its first, at distance 0), i.e. it averages over k − 1 other points and a zero.
+    Every mean is then scaled by the same (k − 1)/k, which leaves the test unchanged, so
+    ``nb_neighbors = neighbours + 1`` keeps exactly the points of this definition (open3d keeps
+    strictly below the threshold, PCL at or below it; a tie has probability zero) — checked
+    point for point against a brute-force reference in the tests. That call does the work here:
+    its multi-threaded k-d tree is faster than scipy's.
 
     Returns ``(kept points, boolean mask of the kept points)``.
     """
-    _, kept = _cloud(points).remove_statistical_outlier(nb_neighbors=neighbours,
+    points = np.asarray(points)
+    if len(points) <= neighbours:
+        raise ValueError(f"statistical outlier removal needs more than {neighbours} points "
+                         f"(got {len(points)})")
+    _, kept = _cloud(points).remove_statistical_outlier(nb_neighbors=neighbours + 1,
                                                         std_ratio=std_ratio)
     mask = np.zeros(len(points), dtype=bool)
     mask[np.asarray(kept, dtype=np.int64)] = True
@@ -278,6 +306,133 @@ def degeneracy_aware_icp(source: np.ndarray, target: np.ndarray, target_normals:
     return transformation, overlap, rms, scale @ hessian @ scale
 
 
+def multiview_icp(views: Sequence[np.ndarray], normals: Sequence[np.ndarray],
+                  poses: Sequence[np.ndarray], distance: float, iterations: int = 30,
+                  prior: Sequence[np.ndarray] | None = None, prior_angle: float = 5e-4,
+                  prior_offset: float = 0.05e-3, min_pairs: int = 200,
+                  tolerance: float = 1e-7, stability: float = 0.0
+                  ) -> tuple[list[np.ndarray], dict]:
+    """Joint point-to-plane ICP of all views at once (simultaneous multi-view registration:
+    Bergevin, Soucy, Gagnon & Laurendeau 1996, IEEE PAMI 18(5); Pulli 1999, 3DIM).
+
+    Every ordered pair of overlapping views contributes the point-to-plane residuals of the
+    first view's points against the second's tangent planes (``normals``, oriented towards
+    each view's camera; pairs with normals more than 60° apart are dropped: on a thin blade the
+    nearest point may lie on the opposite face); one Gauss-Newton step then moves all poses
+    (6 (N − 1) unknowns, view 0 fixed: the gauge) together, so that a direction one pair cannot
+    fix (the shift along the span of two views without a cap) is fixed by the others.
+    Residuals are weighted by Huber's function (k = 1.345 robust σ) and correspondences farther
+    than ``distance`` (m) or 3 robust σ are dropped. With ``prior`` (the scanner's own pose
+    estimates, view -> the frame of view 0), each pose also carries a Gaussian prior of
+    ``prior_angle`` (rad) and ``prior_offset`` (m) standard deviation about it: a maximum a
+    posteriori estimate, which leaves the estimate at the prior only in directions the scans
+    do not constrain. With ``stability`` > 0 the step is taken only along eigenvectors of the
+    joint normal matrix whose eigenvalue exceeds ``stability`` × the largest (degeneracy-aware
+    solving, Zhang, Kaess & Singh 2016); weaker directions keep their starting value. Returns
+    ``(poses, figures)``, figures holding the linked view pairs, correspondences, the RMS
+    residual (m), the iterations used and the number of weak directions.
+    """
+    from scipy.spatial import cKDTree
+
+    count = len(views)
+    poses = [np.asarray(p, dtype=np.float64).copy() for p in poses]
+    trees = [cKDTree(v) for v in views]
+    centre = np.mean([transform(v, p).mean(axis=0) for v, p in zip(views, poses, strict=True)],
+                     axis=0)
+    length = float(np.sqrt(np.mean([np.sum((transform(v, p) - centre) ** 2, axis=1).mean()
+                                    for v, p in zip(views, poses, strict=True)])))
+    figures: dict = {"iterations": 0, "correspondences": 0, "rms": math.inf, "pairs": 0}
+    sigma = distance / 3.0
+    apart: set[tuple[int, int]] = set()
+    for iteration in range(iterations):
+        hessian = np.zeros((6 * count, 6 * count))
+        gradient = np.zeros(6 * count)
+        moved = [transform(v, p) for v, p in zip(views, poses, strict=True)]
+        turned = [n @ p[:3, :3].T for n, p in zip(normals, poses, strict=True)]
+        residuals = []
+        linked = set()
+        for i in range(count):
+            for j in range(count):
+                if i == j or (i, j) in apart:
+                    continue
+                local = transform(moved[i], np.linalg.inv(poses[j]))
+                d, idx = trees[j].query(local, distance_upper_bound=distance, workers=-1)
+                ok = np.flatnonzero(np.isfinite(d))
+                if len(ok) < min_pairs:
+                    if iteration == 0:  # views that do not overlap at the start never will
+                        apart.add((i, j))
+                    continue
+                idx = idx[ok]
+                n = turned[j][idx]
+                ok_normal = np.einsum("ij,ij->i", turned[i][ok], n) > 0.5
+                ok, idx, n = ok[ok_normal], idx[ok_normal], n[ok_normal]
+                if len(ok) < min_pairs:
+                    continue
+                p_i, q_j = moved[i][ok] - centre, moved[j][idx] - centre
+                r = np.einsum("ij,ij->i", p_i - q_j, n)
+                keep = np.abs(r) <= 3.0 * sigma if iteration > 0 else np.ones(len(r), bool)
+                p_i, q_j, n, r = p_i[keep], q_j[keep], n[keep], r[keep]
+                residuals.append(r)
+                linked.add((min(i, j), max(i, j)))
+                a = np.column_stack([np.cross(p_i, n) / length, n])
+                b = -np.column_stack([np.cross(q_j, n) / length, n])
+                w = np.minimum(1.0, 1.345 * sigma / np.maximum(np.abs(r), 1e-300))
+                si, sj = slice(6 * i, 6 * i + 6), slice(6 * j, 6 * j + 6)
+                wa, wb = a * w[:, None], b * w[:, None]
+                hessian[si, si] += a.T @ wa
+                hessian[sj, sj] += b.T @ wb
+                hessian[si, sj] += wa.T @ b
+                hessian[sj, si] += wb.T @ a
+                gradient[si] -= wa.T @ r
+                gradient[sj] -= wb.T @ r
+        if not residuals:
+            raise ValueError("no two views overlap: the views cannot be registered jointly")
+        all_r = np.concatenate(residuals)
+        sigma = max(1.4826 * float(np.median(np.abs(all_r))), 1e-7)
+        hessian /= sigma**2
+        gradient /= sigma**2
+        if prior is not None:
+            for k in range(1, count):
+                error = _pose_difference(poses[k], np.asarray(prior[k], dtype=np.float64),
+                                         centre, length)
+                weight = np.array([1.0 / (prior_angle * length) ** 2] * 3
+                                  + [1.0 / prior_offset**2] * 3)
+                sk = slice(6 * k, 6 * k + 6)
+                hessian[sk, sk] += np.diag(weight)
+                gradient[sk] -= weight * error
+        step = np.zeros(6 * count)
+        values, vectors = np.linalg.eigh(hessian[6:, 6:])
+        keep = values > stability * values[-1]
+        step[6:] = vectors[:, keep] @ ((vectors[:, keep].T @ gradient[6:]) / values[keep])
+        figures["weak_directions"] = int(np.sum(~keep))
+        for k in range(1, count):
+            delta = step[6 * k: 6 * k + 6]
+            update = np.eye(4)
+            update[:3, :3] = _rotation_from_vector(delta[:3] / length)
+            update[:3, 3] = delta[3:] + centre - update[:3, :3] @ centre
+            poses[k] = update @ poses[k]
+        figures.update({"iterations": iteration + 1, "correspondences": len(all_r),
+                        "pairs": len(linked),
+                        "rms": float(np.sqrt(np.mean(all_r**2)))})
+        if np.abs(step).max() < tolerance:
+            break
+    return poses, figures
+
+
+def _pose_difference(pose: np.ndarray, reference: np.ndarray, centre: np.ndarray,
+                     length: float) -> np.ndarray:
+    """The small motion (rotation vector × ``length``, translation at ``centre``; m) taking
+    ``pose`` to ``reference``: reference ≈ exp(motion) · pose."""
+    motion = reference @ np.linalg.inv(pose)
+    rotation = motion[:3, :3]
+    angle = math.acos(max(-1.0, min(1.0, 0.5 * (np.trace(rotation) - 1.0))))
+    axis = np.array([rotation[2, 1] - rotation[1, 2], rotation[0, 2] - rotation[2, 0],
+                     rotation[1, 0] - rotation[0, 1]])
+    vector = axis * (0.5 * angle / math.sin(angle)) if angle > 1e-12 else 0.5 * axis
+    shift = motion[:3, :3] @ centre + motion[:3, 3] - centre
+    return np.concatenate([vector * length, shift])
+
+
 def _rotation_from_vector(vector: np.ndarray) -> np.ndarray:
     """Rotation matrix of a rotation vector (Rodrigues)."""
     angle = float(np.linalg.norm(vector))
@@ -353,11 +508,16 @@ def register_views(views: Sequence[np.ndarray], settings: PreprocessSettings | N
        (:func:`visibility_violation`) or overlap less than ``settings.min_overlap`` and keeping
        the lowest point-to-plane RMS. On smooth, nearly symmetric blades with sparse views this
        fallback often slides a view along the surface (see docs/geometry.md).
-    2. Fine: point-to-plane ICP of each view onto the model of the views before it, moving
-       only along well-constrained directions (:func:`degeneracy_aware_icp`).
-    3. Multi-view refinement: every overlapping pair is re-registered by ICP from the current
-       poses and all pairs form an open3d pose graph optimised globally (Choi, Zhou & Koltun
-       2015) with view 0 fixed.
+    2. Without ``initial_poses`` only — fine: point-to-plane ICP of each view onto the model
+       of the views before it, moving only along well-constrained directions
+       (:func:`degeneracy_aware_icp`); then every overlapping pair is re-registered by ICP from
+       the current poses and all pairs form an open3d pose graph optimised globally (Choi, Zhou
+       & Koltun 2015) with view 0 fixed.
+    3. Joint multi-view point-to-plane ICP of all full-resolution views at once
+       (:func:`multiview_icp`), degeneracy-aware: the one direction a nearly extruded blade
+       leaves free — the shift along the span, with the matching turn of the twist, between the
+       views that see only the tip cap and those that see only the root cap — keeps its
+       starting (tracked) value; every other direction is fixed by the scans to µm.
 
     Raises ``ValueError`` naming the views that could not be registered.
     """
@@ -370,26 +530,17 @@ def register_views(views: Sequence[np.ndarray], settings: PreprocessSettings | N
     # correspondences must reach the next point of a sparse view: at least 3 point spacings
     distance = max(settings.icp_distance, 3.0 * spacing)
     radius = max(2.0 * spacing, settings.icp_distance)
-    subsampled = [np.asarray(_cloud(v).voxel_down_sample(0.25 * settings.voxel).points)
-                  for v in views]
-    normals = [local_frames(v, 20, viewpoint=np.zeros(3))[1] for v in subsampled]
     if initial_poses is not None:
         if len(initial_poses) != count:
             raise ValueError(f"{len(initial_poses)} initial poses for {count} views")
         base = np.linalg.inv(np.asarray(initial_poses[0], dtype=np.float64))
-        poses = {0: np.eye(4)}
-        for j in range(1, count):
-            model = np.concatenate([transform(subsampled[k], poses[k]) for k in poses])
-            model_normals = np.concatenate([normals[k] @ poses[k][:3, :3].T for k in poses])
-            guess = base @ np.asarray(initial_poses[j], dtype=np.float64)
-            poses[j], _, _, _ = degeneracy_aware_icp(subsampled[j], model, model_normals, guess,
-                                                     distance, stability=settings.stability,
-                                                     source_normals=normals[j])
-            if progress is not None:
-                progress(0.6 * (j + 1) / count)
-    else:
-        poses = _register_by_features(views, subsampled, normals, settings, spacing, radius,
-                                      distance, progress)
+        tracked = [base @ np.asarray(p, dtype=np.float64) for p in initial_poses]
+        return _joint_registration(views, tracked, distance, settings, report, progress)
+    subsampled = [np.asarray(_cloud(v).voxel_down_sample(0.25 * settings.voxel).points)
+                  for v in views]
+    normals = [local_frames(v, 20, viewpoint=np.zeros(3))[1] for v in subsampled]
+    poses = _register_by_features(views, subsampled, normals, settings, spacing, radius,
+                                  distance, progress)
     graph = reg.PoseGraph()
     for k in range(count):
         graph.nodes.append(reg.PoseGraphNode(poses[k]))
@@ -415,9 +566,26 @@ def register_views(views: Sequence[np.ndarray], settings: PreprocessSettings | N
     if report is not None:
         report.pose_graph_edges = len(graph.edges)
         report.pose_graph_pruned = edges - len(graph.edges)
+    optimised = [np.asarray(graph.nodes[k].pose) for k in range(count)]
+    return _joint_registration(views, optimised, distance, settings, report, progress)
+
+
+def _joint_registration(views: Sequence[np.ndarray], poses: list[np.ndarray], distance: float,
+                        settings: PreprocessSettings, report: PreprocessReport | None,
+                        progress: Callable[[float], None] | None) -> list[np.ndarray]:
+    """Final joint multi-view ICP (:func:`multiview_icp`) of the full-resolution views from
+    ``poses`` (view -> frame of view 0), degeneracy-aware with ``settings.joint_stability``."""
+    normals = [local_frames(v, 20, viewpoint=np.zeros(3))[1] for v in views]
+    poses, figures = multiview_icp(views, normals, poses, distance,
+                                   iterations=settings.joint_iterations,
+                                   stability=settings.joint_stability)
+    if report is not None:
+        report.joint_rms = figures["rms"]
+        report.joint_weak_directions = figures.get("weak_directions", 0)
+        report.pose_graph_edges = max(report.pose_graph_edges, figures["pairs"])
     if progress is not None:
         progress(1.0)
-    return [np.asarray(graph.nodes[k].pose) for k in range(count)]
+    return poses
 
 
 def _register_by_features(views: Sequence[np.ndarray], subsampled: list[np.ndarray],
@@ -465,6 +633,52 @@ def _register_by_features(views: Sequence[np.ndarray], subsampled: list[np.ndarr
         if progress is not None:
             progress(0.6 * len(poses) / count)
     return poses
+
+
+def pose_errors(estimated: Sequence[np.ndarray], truth: Sequence[np.ndarray],
+                views: Sequence[np.ndarray]) -> dict[str, np.ndarray]:
+    """Errors of recovered view poses against the true ones (4×4, view -> any common frame).
+
+    Only relative poses are recoverable: the estimate lives in the frame of view 0 (a free
+    gauge). One rigid transformation G — the least-squares fit (Kabsch) of all view points as
+    placed by the estimate onto the same points as placed by the truth — takes the estimated
+    pose set to the true one; each view's error is then E_k = G T̂_k T_k⁻¹, a motion of the
+    truth frame. Per view (arrays of length N): ``rotation_deg`` its angle (degrees),
+    ``translation_m`` the displacement of the view's point centroid (m; at the part, not at the
+    camera 0.1 m away), split into ``across_span_m`` (x-y) and ``span_m`` (z of the truth
+    frame, the blade's span for blade-frame truth), and ``max_point_m``, the largest
+    displacement of any of the view's ``views`` points (view frame, m).
+    """
+    placed = [transform(v, t) for v, t in zip(views, truth, strict=True)]
+    moved = [transform(v, e) for v, e in zip(views, estimated, strict=True)]
+    step = max(1, sum(len(v) for v in views) // 200_000)
+    source = np.concatenate(moved)[::step]
+    target = np.concatenate(placed)[::step]
+    gauge = np.eye(4)
+    gauge[:3, :3], gauge[:3, 3] = _kabsch(source, target)
+    out: dict[str, list[float]] = {"rotation_deg": [], "translation_m": [], "across_span_m": [],
+                                   "span_m": [], "max_point_m": []}
+    for t, e, p in zip(truth, estimated, placed, strict=True):
+        error = gauge @ np.asarray(e) @ np.linalg.inv(np.asarray(t))
+        cosine = 0.5 * (np.trace(error[:3, :3]) - 1.0)
+        centroid = p.mean(axis=0)
+        shift = error[:3, :3] @ centroid + error[:3, 3] - centroid
+        out["rotation_deg"].append(math.degrees(math.acos(max(-1.0, min(1.0, cosine)))))
+        out["translation_m"].append(float(np.linalg.norm(shift)))
+        out["across_span_m"].append(float(np.linalg.norm(shift[:2])))
+        out["span_m"].append(float(abs(shift[2])))
+        out["max_point_m"].append(float(np.linalg.norm(transform(p, error) - p, axis=1).max()))
+    return {key: np.array(value) for key, value in out.items()}
+
+
+def _kabsch(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rotation and translation of the least-squares rigid fit of ``source`` onto ``target``
+    (Kabsch 1976)."""
+    cs, ct = source.mean(axis=0), target.mean(axis=0)
+    u, _, vt = np.linalg.svd((source - cs).T @ (target - ct))
+    d = np.sign(np.linalg.det(vt.T @ u.T))
+    rotation = vt.T @ np.diag([1.0, 1.0, d]) @ u.T
+    return rotation, ct - rotation @ cs
 
 
 def transform(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:

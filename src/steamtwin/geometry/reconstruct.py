@@ -11,8 +11,11 @@ scan is brought there by :func:`~steamtwin.geometry.fidelity.align_to_nominal`).
    stacked blade (a similarity of each section).
 3. The side is one periodic cubic B-spline surface (:mod:`~steamtwin.geometry.bspline`) whose
    starting knots are dense on the leading- and trailing-edge patches (``edge_knot_spans`` per
-   edge) and graded to ``side_knot_spacing`` along the sides, then refined adaptively; each cap
-   is a least-squares plane (a degree-1 patch).
+   edge, no wider than a third of the edge circle's half-turn, :func:`edge_arcs`) and graded to
+   ``side_knot_spacing`` along the sides, then refined adaptively — robust to the stray points
+   and the thin spans of sparse clouds, stopping before the surface folds; a side that still
+   folds or misses the cloud is refused (:func:`check_side_fit`); each cap is a least-squares
+   plane (a degree-1 patch).
 4. The side is sampled on a grid — chordwise spacing from the curvature (chord sag ``sag``,
    at most ``chordwise_spacing``), ``span_spacing`` along the span, the grid lines through the
    patch boundaries — triangulated as a closed tube between the rims where it meets the cap
@@ -148,7 +151,8 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
     have = np.isin(labels, [REGIONS.index(name) for name in SIDE_REGIONS])
     s0, perimeter = initial_parameters(points, segmentation, have)
     boundaries = patch_boundaries(s0[have], labels[have])
-    breaks = initial_breaks(boundaries, perimeter, settings)
+    breaks = initial_breaks(boundaries, perimeter, settings,
+                            edge_arcs(segmentation, labels, perimeter))
     root, tip = _refit_caps(points, labels, segmentation)
     z = points[have, 2]
     z_lo, z_hi = _span_range(points[have], root, tip)
@@ -158,6 +162,7 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
                              outlier_distance=settings.outlier_distance)
     fit.fit(s0[have], z, points[have, :2], breaks, z_knots)
     surface = fit.surface_
+    check_side_fit(fit)
     parameters = np.full(len(points), np.nan)
     parameters[have] = fit.parameters_
     boundaries = patch_boundaries(fit.parameters_, labels[have])
@@ -225,6 +230,23 @@ def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.
     return s, float(np.median(perimeters))
 
 
+#: Largest share of the side points the fit may leave out before the side counts as not fitted.
+MAX_TRIMMED = 0.1
+
+
+def check_side_fit(fit: AdaptiveSurfaceFit) -> None:
+    """Raise :class:`ReconstructionError` when the fitted side folds over itself or leaves more
+    than :data:`MAX_TRIMMED` of the side points out (farther than the outlier distance): the
+    surface then does not follow the cloud, whatever the triangulation would make of it."""
+    trimmed = float(np.mean(~fit.inliers_))
+    if fit.surface_.folds() or trimmed > MAX_TRIMMED:
+        raise ReconstructionError(
+            f"the fitted side folds over itself or misses the cloud ({trimmed:.0%} of the side "
+            f"points farther than {fit.outlier_distance * 1e3:.3g} mm): are the sections too "
+            "strongly cambered for the chordwise parametrisation, or the cloud not in the "
+            "blade frame?")
+
+
 def _circular(s: np.ndarray, centre: float) -> np.ndarray:
     """``s`` shifted into [centre − 0.5, centre + 0.5)."""
     return np.mod(s - centre + 0.5, 1.0) + centre - 0.5
@@ -261,16 +283,35 @@ def _separation(before: np.ndarray, after: np.ndarray) -> float:
     return float(candidates[np.argmax(score)])
 
 
+def edge_arcs(segmentation: Segmentation, labels: np.ndarray, perimeter: float
+              ) -> dict[str, float]:
+    """Half-turn arc length π r of each edge circle as a fraction of the ``perimeter`` (m), the
+    radius r the smallest radius of curvature of the edge patch (the 90th percentile of its
+    points' curvature; k-NN estimates blend in the flatter sides, so r is rather too large)."""
+    arcs = {}
+    for edge in ("trailing_edge", "leading_edge"):
+        on = labels == REGIONS.index(edge)
+        if np.any(on):
+            radius = 1.0 / max(float(np.percentile(segmentation.curvature[on], 90.0)), 1e-9)
+            arcs[edge] = math.pi * radius / perimeter
+    return arcs
+
+
 def initial_breaks(boundaries: dict[str, float], perimeter: float,
-                   settings: ReconstructionSettings) -> np.ndarray:
-    """Starting breakpoints in [0, 1): ``edge_knot_spans`` spans across each edge patch,
-    growing by half the distance from the edge up to ``side_knot_spacing`` along the sides."""
+                   settings: ReconstructionSettings, arcs: dict[str, float] | None = None
+                   ) -> np.ndarray:
+    """Starting breakpoints in [0, 1): ``edge_knot_spans`` spans across each edge patch — or
+    across the edge circle's half-turn ``arcs[edge]`` (fraction of the perimeter) when that is
+    narrower: on a sparse cloud the patch spreads onto the sides and spans as wide as the
+    circle cut across it —, growing by half the distance from the edge up to
+    ``side_knot_spacing`` along the sides."""
     grid = np.linspace(0.0, 1.0, 20_001)
     spacing = np.full(len(grid), settings.side_knot_spacing / perimeter)
     for edge in ("trailing_edge", "leading_edge"):
         lo = next(v for k, v in boundaries.items() if k.endswith(f"|{edge}"))
         hi = next(v for k, v in boundaries.items() if k.startswith(f"{edge}|"))
-        width = np.mod(hi - lo, 1.0)
+        width = min(float(np.mod(hi - lo, 1.0)), (arcs or {}).get(edge, 1.0))
+        lo = lo + 0.5 * (np.mod(hi - lo, 1.0) - width)
         centre = lo + 0.5 * width
         outside = np.maximum(np.abs(_circular(grid, centre) - centre) - 0.5 * width, 0.0)
         spacing = np.minimum(spacing, width / settings.edge_knot_spans + 0.5 * outside)
