@@ -22,11 +22,10 @@ def blade_snapshots(reference_spec, reference_model, coarse_blade) -> SnapshotSe
     return generate_snapshots(reference_spec, coarse_blade, conditions, max_workers=1)
 
 
-def random_conditions(spec, n: int, seed: int) -> pd.DataFrame:
-    """Conditions inside the design's envelope at random loads (held out from the design)."""
-    rng = np.random.default_rng(seed)
+def conditions_at(spec, loads, rng: np.random.Generator) -> pd.DataFrame:
+    """Conditions at ``loads``: pressure ±2 %, temperature ±5 K, flow ±2 % (random, ``rng``)."""
     rows = []
-    for load in rng.uniform(0.3, 1.0, n):
+    for load in loads:
         point = operating_point(spec, load)
         flow = float(point["main_steam_flow"]) * min(rng.uniform(0.98, 1.02), 1.0 / load)
         rows.append({
@@ -39,6 +38,18 @@ def random_conditions(spec, n: int, seed: int) -> pd.DataFrame:
             / spec.design.main_steam_flow,
         })
     return pd.DataFrame(rows)
+
+
+def random_conditions(spec, n: int, seed: int) -> pd.DataFrame:
+    """Conditions inside the design's envelope at random loads (held out from the design)."""
+    rng = np.random.default_rng(seed)
+    return conditions_at(spec, rng.uniform(0.3, 1.0, n), rng)
+
+
+@pytest.fixture(scope="session")
+def held_out_conditions():
+    """:func:`conditions_at`, for test modules (they cannot import this conftest)."""
+    return conditions_at
 
 
 @pytest.fixture(scope="session")

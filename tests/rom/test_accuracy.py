@@ -10,10 +10,8 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
-import pandas as pd
 import pytest
 
-from steamtwin.model.operating import operating_point
 from steamtwin.rom.build import build_rom
 from steamtwin.rom.estimator import ExtrapolationWarning, PodRbfRom
 from steamtwin.rom.features import FEATURE_NAMES, ControlStageFeatures
@@ -22,36 +20,17 @@ from steamtwin.rom.snapshots import ROM_INPUTS, generate_snapshots
 from steamtwin.rom.validation import rom_errors
 
 
-def conditions_at(spec, loads, seed: int) -> pd.DataFrame:
-    """Held-out conditions at ``loads``: pressure ±2 %, temperature ±5 K, flow ±2 % (random)."""
-    rng = np.random.default_rng(seed)
-    rows = []
-    for load in loads:
-        point = operating_point(spec, load)
-        flow = float(point["main_steam_flow"]) * min(rng.uniform(0.98, 1.02), 1.0 / load)
-        rows.append({
-            "load_fraction": load,
-            "main_steam_pressure": float(point["main_steam_pressure"]) * rng.uniform(0.98, 1.02),
-            "main_steam_temperature": float(point["main_steam_temperature"])
-            + rng.uniform(-5.0, 5.0),
-            "main_steam_flow": flow,
-            "hp_exhaust_pressure": spec.design.hp_exhaust_pressure * flow
-            / spec.design.main_steam_flow,
-        })
-    return pd.DataFrame(rows)
-
-
 @pytest.fixture(scope="module")
 def default_build(reference_spec, reference_model, coarse_blade):
     return build_rom(reference_spec, coarse_blade, max_workers=1)
 
 
 @pytest.fixture(scope="module")
-def held_out(reference_spec, reference_model, coarse_blade):
+def held_out(reference_spec, reference_model, coarse_blade, held_out_conditions):
     """Random loads plus loads around the third valve's opening (75–100 %), where it kinks."""
     loads = np.concatenate([np.random.default_rng(7).uniform(0.3, 1.0, 5),
                             np.random.default_rng(8).uniform(0.8, 1.0, 5)])
-    conditions = conditions_at(reference_spec, loads, seed=9)
+    conditions = held_out_conditions(reference_spec, loads, np.random.default_rng(9))
     return generate_snapshots(reference_spec, coarse_blade, conditions, max_workers=1)
 
 
