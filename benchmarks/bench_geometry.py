@@ -10,8 +10,8 @@ uncertainty study)
 
 from __future__ import annotations
 
+import argparse
 import json
-import sys
 import time
 
 import numpy as np
@@ -181,7 +181,10 @@ def _reconstruction(blade: Blade, cloud: np.ndarray, quick: bool = False) -> dic
 
 
 if __name__ == "__main__":
-    arguments = [a for a in sys.argv[1:] if not a.startswith("--")]
-    row_name = arguments[0] if arguments else "hp1"
-    seed_value = int(arguments[1]) if len(arguments) > 1 else 0
-    print(json.dumps(main(row_name, seed_value, "--quick" in sys.argv), indent=2, default=float))
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("row", nargs="?", default="hp1", help="blade row, e.g. hp1")
+    parser.add_argument("seed", nargs="?", type=int, default=0, help="scan seed")
+    parser.add_argument("--quick", action="store_true",
+                        help="no meshing and no uncertainty study")
+    options = parser.parse_args()
+    print(json.dumps(main(options.row, options.seed, options.quick), indent=2, default=float))
