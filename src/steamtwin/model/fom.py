@@ -305,11 +305,11 @@ def _validated_inputs(inputs: pd.DataFrame) -> tuple[dict[str, np.ndarray], np.n
     bad = near[t0[near] <= lower_boundary_temperature(p0[near])]
     if bad.size:
         row = int(bad[0])
-        t_min = lower_boundary_temperature(p0[bad])
+        t_min = float(lower_boundary_temperature(p0[row]))
         raise InputError(
             f"inputs column 'main_steam_temperature' row {row} ({inputs.index[row]}): "
             f"{t0[row] - 273.15:.1f} °C is not superheated at {p0[row] / 1e6:.3f} MPa "
-            f"(must exceed {t_min[0] - 273.15:.1f} °C)"
+            f"(must exceed {t_min - 273.15:.1f} °C)"
         )
     return columns, _time_steps(inputs.index)
 
