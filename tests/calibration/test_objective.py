@@ -112,3 +112,32 @@ def test_too_short_window_and_missing_sensor_are_named(linear_simulator):
     no_casing = small_window().drop(columns="hp_inner_casing_temperature")
     with pytest.raises(ValueError, match=r"window 0: lacks column\(s\) \['hp_inner_casing"):
         CalibrationProblem(linear_simulator, [no_casing], min_samples=1)
+
+
+class _SimulateOnly:
+    """The FOM seen through the bare Simulator protocol (no checked-input fast path)."""
+
+    def __init__(self, model) -> None:
+        self.model = model
+        self.input_signals = model.input_signals
+        self.output_signals = model.output_signals
+
+    def simulate(self, inputs: pd.DataFrame, params: ModelParameters) -> pd.DataFrame:
+        return self.model.simulate(inputs, params)
+
+
+def test_fast_path_scores_as_the_protocol_does(reference_model, low_load_window):
+    """The FOM's windows are checked once and run as arrays; the RMSE is the protocol's."""
+    window = low_load_window.iloc[:300]
+    fast = CalibrationProblem(reference_model, [window], min_samples=1)
+    plain = CalibrationProblem(_SimulateOnly(reference_model), [window], min_samples=1)
+    assert fast.windows[0].checked is not None and plain.windows[0].checked is None
+    params = ModelParameters(0.97, 1.3, 1.4)
+    assert fast.rmse(params) == pytest.approx(plain.rmse(params), rel=1e-13)
+    # inputs the model rejects keep being reported per evaluation, as through ``simulate``
+    bad = window.copy()
+    bad.iloc[5, bad.columns.get_loc("main_steam_flow")] = 10.0
+    rejected = CalibrationProblem(reference_model, [bad], min_samples=1)
+    assert rejected.windows[0].checked is None
+    evaluation = rejected.objective.evaluate([1.0, 1.0, 1.0])
+    assert evaluation.rmse == PENALTY_RMSE and "main_steam_flow" in evaluation.error

@@ -378,3 +378,54 @@ def test_superheat_screen_agrees_with_the_row_by_row_check(rows):
             _validated_inputs(frame)
     else:
         _validated_inputs(frame)
+
+
+def test_checked_inputs_run_as_simulate_does(reference_spec):
+    """The calibration's fast path (inputs checked once, array out) equals ``simulate``,
+    sensor lags included, and the check still names the column and row."""
+    from steamtwin.model.fom import FullOrderModel
+
+    lagged = FullOrderModel(reference_spec,
+                            sensor_time_constants={"hp_exhaust_temperature": 20.0})
+    frame = load_profile_inputs(reference_spec, ramp_profile(1.0, 0.6, 0.05, 30.0, 60.0))
+    params = ModelParameters(0.98, 1.2, 1.5)
+    signals = ["hp_exhaust_temperature", "control_stage_pressure"]
+    expected = lagged.simulate(frame, params)[signals].to_numpy()
+    checked = lagged.check_inputs(frame)
+    assert np.array_equal(lagged.simulate_checked(checked, params, signals), expected)
+    assert lagged.simulate_checked(checked, params).shape == (len(frame),
+                                                              len(lagged.output_signals))
+    with pytest.raises(ValueError, match="does not predict"):
+        lagged.simulate_checked(checked, params, ["heat_to_metal"])
+    frame.iloc[7, frame.columns.get_loc("main_steam_flow")] = 10.0
+    with pytest.raises(InputError, match="'main_steam_flow' row 7"):
+        lagged.check_inputs(frame)
+
+
+@settings(max_examples=30, deadline=None)
+@given(guess=st.floats(0.0, 1.0), slope=st.floats(-1e-4, 1e-4), load=st.floats(0.3, 0.9))
+def test_throttled_valve_pressure_passes_the_flow_from_any_start(reference_model, guess, slope,
+                                                                 load):
+    """The part-open valve's outlet pressure passes the flow to THROTTLE_TOLERANCE whatever the
+    warm start (pressure and slope, even a wrong-signed one), and lies in (p1, p_valve]."""
+    from steamtwin.model import kernel
+    from steamtwin.steam.tables import steam_tables
+
+    tables = steam_tables()
+    p1, p_valve, h0 = 4.0e6 * load + 1.0e6, 15.6e6, 3.39e6
+    area = 2e-3
+    open_flow = kernel._nozzle_group_flow(area, p1, p_valve, _v(tables, p_valve, h0))
+    flow = 0.5 * open_flow
+    start = p1 + guess * (p_valve - p1)
+    pressure, new_slope = kernel._throttled_pressure(flow, area, p1, p_valve, open_flow, h0,
+                                                     tables, start, slope)
+    assert p1 < pressure <= p_valve
+    passed = kernel._nozzle_group_flow(area, p1, pressure, _v(tables, pressure, h0))
+    assert abs(passed - flow) <= kernel.THROTTLE_TOLERANCE * flow
+    assert new_slope > 0.0  # flow rises with the valve-outlet pressure
+
+
+def _v(tables, p, h):
+    from steamtwin.steam.tables import PH_V, ph_property
+
+    return ph_property(tables, PH_V, p, h)

@@ -29,6 +29,7 @@ from steamtwin.calibration.objective import (
     PENALTY_RMSE,
     CalibrationProblem,
     Objective,
+    predict_window,
 )
 from steamtwin.model.parameters import ModelParameters
 
@@ -55,8 +56,7 @@ def _residuals(objective: Objective, params: ModelParameters) -> list[np.ndarray
     """Weighted residuals (K) per window: rows = samples, one column per sensor, NaN if unused."""
     result = []
     for window in objective.windows:
-        simulated = objective.simulator.simulate(window.inputs, params)
-        predicted = simulated[list(objective.sensors)].to_numpy(dtype=float)
+        predicted = predict_window(objective.simulator, window, params, objective.sensors)
         result.append((predicted - window.measured) * np.sqrt(objective.weights))
     return result
 

@@ -49,6 +49,7 @@ __all__ = [
     "PreparedWindow",
     "check_bounds",
     "fitness",
+    "predict_window",
     "prepare_window",
     "squared_errors",
     "window_rmse",
@@ -109,7 +110,8 @@ class PreparedWindow:
     ``inputs``: the simulator's input columns (SI) after dropping/filling; ``measured``:
     (n, n_sensors) measured temperatures (K), NaN where excluded; ``filled_rows``: rows with a
     forward-filled input; ``dropped_rows``: leading rows dropped; ``excluded``: NaN measured
-    samples per sensor.
+    samples per sensor; ``checked``: the inputs as the simulator's ``check_inputs`` returned
+    them, when it has that fast path (see :func:`predict_window`), else None.
     """
 
     inputs: pd.DataFrame
@@ -117,6 +119,7 @@ class PreparedWindow:
     filled_rows: int
     dropped_rows: int
     excluded: tuple[int, ...]
+    checked: object = None
 
 
 def _seconds(index: pd.Index) -> np.ndarray:
@@ -169,16 +172,44 @@ def prepare_window(window: pd.DataFrame, simulator: Simulator, sensors: Sequence
     if empty:
         raise ValueError(f"{name}: sensor(s) {empty} have no valid measured sample")
     return PreparedWindow(inputs=inputs, measured=values, filled_rows=filled_rows,
-                          dropped_rows=first, excluded=excluded)
+                          dropped_rows=first, excluded=excluded,
+                          checked=_checked_inputs(simulator, inputs))
 
 
-def squared_errors(prepared: PreparedWindow, simulated: pd.DataFrame, sensors: Sequence[str]
-                    ) -> tuple[np.ndarray, np.ndarray]:
-    """Per-sensor sum of squared errors (K²) and valid-sample counts; ValueError on NaN output."""
+def _checked_inputs(simulator: Simulator, inputs: pd.DataFrame) -> object:
+    """The simulator's checked form of ``inputs`` (None without the fast path, or when it
+    rejects them: every evaluation then reports the rejection through ``simulate``)."""
+    check = getattr(simulator, "check_inputs", None)
+    if check is None or not hasattr(simulator, "simulate_checked"):
+        return None
+    try:
+        return check(inputs)
+    except ValueError:
+        return None
+
+
+def predict_window(simulator: Simulator, prepared: PreparedWindow, params: ModelParameters,
+                   sensors: Sequence[str]) -> np.ndarray:
+    """Predicted ``sensors`` (samples, sensors; K) on one window.
+
+    A simulator may offer ``check_inputs(inputs)`` and ``simulate_checked(checked, params,
+    signals)`` (as :class:`~steamtwin.model.fom.FullOrderModel` does): the window's inputs are
+    then checked once, not at every one of a calibration's thousands of runs, and no DataFrame
+    is built; otherwise ``simulate`` is called.
+    """
+    if prepared.checked is not None:
+        return simulator.simulate_checked(prepared.checked, params, sensors)
+    simulated = simulator.simulate(prepared.inputs, params)
     missing = [s for s in sensors if s not in simulated.columns]
     if missing:
         raise KeyError(f"the simulator does not predict {missing}")
-    predicted = simulated[list(sensors)].to_numpy(dtype=float)
+    return simulated[list(sensors)].to_numpy(dtype=float)
+
+
+def squared_errors(prepared: PreparedWindow, predicted: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Per-sensor sum of squared errors (K²) and valid-sample counts of ``predicted``
+    (samples, sensors; K, as :func:`predict_window` returns); ValueError on NaN output."""
     valid = ~np.isnan(prepared.measured)
     if not np.isfinite(predicted[valid]).all():
         raise ValueError("the simulator returned non-finite temperatures")
@@ -235,7 +266,7 @@ class Objective:
 
     def squared_errors(self, params: ModelParameters) -> list[tuple[np.ndarray, np.ndarray]]:
         """Per window: per-sensor sum of squared errors (K²) and counts; raises if rejected."""
-        return [squared_errors(w, self.simulator.simulate(w.inputs, params), self.sensors)
+        return [squared_errors(w, predict_window(self.simulator, w, params, self.sensors))
                 for w in self.windows]
 
     def evaluate(self, x: Sequence[float]) -> Evaluation:
@@ -364,8 +395,8 @@ def window_rmse(simulator: Simulator, windows: Sequence[pd.DataFrame],
             "dropped_rows": prepared.dropped_rows, "error": "",
         }
         try:
-            simulated = simulator.simulate(prepared.inputs, params)
-            sse, count = squared_errors(prepared, simulated, problem.sensors)
+            sse, count = squared_errors(
+                prepared, predict_window(simulator, prepared, params, problem.sensors))
         except ValueError as error:
             sse, count = np.full(len(problem.sensors), np.nan), np.ones(len(problem.sensors))
             row["error"] = str(error)

@@ -9,7 +9,7 @@ and inner casing per stage group (``metal``), solved sample by sample in a compi
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from functools import cached_property
 
@@ -18,7 +18,7 @@ import pandas as pd
 
 from steamtwin.model import kernel
 from steamtwin.model.design import EFFICIENCY_SCALE_RANGE, DesignConstants, kernel_constants
-from steamtwin.model.measurement import check_time_constants, lag_outputs
+from steamtwin.model.measurement import check_time_constants, lag
 from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import SpecError, TurbineSpec
@@ -67,6 +67,19 @@ class SimulationResult:
     diagnostics: pd.DataFrame | None
     stage_pressures: pd.DataFrame | None
     stage_temperatures: pd.DataFrame | None
+
+
+@dataclass(frozen=True)
+class CheckedInputs:
+    """An input series checked once by :meth:`FullOrderModel.check_inputs`.
+
+    ``columns``: one contiguous SI array per input signal (Pa, K, kg/s); ``time_step``: seconds
+    since the previous sample (the first is ∞: steady start); ``index``: the series' time index.
+    """
+
+    index: pd.Index
+    columns: dict[str, np.ndarray]
+    time_step: np.ndarray
 
 
 class FullOrderModel:
@@ -206,11 +219,13 @@ class FullOrderModel:
                                  f"outside [{low}, {high}]")
         return self._run(self.design_.kernel, inputs, schedule, stages)
 
-    def _run(self, constants: kernel.KernelConstants, inputs: pd.DataFrame,
-             params: ModelParameters | np.ndarray, detail: bool, diagnostics: bool = True
-             ) -> SimulationResult:
+    def check_inputs(self, inputs: pd.DataFrame) -> CheckedInputs:
+        """Check an input series once (SI: Pa, K, kg/s) for repeated :meth:`simulate_checked`.
+
+        Raises :class:`InputError` naming the column and row of any input the model cannot take.
+        """
         columns, time_step = _validated_inputs(inputs)
-        p0, t0, flow, p_exhaust = (columns[name] for name in INPUT_SIGNALS)
+        flow = columns["main_steam_flow"]
         minimum_flow = MINIMUM_FLOW_FRACTION * self.spec.design.main_steam_flow
         low = np.flatnonzero(flow < minimum_flow)
         if low.size:
@@ -221,6 +236,61 @@ class FullOrderModel:
                 f"({minimum_flow * 3.6:.0f} t/h), outside the validity of the stage-efficiency "
                 f"and partial-admission loss correlations ({low.size} rows)"
             )
+        return CheckedInputs(index=inputs.index, columns=columns, time_step=time_step)
+
+    def simulate_checked(self, checked: CheckedInputs, params: ModelParameters | None = None,
+                         signals: Sequence[str] | None = None) -> np.ndarray:
+        """Like :meth:`simulate` on inputs checked by :meth:`check_inputs`, as an array.
+
+        Returns (samples, signals) in SI units (Pa, K, W), columns in the order of ``signals``
+        (default: :attr:`output_signals`). What a calibration runs thousands of times: the
+        inputs are not checked again and no DataFrame is built.
+        """
+        signals = self.output_signals if signals is None else tuple(signals)
+        unknown = [name for name in signals if name not in self.output_signals]
+        if unknown:
+            raise ValueError(f"the model does not predict {unknown} "
+                             f"(it predicts {list(self.output_signals)})")
+        results, _, _ = self._solve(self.design_.kernel, checked, params or ModelParameters(),
+                                    False)
+        return self._readings(results, checked.time_step, signals)
+
+    def _run(self, constants: kernel.KernelConstants, inputs: pd.DataFrame,
+             params: ModelParameters | np.ndarray, detail: bool, diagnostics: bool = True
+             ) -> SimulationResult:
+        checked = self.check_inputs(inputs)
+        results, stage_p, stage_t = self._solve(constants, checked, params, detail)
+        outputs = pd.DataFrame(
+            self._readings(results, checked.time_step, self.output_signals),
+            index=inputs.index, columns=list(self.output_signals))
+        stages = constants.stage_capacity.size
+        stage_names = ["control_stage"] + [f"stage_{i}" for i in range(1, stages + 1)]
+        return SimulationResult(
+            outputs=outputs,
+            diagnostics=pd.DataFrame(results, index=inputs.index, columns=kernel.RESULT_COLUMNS)
+            if diagnostics else None,
+            stage_pressures=pd.DataFrame(stage_p, index=inputs.index, columns=stage_names)
+            if detail else None,
+            stage_temperatures=pd.DataFrame(stage_t, index=inputs.index, columns=stage_names)
+            if detail else None,
+        )
+
+    def _readings(self, results: np.ndarray, time_step: np.ndarray, signals: Sequence[str]
+                  ) -> np.ndarray:
+        """Columns of the kernel's ``results`` for ``signals``, lagged where a sensor lags."""
+        lags = check_time_constants(self.sensor_time_constants, self.output_signals)
+        readings = np.empty((results.shape[0], len(signals)))
+        for j, name in enumerate(signals):
+            values = results[:, kernel.RESULT_COLUMNS.index(name)]
+            readings[:, j] = lag(values, time_step, lags[name]) if name in lags else values
+        return readings
+
+    def _solve(self, constants: kernel.KernelConstants, checked: CheckedInputs,
+               params: ModelParameters | np.ndarray, detail: bool
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Run the kernel: results (samples × N_RESULTS) and, with ``detail``, stage pressures
+        (Pa) and temperatures (K); raises :class:`InputError` at the first failed sample."""
+        p0, t0, flow, p_exhaust = (checked.columns[name] for name in INPUT_SIGNALS)
         n = p0.size
         stages = constants.stage_capacity.size
         # a rough start for the first sample's sweeps (only its p·v values are used): pressures
@@ -242,32 +312,18 @@ class FullOrderModel:
         if not (np.isfinite(tolerance).all() and (tolerance > 0).all()):
             raise ValueError(f"pressure_tolerance and enthalpy_tolerance must be finite and > 0 "
                              f"(got {self.pressure_tolerance!r}, {self.enthalpy_tolerance!r})")
-        solved = kernel.run_kernel(constants, steam_tables(), time_step, p0, t0, flow, p_exhaust,
-                                   parameter_array, tolerance, pressures, enthalpies, metal,
-                                   results, status, stage_p, stage_t)
+        solved = kernel.run_kernel(constants, steam_tables(), checked.time_step, p0, t0, flow,
+                                   p_exhaust, parameter_array, tolerance, pressures, enthalpies,
+                                   metal, results, status, stage_p, stage_t)
         if solved < n:
             raise InputError(
-                f"inputs row {solved} ({inputs.index[solved]}): {_STATUS_TEXT[int(status[solved])]}"
-                f" (main_steam_pressure {p0[solved] / 1e6:.3f} MPa, main_steam_temperature "
+                f"inputs row {solved} ({checked.index[solved]}): "
+                f"{_STATUS_TEXT[int(status[solved])]} (main_steam_pressure "
+                f"{p0[solved] / 1e6:.3f} MPa, main_steam_temperature "
                 f"{t0[solved] - 273.15:.1f} °C, main_steam_flow {flow[solved] * 3.6:.0f} t/h, "
                 f"hp_exhaust_pressure {p_exhaust[solved] / 1e6:.3f} MPa)"
             )
-        outputs = pd.DataFrame(
-            {name: results[:, kernel.RESULT_COLUMNS.index(name)] for name in self.output_signals},
-            index=inputs.index)
-        lags = check_time_constants(self.sensor_time_constants, self.output_signals)
-        if lags:
-            outputs = lag_outputs(outputs, time_step, lags)
-        stage_names = ["control_stage"] + [f"stage_{i}" for i in range(1, stages + 1)]
-        return SimulationResult(
-            outputs=outputs,
-            diagnostics=pd.DataFrame(results, index=inputs.index, columns=kernel.RESULT_COLUMNS)
-            if diagnostics else None,
-            stage_pressures=pd.DataFrame(stage_p, index=inputs.index, columns=stage_names)
-            if detail else None,
-            stage_temperatures=pd.DataFrame(stage_t, index=inputs.index, columns=stage_names)
-            if detail else None,
-        )
+        return results, stage_p, stage_t
 
 
 def _validated_inputs(inputs: pd.DataFrame) -> tuple[dict[str, np.ndarray], np.ndarray]:

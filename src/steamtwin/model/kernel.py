@@ -30,7 +30,8 @@ import numpy as np
 from numba import njit
 
 from steamtwin.model.metal import (
-    dittus_boelter_htc,
+    dittus_boelter_from_logs,
+    dittus_boelter_logs,
     factor_chain,
     finish_chain,
     prepare_chain,
@@ -106,8 +107,11 @@ PREDICTOR_PASSES = 1  # control stage + polytropic p·v update + backward sweep,
 # pressure, J/kg), so that a hold that follows does not drift.
 START_FLOOR = np.array([1e-11, 1e-5])
 
-# Relative flow residual at which the throttled nozzle group's pressure is accepted.
-THROTTLE_TOLERANCE = 1e-9
+# Relative flow residual at which the throttled nozzle group's pressure is accepted: the valve
+# outlet pressure then errs by ~1e-7 relative (F ∝ p/sqrt(p·v) when choked, steeper below), its
+# entropy by R·1e-7 ≈ 5e-5 J/(kg·K), the group's isentropic drop by T·Δs < 0.05 J/kg: far inside
+# ENTHALPY_TOLERANCE.
+THROTTLE_TOLERANCE = 1e-7
 
 # Status codes per sample (0 = solved).
 STATUS_OK = 0
@@ -184,38 +188,45 @@ def _nozzle_group_flow(area, p1, pressure, specific_volume):
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
-def _throttled_pressure(flow, area, p1, p_valve, wide_open, h0, tables, guess):
+def _throttled_pressure(flow, area, p1, p_valve, wide_open, h0, tables, guess, slope):
     """Pressure after a part-open valve whose nozzle group must pass ``flow`` (kg/s).
 
-    ``wide_open`` is the group's flow at ``p_valve`` (kg/s). Secant iteration from the previous
-    sample's answer, kept inside the bracket (p1, p_valve] by bisection; the flow function rises
-    monotonically with the valve-outlet pressure.
+    ``wide_open`` is the group's flow at ``p_valve`` (kg/s). Starts from the previous answer
+    ``guess`` (Pa) with a Newton step on the previous solve's ``slope`` (kg/s per Pa; ≤ 0: none
+    yet), then secant steps, kept inside the bracket (p1, p_valve] by bisection: the flow
+    function rises monotonically with the valve-outlet pressure. Returns the pressure and the
+    last secant slope, for the next sample's start.
     """
     low, high = p1, p_valve
     if wide_open <= flow:
-        return high
+        return high, slope
     x0 = min(max(guess, low + 1e-3 * (high - low)), high - 1e-3 * (high - low))
     f0 = _nozzle_group_flow(area, p1, x0, ph_property(tables, PH_V, x0, h0)) - flow
     if abs(f0) <= THROTTLE_TOLERANCE * flow:
-        return x0
-    x1 = x0 + 1e-4 * (high - low) * (-1.0 if f0 > 0.0 else 1.0)
+        return x0, slope
+    if f0 > 0.0:
+        high = x0
+    else:
+        low = x0
+    x1 = x0 - f0 / slope if slope > 0.0 else x0 + 1e-4 * (p_valve - p1) * (
+        -1.0 if f0 > 0.0 else 1.0)
+    if not low < x1 < high:
+        x1 = 0.5 * (low + high)
     for _ in range(60):
-        if f0 > 0.0:
-            high = min(high, x0)
-        else:
-            low = max(low, x0)
         f1 = _nozzle_group_flow(area, p1, x1, ph_property(tables, PH_V, x1, h0)) - flow
+        if f1 != f0:
+            slope = (f1 - f0) / (x1 - x0)
         if abs(f1) <= THROTTLE_TOLERANCE * flow:
-            return x1
+            return x1, slope
         if f1 > 0.0:
             high = min(high, x1)
         else:
             low = max(low, x1)
-        x2 = x1 - f1 * (x1 - x0) / (f1 - f0) if f1 != f0 else 0.5 * (low + high)
+        x2 = x1 - f1 / slope if f1 != f0 else 0.5 * (low + high)
         if not low < x2 < high:
             x2 = 0.5 * (low + high)
         x0, f0, x1 = x1, f1, x2
-    return x1
+    return x1, slope
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -235,8 +246,9 @@ def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params,
 
     The wide-open valves pass steam at ``p_valve`` (Pa) with entropy ``s_valve`` and p·v
     ``pv_valve`` (J/kg), set once per sample. ``out`` receives [status, power W, efficiency,
-    active arc]; ``throttled`` holds each level's valve-outlet pressure (warm start in, solution
-    out).
+    active arc]; ``throttled`` (2, levels) holds each level's valve-outlet pressure (Pa) and the
+    slope of its nozzle group's flow with that pressure (kg/s per Pa): warm start in, solution
+    out.
     """
     flow_coefficient, friction_coefficient = params[0], params[1]
     cell_1, coordinate_1 = locate_pressure(tables, p1)
@@ -252,7 +264,7 @@ def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params,
     segments = 0.0
     for level in range(cs.level_area.size):
         if remaining <= 0.0:
-            throttled[level] = p1
+            throttled[0, level] = p1
             continue
         area = flow_coefficient * cs.nozzle_discharge_coefficient * cs.level_area[level]
         wide_open = open_flux * cs.level_area[level]
@@ -260,12 +272,13 @@ def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params,
             level_flow, p_level, h_level, drop = wide_open, p_valve, h_open, drop_open
         else:
             level_flow = remaining
-            p_level = _throttled_pressure(remaining, area, p1, p_valve, wide_open, h0, tables,
-                                          throttled[level])
+            p_level, throttled[1, level] = _throttled_pressure(
+                remaining, area, p1, p_valve, wide_open, h0, tables, throttled[0, level],
+                throttled[1, level])
             h_level, drop = _nozzle_group_expansion(
                 cs, tables, cell_1, coordinate_1, h0, ph_property(tables, PH_S, p_level, h0),
                 friction_coefficient)
-        throttled[level] = p_level
+        throttled[0, level] = p_level
         remaining -= level_flow
         # a part-open valve's arc counts in proportion to its flow, so the admission losses
         # change continuously as a valve opens (a barely open group is almost an idle arc)
@@ -308,12 +321,15 @@ def _setup_group_metal(metal, group, flow, htc_multiplier, metal_old, pivot, rhs
     v, mu, k, cp = properties[PH_V], properties[PH_MU], properties[PH_K], properties[PH_CP]
     axial = flow * v / metal.flow_area[group]
     relative = rotor_relative_velocity(axial, metal.rotor_speed[group])
+    diameter = metal.hydraulic_diameter[group]
+    log_re_per_velocity, log_prandtl = dittus_boelter_logs(diameter, v, mu, k, cp)
     for body in range(2):
         velocity = axial if body == CASING else relative
         chain = 2 * group + body
         steam_is_heated = metal_old[chain, 0] > temperature
-        htc = htc_multiplier * dittus_boelter_htc(velocity, metal.hydraulic_diameter[group], v,
-                                                  mu, k, cp, steam_is_heated)
+        htc = htc_multiplier * dittus_boelter_from_logs(velocity, log_re_per_velocity,
+                                                        log_prandtl, k, diameter,
+                                                        steam_is_heated)
         conductance = metal.area[chain] / (1.0 / htc + metal.half_cell_resistance[chain])
         surface[chain, 0] = conductance
         surface[chain, 1], surface[chain, 2] = surface_response(conductance, pivot[chain, 0],
@@ -555,8 +571,8 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
     surface, pivot, rhs = np.zeros((chains, 3)), np.zeros(metal.shape), np.zeros(metal.shape)
     group_temperature = np.zeros(chains // 2)
     factored_inverse_dt = math.nan
-    throttled = np.empty(c.control.level_area.size)
-    throttled[:] = p0[0]
+    throttled = np.zeros((2, c.control.level_area.size))  # valve-outlet pressure, flow slope
+    throttled[0, :] = p0[0]
     cs_out = np.zeros(4)
     accepted = np.empty(pressures.size)
     properties = np.empty(6)

@@ -30,6 +30,10 @@ class Simulator(Protocol):
     with the columns ``input_signals`` in SI units and returns a DataFrame on the same index with
     the columns ``output_signals`` in SI units (Pa, K, W). It must raise ``ValueError`` naming the
     column and row for inputs it cannot handle, never return NaN silently.
+
+    Optional fast path for calibration (see ``calibration.objective.predict_window``):
+    ``check_inputs(inputs)`` checks a series once and ``simulate_checked(checked, params,
+    signals)`` returns the ``signals`` as an array (samples, signals; SI).
     """
 
     input_signals: tuple[str, ...]
