@@ -1,11 +1,12 @@
 """Full-size geometry benchmark: 150k-point scan of hp1 -> preprocessing -> fidelity; surface
 reconstruction -> STL -> fidelity and mesh of the measured blade; meshing; scan-uncertainty
 study. Also: raw views -> STL wall time, statistical outlier removal against open3d's on the
-150k raw points, recovered view poses against the scanner's true ones. Prints timings and the
-measured figures as JSON.
+150k raw points, recovered view poses against the scanner's true ones, reference spheres
+found and removed. Prints timings and the measured figures as JSON.
 
-Run: python benchmarks/bench_geometry.py [row] [seed] [--quick]   (--quick: no meshing and no
-uncertainty study)
+Run: python benchmarks/bench_geometry.py [row] [seed] [--quick] [--spheres N]   (--quick: no
+meshing and no uncertainty study; --spheres: reference spheres in the scan, default 4, 0 for
+the scanner without them)
 """
 
 from __future__ import annotations
@@ -33,31 +34,40 @@ from steamtwin.model.fom import FullOrderModel
 from steamtwin.spec import load_spec
 
 
-def main(row: str = "hp1", seed: int = 0, quick: bool = False) -> dict:
+def main(row: str = "hp1", seed: int = 0, quick: bool = False, spheres: int = 4) -> dict:
     spec = load_spec("reference")
     blade = make_blade(spec, row)
-    figures: dict = {"row": row, "seed": seed}
+    figures: dict = {"row": row, "seed": seed, "reference_spheres": spheres}
 
     start = time.perf_counter()
-    scan = scan_blade(blade, ScannerSettings(points=150_000, views=8), rng=seed)
+    scan = scan_blade(blade, ScannerSettings(points=150_000, views=8, reference_spheres=spheres),
+                      rng=seed)
     figures["scan_s"] = time.perf_counter() - start
     figures["outlier_removal"] = _outlier_removal(np.concatenate([v.points for v in scan.views]))
 
     start = time.perf_counter()
     fused, poses, report = preprocess_views(
-        [v.points for v in scan.views], PreprocessSettings(target_points=80_000),
+        [v.points for v in scan.views],
+        PreprocessSettings(target_points=80_000,
+                           sphere_radius=scan.settings.sphere_radius if spheres else None),
         initial_poses=[v.tracked_pose for v in scan.views])
     figures["preprocess_s"] = time.perf_counter() - start
     figures["steps"] = {"input": sum(report.input_points),
                         "outliers_injected": sum(int(v.is_outlier.sum()) for v in scan.views),
                         "outliers_removed": sum(report.outliers_removed),
                         "fused": report.fused_points, "downsampled": report.downsampled_points,
-                        "pose_graph_edges": report.pose_graph_edges}
+                        "pose_graph_edges": report.pose_graph_edges,
+                        "sphere_points_injected": [int(np.sum(v.sphere_index >= 0))
+                                                   for v in scan.views],
+                        "sphere_points_removed": report.sphere_points_removed,
+                        "spheres_found": report.spheres_found,
+                        "spheres_matched": report.spheres_matched,
+                        "sphere_centre_rms_mm": report.sphere_rms * 1e3}
     base = np.linalg.inv(scan.views[0].pose)
+    blade_points = [v.points[v.sphere_index < 0] for v in scan.views]  # with the outliers
     figures["registration_error_max_mm"] = max(
-        float(np.linalg.norm(transform(v.points, p) - transform(v.points, base @ v.pose),
-                             axis=1).max()) * 1e3
-        for v, p in zip(scan.views, poses, strict=True))
+        float(np.linalg.norm(transform(b, p) - transform(b, base @ v.pose), axis=1).max()) * 1e3
+        for v, b, p in zip(scan.views, blade_points, poses, strict=True))
     figures["pose_recovery"] = _pose_recovery(scan, poses)
     figures["joint_icp"] = {"rms_mm": report.joint_rms * 1e3,
                             "weak_directions": report.joint_weak_directions}
@@ -122,8 +132,9 @@ def _outlier_removal(points: np.ndarray, repeats: int = 3) -> dict:
 def _pose_recovery(scan: object, poses: list[np.ndarray]) -> dict:
     """Recovered view poses against the scanner's true ones (:func:`pose_errors`; mm, deg):
     all views (one gauge fit), the views sharing a cap (cameras above / below), and the
-    scanner's tracked poses for comparison."""
-    views = [v.points[~v.is_outlier] for v in scan.views]
+    scanner's tracked poses for comparison. Per view, its blade points (no outliers, no
+    reference spheres)."""
+    views = [v.points[~v.is_outlier & (v.sphere_index < 0)] for v in scan.views]  # the blade
     truth = [v.pose for v in scan.views]
 
     def summary(estimated: list[np.ndarray], pick: list[int]) -> dict:
@@ -186,5 +197,8 @@ if __name__ == "__main__":
     parser.add_argument("seed", nargs="?", type=int, default=0, help="scan seed")
     parser.add_argument("--quick", action="store_true",
                         help="no meshing and no uncertainty study")
+    parser.add_argument("--spheres", type=int, default=4,
+                        help="reference spheres in the scan (0: the scanner without them)")
     options = parser.parse_args()
-    print(json.dumps(main(options.row, options.seed, options.quick), indent=2, default=float))
+    print(json.dumps(main(options.row, options.seed, options.quick, options.spheres), indent=2,
+                     default=float))

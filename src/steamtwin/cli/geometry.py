@@ -29,6 +29,17 @@ def _spec(turbine: str):  # returns a steamtwin.spec.TurbineSpec
         raise  # unreachable, keeps type checkers calm
 
 
+def _preprocess_settings(manifest: dict, target_points: int):  # -> PreprocessSettings
+    """Preprocessing settings for a scan folder: the reference spheres' radius from
+    ``scan.json`` (null: no spheres), the default radius when the manifest does not say."""
+    from steamtwin.geometry.preprocess import PreprocessSettings
+
+    if "sphere_radius" not in manifest:
+        return PreprocessSettings(target_points=target_points)
+    return PreprocessSettings(target_points=target_points,
+                              sphere_radius=manifest["sphere_radius"])
+
+
 def _read_scan(folder: Path) -> tuple[list, dict]:
     """The views (m) and the manifest of a 'geometry scan' folder."""
     from steamtwin.geometry.pointcloud import PointCloudError, read_point_cloud
@@ -49,18 +60,23 @@ def scan(
     row: str = typer.Option("hp1", help="Blade row: hp1…hp13 (HP rotor) or ip1…ip9 (IP stator)."),
     out: Path = typer.Option(..., help="Folder for view_NN.ply, scan.json and truth/."),
     turbine: str = typer.Option("reference", help="Built-in turbine name or spec TOML path."),
-    points: int = typer.Option(150_000, help="Total points over all views."),
+    points: int = typer.Option(150_000, help="Total blade points (with outliers) over all "
+                                             "views; the spheres' points come on top."),
     views: int = typer.Option(8, help="Number of partial views."),
     outliers: float = typer.Option(0.02, help="Share of outliers (0.01-0.03 typical)."),
     seed: int = typer.Option(0, help="Seed of the scanner's random generator."),
     file_format: str = typer.Option("ply", help="'ply' or 'pcd'."),
+    spheres: int = typer.Option(4, help="Reference spheres (5 mm radius) on the fixture, 0-6; "
+                                        "0 scans the blade alone."),
 ) -> None:
     """Scan the ground-truth blade of ROW with the virtual handheld scanner (±0.05 mm).
 
-    Each view is in the scanner's own frame; the true poses go to OUT/truth/ (do not read them
-    when reconstructing).
+    Each view is in the scanner's own frame; the true poses and sphere centres go to
+    OUT/truth/ (do not read them when reconstructing). The reference spheres link the views
+    in the registration; their points are removed before the blade is fused.
 
     Example: steamtwin geometry scan --row hp1 --points 150000 --seed 1 --out scan-hp1
+    Example: steamtwin geometry scan --row hp1 --spheres 0 --out scan-hp1-blade-only
     """
     from steamtwin.geometry.profile import GeometryError, make_blade
     from steamtwin.geometry.scanner import ScannerSettings, scan_blade, write_scan
@@ -70,7 +86,8 @@ def scan(
     spec = _spec(turbine)
     try:
         blade = make_blade(spec, row)
-        settings = ScannerSettings(views=views, points=points, outlier_share=outliers)
+        settings = ScannerSettings(views=views, points=points, outlier_share=outliers,
+                                   reference_spheres=spheres)
         result = scan_blade(blade, settings, rng=seed)
     except (GeometryError, ValueError) as error:
         _fail(str(error))
@@ -96,13 +113,13 @@ def preprocess(
     """
     from steamtwin.geometry.fidelity import align_to_nominal, surface_deviation
     from steamtwin.geometry.pointcloud import write_point_cloud
-    from steamtwin.geometry.preprocess import PreprocessSettings, preprocess_views, transform
+    from steamtwin.geometry.preprocess import preprocess_views, transform
     from steamtwin.geometry.profile import make_blade
 
     views, manifest = _read_scan(folder)
     tracked = manifest.get("tracked_poses")
     try:
-        fused, _, steps = preprocess_views(views, PreprocessSettings(target_points=target_points),
+        fused, _, steps = preprocess_views(views, _preprocess_settings(manifest, target_points),
                                            initial_poses=tracked)
     except ValueError as error:
         _fail(str(error))
@@ -110,6 +127,9 @@ def preprocess(
     typer.echo(f"fused {sum(steps.input_points)} points of {len(views)} views into "
                f"{len(fused)} points: {out}")
     typer.echo(f"  outliers removed per view: {steps.outliers_removed}")
+    if any(steps.spheres_found):
+        typer.echo(f"  reference spheres: {steps.spheres_matched} matched across views, "
+                   f"points removed per view: {steps.sphere_points_removed}")
     if report is not None:
         blade = make_blade(_spec(turbine), manifest["row"])
         pose, fit_rms = align_to_nominal(fused, blade)
@@ -157,7 +177,7 @@ def reconstruct(
     """
     from steamtwin.geometry.fidelity import align_to_nominal
     from steamtwin.geometry.pointcloud import PointCloudError, read_point_cloud
-    from steamtwin.geometry.preprocess import PreprocessSettings, preprocess_views, transform
+    from steamtwin.geometry.preprocess import preprocess_views, transform
     from steamtwin.geometry.profile import GeometryError, make_blade
     from steamtwin.geometry.reconstruct import (
         ReconstructionSettings,
@@ -176,7 +196,7 @@ def reconstruct(
         row = row or manifest.get("row")
         try:
             cloud, _, steps = preprocess_views(
-                views, PreprocessSettings(target_points=target_points),
+                views, _preprocess_settings(manifest, target_points),
                 initial_poses=manifest.get("tracked_poses"))
         except ValueError as error:
             _fail(str(error))

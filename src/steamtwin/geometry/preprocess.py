@@ -1,4 +1,5 @@
-"""Point-cloud preprocessing: outliers, smoothing, registration, fusion, downsampling.
+"""Point-cloud preprocessing: reference spheres, outliers, smoothing, registration, fusion,
+downsampling.
 
 Every step returns its result and what it removed or changed, so a report can account for each
 point. open3d does the neighbour searches, features and registration; moving-least-squares
@@ -17,6 +18,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from steamtwin.geometry.pointcloud import check_point_cloud
+from steamtwin.geometry.targets import (
+    SphereFit,
+    detect_spheres,
+    fit_sphere,
+    match_spheres,
+    poses_from_spheres,
+)
 
 
 @dataclass(frozen=True)
@@ -24,7 +32,12 @@ class PreprocessSettings:
     """Hyper-parameters of :func:`preprocess_views` (lengths in m).
 
     ``voxel`` is the feature scale for FPFH/RANSAC; ``icp_distance`` the ICP correspondence
-    cut-off; ``target_points`` the size of the fused, downsampled cloud.
+    cut-off; ``target_points`` the size of the fused, downsampled cloud. ``sphere_radius`` is
+    the nominal radius of the reference spheres on the fixture (the virtual scanner's default;
+    None: no sphere detection), ``sphere_tolerance`` the shell half-width of a sphere's points
+    (twice the scanner's ±0.05 mm bound), ``sphere_min_points`` the fewest points a sphere is
+    accepted with and ``sphere_match_distance`` how close (in the frame of the starting poses)
+    two views' centres of one sphere must land (see :mod:`steamtwin.geometry.targets`).
     """
 
     outlier_neighbours: int = 50
@@ -42,13 +55,28 @@ class PreprocessSettings:
     feature_share: float = 0.25  # share of the kept points reserved for high-curvature regions
     joint_iterations: int = 12  # Gauss-Newton steps of the joint multi-view ICP
     joint_stability: float = 1e-3  # joint ICP keeps directions weaker than this share fixed
+    sphere_radius: float | None = 5e-3
+    sphere_tolerance: float = 0.1e-3
+    sphere_min_points: int = 30
+    sphere_match_distance: float = 2e-3
 
 
 @dataclass
 class PreprocessReport:
-    """What each step did (counts of points; lengths in m)."""
+    """What each step did (counts of points; lengths in m).
+
+    ``spheres_found`` and ``sphere_points_removed`` are per view; ``spheres_matched`` counts the
+    reference spheres found by two or more views (the registration's datums), ``spheres_single``
+    those only one view found (removed, not datums), and ``sphere_rms`` is the RMS distance
+    between two views' placements of one sphere's centre after registration (NaN without).
+    """
 
     input_points: list[int] = field(default_factory=list)
+    spheres_found: list[int] = field(default_factory=list)
+    sphere_points_removed: list[int] = field(default_factory=list)
+    spheres_matched: int = 0
+    spheres_single: int = 0
+    sphere_rms: float = float("nan")
     outliers_removed: list[int] = field(default_factory=list)
     smoothing_mean_shift: list[float] = field(default_factory=list)
     pair_fitness: dict[str, float] = field(default_factory=dict)
@@ -310,7 +338,8 @@ def multiview_icp(views: Sequence[np.ndarray], normals: Sequence[np.ndarray],
                   poses: Sequence[np.ndarray], distance: float, iterations: int = 30,
                   prior: Sequence[np.ndarray] | None = None, prior_angle: float = 5e-4,
                   prior_offset: float = 0.05e-3, min_pairs: int = 200,
-                  tolerance: float = 1e-7, stability: float = 0.0
+                  tolerance: float = 1e-7, stability: float = 0.0,
+                  centres: Sequence[Sequence[tuple[int, np.ndarray, np.ndarray]]] | None = None
                   ) -> tuple[list[np.ndarray], dict]:
     """Joint point-to-plane ICP of all views at once (simultaneous multi-view registration:
     Bergevin, Soucy, Gagnon & Laurendeau 1996, IEEE PAMI 18(5); Pulli 1999, 3DIM).
@@ -328,9 +357,17 @@ def multiview_icp(views: Sequence[np.ndarray], normals: Sequence[np.ndarray],
     posteriori estimate, which leaves the estimate at the prior only in directions the scans
     do not constrain. With ``stability`` > 0 the step is taken only along eigenvectors of the
     joint normal matrix whose eigenvalue exceeds ``stability`` × the largest (degeneracy-aware
-    solving, Zhang, Kaess & Singh 2016); weaker directions keep their starting value. Returns
-    ``(poses, figures)``, figures holding the linked view pairs, correspondences, the RMS
-    residual (m), the iterations used and the number of weak directions.
+    solving, Zhang, Kaess & Singh 2016); weaker directions keep their starting value.
+
+    ``centres`` are datums seen by several views, e.g. reference spheres: per datum, the
+    ``(view, centre (3,) in the view frame, covariance (3×3, m²))`` of every view that sees it.
+    Each pair of those views adds the difference of the two placements of the centre, weighted
+    by the inverse of the sum of the two covariances × 2/m (m views; for equal covariances
+    exactly the cost of fitting one unknown centre to the m placements), so the datums tie the
+    views also along directions the surfaces leave free. Returns ``(poses, figures)``, figures
+    holding the linked view pairs, correspondences, the RMS residual (m), the iterations used,
+    the number of weak directions and, with ``centres``, the RMS distance between two
+    placements of a datum (``centre_rms``, m).
     """
     from scipy.spatial import cKDTree
 
@@ -391,6 +428,9 @@ def multiview_icp(views: Sequence[np.ndarray], normals: Sequence[np.ndarray],
         sigma = max(1.4826 * float(np.median(np.abs(all_r))), 1e-7)
         hessian /= sigma**2
         gradient /= sigma**2
+        if centres:
+            figures["centre_rms"] = _add_centre_links(hessian, gradient, centres, poses, centre,
+                                                      length)
         if prior is not None:
             for k in range(1, count):
                 error = _pose_difference(poses[k], np.asarray(prior[k], dtype=np.float64),
@@ -417,6 +457,42 @@ def multiview_icp(views: Sequence[np.ndarray], normals: Sequence[np.ndarray],
         if np.abs(step).max() < tolerance:
             break
     return poses, figures
+
+
+def _add_centre_links(hessian: np.ndarray, gradient: np.ndarray,
+                      centres: Sequence[Sequence[tuple[int, np.ndarray, np.ndarray]]],
+                      poses: Sequence[np.ndarray], centre: np.ndarray, length: float) -> float:
+    """Add the datum terms of :func:`multiview_icp` to its normal equations (in place); returns
+    the RMS distance (m) between two views' placements of a datum."""
+    distances = []
+    for datum in centres:
+        weight_share = 2.0 / len(datum)
+        placed = []
+        for k, point, covariance in datum:
+            rotation = poses[k][:3, :3]
+            where = rotation @ point + poses[k][:3, 3]
+            # a pose step (rotation vector × length, translation) moves the point by this
+            jacobian = np.column_stack([-_skew(where - centre) / length, np.eye(3)])
+            placed.append((k, where, rotation @ covariance @ rotation.T, jacobian))
+        for a, (i, p_i, cov_i, jac_i) in enumerate(placed):
+            for j, p_j, cov_j, jac_j in placed[a + 1:]:
+                residual = p_i - p_j
+                weight = weight_share * np.linalg.inv(cov_i + cov_j)
+                si, sj = slice(6 * i, 6 * i + 6), slice(6 * j, 6 * j + 6)
+                hessian[si, si] += jac_i.T @ weight @ jac_i
+                hessian[sj, sj] += jac_j.T @ weight @ jac_j
+                hessian[si, sj] -= jac_i.T @ weight @ jac_j
+                hessian[sj, si] -= jac_j.T @ weight @ jac_i
+                gradient[si] -= jac_i.T @ weight @ residual
+                gradient[sj] += jac_j.T @ weight @ residual
+                distances.append(float(np.linalg.norm(residual)))
+    return float(np.sqrt(np.mean(np.square(distances)))) if distances else math.nan
+
+
+def _skew(vector: np.ndarray) -> np.ndarray:
+    """The matrix of the cross product: ``_skew(a) @ b == np.cross(a, b)``."""
+    x, y, z = vector
+    return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
 def _pose_difference(pose: np.ndarray, reference: np.ndarray, centre: np.ndarray,
@@ -498,17 +574,20 @@ def plane_residual(target: np.ndarray, target_normals: np.ndarray, moved: np.nda
 def register_views(views: Sequence[np.ndarray], settings: PreprocessSettings | None = None,
                    report: PreprocessReport | None = None,
                    initial_poses: Sequence[np.ndarray] | None = None,
-                   progress: Callable[[float], None] | None = None) -> list[np.ndarray]:
+                   progress: Callable[[float], None] | None = None,
+                   spheres: Sequence[Sequence[SphereFit]] | None = None) -> list[np.ndarray]:
     """Poses (4×4, view -> frame of view 0) of all views.
 
     1. Coarse: with ``initial_poses`` (the scanner's own tracking estimate, view -> any common
-       frame) the relative poses start from them; without, each view is registered onto the
-       model fused so far by FPFH + RANSAC (``settings.hypotheses`` seeds), rejecting poses that
-       put points into the free space a registered camera saw through
-       (:func:`visibility_violation`) or overlap less than ``settings.min_overlap`` and keeping
-       the lowest point-to-plane RMS. On smooth, nearly symmetric blades with sparse views this
-       fallback often slides a view along the surface (see docs/geometry.md).
-    2. Without ``initial_poses`` only — fine: point-to-plane ICP of each view onto the model
+       frame) the relative poses start from them; without, from the reference spheres when
+       they link every view (:func:`poses_from_spheres`: at least 3 spheres shared along a
+       chain of view pairs); otherwise each view is registered onto the model fused so far
+       by FPFH + RANSAC (``settings.hypotheses`` seeds), rejecting poses that put points into
+       the free space a registered camera saw through (:func:`visibility_violation`) or
+       overlap less than ``settings.min_overlap`` and keeping the lowest point-to-plane RMS.
+       On smooth, nearly symmetric blades with sparse views this fallback often slides a view
+       along the surface (see docs/geometry.md).
+    2. With the FPFH fallback only — fine: point-to-plane ICP of each view onto the model
        of the views before it, moving only along well-constrained directions
        (:func:`degeneracy_aware_icp`); then every overlapping pair is re-registered by ICP from
        the current poses and all pairs form an open3d pose graph optimised globally (Choi, Zhou
@@ -517,9 +596,14 @@ def register_views(views: Sequence[np.ndarray], settings: PreprocessSettings | N
        (:func:`multiview_icp`), degeneracy-aware: the one direction a nearly extruded blade
        leaves free — the shift along the span, with the matching turn of the twist, between the
        views that see only the tip cap and those that see only the root cap — keeps its
-       starting (tracked) value; every other direction is fixed by the scans to µm.
+       starting (tracked) value; every other direction is fixed by the scans to µm. With
+       ``spheres`` (the reference spheres found in each view, :func:`detect_spheres`), the
+       spheres are matched across views by the starting poses (:func:`match_spheres`) and
+       their centres join the joint ICP as datums (``centres`` of :func:`multiview_icp`),
+       which fix that direction too.
 
-    Raises ``ValueError`` naming the views that could not be registered.
+    Raises ``ValueError`` naming the views that could not be registered, or when spheres were
+    found but none matches across views (:func:`match_spheres` for ambiguous matches).
     """
     import open3d as o3d
 
@@ -535,7 +619,13 @@ def register_views(views: Sequence[np.ndarray], settings: PreprocessSettings | N
             raise ValueError(f"{len(initial_poses)} initial poses for {count} views")
         base = np.linalg.inv(np.asarray(initial_poses[0], dtype=np.float64))
         tracked = [base @ np.asarray(p, dtype=np.float64) for p in initial_poses]
-        return _joint_registration(views, tracked, distance, settings, report, progress)
+        return _joint_registration(views, tracked, distance, settings, report, progress,
+                                   spheres)
+    if spheres is not None and any(spheres):
+        linked = poses_from_spheres(spheres)
+        if len(linked) == count:  # every view posed by the sphere centres
+            return _joint_registration(views, [linked[k] for k in range(count)], distance,
+                                       settings, report, progress, spheres)
     subsampled = [np.asarray(_cloud(v).voxel_down_sample(0.25 * settings.voxel).points)
                   for v in views]
     normals = [local_frames(v, 20, viewpoint=np.zeros(3))[1] for v in subsampled]
@@ -567,18 +657,38 @@ def register_views(views: Sequence[np.ndarray], settings: PreprocessSettings | N
         report.pose_graph_edges = len(graph.edges)
         report.pose_graph_pruned = edges - len(graph.edges)
     optimised = [np.asarray(graph.nodes[k].pose) for k in range(count)]
-    return _joint_registration(views, optimised, distance, settings, report, progress)
+    return _joint_registration(views, optimised, distance, settings, report, progress, spheres)
 
 
 def _joint_registration(views: Sequence[np.ndarray], poses: list[np.ndarray], distance: float,
                         settings: PreprocessSettings, report: PreprocessReport | None,
-                        progress: Callable[[float], None] | None) -> list[np.ndarray]:
+                        progress: Callable[[float], None] | None,
+                        spheres: Sequence[Sequence[SphereFit]] | None = None
+                        ) -> list[np.ndarray]:
     """Final joint multi-view ICP (:func:`multiview_icp`) of the full-resolution views from
-    ``poses`` (view -> frame of view 0), degeneracy-aware with ``settings.joint_stability``."""
+    ``poses`` (view -> frame of view 0), degeneracy-aware with ``settings.joint_stability``,
+    the reference spheres matched by ``poses`` as datums."""
+    centres = None
+    if spheres is not None and any(len(found) for found in spheres):
+        groups = match_spheres(spheres, poses, settings.sphere_match_distance)
+        centres = [[(k, spheres[k][i].centre, spheres[k][i].covariance) for k, i in group]
+                   for group in groups if len(group) > 1]
+        if not centres:
+            seen = [k for k, found in enumerate(spheres) if found]
+            raise ValueError(
+                f"reference spheres were found in views {seen} but none matches a sphere of "
+                f"another view within {settings.sphere_match_distance * 1e3:.1f} mm: check the "
+                "starting poses and the sphere radius (sphere_radius=None if the scan holds no "
+                "reference spheres)")
+        if report is not None:
+            report.spheres_single = len(groups) - len(centres)
     normals = [local_frames(v, 20, viewpoint=np.zeros(3))[1] for v in views]
     poses, figures = multiview_icp(views, normals, poses, distance,
                                    iterations=settings.joint_iterations,
-                                   stability=settings.joint_stability)
+                                   stability=settings.joint_stability, centres=centres)
+    if report is not None and centres is not None:
+        report.spheres_matched = len(centres)
+        report.sphere_rms = figures["centre_rms"]
     if report is not None:
         report.joint_rms = figures["rms"]
         report.joint_weak_directions = figures.get("weak_directions", 0)
@@ -686,6 +796,42 @@ def transform(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
     return points @ matrix[:3, :3].T + matrix[:3, 3]
 
 
+def _remove_sphere_remnants(views: list[np.ndarray], spheres: Sequence[Sequence[SphereFit]],
+                            poses: Sequence[np.ndarray], settings: PreprocessSettings,
+                            report: PreprocessReport, widen: float) -> list[np.ndarray]:
+    """Remove from each view the points of the reference spheres it did not find (too few
+    points, e.g. mostly hidden by the blade), counted in ``report.sphere_points_removed``.
+
+    A sphere's centre is the mean of its placements by ``poses`` (view -> a common frame),
+    carried into the view; the view's points within 0.5 mm of that sphere's surface (the poses
+    may be off by the tracking error) refit the centre with the known radius (kept if it moves
+    less than 0.5 mm), and the points on the shell (``sphere_tolerance`` + ``widen``, m) or
+    inside it are removed.
+    """
+    groups = match_spheres(spheres, poses, settings.sphere_match_distance)
+    radius = settings.sphere_radius
+    band = 0.5e-3
+    kept = []
+    for k, (view, pose) in enumerate(zip(views, poses, strict=True)):
+        remnant = np.zeros(len(view), dtype=bool)
+        for group in groups:
+            if any(j == k for j, _ in group):
+                continue  # found in this view: its points are gone already
+            placed = np.mean([transform(spheres[j][i].centre[None], np.asarray(poses[j]))[0]
+                              for j, i in group], axis=0)
+            centre = transform(placed[None], np.linalg.inv(np.asarray(pose)))[0]
+            distance = np.linalg.norm(view - centre, axis=1)
+            candidates = np.abs(distance - radius) <= band
+            if candidates.sum() >= 4:
+                refit = fit_sphere(view[candidates], radius, centre)[0]
+                if np.linalg.norm(refit - centre) < band:
+                    distance = np.linalg.norm(view - refit, axis=1)
+            remnant |= distance <= radius + settings.sphere_tolerance + widen
+        report.sphere_points_removed[k] += int(remnant.sum())
+        kept.append(view[~remnant])
+    return kept
+
+
 def feature_preserving_downsample(points: np.ndarray, target: int, feature_share: float = 0.25,
                                   neighbours: int = 20) -> np.ndarray:
     """Thin ``points`` to about ``target`` points, keeping high-curvature regions dense.
@@ -740,17 +886,40 @@ def preprocess_views(views: Sequence[np.ndarray], settings: PreprocessSettings |
                      initial_poses: Sequence[np.ndarray] | None = None,
                      progress: Callable[[float], None] | None = None
                      ) -> tuple[np.ndarray, list[np.ndarray], PreprocessReport]:
-    """Outliers -> MLS smoothing -> registration -> fusion -> downsampling.
+    """Reference spheres -> outliers -> MLS smoothing -> registration -> fusion ->
+    downsampling.
 
+    With ``settings.sphere_radius``, the reference spheres of that radius are found in each
+    view (:func:`detect_spheres`) and their points removed before anything else, so that the
+    fused cloud holds the blade only; their centres link the views in the registration. The
+    few points of a sphere that a view saw too little of to find it are removed as well
+    (:func:`_remove_sphere_remnants`): before the outlier removal when ``initial_poses`` place
+    the spheres, else after the registration.
     ``initial_poses`` are the scanner's tracking estimates (see :func:`register_views`).
     Returns ``(fused cloud in the frame of view 0, per-view poses, report)``.
     """
     settings = settings or PreprocessSettings()
     report = PreprocessReport()
-    cleaned = []
+    blade_views, spheres = [], []
     for k, view in enumerate(views):
         view = check_point_cloud(view, f"view {k}")
         report.input_points.append(len(view))
+        found = [] if settings.sphere_radius is None else detect_spheres(
+            view, settings.sphere_radius, settings.sphere_tolerance, settings.sphere_min_points)
+        on_sphere = np.zeros(len(view), dtype=bool)
+        for fit in found:
+            on_sphere[fit.points] = True
+        spheres.append(found)
+        report.spheres_found.append(len(found))
+        report.sphere_points_removed.append(int(on_sphere.sum()))
+        blade_views.append(view[~on_sphere])
+    if any(spheres) and initial_poses is not None:
+        if len(initial_poses) != len(views):
+            raise ValueError(f"{len(initial_poses)} initial poses for {len(views)} views")
+        blade_views = _remove_sphere_remnants(blade_views, spheres, initial_poses, settings,
+                                              report, 0.0)
+    cleaned = []
+    for k, view in enumerate(blade_views):
         kept, mask = remove_statistical_outliers(view, settings.outlier_neighbours,
                                                  settings.outlier_std_ratio)
         report.outliers_removed.append(int((~mask).sum()))
@@ -760,7 +929,11 @@ def preprocess_views(views: Sequence[np.ndarray], settings: PreprocessSettings |
         if progress is not None:
             progress(0.2 * (k + 1) / len(views))
     poses = register_views(cleaned, settings, report, initial_poses,
-                           None if progress is None else lambda f: progress(0.2 + 0.7 * f))
+                           None if progress is None else lambda f: progress(0.2 + 0.7 * f),
+                           spheres)
+    if any(spheres) and initial_poses is None:
+        cleaned = _remove_sphere_remnants(cleaned, spheres, poses, settings, report,
+                                          settings.mls_max_shift)
     fused = np.concatenate([transform(v, p) for v, p in zip(cleaned, poses, strict=True)])
     report.fused_points = len(fused)
     fused = feature_preserving_downsample(fused, settings.target_points, settings.feature_share)

@@ -5,10 +5,11 @@ scan is brought there by :func:`~steamtwin.geometry.fidelity.align_to_nominal`).
 
 1. :func:`~steamtwin.geometry.segmentation.segment_blade`: normals, curvature, region growing,
    labels root/tip/pressure_side/suction_side/leading_edge/trailing_edge.
-2. Parameters of the side points: the turn fraction round the section from the chordwise
-   position and the side (:func:`initial_parameters`), mapped to the arc-length fraction ``s``
-   counted anticlockwise from the rear chord end. Both are unchanged by the twist and taper of a
-   stacked blade (a similarity of each section).
+2. Parameters of the side points: the turn fraction round the section from geodesic arc
+   length (:func:`~steamtwin.geometry.segmentation.section_turn`), mapped to the arc-length
+   fraction ``s`` counted anticlockwise from the rear end (:func:`initial_parameters`);
+   monotone round any section, also where a strongly cambered face is no graph over the
+   chord, and unchanged by the twist and taper of a stacked blade.
 3. The side is one periodic cubic B-spline surface (:mod:`~steamtwin.geometry.bspline`) whose
    starting knots are dense on the leading- and trailing-edge patches (``edge_knot_spans`` per
    edge, no wider than a third of the edge circle's half-turn, :func:`edge_arcs`) and graded to
@@ -191,22 +192,22 @@ def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.
     """Start parameter ``s`` ∈ [0, 1) of the points under ``mask`` (NaN elsewhere) and the
     median section perimeter (m).
 
-    Going round anticlockwise from the rear chord end, the turn fraction θ = (1 − ξ)/2 above
-    the camber line (suction side) and (1 + ξ)/2 below it, with ξ the chordwise position:
-    monotone round the section, unchanged by twist and taper, and continuous at both ends of
-    the chord whichever side a point there is counted to. θ is then
-    mapped to the arc-length fraction measured on thin slabs spread over the span: the medians
+    The turn fraction θ of the segmentation (``Segmentation.turn``, from
+    :func:`~steamtwin.geometry.segmentation.section_turn`: geodesic arc length anticlockwise
+    from the rear end over the perimeter) is monotone round any section — also where a strongly
+    cambered face is no graph over the chord — and unchanged by twist and taper. θ is then
+    mapped to the arc-length fraction measured on 9 thin slabs spread over the span: the medians
     of their points in θ order, in groups of :data:`GROUP` (robust to stray points), give a
-    polyline whose cumulative length is the arc length; the median over the slabs is used.
+    polyline whose cumulative length is the arc length. The mapping of each slab is the median
+    of its own and its neighbours' and is interpolated linearly along the span (graph distances
+    stretch differently where the sampling differs).
     """
     theta = np.full(len(points), np.nan)
-    xi = np.clip(segmentation.chordwise[mask], 0.0, 1.0)
-    suction = segmentation.camber[mask] >= 0.0
-    theta[mask] = np.mod(np.where(suction, 0.5 * (1.0 - xi), 0.5 * (1.0 + xi)), 1.0)
+    theta[mask] = segmentation.turn[mask]
     z = points[mask, 2]
     grid = np.linspace(0.0, 1.0, 2001)
     height = 2.0 * segmentation.spacing
-    fractions, perimeters = [], []
+    fractions, perimeters, centres = [], [], []
     for centre in np.linspace(np.percentile(z, 10.0), np.percentile(z, 90.0), 9):
         members = np.flatnonzero(mask)[np.abs(z - centre) < height]
         if len(members) < 200:
@@ -219,14 +220,24 @@ def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.
         length = np.concatenate([[0.0], np.cumsum(steps)])
         knots = np.concatenate([[0.0], angle, [1.0]])
         values = np.concatenate([[0.0], length[:-1] + 0.5 * steps[-1], [length[-1]]])
-        fractions.append(np.interp(grid, knots, values / length[-1]))
+        fractions.append(np.maximum.accumulate(np.interp(grid, knots, values / length[-1])))
         perimeters.append(length[-1])
+        centres.append(centre)
     if not fractions:
         raise ReconstructionError("too few side points to order them round the section")
-    mapping = np.maximum.accumulate(np.median(fractions, axis=0))
-    mapping = (mapping - mapping[0]) / (mapping[-1] - mapping[0])
+    # the median of each slab and its two neighbours, interpolated along the span
+    fractions = np.array(fractions)
+    padded = np.vstack([fractions[:1], fractions, fractions[-1:]])
+    mappings = np.median(np.stack([padded[:-2], padded[1:-1], padded[2:]]), axis=0)
+    mappings = (mappings - mappings[:, :1]) / (mappings[:, -1:] - mappings[:, :1])
+    at = np.array([np.interp(theta[mask], grid, row) for row in mappings])  # (slabs, n)
+    position = np.interp(z, centres, np.arange(len(centres)))
+    lower = np.minimum(np.floor(position).astype(int), len(centres) - 1)
+    upper = np.minimum(lower + 1, len(centres) - 1)
+    weight = position - lower
+    columns = np.arange(len(z))
     s = np.full(len(points), np.nan)
-    s[mask] = np.mod(np.interp(theta[mask], grid, mapping), 1.0)
+    s[mask] = np.mod((1.0 - weight) * at[lower, columns] + weight * at[upper, columns], 1.0)
     return s, float(np.median(perimeters))
 
 
@@ -242,9 +253,8 @@ def check_side_fit(fit: AdaptiveSurfaceFit) -> None:
     if fit.surface_.folds() or trimmed > MAX_TRIMMED:
         raise ReconstructionError(
             f"the fitted side folds over itself or misses the cloud ({trimmed:.0%} of the side "
-            f"points farther than {fit.outlier_distance * 1e3:.3g} mm): are the sections too "
-            "strongly cambered for the chordwise parametrisation, or the cloud not in the "
-            "blade frame?")
+            f"points farther than {fit.outlier_distance * 1e3:.3g} mm): is the cloud too "
+            "sparse at the edges, or not in the blade frame?")
 
 
 def _circular(s: np.ndarray, centre: float) -> np.ndarray:
@@ -418,10 +428,9 @@ def triangulate(surface: PeriodicSurface, root: CapPlane, tip: CapPlane,
         cap_top = _cap_triangles(vertices[-n:, :2])
     except GeometryError as error:
         raise ReconstructionError(f"a cap outline of the fitted surface is not a simple "
-                                  f"polygon ({error}): the fitted side folds over itself — are "
-                                  "the sections too strongly cambered for the chordwise "
-                                  "parametrisation, or the cloud not in the blade frame?"
-                                  ) from None
+                                  f"polygon ({error}): the fitted side folds over itself — is "
+                                  "the cloud too sparse at the edges, or not in the blade "
+                                  "frame?") from None
     triangles = np.concatenate([side, cap[:, ::-1], cap_top + (levels - 1) * n])
     regions = np.concatenate([side_region, np.full(len(cap), REGIONS.index("root")),
                               np.full(len(cap_top), REGIONS.index("tip"))])

@@ -7,6 +7,10 @@ itself (self-occlusion). Every hit is displaced along its ray by a truncated Gau
 scanners state volumetric accuracy, VDI/VDE 2634-2). A share of outliers (1–3 %) is scattered
 uniformly through the view's bounding box, and every view is expressed in its own unknown frame
 (a random rigid motion), as a handheld scanner does before registration.
+
+Matte reference spheres on the fixture (the sphere standards of VDI/VDE 2634-2/-3, the datums
+that link the views of a multi-view scan) are part of the scene by default: they are hit by the
+same rays, hide parts of the blade and are hidden by it, and get the same range error.
 """
 
 from __future__ import annotations
@@ -22,8 +26,19 @@ import numpy as np
 from steamtwin.geometry.profile import Blade, reference_surface
 
 #: Files of a scan folder: views as ``view_00.ply`` …, settings in ``scan.json`` and the hidden
-#: truth (view poses) in ``truth/poses.json``; reconstruction must not read ``truth/``.
+#: truth (view poses, reference-sphere centres) in ``truth/poses.json``; reconstruction must not
+#: read ``truth/``.
 MANIFEST = "scan.json"
+
+#: Reference-sphere positions around the blade, fixed in the blade frame: azimuth about the span
+#: axis (deg), distance from the span axis through the blade's centre and height above its
+#: mid-span, both as multiples of the blade's bounding-sphere radius. Chosen unequal in all
+#: three so that no two spheres (or sub-configurations) are related by a symmetry — the centres
+#: fix a view's pose uniquely —, outside the blade's bounding sphere (1.25–1.55 radii) so that
+#: the blade hides only part of a sphere from a camera on the other side, and within 0.45 radii
+#: of mid-span so that the cameras 35° above and 35° below both see them.
+SPHERE_LAYOUT = ((17.0, 1.25, -0.30), (103.0, 1.40, 0.18), (196.0, 1.30, -0.08),
+                 (284.0, 1.45, 0.34), (58.0, 1.55, 0.45), (241.0, 1.35, -0.42))
 
 
 @dataclass(frozen=True)
@@ -39,6 +54,15 @@ class ScannerSettings:
     random axis and a shift of that length in a random direction. The defaults (0.5 mrad, i.e.
     0.05 mm at the 0.1 m stand-off, and 0.05 mm) are the order of the volumetric accuracy that
     positioning-target tracking of metrology handheld scanners is accepted at (VDI/VDE 2634-3).
+
+    ``reference_spheres`` (0–6) matte spheres of radius ``sphere_radius`` stand on the fixture
+    at the fixed places :data:`SPHERE_LAYOUT`. 5 mm (10 mm diameter): VDI/VDE 2634-2 sizes its
+    sphere standard at 0.1–0.2 of the measuring volume's length L0, here the blade's ~70 mm
+    bounding diameter gives 7–14 mm; large enough that a partly hidden sphere still holds
+    hundreds of points (centre to ~µm), small enough to hide little of the blade. The sphere
+    points come on top of ``points`` (the blade keeps its budget), at the same sampling density;
+    outliers stay a share of the blade points (reflections of the shiny blade, not of the matte
+    spheres). ``reference_spheres = 0`` is the scanner without spheres, point for point.
     """
 
     views: int = 8
@@ -49,9 +73,16 @@ class ScannerSettings:
     distance: float = 3.0
     tracking_angle: float = 5e-4  # rad, error of the scanner's own pose estimate
     tracking_offset: float = 0.05e-3  # m
+    reference_spheres: int = 4
+    sphere_radius: float = 5e-3  # m
 
     def validate(self) -> None:
         problems = []
+        if not 0 <= self.reference_spheres <= len(SPHERE_LAYOUT):
+            problems.append(f"reference_spheres = {self.reference_spheres} "
+                            f"(expected 0-{len(SPHERE_LAYOUT)})")
+        if not 1e-3 <= self.sphere_radius <= 20e-3:
+            problems.append(f"sphere_radius = {self.sphere_radius} m (expected 1-20 mm)")
         if self.views < 2:
             problems.append(f"views = {self.views} (need >= 2)")
         if self.points < 100 * self.views:
@@ -70,7 +101,8 @@ class ScanView:
 
     The view frame is the scanner's: camera at the origin, viewing along +z. ``pose`` (4×4) maps
     view-frame points to the blade frame; ``is_outlier`` marks the injected
-    outliers (truth, for tests); ``camera`` is the camera position in the blade frame (m).
+    outliers and ``sphere_index`` the reference sphere a point lies on (−1: blade or outlier;
+    both truth, for tests); ``camera`` is the camera position in the blade frame (m).
     ``tracked_pose`` is the scanner's own, erroneous estimate of ``pose`` (the user sees it).
     """
 
@@ -79,17 +111,20 @@ class ScanView:
     tracked_pose: np.ndarray
     is_outlier: np.ndarray
     camera: np.ndarray
+    sphere_index: np.ndarray
 
 
 @dataclass(frozen=True)
 class Scan:
-    """All views of one blade and the settings that made them."""
+    """All views of one blade and the settings that made them; ``sphere_centres`` (k, 3) are
+    the reference spheres' centres in the blade frame (m; hidden truth)."""
 
     row: str
     views: tuple[ScanView, ...]
     settings: ScannerSettings
     seed: int | None = None
     extra: dict = field(default_factory=dict)
+    sphere_centres: np.ndarray = field(default_factory=lambda: np.empty((0, 3)))
 
 
 def blade_raycasting_scene(blade: Blade) -> object:
@@ -138,10 +173,67 @@ def camera_positions(centre: np.ndarray, radius: float, count: int) -> np.ndarra
     return centre + radius * direction
 
 
+def reference_sphere_centres(centre: np.ndarray, radius: float, count: int) -> np.ndarray:
+    """Centres (count, 3; m) of the first ``count`` reference spheres of :data:`SPHERE_LAYOUT`
+    around a blade whose bounding sphere has ``centre`` and ``radius`` (m)."""
+    layout = np.array(SPHERE_LAYOUT[:count], dtype=np.float64).reshape(-1, 3)
+    azimuth = np.radians(layout[:, 0])
+    offset = np.column_stack([layout[:, 1] * np.cos(azimuth), layout[:, 1] * np.sin(azimuth),
+                              layout[:, 2]])
+    return np.asarray(centre, dtype=np.float64) + radius * offset
+
+
+def ray_sphere_hits(origin: np.ndarray, directions: np.ndarray, centres: np.ndarray,
+                    radius: float) -> tuple[np.ndarray, np.ndarray]:
+    """Exact (analytic) first intersection of unit rays from ``origin`` with spheres of
+    ``radius`` (m) at ``centres``: the distance along each ray (m; inf for a miss) and the index
+    of the sphere hit (−1 for a miss)."""
+    distance = np.full(len(directions), np.inf)
+    index = np.full(len(directions), -1, dtype=np.int64)
+    for k, centre in enumerate(np.asarray(centres, dtype=np.float64)):
+        offset = centre - origin
+        along = directions @ offset
+        discriminant = along * along - (offset @ offset - radius * radius)
+        t = along - np.sqrt(np.maximum(discriminant, 0.0))
+        t = np.where((discriminant >= 0.0) & (t > 0.0), t, np.inf)
+        closer = t < distance
+        distance[closer] = t[closer]
+        index[closer] = k
+    return distance, index
+
+
+def _sphere_discs(camera: np.ndarray, centre: np.ndarray, spheres: np.ndarray, radius: float
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Discs in the target plane (through ``centre``, normal to the viewing axis) that hold
+    each sphere's outline seen from ``camera``: their centres (k, 3) and radii (k,), m.
+
+    The outline is a cone of half-angle α = asin(r / d) about the direction to the sphere, at
+    θ from the axis; its section with the plane lies within plane distance × (tan(θ + α) −
+    tan θ) of where the sphere's centre projects (2 % margin)."""
+    axis = (centre - camera) / np.linalg.norm(centre - camera)
+    plane = float(np.linalg.norm(centre - camera))
+    towards = spheres - camera
+    length = np.linalg.norm(towards, axis=1)
+    depth = towards @ axis
+    theta = np.arccos(np.clip(depth / length, -1.0, 1.0))
+    alpha = np.arcsin(np.minimum(radius / length, 1.0))
+    if np.any(theta + alpha >= math.radians(80.0)):
+        raise ValueError("a reference sphere lies too far off the viewing direction of a camera")
+    projected = camera + towards * (plane / depth)[:, None]
+    radii = 1.02 * plane * (np.tan(theta + alpha) - np.tan(theta))
+    return projected, radii
+
+
 def scan_blade(blade: Blade, settings: ScannerSettings | None = None,
                rng: np.random.Generator | int | None = None,
                progress: Callable[[float], None] | None = None) -> Scan:
-    """Scan ``blade`` with the virtual scanner (seeded by ``rng``: a Generator or a seed)."""
+    """Scan ``blade`` with the virtual scanner (seeded by ``rng``: a Generator or a seed).
+
+    Rays aim at random points, uniformly distributed over the target plane's disc that holds
+    the blade and over the discs that hold the reference spheres' outlines; each ray ends at
+    the nearest of the blade (open3d ray casting) and the spheres (exact intersection). Rays
+    are cast until the blade has its points; a sphere keeps the hits of the same rays.
+    """
     import open3d as o3d
 
     settings = settings or ScannerSettings()
@@ -153,43 +245,58 @@ def scan_blade(blade: Blade, settings: ScannerSettings | None = None,
     centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
     sphere = float(np.linalg.norm(vertices - centre, axis=1).max())
     cameras = camera_positions(centre, settings.distance * sphere, settings.views)
+    spheres = reference_sphere_centres(centre, sphere, settings.reference_spheres)
     per_view = settings.points // settings.views
     views = []
     for k, camera in enumerate(cameras):
         inliers_wanted = round(per_view * (1.0 - settings.outlier_share))
-        hits = np.empty((0, 3))
-        rays_cast = 0
-        while len(hits) < inliers_wanted:
+        axis = (centre - camera) / np.linalg.norm(centre - camera)
+        e1 = np.cross(axis, [0.0, 0.0, 1.0] if abs(axis[2]) < 0.9 else [1.0, 0.0, 0.0])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(axis, e1)
+        discs = _sphere_discs(camera, centre, spheres, settings.sphere_radius)
+        batches, batch_labels = [], []
+        blade_hits = rays_cast = 0
+        while blade_hits < inliers_wanted:
             # rays towards random points of the bounding sphere's disc facing the camera
-            count = max(1000, int(1.3 * (inliers_wanted - len(hits)) * (rays_cast + 1000)
-                                  / max(len(hits), 1000)))
-            axis = (centre - camera) / np.linalg.norm(centre - camera)
-            e1 = np.cross(axis, [0.0, 0.0, 1.0] if abs(axis[2]) < 0.9 else [1.0, 0.0, 0.0])
-            e1 /= np.linalg.norm(e1)
-            e2 = np.cross(axis, e1)
+            count = max(1000, int(1.3 * (inliers_wanted - blade_hits) * (rays_cast + 1000)
+                                  / max(blade_hits, 1000)))
             rho = sphere * np.sqrt(rng.random(count))
             phi = 2.0 * math.pi * rng.random(count)
             targets = centre + (rho * np.cos(phi))[:, None] * e1 + (rho * np.sin(phi))[:, None] * e2
+            if len(spheres):
+                targets = _with_sphere_targets(targets, rng, centre, sphere, *discs, e1, e2)
             dirs = targets - camera
             dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
-            rays = np.column_stack([np.repeat(camera[None], count, axis=0), dirs])
+            rays = np.column_stack([np.repeat(camera[None], len(dirs), axis=0), dirs])
             answer = scene.cast_rays(o3d.core.Tensor(rays.astype(np.float32)))
             t_hit = answer["t_hit"].numpy().astype(np.float64)
+            label = np.full(len(dirs), -1, dtype=np.int64)
+            if len(spheres):
+                t_sphere, which = ray_sphere_hits(camera, dirs, spheres, settings.sphere_radius)
+                nearer = t_sphere < t_hit
+                t_hit = np.where(nearer, t_sphere, t_hit)
+                label = np.where(nearer, which, -1)
             ok = np.isfinite(t_hit)
             error = _truncated_normal(rng, int(ok.sum()), settings.noise_sigma,
                                       settings.noise_bound)
-            new = camera + dirs[ok] * (t_hit[ok] + error)[:, None]
-            hits = np.concatenate([hits, new])
+            batches.append(camera + dirs[ok] * (t_hit[ok] + error)[:, None])
+            batch_labels.append(label[ok])
+            blade_hits += int(np.sum(label[ok] < 0))
             rays_cast += count
-        hits = hits[:inliers_wanted]
+        # keep the rays up to the one that gives the blade its last point
+        labels = np.concatenate(batch_labels)
+        last = int(np.flatnonzero(labels < 0)[inliers_wanted - 1]) + 1
+        hits, labels = np.concatenate(batches)[:last], labels[:last]
         outlier_count = per_view - inliers_wanted
-        lo, hi = hits.min(axis=0), hits.max(axis=0)
+        lo, hi = hits[labels < 0].min(axis=0), hits[labels < 0].max(axis=0)
         margin = 0.05 * (hi - lo)
         outliers = rng.uniform(lo - margin, hi + margin, size=(outlier_count, 3))
         points = np.concatenate([hits, outliers])
         is_outlier = np.concatenate([np.zeros(len(hits), bool), np.ones(outlier_count, bool)])
+        sphere_index = np.concatenate([labels, np.full(outlier_count, -1, dtype=np.int64)])
         order = rng.permutation(len(points))
-        points, is_outlier = points[order], is_outlier[order]
+        points, is_outlier, sphere_index = points[order], is_outlier[order], sphere_index[order]
         # the view's frame is the scanner's own: camera at the origin looking along +z, with a
         # random roll about the viewing axis; its pose in the blade frame is unknown to the user
         rotation = _look_at(camera, centre, float(rng.uniform(0.0, 2.0 * math.pi)))
@@ -199,10 +306,33 @@ def scan_blade(blade: Blade, settings: ScannerSettings | None = None,
         local = (points - camera) @ rotation
         tracked = _perturbed(pose, settings.tracking_angle, settings.tracking_offset, rng)
         views.append(ScanView(points=local, pose=pose, tracked_pose=tracked,
-                              is_outlier=is_outlier, camera=camera))
+                              is_outlier=is_outlier, camera=camera, sphere_index=sphere_index))
         if progress is not None:
             progress((k + 1) / len(cameras))
-    return Scan(row=blade.row, views=tuple(views), settings=settings, seed=seed)
+    return Scan(row=blade.row, views=tuple(views), settings=settings, seed=seed,
+                sphere_centres=spheres)
+
+
+def _with_sphere_targets(targets: np.ndarray, rng: np.random.Generator, centre: np.ndarray,
+                         radius: float, disc_centres: np.ndarray, disc_radii: np.ndarray,
+                         e1: np.ndarray, e2: np.ndarray) -> np.ndarray:
+    """``targets`` (uniform on the blade's disc of ``radius`` about ``centre``) joined by
+    targets on the spheres' discs at the same density, each disc's samples falling in the
+    blade's disc or an earlier disc dropped: uniform over the union. Shuffled, so that the
+    first rays of a batch are a uniform sample too."""
+    density = len(targets) / (math.pi * radius**2)
+    joined = [targets]
+    for k, (middle, size) in enumerate(zip(disc_centres, disc_radii, strict=True)):
+        count = round(density * math.pi * size**2)
+        rho = size * np.sqrt(rng.random(count))
+        phi = 2.0 * math.pi * rng.random(count)
+        new = middle + (rho * np.cos(phi))[:, None] * e1 + (rho * np.sin(phi))[:, None] * e2
+        covered = np.linalg.norm(new - centre, axis=1) < radius
+        for before, size_before in zip(disc_centres[:k], disc_radii[:k], strict=True):
+            covered |= np.linalg.norm(new - before, axis=1) < size_before
+        joined.append(new[~covered])
+    targets = np.concatenate(joined)
+    return targets[rng.permutation(len(targets))]
 
 
 def _perturbed(pose: np.ndarray, angle: float, offset: float,
@@ -231,8 +361,9 @@ def _truncated_normal(rng: np.random.Generator, count: int, sigma: float,
 
 
 def write_scan(scan: Scan, folder: str | Path, file_format: str = "ply") -> list[Path]:
-    """Write the views as ``view_NN.ply``/``.pcd``, ``scan.json`` (settings and the scanner's
-    tracked poses) and the hidden ``truth/poses.json``."""
+    """Write the views as ``view_NN.ply``/``.pcd``, ``scan.json`` (settings, the scanner's
+    tracked poses and the nominal ``sphere_radius``, m, null without spheres) and the hidden
+    ``truth/poses.json`` (poses, sphere centres in the blade frame, points per sphere)."""
     from steamtwin.geometry.pointcloud import write_point_cloud
 
     if file_format not in ("ply", "pcd"):
@@ -244,12 +375,16 @@ def write_scan(scan: Scan, folder: str | Path, file_format: str = "ply") -> list
         path = folder / f"view_{k:02d}.{file_format}"
         write_point_cloud(view.points, path)
         paths.append(path)
+    spheres = scan.settings.reference_spheres > 0
     manifest = {"row": scan.row, "seed": scan.seed, "units": "m",
                 "views": [p.name for p in paths], "settings": asdict(scan.settings),
-                "tracked_poses": [v.tracked_pose.tolist() for v in scan.views]}
+                "tracked_poses": [v.tracked_pose.tolist() for v in scan.views],
+                "sphere_radius": scan.settings.sphere_radius if spheres else None}
     (folder / MANIFEST).write_text(json.dumps(manifest, indent=2), encoding="utf-8")
     truth = {"poses": [v.pose.tolist() for v in scan.views],
              "outliers": [int(v.is_outlier.sum()) for v in scan.views],
-             "cameras": [v.camera.tolist() for v in scan.views]}
+             "cameras": [v.camera.tolist() for v in scan.views],
+             "sphere_centres": scan.sphere_centres.tolist(),
+             "sphere_points": [int(np.sum(v.sphere_index >= 0)) for v in scan.views]}
     (folder / "truth" / "poses.json").write_text(json.dumps(truth), encoding="utf-8")
     return paths

@@ -20,13 +20,16 @@ z = const. Steps:
    along ∓z at the low/high end of the span are the root (hub) and tip caps; a plane fitted to
    each, and every point on it, gives the cap patches. On a blade the side is one smooth segment
    (neighbouring normals turn by less than the smoothness angle round the leading edge), so the
-   side points are labelled one by one: leading or trailing edge where the curvature radius is
-   below ``edge_radius_ratio`` × chord near the front or rear end of the section's chord — the
-   line from its most upstream to its most downstream point —, otherwise suction or pressure
-   side by the side of the camber line (midway between the two faces) they lie on. Next to the
-   cap rims, where neighbourhoods straddle the crease, a point takes the label of the nearest
-   point further along the span. Isolated points and points beyond the cap planes stay
-   unassigned; :meth:`Segmentation.counts` accounts for every point.
+   side points are labelled one by one, by their turn fraction round the section
+   (:func:`section_turn`: geodesic arc length from the section's most upstream point, its
+   front end, round to its most downstream point, the rear end, and back): leading or trailing
+   edge where the curvature radius is below ``edge_radius_ratio`` × chord within a share of
+   the chord (the distance between the ends) of arc length from the front or rear end,
+   otherwise suction side (from the rear end anticlockwise to the front end) or pressure side.
+   Next to the cap rims, where neighbourhoods straddle the crease, a point takes the label (and
+   the turn fraction) of the nearest point further along the span. Isolated points and points
+   beyond the cap planes stay unassigned; :meth:`Segmentation.counts` accounts for every
+   point.
 """
 
 from __future__ import annotations
@@ -47,6 +50,11 @@ MIN_POINTS = 2000
 SIDE_REGIONS = ("pressure_side", "suction_side", "leading_edge", "trailing_edge")
 #: A point whose k-th neighbour is farther than this multiple of the median is isolated.
 ISOLATED = 3.0
+#: Nearest neighbours joined in the graph of :func:`section_turn`: few enough that an edge does
+#: not reach across a thin trailing edge (~1.4 point spacings), many enough to join all points.
+GRAPH_NEIGHBOURS = 8
+#: Passes of neighbour averaging of the path lengths in :func:`section_turn`.
+SMOOTHING_PASSES = 3
 
 
 class ReconstructionError(ValueError):
@@ -59,8 +67,8 @@ class SegmentationSettings:
 
     ``curvature_threshold`` bounds the surface variation of seed points (PCL's
     ``setCurvatureThreshold``); ``edge_radius_ratio`` × chord is the largest radius of curvature
-    counted as leading/trailing edge; ``leading_band`` and ``trailing_band`` are the chordwise
-    fractions (0 at the front, 1 at the rear) inside which edges are looked for.
+    counted as leading/trailing edge; edges are looked for within ``leading_band`` × chord of
+    arc length from the front end and ``1 − trailing_band`` × chord from the rear end.
     """
 
     neighbours: int = 20
@@ -94,8 +102,8 @@ class Segmentation:
     segments below the minimum size); ``labels`` index into REGIONS or −1 (unassigned);
     ``spacing`` median distance to the nearest point (m); ``chord`` median distance between
     the sections' front and rear ends (:func:`section_chords`, m);
-    ``chordwise`` position along the chord of each point's section (0 front, 1 rear end) and
-    ``camber`` its offset from the camber line in chords (> 0 on the suction side), both NaN
+    ``turn`` the arc-length fraction of each side point round its section, anticlockwise from
+    the rear end (:func:`section_turn`), and ``perimeter`` its section's perimeter (m), both NaN
     off the side.
     """
 
@@ -108,8 +116,8 @@ class Segmentation:
     tip: CapPlane
     spacing: float
     chord: float
-    chordwise: np.ndarray
-    camber: np.ndarray
+    turn: np.ndarray
+    perimeter: np.ndarray
     extra: dict = field(default_factory=dict)
 
     def counts(self) -> dict[str, int]:
@@ -160,8 +168,9 @@ def oriented_normals(points: np.ndarray, neighbours: int = 20
 
     index, normals, variation = local_frames(points, neighbours)
     count = len(points)
-    i = np.repeat(np.arange(count), index.shape[1] - 1)
-    j = index[:, 1:].ravel()
+    nearest = index[:, 1:GRAPH_NEIGHBOURS + 1]
+    i = np.repeat(np.arange(count), nearest.shape[1])
+    j = nearest.ravel()
     chord = points[j] - points[i]
     length = np.linalg.norm(chord, axis=1)
     along_i = np.abs(np.einsum("ij,ij->i", normals[i], chord))
@@ -302,13 +311,13 @@ def segment_blade(points: np.ndarray, settings: SegmentationSettings | None = No
     # next to the cap rims the neighbourhoods straddle the crease: normals and curvature there
     # are blends; those points take the label of the nearest side point beyond the rim zone
     rim = side & (np.minimum(above_root, below_tip) < np.median(reach))
-    chord, chordwise, camber = _label_sides(points, normals, curvature, segments, side, rim,
-                                            labels, settings)
+    chord, turn, perimeter = _label_sides(points, normals, curvature, segments, index,
+                                          float(np.median(reach)), side, rim, labels, settings)
     _smooth_labels(labels, index, side & ~rim)
     _label_rims(points, labels, side & ~rim, rim)
     return Segmentation(normals=normals, variation=variation, curvature=curvature,
                         segments=segments, labels=labels, root=root, tip=tip, spacing=spacing,
-                        chord=chord, chordwise=chordwise, camber=camber,
+                        chord=chord, turn=turn, perimeter=perimeter,
                         extra={"segments": int(segments.max() + 1),
                                "fragment_points": int(np.sum(segments < 0))})
 
@@ -386,70 +395,175 @@ def section_chords(points: np.ndarray, mask: np.ndarray, slab: float
 
 
 def _label_sides(points: np.ndarray, normals: np.ndarray, curvature: np.ndarray,
-                 segments: np.ndarray, side: np.ndarray, rim: np.ndarray, labels: np.ndarray,
-                 settings: SegmentationSettings) -> tuple[float, np.ndarray, np.ndarray]:
+                 segments: np.ndarray, index: np.ndarray, reach: float, side: np.ndarray,
+                 rim: np.ndarray, labels: np.ndarray, settings: SegmentationSettings
+                 ) -> tuple[float, np.ndarray, np.ndarray]:
     """Label the side points off the rims in place (edges, suction, pressure).
 
-    Returns the median chord (m) and every side point's chordwise position and offset from the
-    camber line in chords (NaN elsewhere).
+    The suction side runs anticlockwise from the rear end of the section to its front end, the
+    pressure side on from there (:func:`section_turn`); edges are looked for within
+    ``leading_band`` × chord of arc length from the front end and ``1 − trailing_band`` × chord
+    from the rear end; ``reach`` (m) is the typical distance to the k-th neighbour. Returns the
+    median chord (m), every side point's turn fraction and its section's perimeter (m; NaN
+    elsewhere).
     """
     if np.sum(side & (segments >= 0)) < MIN_POINTS // 4:
         raise ReconstructionError(f"only {int(np.sum(side & (segments >= 0)))} points between "
                                   "the caps lie in smooth patches: too few to reconstruct the "
                                   "blade's sides")
     extent = float(np.ptp(points[side, 2]))
-    front, rear, _ = section_chords(points, side, max(extent / 40.0, 1e-4))
-    along = rear - front
-    chord = np.linalg.norm(along, axis=1)
-    direction = along / chord[:, None]
-    normal = np.column_stack([-direction[:, 1], direction[:, 0]])
-    offset = points[:, :2] - front
-    xi = np.einsum("ij,ij->i", offset, direction) / chord
-    eta = np.einsum("ij,ij->i", offset, normal)
-    if np.median(eta[side]) < 0.0:  # the camber side: where the section bulges
-        eta = -eta
-        normal = -normal
-    facing = np.einsum("ij,ij->i", normals[:, :2], normal) >= 0.0
-    camber = eta / chord - camber_line(np.clip(xi, 0.0, 1.0), eta / chord, facing, side)
+    slab = max(extent / 40.0, 1e-4)
+    front, rear, _ = section_chords(points, side, slab)
+    chord = np.linalg.norm(rear - front, axis=1)
     inner = side & ~rim
+    turn, perimeter = section_turn(points, normals, index, inner, front, rear, reach, slab)
+    if np.any(rim):  # as the labels: from the nearest point further along the span
+        nearest = _nearest_along_span(points, inner, rim)
+        turn[rim], perimeter[rim] = turn[nearest], perimeter[nearest]
+    near_front = side & (np.linalg.norm(points[:, :2] - front, axis=1) < reach)
+    front_turn = float(np.median(turn[near_front]))  # away from the seam at θ = 0
+    from_rear = perimeter * np.minimum(turn, 1.0 - turn)
+    from_front = perimeter * np.abs(np.mod(turn - front_turn + 0.5, 1.0) - 0.5)
     edge = inner & (curvature > 1.0 / (settings.edge_radius_ratio * chord))
-    leading = edge & (xi < settings.leading_band)
-    trailing = edge & (xi > settings.trailing_band)
+    leading = edge & (from_front < settings.leading_band * chord)
+    trailing = edge & (from_rear < (1.0 - settings.trailing_band) * chord)
     # neighbourhoods reaching onto an edge circle blend its curvature in: keep the points above
     # half the edge's typical (upper-quartile) curvature
     for band in (leading, trailing):
         if np.any(band):
             band &= curvature > 0.5 * np.percentile(curvature[band], 75.0)
     sides = inner & ~leading & ~trailing
-    labels[sides & (camber >= 0.0)] = REGIONS.index("suction_side")
-    labels[sides & (camber < 0.0)] = REGIONS.index("pressure_side")
+    suction = turn < front_turn
+    labels[sides & suction] = REGIONS.index("suction_side")
+    labels[sides & ~suction] = REGIONS.index("pressure_side")
     labels[leading] = REGIONS.index("leading_edge")
     labels[trailing] = REGIONS.index("trailing_edge")
-    return (float(np.median(chord[side])), np.where(side, xi, np.nan),
-            np.where(side, camber, np.nan))
+    return float(np.median(chord[side])), turn, perimeter
 
 
-def camber_line(xi: np.ndarray, eta: np.ndarray, facing: np.ndarray, mask: np.ndarray
-                ) -> np.ndarray:
-    """Offset (in chords) of the camber line from the chord at every point's chordwise position.
+def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mask: np.ndarray,
+                 front: np.ndarray, rear: np.ndarray, seed_radius: float, slab: float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Turn fraction θ ∈ [0, 1) of the points under ``mask`` round their section (arc length
+    anticlockwise, seen from the tip, from the section's rear end, over the perimeter) and the
+    perimeter (m) at every point; NaN elsewhere. ``front`` and ``rear`` are the sections' most
+    upstream and most downstream points (x-y at every point's z, m); ``seed_radius`` (m) is
+    about the k-th neighbour distance, ``slab`` (m) the height of the slabs along the span.
 
-    The camber line lies midway between the two faces: in 100 chordwise bins, the mean of the
-    median offsets ``eta`` of the points whose normals face the camber side (``facing``) and of
-    the others; bins lacking either face are interpolated. Twist and taper do not change it.
+    Arc lengths are geodesic distances on the surface, approximated by shortest paths through
+    a neighbour graph (Dijkstra 1959; graph distances converge to geodesic ones on densely
+    sampled surfaces, Tenenbaum, de Silva & Langford 2000, Science 290). Edges join each point
+    to those of its :data:`GRAPH_NEIGHBOURS` nearest neighbours whose outward normals,
+    projected on the section plane, agree within 75° and whose chord lies within 45° of both
+    tangent planes. The front end's outward normal is −x, so the points just below it (smaller
+    y) lie anticlockwise of it: the graph is cut along the line y = y_front within
+    2 ``seed_radius`` of the front end (the section crosses it there once, at right angles), and
+    the paths start from the points within ``seed_radius`` below the cut, run once round the
+    section and end at those above it. The distance d from the start (averaged
+    :data:`SMOOTHING_PASSES` times over each point and its graph neighbours) is the arc length
+    anticlockwise from the front end; the perimeter P is d plus the distance to the front end
+    at the end points (median per slab along the span). From θ' = d / P and the rear end's θ'_r
+    (median of the points within ``seed_radius`` of it, per slab: it moves with the twist),
+    θ = (θ' − θ'_r) / (1 − θ'_r) · (1 − a) on the suction side and 1 − a + θ' / θ'_r · a on the
+    pressure side, a the median θ'_r: each face keeps a fixed share of the turn along the span,
+    the rear end at θ = 0 and the front end at 1 − a, as the chordwise turn fraction kept them
+    at 0 and 0.5. The cut is at the leading edge, whose circle spans several point spacings;
+    at a thin trailing edge k-NN normals straddle both faces and an edge may cut across, which
+    only shortens the paths beyond it by part of the circle. Unlike the chordwise position, θ
+    is monotone round any section, however strongly cambered, and unchanged by twist and
+    taper. Points the graph does not reach (strays) take the θ of their nearest reached point.
     """
-    edges = np.linspace(0.0, 1.0, 101)
-    which = np.clip(np.searchsorted(edges, xi, side="right") - 1, 0, 99)
-    centres, middles = [], []
-    for k in range(100):
-        upper = mask & facing & (which == k)
-        lower = mask & ~facing & (which == k)
-        if upper.sum() >= 3 and lower.sum() >= 3:
-            centres.append(0.5 * (edges[k] + edges[k + 1]))
-            middles.append(0.5 * (np.median(eta[upper]) + np.median(eta[lower])))
-    if len(centres) < 10:
-        raise ReconstructionError("the side points do not show two faces along the chord: "
-                                  "not a blade")
-    return np.interp(xi, centres, middles)
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import dijkstra
+    from scipy.spatial import cKDTree
+
+    count = len(points)
+    nearest = index[:, 1:GRAPH_NEIGHBOURS + 1]
+    i = np.repeat(np.arange(count), nearest.shape[1])
+    j = nearest.ravel()
+    chord = points[j] - points[i]
+    length = np.linalg.norm(chord, axis=1)
+    # the normals' directions in the section plane: next to the cap rims the k-NN normals of
+    # both faces tilt towards ±z, where they would agree across a thin trailing edge
+    flat = np.column_stack([normals[:, :2], np.zeros(count)])
+    flat /= np.maximum(np.linalg.norm(flat, axis=1, keepdims=True), 1e-12)
+    along_i = np.abs(np.einsum("ij,ij->i", flat[i], chord))
+    along_j = np.abs(np.einsum("ij,ij->i", flat[j], chord))
+    agree = np.einsum("ij,ij->i", flat[i], flat[j]) > math.cos(math.radians(75.0))
+    tangential = (along_i < math.sqrt(0.5) * length) & (along_j < math.sqrt(0.5) * length)
+    edge = mask[i] & mask[j] & (length > 0.0) & agree & tangential
+    pair = np.minimum(i, j)[edge] * count + np.maximum(i, j)[edge]
+    _, unique = np.unique(pair, return_index=True)  # a mutual neighbour pair once
+    lo, hi, length = i[edge][unique], j[edge][unique], length[edge][unique]
+    offset = np.linalg.norm(points[:, :2] - front, axis=1)
+    below = points[:, 1] < front[:, 1]
+    # cut the ring along the line y = y_front across the leading edge
+    cut = (below[lo] != below[hi]) & (np.minimum(offset[lo], offset[hi]) < 2.0 * seed_radius)
+    lo, hi, length = lo[~cut], hi[~cut], length[~cut]
+    seam = mask & (offset < seed_radius)
+    start, end = np.flatnonzero(seam & below), np.flatnonzero(seam & ~below)
+    if start.size == 0 or end.size == 0:
+        raise ReconstructionError("no side points at the front end of the sections: is the "
+                                  "leading edge scanned?")
+    origin = count  # a virtual source joined to the seam points below the cut
+    rows = np.concatenate([lo, hi, np.full(start.size, origin)])
+    cols = np.concatenate([hi, lo, start])
+    weights = np.concatenate([length, length, offset[start] + 1e-12])
+    graph = coo_array((weights, (rows, cols)), shape=(count + 1, count + 1)).tocsr()
+    distance = dijkstra(graph, indices=origin)[:count]
+    reached = mask & np.isfinite(distance)
+    # the zig-zag of the paths through noisy points varies from point to point: average d over
+    # each point and its graph neighbours (d is linear along the surface, the mean keeps it)
+    near = reached[lo] & reached[hi]
+    adjacency = coo_array((np.ones(2 * near.sum()), (np.concatenate([lo[near], hi[near]]),
+                                                     np.concatenate([hi[near], lo[near]]))),
+                          shape=(count, count)).tocsr()
+    degree = np.asarray(adjacency.sum(axis=1)).ravel() + 1.0
+    smooth = np.where(reached, distance, 0.0)
+    for _ in range(SMOOTHING_PASSES):
+        smooth = (smooth + adjacency @ smooth) / degree
+    distance = np.where(reached, smooth, np.inf)
+    closing = end[np.isfinite(distance[end])]
+    if closing.size == 0 or np.mean(reached[mask]) < 0.9:
+        raise ReconstructionError("the side points do not close round the section: the paths "
+                                  "from the leading edge do not come back to it (a hole "
+                                  "across the whole span?)")
+    perimeter = np.full(count, np.nan)
+    perimeter[mask] = _slab_median(points[closing, 2], distance[closing] + offset[closing],
+                                   points[mask, 2], slab)
+    turn = np.full(count, np.nan)
+    turn[reached] = np.mod(distance[reached] / perimeter[reached], 1.0)
+    missed = mask & ~reached
+    if np.any(missed):
+        _, nearest = cKDTree(points[reached]).query(points[missed])
+        turn[missed] = turn[reached][nearest]
+    near_rear = mask & (np.linalg.norm(points[:, :2] - rear, axis=1) < seed_radius)
+    if not np.any(near_rear):
+        raise ReconstructionError("no side points at the rear end of the sections: is the "
+                                  "trailing edge scanned?")
+    # the rear end's turn along the span (it moves with the twist), then both faces stretched
+    # to fixed shares so that the rear end is at θ = 0 and the front end at 1 − share
+    rear_turn = np.clip(_slab_median(points[near_rear, 2], turn[near_rear], points[mask, 2],
+                                     slab), 0.05, 0.95)
+    share = float(np.median(rear_turn))
+    front_based = turn[mask]
+    turn[mask] = np.where(front_based >= rear_turn,
+                          (front_based - rear_turn) / (1.0 - rear_turn) * (1.0 - share),
+                          1.0 - share + front_based / rear_turn * share)
+    return turn, perimeter
+
+
+def _slab_median(z: np.ndarray, values: np.ndarray, at: np.ndarray, slab: float) -> np.ndarray:
+    """Medians of ``values`` in slabs ``slab`` (m) high along z, interpolated linearly (held
+    beyond the end slabs) at the heights ``at``; slabs with fewer than 3 values are skipped."""
+    edges = np.arange(z.min(), z.max() + slab, slab)
+    which = np.clip(np.searchsorted(edges, z, side="right") - 1, 0, len(edges) - 1)
+    counts = np.bincount(which, minlength=len(edges))
+    full = np.flatnonzero(counts >= 3)
+    if full.size == 0:
+        return np.full(len(at), float(np.median(values)))
+    medians = [float(np.median(values[which == k])) for k in full]
+    return np.interp(at, edges[full] + 0.5 * slab, medians)
 
 
 def _smooth_labels(labels: np.ndarray, index: np.ndarray, side: np.ndarray) -> None:
@@ -469,11 +583,18 @@ def _label_rims(points: np.ndarray, labels: np.ndarray, inner: np.ndarray,
     """Give the rim-zone points the label of the nearest labelled side point (in place), with
     z shrunk tenfold so that the same place of the section a little further along the span
     wins."""
-    from scipy.spatial import cKDTree
-
     source = inner & (labels >= 0)
     if not np.any(rim) or not np.any(source):
         return
+    labels[rim] = labels[_nearest_along_span(points, source, rim)]
+
+
+def _nearest_along_span(points: np.ndarray, source: np.ndarray, target: np.ndarray
+                        ) -> np.ndarray:
+    """Index of the nearest ``source`` point of every ``target`` point, with z shrunk tenfold
+    so that the same place of the section a little further along the span wins."""
+    from scipy.spatial import cKDTree
+
     scale = np.array([1.0, 1.0, 0.1])
-    _, nearest = cKDTree(points[source] * scale).query(points[rim] * scale)
-    labels[rim] = labels[source][nearest]
+    _, nearest = cKDTree(points[source] * scale).query(points[target] * scale)
+    return np.flatnonzero(source)[nearest]
