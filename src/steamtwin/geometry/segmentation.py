@@ -148,6 +148,18 @@ def check_blade_cloud(points: np.ndarray, source: str = "point cloud") -> np.nda
     return points
 
 
+def neighbour_chords(points: np.ndarray, index: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Candidate graph edges: every point ``i`` with each of its :data:`GRAPH_NEIGHBOURS`
+    nearest neighbours ``j`` (``index`` row 0 is the point itself), the chord p_j − p_i and its
+    length (m)."""
+    nearest = index[:, 1:GRAPH_NEIGHBOURS + 1]
+    i = np.repeat(np.arange(len(points)), nearest.shape[1])
+    j = nearest.ravel()
+    chord = points[j] - points[i]
+    return i, j, chord, np.linalg.norm(chord, axis=1)
+
+
 def oriented_normals(points: np.ndarray, neighbours: int = 20
                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Neighbour indices (n, k), outward unit normals (n, 3) and surface variation (n,).
@@ -168,11 +180,7 @@ def oriented_normals(points: np.ndarray, neighbours: int = 20
 
     index, normals, variation = local_frames(points, neighbours)
     count = len(points)
-    nearest = index[:, 1:GRAPH_NEIGHBOURS + 1]
-    i = np.repeat(np.arange(count), nearest.shape[1])
-    j = nearest.ravel()
-    chord = points[j] - points[i]
-    length = np.linalg.norm(chord, axis=1)
+    i, j, chord, length = neighbour_chords(points, index)
     along_i = np.abs(np.einsum("ij,ij->i", normals[i], chord))
     along_j = np.abs(np.einsum("ij,ij->i", normals[j], chord))
     tangential = (length > 0.0) & (along_i < 0.5 * length) & (along_j < 0.5 * length)
@@ -478,11 +486,7 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     from scipy.spatial import cKDTree
 
     count = len(points)
-    nearest = index[:, 1:GRAPH_NEIGHBOURS + 1]
-    i = np.repeat(np.arange(count), nearest.shape[1])
-    j = nearest.ravel()
-    chord = points[j] - points[i]
-    length = np.linalg.norm(chord, axis=1)
+    i, j, chord, length = neighbour_chords(points, index)
     # the normals' directions in the section plane: next to the cap rims the k-NN normals of
     # both faces tilt towards ±z, where they would agree across a thin trailing edge
     flat = np.column_stack([normals[:, :2], np.zeros(count)])
