@@ -1,0 +1,68 @@
+"""Every blade row through the geometry chain: scan -> preprocessing -> reconstruction -> STL.
+
+For each of the 13 HP rotor rows and 9 IP stator rows (or those named), runs
+``bench_geometry.main(row, seed, quick=True)`` and prints one Markdown table row: STL
+deviation from the exact blade (RMS, max), the worst chord / stagger / throat error over the
+hub, mid and tip sections, the recovered view poses (all views) and the raw views -> STL wall
+time, each against the issue's limits (RMS <= 0.02 mm, max <= 0.1 mm, chord and throat
+<= 0.05 mm, stagger <= 0.1 deg, poses <= 0.02 mm / 0.01 deg, <= 60 s).
+
+Run: python benchmarks/bench_geometry_rows.py [--seed N] [--rows hp1 ip9 ...] [--json FILE]
+(about 30 s per row on this 2-core machine).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import warnings
+
+from bench_geometry import main as bench_row
+from steamtwin.geometry.profile import ROWS
+
+LIMITS = {"rms": 0.02, "max": 0.1, "chord": 0.05, "stagger": 0.1, "throat": 0.05,
+          "pose_mm": 0.02, "pose_deg": 0.01, "seconds": 60.0}
+"""The issue's acceptance limits (mm, deg, s)."""
+
+
+def summarise(figures: dict) -> dict:
+    """The figures of one row that the limits judge, and whether each holds."""
+    reconstruction = figures["reconstruction"]
+    metrics = reconstruction["metric_errors"]
+    poses = figures["pose_recovery"]["all_views"]
+    row = {"rms": reconstruction["deviation_mm"]["rms"],
+           "max": reconstruction["deviation_mm"]["max"],
+           **{name: max(abs(section[name]) for section in metrics.values())
+              for name in ("chord", "stagger", "throat")},
+           "pose_mm": poses["translation_max_mm"], "pose_deg": poses["rotation_max_deg"],
+           "seconds": figures["raw_views_to_stl_s"]}
+    row["failed"] = [name for name, limit in LIMITS.items() if not row[name] <= limit]
+    return row
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seed", type=int, default=0, help="scan seed")
+    parser.add_argument("--rows", nargs="+", default=list(ROWS), choices=ROWS, metavar="ROW")
+    parser.add_argument("--json", help="also write one JSON line per row to this file")
+    arguments = parser.parse_args()
+    warnings.simplefilter("ignore")
+    print(f"seed {arguments.seed}\n")
+    print("| row | RMS / max mm | chord mm | stagger ° | throat mm | poses mm / ° | raw → STL s "
+          "| meets the limits |")
+    print("|---|---|---|---|---|---|---|---|")
+    lines = []
+    for name in arguments.rows:
+        row = summarise(bench_row(name, arguments.seed, quick=True))
+        verdict = "✓" if not row["failed"] else "✗ " + ", ".join(row["failed"])
+        print(f"| {name} | {row['rms']:.4f} / {row['max']:.3f} | {row['chord']:.3f} "
+              f"| {row['stagger']:.3f} | {row['throat']:.3f} | {row['pose_mm']:.4f} / "
+              f"{row['pose_deg']:.4f} | {row['seconds']:.0f} | {verdict} |", flush=True)
+        lines.append(json.dumps({"row": name, "seed": arguments.seed, **row}))
+    if arguments.json:
+        with open(arguments.json, "w", encoding="utf-8") as stream:
+            stream.write("\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    main()
