@@ -208,3 +208,21 @@ def test_spheres_pose_the_views_without_tracked_poses(sphere_scan) -> None:
     assert report.spheres_matched == 4 and report.pose_graph_pruned == 0
     assert errors["translation_m"].max() < 0.01e-3  # measured 0.003 mm
     assert errors["rotation_deg"].max() < 0.015
+
+
+def test_spheres_are_sized_to_the_blade(reference_spec, sphere_scan, tmp_path) -> None:
+    """VDI/VDE 2634-2: sphere diameter a share of the measuring volume; whole mm, ≥ 1 mm."""
+    from steamtwin.geometry.profile import make_blade
+    from steamtwin.geometry.scanner import SPHERE_DIAMETER_SHARE, planned_sphere_radius
+
+    assert sphere_scan.settings.sphere_radius == 5e-3  # hp1's 73 mm bounding diameter
+    vertices, _, _ = make_blade(reference_spec, "ip9").surface_mesh(2e-3)
+    bounding = float(np.linalg.norm(vertices - 0.5 * (vertices.min(axis=0)
+                                                      + vertices.max(axis=0)), axis=1).max())
+    radius = planned_sphere_radius(bounding)
+    assert radius == 26e-3 and abs(radius - SPHERE_DIAMETER_SHARE * bounding) <= 0.5e-3
+    assert planned_sphere_radius(1e-3) == 1e-3
+    with pytest.raises(ValueError, match="bounding_radius"):
+        planned_sphere_radius(0.0)
+    with pytest.raises(ValueError, match="sphere_radius"):
+        ScannerSettings(sphere_radius=0.2).validate()

@@ -83,3 +83,48 @@ def test_written_scan_reads_back(hp1_scan, tmp_path) -> None:
 def test_bad_settings_are_refused(hp1_blade) -> None:
     with pytest.raises(ValueError, match="outlier_share"):
         scan_blade(hp1_blade, ScannerSettings(outlier_share=0.5))
+
+
+def _fused_points_across_edge(blade, points: int) -> float:
+    """Points of the fused cloud (KEPT_SHARE of ``points``) on the half circle π·r of the
+    smaller edge at the narrowest section, at the cloud's mean spacing over the blade area."""
+    import trimesh
+
+    from steamtwin.geometry.preprocess import KEPT_SHARE
+    from steamtwin.geometry.profile import reference_surface
+
+    vertices, triangles, _ = reference_surface(blade)
+    area = trimesh.Trimesh(vertices, triangles, process=False).area
+    design, params = blade.design, blade.profile.params
+    scale = min(design.chord_scale(design.hub_radius), design.chord_scale(design.tip_radius))
+    edge = min(params.leading_edge_radius, params.trailing_edge_radius) * float(scale)
+    return np.pi * edge / np.sqrt(area / (KEPT_SHARE * points))
+
+
+@pytest.mark.parametrize("row", ["hp1", "hp13", "ip1", "ip5", "ip9"])
+def test_planned_scan_resolves_the_edges(reference_spec, row) -> None:
+    from steamtwin.geometry.profile import make_blade
+    from steamtwin.geometry.scanner import EDGE_SAMPLES, METHOD_SCAN_POINTS, planned_points
+
+    blade = make_blade(reference_spec, row)
+    points = planned_points(blade)
+    assert points >= METHOD_SCAN_POINTS
+    across = _fused_points_across_edge(blade, points)
+    assert across >= EDGE_SAMPLES * (1 - 1e-9)
+    if points > METHOD_SCAN_POINTS:  # the fewest that do: one point fewer falls short
+        assert _fused_points_across_edge(blade, points - 1) < EDGE_SAMPLES
+    # the HP rows are short enough for the method's 150k, the last IP rows are not
+    assert (points == METHOD_SCAN_POINTS) == (row in ("hp1", "hp13", "ip1"))
+
+
+def test_planned_points_scale_with_the_edge_samples_squared(reference_spec) -> None:
+    from steamtwin.geometry.profile import make_blade
+    from steamtwin.geometry.scanner import planned_points
+
+    blade = make_blade(reference_spec, "ip9")
+    base = planned_points(blade, edge_samples=3.0, minimum=1)
+    assert planned_points(blade, edge_samples=6.0, minimum=1) == pytest.approx(4 * base, rel=1e-5)
+    assert planned_points(blade, kept_share=0.25, minimum=1) > planned_points(blade, minimum=1)
+    for bad in ({"edge_samples": 0.0}, {"kept_share": 1.5}, {"minimum": 0}):
+        with pytest.raises(ValueError, match="edge_samples"):
+            planned_points(blade, **bad)

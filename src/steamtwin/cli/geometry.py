@@ -29,7 +29,7 @@ def _spec(turbine: str):  # returns a steamtwin.spec.TurbineSpec
         raise  # unreachable, keeps type checkers calm
 
 
-def _preprocess_settings(manifest: dict, target_points: int):  # -> PreprocessSettings
+def _preprocess_settings(manifest: dict, target_points: int | None):  # -> PreprocessSettings
     """Preprocessing settings for a scan folder: the reference spheres' radius from
     ``scan.json`` (null: no spheres), the default radius when the manifest does not say."""
     from steamtwin.geometry.preprocess import PreprocessSettings
@@ -60,14 +60,16 @@ def scan(
     row: str = typer.Option("hp1", help="Blade row: hp1…hp13 (HP rotor) or ip1…ip9 (IP stator)."),
     out: Path = typer.Option(..., help="Folder for view_NN.ply, scan.json and truth/."),
     turbine: str = typer.Option("reference", help="Built-in turbine name or spec TOML path."),
-    points: int = typer.Option(150_000, help="Total blade points (with outliers) over all "
-                                             "views; the spheres' points come on top."),
+    points: int | None = typer.Option(
+        None, help="Total blade points (with outliers) over all views; the spheres' points come "
+                   "on top. Default: planned from the blade, the method's 150000 or more where "
+                   "a long blade needs them to resolve its trailing edge."),
     views: int = typer.Option(8, help="Number of partial views."),
     outliers: float = typer.Option(0.02, help="Share of outliers (0.01-0.03 typical)."),
     seed: int = typer.Option(0, help="Seed of the scanner's random generator."),
     file_format: str = typer.Option("ply", help="'ply' or 'pcd'."),
-    spheres: int = typer.Option(4, help="Reference spheres (5 mm radius) on the fixture, 0-6; "
-                                        "0 scans the blade alone."),
+    spheres: int = typer.Option(4, help="Reference spheres on the fixture, 0-6, sized to the "
+                                        "blade (5 mm radius on hp1); 0 scans the blade alone."),
 ) -> None:
     """Scan the ground-truth blade of ROW with the virtual handheld scanner (±0.05 mm).
 
@@ -76,16 +78,24 @@ def scan(
     in the registration; their points are removed before the blade is fused.
 
     Example: steamtwin geometry scan --row hp1 --points 150000 --seed 1 --out scan-hp1
+    Example: steamtwin geometry scan --row ip9 --out scan-ip9   (planned: ~294000 points)
     Example: steamtwin geometry scan --row hp1 --spheres 0 --out scan-hp1-blade-only
     """
     from steamtwin.geometry.profile import GeometryError, make_blade
-    from steamtwin.geometry.scanner import ScannerSettings, scan_blade, write_scan
+    from steamtwin.geometry.scanner import (
+        ScannerSettings,
+        planned_points,
+        scan_blade,
+        write_scan,
+    )
 
     if file_format not in ("ply", "pcd"):
         _fail(f"--file-format must be 'ply' or 'pcd' (got {file_format!r})")
     spec = _spec(turbine)
     try:
         blade = make_blade(spec, row)
+        if points is None:
+            points = planned_points(blade)
         settings = ScannerSettings(views=views, points=points, outlier_share=outliers,
                                    reference_spheres=spheres)
         result = scan_blade(blade, settings, rng=seed)
@@ -100,7 +110,9 @@ def scan(
 def preprocess(
     folder: Path = typer.Argument(..., help="Scan folder written by 'geometry scan'."),
     out: Path = typer.Option(..., help="Fused, downsampled cloud (.ply, .pcd or .xyz)."),
-    target_points: int = typer.Option(80_000, help="Points kept after downsampling."),
+    target_points: int | None = typer.Option(
+        None, help="Points kept after downsampling. Default: 8/15 of the scanned blade points "
+                   "(the method's 150k → 80k)."),
     report: Path | None = typer.Option(None, help="Report base path (writes .json)."),
     turbine: str = typer.Option("reference", help="Turbine of the nominal blade (report)."),
 ) -> None:
@@ -161,8 +173,9 @@ def reconstruct(
                                               "nominal blade; without, it must already be in "
                                               "the blade frame."),
     turbine: str = typer.Option("reference", help="Turbine of the nominal blade."),
-    target_points: int = typer.Option(80_000, help="Points kept by preprocessing (scan "
-                                                   "folders)."),
+    target_points: int | None = typer.Option(
+        None, help="Points kept by preprocessing (scan folders). Default: 8/15 of the scanned "
+                   "blade points (the method's 150k → 80k)."),
     tolerance: float = typer.Option(0.02, help="RMS fit residual aimed at by knot insertion, "
                                                "mm."),
 ) -> None:

@@ -276,7 +276,9 @@ class AdaptiveSurfaceFit:
                 break  # refinement went too far for the data: keep the coarser knots
             s = s_new
             candidates.append((rms, len(candidates), breaks, s.copy(), smoothing))
-            if len(self.history_) > 1 and rms > (1.0 - MIN_GAIN) * self.history_[-2]["rms"]:
+            # the gain is measured against the previous round's kept fit, not against a folded
+            # attempt of this round (a stronger penalty always costs some RMS)
+            if len(candidates) > 1 and rms > (1.0 - MIN_GAIN) * candidates[-2][0]:
                 break
             refined = self._refine(breaks, s, residual, inliers)
             if refined is None:

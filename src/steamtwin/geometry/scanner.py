@@ -11,6 +11,11 @@ uniformly through the view's bounding box, and every view is expressed in its ow
 Matte reference spheres on the fixture (the sphere standards of VDI/VDE 2634-2/-3, the datums
 that link the views of a multi-view scan) are part of the scene by default: they are hit by the
 same rays, hide parts of the blade and are hidden by it, and get the same range error.
+
+How many points a blade needs is planned from its nominal geometry (:func:`planned_points`),
+as a metrology engineer sets a scanner's resolution from the smallest feature to capture: the
+method's ~150k points per blade, more where a long blade would otherwise leave its trailing
+edge with too few points to reconstruct.
 """
 
 from __future__ import annotations
@@ -18,11 +23,12 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
+from steamtwin.geometry.preprocess import KEPT_SHARE
 from steamtwin.geometry.profile import Blade, reference_surface
 
 #: Files of a scan folder: views as ``view_00.ply`` …, settings in ``scan.json`` and the hidden
@@ -41,6 +47,55 @@ SPHERE_LAYOUT = ((17.0, 1.25, -0.30), (103.0, 1.40, 0.18), (196.0, 1.30, -0.08),
                  (284.0, 1.45, 0.34), (58.0, 1.55, 0.45), (241.0, 1.35, -0.42))
 
 
+#: The method's scan size: ~150k points per blade, the fewest :func:`planned_points` plans.
+METHOD_SCAN_POINTS = 150_000
+
+#: Points of the fused cloud across an edge's half circle (π·r) that reconstruction needs to
+#: hold the edge within the 0.1 mm limit. Measured on the IP rows at 150k points (2026-11-25,
+#: docs/benchmarks.md): 2.5–2.9 points across the trailing edge left ip6, ip8 and ip9 at
+#: 0.15–0.47 mm at the edge, 3.1 and more passed; 3.5 leaves a margin.
+EDGE_SAMPLES = 3.5
+
+
+def planned_points(blade: Blade, edge_samples: float = EDGE_SAMPLES,
+                   kept_share: float = KEPT_SHARE, minimum: int = METHOD_SCAN_POINTS) -> int:
+    """Scan points (all views, with outliers) that resolve ``blade``'s edges after fusion.
+
+    The fused cloud keeps ``kept_share`` of the N scanned points over the blade's surface area
+    A, so its mean spacing is h = sqrt(A / (kept_share·N)); ``edge_samples`` points on the half
+    circle π·r of the smaller edge radius r (at the narrowest section) need
+    h = π·r / edge_samples, i.e. N = A·edge_samples² / (kept_share·(π·r)²). Never fewer than
+    ``minimum`` (the method's ~150k per blade).
+    """
+    if not (edge_samples > 0.0 and 0.0 < kept_share <= 1.0 and minimum > 0):
+        raise ValueError("edge_samples and minimum must be > 0 and kept_share within (0, 1]")
+    vertices, triangles, _ = reference_surface(blade)
+    corners = vertices[triangles]
+    area = 0.5 * float(np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0],
+                                               corners[:, 2] - corners[:, 0]), axis=1).sum())
+    params, design = blade.profile.params, blade.design
+    narrowest = float(np.min(design.chord_scale(np.array([design.hub_radius,
+                                                         design.tip_radius]))))
+    edge = min(params.leading_edge_radius, params.trailing_edge_radius) * narrowest
+    needed = area * edge_samples**2 / (kept_share * (math.pi * edge) ** 2)
+    return max(minimum, math.ceil(needed))
+
+
+#: Reference-sphere diameter as a share of the blade's bounding diameter: VDI/VDE 2634-2 sizes
+#: its sphere standard at 0.1–0.2 of the measuring volume's length L0; 1/7 keeps hp1's 10 mm.
+SPHERE_DIAMETER_SHARE = 1.0 / 7.0
+
+
+def planned_sphere_radius(bounding_radius: float) -> float:
+    """Reference-sphere radius (m) for a blade of ``bounding_radius`` (m): the diameter
+    :data:`SPHERE_DIAMETER_SHARE` of the blade's bounding diameter, rounded to whole mm as sphere
+    standards come, at least 1 mm. Measured on ip9 (2026-11-25): 5 mm spheres on its 360 mm
+    left view poses 0.039 mm off (too few sphere points, centres to 0.03 mm), 20 mm 0.003 mm."""
+    if not bounding_radius > 0.0:
+        raise ValueError(f"bounding_radius = {bounding_radius} m (expected > 0)")
+    return max(1, round(SPHERE_DIAMETER_SHARE * bounding_radius * 1e3)) / 1e3
+
+
 @dataclass(frozen=True)
 class ScannerSettings:
     """Scanner hyper-parameters (lengths in m).
@@ -56,9 +111,10 @@ class ScannerSettings:
     positioning-target tracking of metrology handheld scanners is accepted at (VDI/VDE 2634-3).
 
     ``reference_spheres`` (0–6) matte spheres of radius ``sphere_radius`` stand on the fixture
-    at the fixed places :data:`SPHERE_LAYOUT`. 5 mm (10 mm diameter): VDI/VDE 2634-2 sizes its
-    sphere standard at 0.1–0.2 of the measuring volume's length L0, here the blade's ~70 mm
-    bounding diameter gives 7–14 mm; large enough that a partly hidden sphere still holds
+    at the fixed places :data:`SPHERE_LAYOUT`. None (the default) sizes them to the blade
+    (:func:`planned_sphere_radius`): VDI/VDE 2634-2 sizes its sphere standard at 0.1–0.2 of the
+    measuring volume's length L0, here the blade's bounding diameter — 5 mm radius for hp1's
+    ~73 mm, 26 mm for ip9's ~360 mm; large enough that a partly hidden sphere still holds
     hundreds of points (centre to ~µm), small enough to hide little of the blade. The sphere
     points come on top of ``points`` (the blade keeps its budget), at the same sampling density;
     outliers stay a share of the blade points (reflections of the shiny blade, not of the matte
@@ -74,15 +130,15 @@ class ScannerSettings:
     tracking_angle: float = 5e-4  # rad, error of the scanner's own pose estimate
     tracking_offset: float = 0.05e-3  # m
     reference_spheres: int = 4
-    sphere_radius: float = 5e-3  # m
+    sphere_radius: float | None = None  # m; None: sized to the blade
 
     def validate(self) -> None:
         problems = []
         if not 0 <= self.reference_spheres <= len(SPHERE_LAYOUT):
             problems.append(f"reference_spheres = {self.reference_spheres} "
                             f"(expected 0-{len(SPHERE_LAYOUT)})")
-        if not 1e-3 <= self.sphere_radius <= 20e-3:
-            problems.append(f"sphere_radius = {self.sphere_radius} m (expected 1-20 mm)")
+        if self.sphere_radius is not None and not 1e-3 <= self.sphere_radius <= 50e-3:
+            problems.append(f"sphere_radius = {self.sphere_radius} m (expected 1-50 mm)")
         if self.views < 2:
             problems.append(f"views = {self.views} (need >= 2)")
         if self.points < 100 * self.views:
@@ -244,6 +300,8 @@ def scan_blade(blade: Blade, settings: ScannerSettings | None = None,
     vertices, _, _ = blade.surface_mesh(2e-3)
     centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
     sphere = float(np.linalg.norm(vertices - centre, axis=1).max())
+    if settings.sphere_radius is None:
+        settings = replace(settings, sphere_radius=planned_sphere_radius(sphere))
     cameras = camera_positions(centre, settings.distance * sphere, settings.views)
     spheres = reference_sphere_centres(centre, sphere, settings.reference_spheres)
     per_view = settings.points // settings.views
