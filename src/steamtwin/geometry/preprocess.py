@@ -39,8 +39,9 @@ class PreprocessSettings:
     cut-off; ``target_points`` the size of the fused, downsampled cloud (None:
     :data:`KEPT_SHARE` of the scanned blade points, i.e. of the input less the reference
     spheres' points — the method's ~150k → ~80k at any scan density). ``sphere_radius`` is
-    the nominal radius of the reference spheres on the fixture (the virtual scanner's default;
-    None: no sphere detection), ``sphere_tolerance`` the shell half-width of a sphere's points
+    the nominal radius of the reference spheres on the fixture (default 5 mm, the virtual
+    scanner's spheres on hp1; a scan folder's ``scan.json`` records its own; None: no sphere
+    detection), ``sphere_tolerance`` the shell half-width of a sphere's points
     (twice the scanner's ±0.05 mm bound), ``sphere_min_points`` the fewest points a sphere is
     accepted with and ``sphere_match_distance`` how close (in the frame of the starting poses)
     two views' centres of one sphere must land (see :mod:`steamtwin.geometry.targets`).
