@@ -64,4 +64,8 @@ def test_assemble_and_uncertainty(tmp_path) -> None:
     result = runner.invoke(geometry_app, ["uncertainty", "--samples", "2", "--out",
                                           str(json_path)])
     assert result.exit_code == 0, result.output
-    assert json.loads(json_path.read_text())["samples"] == 2
+    document = json.loads(json_path.read_text())
+    assert document["samples"] == 2
+    assert "largest deviation" in result.output
+    assert (0.5 * document["hp_exhaust_temperature_spread_K"] - 1e-12
+            <= document["hp_exhaust_temperature_max_deviation_K"])

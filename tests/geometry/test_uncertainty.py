@@ -23,6 +23,13 @@ def test_scan_errors_give_a_small_flow_and_temperature_spread(hp1_blade,
     assert np.all(np.abs(result.throat_area_ratio - 1.0) < 0.01)
     assert result.nominal_hp_exhaust_temperature == pytest.approx(326.7 + 273.15, abs=0.05)
     assert 0.0 < result.temperature_spread < 2.0
+    deviation = result.hp_exhaust_temperature - result.nominal_hp_exhaust_temperature
+    assert result.max_deviation == pytest.approx(np.abs(deviation).max(), abs=1e-12)
+    # at least half the spread; at most the spread when the exact blade lies inside the samples
+    assert result.max_deviation >= 0.5 * result.temperature_spread - 1e-12
+    if deviation.min() <= 0.0 <= deviation.max():
+        assert result.max_deviation <= result.temperature_spread + 1e-12
+    assert result.as_dict()["hp_exhaust_temperature_max_deviation_K"] == result.max_deviation
     # a larger flow capacity at fixed boundary pressures changes the exhaust temperature
     # monotonically: the samples order the same way by ratio and by temperature
     order_ratio = np.argsort(result.throat_area_ratio)

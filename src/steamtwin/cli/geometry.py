@@ -360,4 +360,6 @@ def uncertainty(
         out.write_text(json.dumps(document, indent=2), encoding="utf-8")
     typer.echo(f"throat-area multiplier {document['throat_area_ratio_min']:.5f}…"
                f"{document['throat_area_ratio_max']:.5f}; HP-exhaust temperature spread "
-               f"{document['hp_exhaust_temperature_spread_K']:.3f} K over {samples} samples")
+               f"{document['hp_exhaust_temperature_spread_K']:.3f} K (largest deviation from "
+               f"the exact blade's {document['hp_exhaust_temperature_max_deviation_K']:.3f} K) "
+               f"over {samples} samples")
