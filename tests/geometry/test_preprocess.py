@@ -195,3 +195,10 @@ def test_downsampling_keeps_the_edges_denser() -> None:
     # the edge is 10 000 of 40 000 points but gets its curvature budget
     assert on_edge / len(kept) > 0.2
     assert {tuple(p) for p in kept[:100]} <= {tuple(p) for p in points}
+
+
+@pytest.mark.parametrize("target", [0, -5])
+def test_a_non_positive_target_is_refused(target) -> None:
+    views = [np.random.default_rng(k).normal(size=(200, 3)) * 1e-2 for k in range(2)]
+    with pytest.raises(ValueError, match="target_points"):
+        preprocess_views(views, PreprocessSettings(target_points=target, sphere_radius=None))

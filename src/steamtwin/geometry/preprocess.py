@@ -906,6 +906,9 @@ def preprocess_views(views: Sequence[np.ndarray], settings: PreprocessSettings |
     Returns ``(fused cloud in the frame of view 0, per-view poses, report)``.
     """
     settings = settings or PreprocessSettings()
+    if settings.target_points is not None and settings.target_points < 1:
+        raise ValueError(f"target_points = {settings.target_points} (expected a count >= 1, "
+                         "or None for 8/15 of the scanned blade points)")
     report = PreprocessReport()
     blade_views, spheres = [], []
     for k, view in enumerate(views):
@@ -943,8 +946,9 @@ def preprocess_views(views: Sequence[np.ndarray], settings: PreprocessSettings |
                                           settings.mls_max_shift)
     fused = np.concatenate([transform(v, p) for v, p in zip(cleaned, poses, strict=True)])
     report.fused_points = len(fused)
-    target = settings.target_points or round(
-        KEPT_SHARE * (sum(report.input_points) - sum(report.sphere_points_removed)))
+    target = settings.target_points
+    if target is None:
+        target = round(KEPT_SHARE * (sum(report.input_points) - sum(report.sphere_points_removed)))
     fused = feature_preserving_downsample(fused, target, settings.feature_share)
     report.downsampled_points = len(fused)
     if progress is not None:

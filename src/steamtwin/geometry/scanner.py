@@ -51,9 +51,9 @@ SPHERE_LAYOUT = ((17.0, 1.25, -0.30), (103.0, 1.40, 0.18), (196.0, 1.30, -0.08),
 METHOD_SCAN_POINTS = 150_000
 
 #: Points of the fused cloud across an edge's half circle (π·r) that reconstruction needs to
-#: hold the edge within the 0.1 mm limit. Measured on the IP rows at 150k points (2026-11-25,
-#: docs/benchmarks.md): 2.5–2.9 points across the trailing edge left ip6, ip8 and ip9 at
-#: 0.15–0.47 mm at the edge, 3.1 and more passed; 3.5 leaves a margin.
+#: hold the edge within the 0.1 mm limit. Measured at 150k points, seed 0 (docs/benchmarks.md):
+#: ip9 with 2.5 points across its trailing edge 0.47 mm off at the edge; ip8 (2.65) and ip6
+#: (2.93) 0.067 / 0.066 mm — at the margin. 3.5 keeps every row well above 2.5.
 EDGE_SAMPLES = 3.5
 
 
