@@ -63,7 +63,7 @@ def scan(
     points: int | None = typer.Option(
         None, help="Total blade points (with outliers) over all views; the spheres' points come "
                    "on top. Default: planned from the blade, the method's 150000 or more where "
-                   "a long blade needs them to resolve its trailing edge."),
+                   "a blade needs them to resolve its edges (hp13: 234321)."),
     views: int = typer.Option(8, help="Number of partial views."),
     outliers: float = typer.Option(0.02, help="Share of outliers (0.01-0.03 typical)."),
     seed: int = typer.Option(0, help="Seed of the scanner's random generator."),
@@ -78,7 +78,7 @@ def scan(
     in the registration; their points are removed before the blade is fused.
 
     Example: steamtwin geometry scan --row hp1 --points 150000 --seed 1 --out scan-hp1
-    Example: steamtwin geometry scan --row ip9 --out scan-ip9   (planned: ~294000 points)
+    Example: steamtwin geometry scan --row ip9 --out scan-ip9   (planned: ~485000 points)
     Example: steamtwin geometry scan --row hp1 --spheres 0 --out scan-hp1-blade-only
     """
     from steamtwin.geometry.profile import GeometryError, make_blade

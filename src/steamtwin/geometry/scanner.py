@@ -51,10 +51,13 @@ SPHERE_LAYOUT = ((17.0, 1.25, -0.30), (103.0, 1.40, 0.18), (196.0, 1.30, -0.08),
 METHOD_SCAN_POINTS = 150_000
 
 #: Points of the fused cloud across an edge's half circle (π·r) that reconstruction needs to
-#: hold the edge within the 0.1 mm limit. Measured at 150k points, seed 0 (docs/benchmarks.md):
-#: ip9 with 2.5 points across its trailing edge 0.47 mm off at the edge; ip8 (2.65) and ip6
-#: (2.93) 0.067 / 0.066 mm — at the margin. 3.5 keeps every row well above 2.5.
-EDGE_SAMPLES = 3.5
+#: hold the edge within the 0.1 mm limit (docs/benchmarks.md, "Scan density"). At 150k points,
+#: seed 0: ip9 with 2.5 points across its trailing edge is 0.47 mm off at the edge; ip8 (2.65)
+#: and ip6 (2.93) 0.067 / 0.066 mm, at the margin. At 3.5 points, hp13 (3.6 at 150k) missed
+#: the limit on 1 seed of 8 (0.19 mm where a random gap in the points, 0.5 × 4 mm, meets the
+#: trailing edge at the tip) and ip4 on seed 0 (0.11 mm, same place); at 4.5 hp13 met it on
+#: every seed tried (max 0.035–0.048 mm).
+EDGE_SAMPLES = 4.5
 
 
 def planned_points(blade: Blade, edge_samples: float = EDGE_SAMPLES,
