@@ -41,7 +41,7 @@ def main(row: str = "hp1", seed: int = 0, quick: bool = False, spheres: int = 4)
     figures: dict = {"row": row, "seed": seed, "reference_spheres": spheres}
 
     start = time.perf_counter()
-    figures["scan_points"] = planned_points(blade)  # 150k, more for long blades
+    figures["scan_points"] = planned_points(blade)  # 150k for hp1, more for the others
     scan = scan_blade(blade, ScannerSettings(points=figures["scan_points"], views=8,
                                              reference_spheres=spheres), rng=seed)
     figures["scan_s"] = time.perf_counter() - start

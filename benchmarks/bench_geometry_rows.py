@@ -7,10 +7,10 @@ hub, mid and tip sections, the recovered view poses (all views) and the raw view
 time, each against the issue's limits (RMS <= 0.02 mm, max <= 0.1 mm, chord and throat
 <= 0.05 mm, stagger <= 0.1 deg, poses <= 0.02 mm / 0.01 deg, <= 60 s for a ~150k-point scan).
 Each row is scanned with the points :func:`~steamtwin.geometry.scanner.planned_points` plans
-(150k, more for the long IP rows), so the wall time is judged per 150k scanned points.
+(150k for hp1, up to 485k for ip9), so the wall time is judged per 150k scanned points.
 
 Run: python benchmarks/bench_geometry_rows.py [--seed N] [--rows hp1 ip9 ...] [--json FILE]
-(about 30 s per row on this 2-core machine).
+(about 23 min for all 22 rows on this 2-core machine).
 """
 
 from __future__ import annotations

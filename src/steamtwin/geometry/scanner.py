@@ -14,8 +14,8 @@ same rays, hide parts of the blade and are hidden by it, and get the same range 
 
 How many points a blade needs is planned from its nominal geometry (:func:`planned_points`),
 as a metrology engineer sets a scanner's resolution from the smallest feature to capture: the
-method's ~150k points per blade, more where a long blade would otherwise leave its trailing
-edge with too few points to reconstruct.
+method's ~150k points per blade, more where the fused cloud would otherwise put too few points
+across the blade's edges to reconstruct them (every row but hp1 of the reference unit).
 """
 
 from __future__ import annotations
