@@ -11,8 +11,10 @@ import pytest
 
 from steamtwin.rom.estimator import ExtrapolationWarning, PodRbfRom
 from steamtwin.rom.reconstruction import (
+    DISTANCE,
     FLAG_EXTRAPOLATED,
     FLAG_INVALID,
+    FLAG_OUT_OF_DOMAIN,
     predict_field,
     predict_series,
     write_vtu,
@@ -148,13 +150,15 @@ def test_series_prediction_flags_and_matches_fields(bundle, blade_snapshots):
     signals = pd.DataFrame({name: conditions[name].to_numpy()[:5] for name in ROM_INPUTS},
                            index=index)
     signals.iloc[2, 0] = np.nan
-    signals.iloc[4, 1] = conditions["main_steam_temperature"].max() + 40.0
+    t_span = conditions["main_steam_temperature"].max() - conditions["main_steam_temperature"].min()
+    signals.iloc[4, 1] = conditions["main_steam_temperature"].max() + 0.5 * t_span
     with pytest.warns(ExtrapolationWarning, match="1 of 5 samples"):
         result = predict_series(bundle, signals, fields_every=2)
     table = result.sensors
     assert table[FLAG_INVALID].tolist() == [False, False, True, False, False]
     assert table[FLAG_EXTRAPOLATED].tolist() == [False, False, False, False, True]
-    assert table.iloc[2].drop([FLAG_INVALID, FLAG_EXTRAPOLATED]).isna().all()
+    assert not table[FLAG_OUT_OF_DOMAIN].any()
+    assert table.iloc[2].drop([FLAG_INVALID, FLAG_OUT_OF_DOMAIN, FLAG_EXTRAPOLATED]).isna().all()
     # at the snapshots the ROM reproduces the stored sensors and the field's probe nodes
     for row in (0, 1, 3):
         field = blade_snapshots.fields[row]
@@ -168,6 +172,33 @@ def test_series_prediction_flags_and_matches_fields(bundle, blade_snapshots):
     np.testing.assert_allclose(result.fields[3], expected, atol=1e-9)
     with pytest.raises(ValueError, match="lack the ROM input"):
         predict_series(bundle, signals.drop(columns=["control_stage_pressure"]))
+
+
+def test_series_prediction_refuses_inputs_outside_the_physical_domain(bundle, blade_snapshots):
+    """Issue 16, finding 3: wet main steam and a tenfold pressure gave -101 MW and 1862 MW."""
+    conditions = blade_snapshots.conditions
+    index = pd.date_range("2026-01-01", periods=5, freq="1s", tz="UTC")
+    signals = pd.DataFrame({name: conditions[name].to_numpy()[:5] for name in ROM_INPUTS},
+                           index=index)
+    signals.loc[index[1], "main_steam_temperature"] = 281.0 + 273.15  # wet at 16.7 MPa
+    signals.loc[index[1], "main_steam_pressure"] = 16.7e6
+    signals.loc[index[2], "main_steam_pressure"] *= 10.0  # bar read as MPa
+    signals.loc[index[3], "control_stage_pressure"] = signals["main_steam_pressure"].iloc[3]
+    t_span = conditions["main_steam_temperature"].max() - conditions["main_steam_temperature"].min()
+    signals.loc[index[4], "main_steam_temperature"] = (conditions["main_steam_temperature"].max()
+                                                       + 1.5 * t_span)
+    table = predict_series(bundle, signals).sensors
+    assert table[FLAG_OUT_OF_DOMAIN].tolist() == [False, True, True, True, True]
+    assert table[FLAG_INVALID].tolist() == [False, True, True, True, True]
+    assert not table[FLAG_EXTRAPOLATED].iloc[1:].any()
+    predicted = table.drop(columns=[FLAG_INVALID, FLAG_OUT_OF_DOMAIN, FLAG_EXTRAPOLATED, DISTANCE])
+    assert predicted.iloc[1:].isna().all().all() and predicted.iloc[0].notna().all()
+    # the same farthest sample is predicted when the caller widens the limit on purpose
+    with pytest.warns(ExtrapolationWarning):
+        wide = predict_series(bundle, signals, max_extrapolation=2.0).sensors
+    assert not wide[FLAG_INVALID].iloc[4] and wide[FLAG_EXTRAPOLATED].iloc[4]
+    with pytest.raises(ValueError, match="max_extrapolation"):
+        predict_series(bundle, signals, max_extrapolation=-1.0)
 
 
 def test_vtu_output_reads_back(bundle, tmp_path):

@@ -2,9 +2,16 @@
 
 A series costs one RBF evaluation per sample (all samples at once) plus, for the blade probes,
 r multiply-adds per probe; full fields (N values each) are reconstructed only for the samples
-asked for. Samples whose inputs are missing or not finite are flagged and predicted as NaN;
-samples outside the snapshots' range are flagged with their distance (see
-:meth:`PodRbfRom.extrapolation_distance`) and one :class:`ExtrapolationWarning` sums them up.
+asked for. Samples whose inputs are missing or not finite, or outside the physical domain, are
+flagged ``rom_invalid_input`` and predicted as NaN — a ROM is a fit, and a fit evaluated far from
+its data returns numbers that only look like results (a wet "main steam", or a pressure ten times
+the snapshots', once gave −101 MW and 1862 MW). Outside the domain means: main steam not
+superheated (at or below the IF97 region-2 boundary, saturation or B23 line, at its pressure),
+control-stage pressure not below main-steam pressure, or farther than ``max_extrapolation``
+outside the snapshots (:meth:`PodRbfRom.extrapolation_distance`, in units of each input's
+snapshot span). Those samples are also flagged ``rom_out_of_domain``; samples outside the
+snapshots' range but within the limit are predicted, flagged ``rom_extrapolated`` with their
+distance, and one :class:`ExtrapolationWarning` sums them up.
 """
 
 from __future__ import annotations
@@ -21,10 +28,19 @@ import pandas as pd
 from steamtwin.blade.mesh import SolidMesh
 from steamtwin.rom.estimator import ExtrapolationWarning
 from steamtwin.rom.romfile import BladeRom
+from steamtwin.steam.tables import lower_boundary_temperature
+
+IF97_PRESSURE_RANGE = (611.657, 100.0e6)
+"""Pa; IAPWS-IF97's triple-point pressure and upper limit (IAPWS R7-97(2012), §4–5)."""
 
 FLAG_INVALID = "rom_invalid_input"
+FLAG_OUT_OF_DOMAIN = "rom_out_of_domain"
 FLAG_EXTRAPOLATED = "rom_extrapolated"
 DISTANCE = "rom_extrapolation_distance"
+MAX_EXTRAPOLATION = 1.0
+"""Default limit of :func:`predict_series`: a sample may lie at most one whole snapshot span
+(of each input, Euclidean over the inputs) outside the snapshots; farther, the fit has no data
+nearer than the width of everything it was fitted on."""
 
 
 @dataclass(frozen=True)
@@ -32,8 +48,8 @@ class SeriesPrediction:
     """Per-sample predictions (SI) and flags, plus fields (K) at the requested samples.
 
     ``sensors`` columns: the ROM's steam-path sensors, the blade probes, ``rom_invalid_input``,
-    ``rom_extrapolated`` and ``rom_extrapolation_distance``. ``fields`` maps sample positions
-    to nodal temperature arrays.
+    ``rom_out_of_domain``, ``rom_extrapolated`` and ``rom_extrapolation_distance``.
+    ``fields`` maps sample positions to nodal temperature arrays.
     """
 
     sensors: pd.DataFrame
@@ -52,10 +68,13 @@ def predict_field(bundle: BladeRom, condition: dict[str, float] | np.ndarray) ->
 
 
 def predict_series(bundle: BladeRom, signals: pd.DataFrame, fields_every: int | None = None,
-                   progress: Callable[[float], None] | None = None) -> SeriesPrediction:
+                   progress: Callable[[float], None] | None = None,
+                   max_extrapolation: float = MAX_EXTRAPOLATION) -> SeriesPrediction:
     """Sensor and probe predictions for every row of ``signals`` (canonical names, SI).
 
     ``fields_every`` = n also reconstructs the full field at every n-th valid sample.
+    ``max_extrapolation``: the farthest a sample may lie outside the snapshots and still be
+    predicted, in units of each input's snapshot span (see the module docstring).
     """
     rom = bundle.rom
     missing = [name for name in rom.input_names_ if name not in signals.columns]
@@ -63,15 +82,22 @@ def predict_series(bundle: BladeRom, signals: pd.DataFrame, fields_every: int | 
         raise ValueError(f"the data lack the ROM input signal(s) {missing} (SI units)")
     if fields_every is not None and fields_every < 1:
         raise ValueError(f"fields_every must be ≥ 1, got {fields_every}")
+    if not max_extrapolation >= 0.0:
+        raise ValueError(f"max_extrapolation must be ≥ 0 (snapshot spans), got "
+                         f"{max_extrapolation!r}")
     inputs = signals[list(rom.input_names_)].apply(pd.to_numeric, errors="coerce").to_numpy(
         dtype=float)
-    valid = np.all(np.isfinite(inputs), axis=1)
+    finite = np.all(np.isfinite(inputs), axis=1)
     n = len(signals)
-    reduced = np.full((n, rom.n_modes_ + len(rom.sensor_names_)), np.nan)
     distance = np.full(n, np.nan)
+    if np.any(finite):
+        distance[finite] = rom.extrapolation_distance(inputs[finite])
+    out_of_domain = finite & (~_physical(rom.input_names_, inputs)
+                              | (distance > max_extrapolation))
+    valid = finite & ~out_of_domain
+    reduced = np.full((n, rom.n_modes_ + len(rom.sensor_names_)), np.nan)
     if np.any(valid):
         reduced[valid] = rom.predict_reduced(inputs[valid], warn=False)
-        distance[valid] = rom.extrapolation_distance(inputs[valid])
     coefficients = reduced[:, : rom.n_modes_]
     names = list(bundle.probes)
     nodes = np.array([bundle.probes[name] for name in names], dtype=np.int64)
@@ -81,11 +107,12 @@ def predict_series(bundle: BladeRom, signals: pd.DataFrame, fields_every: int | 
     for j, name in enumerate(names):
         table[name] = probes[:, j]
     table[FLAG_INVALID] = ~valid
+    table[FLAG_OUT_OF_DOMAIN] = out_of_domain
     table[FLAG_EXTRAPOLATED] = valid & (distance > 0.0)
     table[DISTANCE] = distance
     outside = int(table[FLAG_EXTRAPOLATED].sum())
     if outside:
-        worst = int(np.nanargmax(distance))
+        worst = int(np.nanargmax(np.where(table[FLAG_EXTRAPOLATED], distance, np.nan)))
         warnings.warn(f"{outside} of {n} samples lie outside the snapshots' range (farthest "
                       f"{distance[worst]:.3f} scaled units, at {signals.index[worst]}); their "
                       "predictions are extrapolated and flagged", ExtrapolationWarning,
@@ -98,6 +125,26 @@ def predict_series(bundle: BladeRom, signals: pd.DataFrame, fields_every: int | 
             if progress is not None:
                 progress((k + 1) / chosen.size)
     return SeriesPrediction(table, fields)
+
+
+def _physical(names: tuple[str, ...], inputs: np.ndarray) -> np.ndarray:
+    """Rows whose inputs a steam turbine can see: superheated main steam, p_cs < p0 (finite
+    rows only; other rows are True and judged elsewhere)."""
+    ok = np.ones(inputs.shape[0], dtype=bool)
+    column = {name: j for j, name in enumerate(names)}
+    finite = np.all(np.isfinite(inputs), axis=1)
+    if "main_steam_pressure" in column:
+        p0 = inputs[:, column["main_steam_pressure"]]
+        low, high = IF97_PRESSURE_RANGE
+        in_tables = finite & (p0 >= low) & (p0 <= high)
+        ok[finite & ~in_tables] = False
+        if "main_steam_temperature" in column and in_tables.any():
+            t0 = inputs[in_tables, column["main_steam_temperature"]]
+            ok[in_tables] &= t0 > lower_boundary_temperature(p0[in_tables])
+        if "control_stage_pressure" in column:
+            p1 = inputs[:, column["control_stage_pressure"]]
+            ok[finite] &= (p1[finite] > 0.0) & (p1[finite] < p0[finite])
+    return ok
 
 
 def write_vtu(mesh: SolidMesh, fields: dict[str, np.ndarray], path: str | Path) -> Path:
