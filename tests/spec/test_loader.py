@@ -65,7 +65,7 @@ def test_metal_groups_must_cover_every_stage():
 
 def test_unknown_sensor_is_named():
     text = REFERENCE_TEXT.replace('"load",\n]', '"vibration",\n]')
-    with pytest.raises(SpecError, match=r"sensors\[8\] = 'vibration' is not a canonical signal"):
+    with pytest.raises(SpecError, match=r"sensors\[9\] = 'vibration' is not a canonical signal"):
         parse_spec(text, "unit.toml")
 
 
@@ -93,8 +93,8 @@ def test_main_steam_pressure_outside_range_is_refused(value):
         ('hp_exhaust_temperature = "326.7 degC"', 'hp_exhaust_temperature = "240 degC"',
          r"hp_exhaust_temperature 240\.0 °C is not superheated at 3\.9 MPa"),
         ("load_fraction = [0.0, 0.27", 'load_fraction = ["0 MPa", 0.27',
-         r"sliding_pressure\.load_fraction\[0\]: '0 MPa' is not convertible"),
-        ('"load",\n]', '"load", 3,\n]', r"sensors\[9\] = 3 is not a canonical signal"),
+         r"sliding_pressure\.load_fraction\[1\]: '0 MPa' is not convertible"),
+        ('"load",\n]', '"load", 3,\n]', r"sensors\[10\] = 3 is not a canonical signal"),
     ],
     ids=["bleed-too-large", "group-names", "control-stage-group", "exhaust-wet", "load-unit",
          "sensor-type"],
@@ -106,3 +106,73 @@ def test_inconsistent_spec_is_refused(old, new, message):
         text = text.replace("stages = [1, 2, 3, 4]", "stages = [2, 3, 4]")
     with pytest.raises(SpecError, match=message):
         parse_spec(text, "unit.toml")
+
+
+def test_misspelled_extractions_table_is_refused():
+    """Finding 5: ``[[extraction]]`` used to drop the HP-heater bleed with exit 0."""
+    text = REFERENCE_TEXT.replace("[[extractions]]", "[[extraction]]")
+    with pytest.raises(SpecError, match=r"unit\.toml: extraction is not a turbine spec field "
+                       r"\(did you mean 'extractions'\?\)"):
+        parse_spec(text, "unit.toml")
+
+
+def test_unknown_key_in_a_stage_names_the_stage_from_one():
+    """Finding 5: an unknown key in the third [[stages]] table is named as stage 3."""
+    text = REFERENCE_TEXT.replace('mean_diameter = "0.9539 m"', 'pitch_diameter = "0.9539 m"')
+    with pytest.raises(SpecError, match=r"unit\.toml: stage 3: stages\[3\]\.pitch_diameter is not "
+                       r"a turbine spec field \(did you mean 'mean_diameter'\?\); expected one "
+                       r"of: blade_count, "):
+        parse_spec(text, "unit.toml")
+
+
+def test_misspelled_table_header_is_refused():
+    text = REFERENCE_TEXT.replace("[metal.casing_material]", "[metal.casing_materail]")
+    with pytest.raises(SpecError, match=r"metal\.casing_materail is not a turbine spec field "
+                       r"\(did you mean 'casing_material'\?\)"):
+        parse_spec(text, "unit.toml")
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ('hp_power = "177.3 MW"', "hp_power = [177.3, 1]",
+     r"design\.hp_power is an array: expected a string 'value unit' with a unit convertible "
+     r"to W"),
+    ('hp_power = "177.3 MW"', "hp_power = 1979-05-27", r"design\.hp_power is a date/time"),
+    ('hp_power = "177.3 MW"', 'hp_power = "177.3 M)W"',
+     r"design\.hp_power: cannot read the unit of '177\.3 M\)W'"),
+    ("valve_pressure_drop = 0.03", "valve_pressure_drop = {value = 0.03}",
+     r"design\.valve_pressure_drop is a table: expected a plain number"),
+    ("load_fraction = [0.0, 0.27", "load_fraction = [0.0, nan",
+     r"sliding_pressure\.load_fraction must increase within 0…1\.2"),
+    ('pressure = ["6.0 MPa"', 'pressure = [[6.0]',
+     r"sliding_pressure\.pressure\[1\] is an array"),
+    ("[metal.rotor_material]", "[metal.rotor_material.extra]",
+     r"metal\.rotor_material\.extra is not a turbine spec field"),
+], ids=["array", "datetime", "unit-syntax", "table", "nan-load", "nested-array", "sub-table"])
+def test_value_of_the_wrong_type_is_named(old, new, message):
+    assert old in REFERENCE_TEXT
+    with pytest.raises(SpecError, match=rf"unit\.toml: {message}"):
+        parse_spec(REFERENCE_TEXT.replace(old, new, 1), "unit.toml")
+
+
+@pytest.mark.parametrize(("content", "message"), [
+    (bytes(range(256)) * 4, r"not UTF-8 text \(byte 0x80 on line 2\)"),
+    (REFERENCE_TEXT.replace("reference unit", "参考机组").encode("gbk"),
+     r"not UTF-8 text \(byte 0xb2 on line 1\); a turbine spec is a TOML file saved as UTF-8"),
+    (b"", r"the file is empty"),
+    (b"\n \n", r"the file is empty"),
+    (b"\x00\x01 binary", r"not valid TOML"),
+    (b"format_version = " + b"9" * 5000, r"not valid TOML: Exceeds the limit"),
+    (b"a = " + b"[" * 5000, r"not valid TOML: maximum recursion depth"),
+], ids=["binary", "gbk", "empty", "blank", "nul-bytes", "huge-integer", "deep-nesting"])
+def test_unreadable_spec_file_is_a_spec_error_naming_it(tmp_path, content, message):
+    """Finding 6: a binary or GBK file as spec used to end in a traceback."""
+    path = tmp_path / "unit.toml"
+    path.write_bytes(content)
+    with pytest.raises(SpecError, match=rf"unit\.toml: {message}"):
+        load_spec(path)
+
+
+def test_a_byte_order_mark_is_accepted(tmp_path, reference_spec):
+    path = tmp_path / "unit.toml"
+    path.write_bytes(b"\xef\xbb\xbf" + REFERENCE_TEXT.encode("utf-8"))
+    assert load_spec(path) == reference_spec

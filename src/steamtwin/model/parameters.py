@@ -22,19 +22,35 @@ designer uses before any calibration.
 from __future__ import annotations
 
 import json
-import math
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
+from typing import Any
+
+from steamtwin.keys import unknown_key_message
 
 PARAMETER_BOUNDS: dict[str, tuple[float, float]] = {
     "flow_coefficient": (0.90, 1.10),
     "friction_coefficient": (0.5, 2.0),
     "heat_transfer_coefficient": (0.5, 2.0),
 }
+#: Informational keys a parameter file may carry next to the coefficients (what the package's
+#: writers add); their content is not read — the bounds applied are always PARAMETER_BOUNDS.
+METADATA_KEYS = frozenset({"bounds", "calibration"})
 
 
 class ParameterError(ValueError):
     """A parameter value is missing, not a number or outside its physical bounds."""
+
+
+def _reject_duplicate_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """JSON object hook: a key given twice is an error, not "the last one wins"."""
+    document: dict[str, Any] = {}
+    for key, value in pairs:
+        if key in document:
+            raise ValueError(f"key {key!r} appears twice in one object")
+        document[key] = value
+    return document
 
 
 @dataclass(frozen=True)
@@ -51,31 +67,98 @@ class ModelParameters:
             low, high = PARAMETER_BOUNDS[field.name]
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise ParameterError(f"{field.name} = {value!r}: expected a number")
-            if not math.isfinite(value) or not low <= value <= high:
+            if not low <= value <= high:  # also false for NaN and ±inf
                 raise ParameterError(
                     f"{field.name} = {value!r} is outside its physical bounds [{low}, {high}]"
                 )
 
     @classmethod
     def from_json(cls, path: str | Path) -> ModelParameters:
-        """Read a parameter set written by :meth:`to_json` (or by calibration)."""
+        """Read a parameter file (UTF-8 JSON) strictly: nothing missing, unknown or defaulted.
+
+        The file is one JSON object in either form:
+
+        * ``{"parameters": {...}, "bounds": {...}, "calibration": {...}}`` — what
+          :meth:`to_json`, calibration (``Calibrator.save``, ``SurrogateCalibrator.save``) and the
+          online :class:`~steamtwin.calibration.online.ParameterStore` write;
+        * ``{"flow_coefficient": ..., "friction_coefficient": ...,
+          "heat_transfer_coefficient": ...}`` — the coefficients at the top level, by hand.
+
+        All three coefficients are required (the defaults 1, 1, 1 apply only when no file is
+        given), each a finite number within :data:`PARAMETER_BOUNDS`. The optional metadata
+        keys :data:`METADATA_KEYS` must be JSON objects and are informational only: ``bounds``
+        (the bounds at writing time) and ``calibration`` (``rmse_K``, ``sensors``,
+        ``evaluations`` and the optimiser's settings). Any other key, a key given twice, or
+        coefficients both at the top level and under ``parameters`` raise
+        :class:`ParameterError` naming the file and the key (with a "did you mean" hint).
+        """
         path = Path(path)
         try:
-            document = json.loads(path.read_text(encoding="utf-8"))
-        except (OSError, json.JSONDecodeError) as error:
-            raise ParameterError(f"{path}: cannot read parameters: {error}") from None
-        values = document.get("parameters", document) if isinstance(document, dict) else None
-        if not isinstance(values, dict):
-            raise ParameterError(f"{path}: expected a JSON object of parameters")
-        unknown = set(values) - set(PARAMETER_BOUNDS)
-        if unknown:
-            raise ParameterError(
-                f"{path}: unknown parameter(s) {sorted(unknown)}; known: {list(PARAMETER_BOUNDS)}"
-            )
+            content = path.read_bytes()
+        except OSError as error:
+            raise ParameterError(f"{path}: cannot read parameters: {error.strerror}") from None
         try:
-            return cls(**values)
-        except ParameterError as error:
-            raise ParameterError(f"{path}: {error}") from None
+            text = content.decode("utf-8-sig")  # a byte-order mark from a Windows editor is fine
+        except UnicodeDecodeError as error:
+            raise ParameterError(
+                f"{path}: not UTF-8 text (byte 0x{content[error.start]:02x} at offset "
+                f"{error.start}); a parameter file is JSON saved as UTF-8"
+            ) from None
+        if not text.strip():
+            raise ParameterError(f"{path}: the file is empty; expected a JSON object with "
+                                 f"{', '.join(PARAMETER_BOUNDS)}")
+        try:
+            document = json.loads(text, object_pairs_hook=_reject_duplicate_keys)
+        except (ValueError, RecursionError) as error:  # JSONDecodeError, duplicates, nesting
+            raise ParameterError(f"{path}: not valid JSON: {error}") from None
+        return cls.from_dict(document, str(path))
+
+    @classmethod
+    def from_dict(cls, document: Any, source: str = "<parameters>") -> ModelParameters:
+        """Validate a parsed parameter document (the schema of :meth:`from_json`).
+
+        ``source`` names the document (file name) in errors.
+        """
+        if not isinstance(document, Mapping):
+            raise ParameterError(f"{source}: expected a JSON object with "
+                                 f"{', '.join(PARAMETER_BOUNDS)}, got {type(document).__name__}")
+        message = unknown_key_message(document, {"parameters", *METADATA_KEYS,
+                                                 *PARAMETER_BOUNDS}, "", source, "parameter file")
+        if message is not None:
+            raise ParameterError(message)
+        for key in METADATA_KEYS & set(document):
+            if not isinstance(document[key], Mapping):
+                raise ParameterError(f"{source}: {key} must be a JSON object (informational "
+                                     f"metadata), got {type(document[key]).__name__}")
+        values, prefix = document, ""
+        if "parameters" in document:
+            values, prefix = document["parameters"], "parameters."
+            inline = sorted(set(PARAMETER_BOUNDS) & set(document))
+            if inline:
+                raise ParameterError(f"{source}: {', '.join(inline)} given both at the top "
+                                     "level and under 'parameters'; give each once")
+            if not isinstance(values, Mapping):
+                raise ParameterError(f"{source}: parameters must be a JSON object, got "
+                                     f"{type(values).__name__}")
+            message = unknown_key_message(values, PARAMETER_BOUNDS, "parameters", source,
+                                          "parameter file")
+            if message is not None:
+                raise ParameterError(message)
+        missing = [name for name in PARAMETER_BOUNDS if name not in values]
+        if missing:
+            raise ParameterError(
+                f"{source}: missing coefficient(s) {', '.join(prefix + name for name in missing)};"
+                f" a parameter file gives all of {', '.join(PARAMETER_BOUNDS)}"
+            )
+        checked = {}
+        for name, (low, high) in PARAMETER_BOUNDS.items():
+            value = values[name]
+            if (isinstance(value, bool) or not isinstance(value, int | float)
+                    or not low <= value <= high):  # the comparison is false for NaN and ±inf
+                raise ParameterError(f"{source}: {prefix}{name} = {value!r}: expected a number "
+                                     f"within its physical bounds [{low}, {high}]")
+            checked[name] = float(value)
+        return cls(**checked)
 
     def to_json(self, path: str | Path) -> None:
         """Write the parameters (with their bounds, for the reader's benefit) as JSON."""

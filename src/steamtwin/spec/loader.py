@@ -2,18 +2,27 @@
 
 Dimensional values are written with their unit (``"16.7 MPa"``, ``"538 degC"``, ``"1800 t/h"``)
 and converted to SI with pint; plain numbers are for dimensionless fields only.
+
+The schema is strict: each table and array of tables may hold only the keys :data:`SPEC_KEYS`
+lists for it, and every one of them is required except the top-level ``[[extractions]]``. An
+unknown key is an error with a "did you mean" hint — a misspelled ``[[extraction]]`` would
+otherwise drop the bleed without a word. Positions in arrays are counted from 1 in messages:
+``stages[3]`` is the third ``[[stages]]`` table, stage 3 (stage 0 is the control stage).
 """
 
 from __future__ import annotations
 
 import itertools
 import math
+import tokenize
 import tomllib
+from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from steamtwin.dcs.signals import SIGNALS
+from steamtwin.keys import unknown_key_message
 from steamtwin.spec.turbine import (
     ControlStage,
     DesignPoint,
@@ -32,21 +41,87 @@ from steamtwin.units import UnitError, parse_quantity
 FORMAT_VERSION = 1
 BUILT_IN = ("reference",)
 
+_BLADING = frozenset({"mean_diameter", "blade_height", "blade_count", "reaction",
+                      "nozzle_exit_angle", "peak_blade_efficiency", "friction_loss"})
+_MATERIAL = frozenset({"density", "specific_heat", "thermal_conductivity"})
+
+#: The keys each table may hold, by its path without array positions ("" is the top level).
+SPEC_KEYS: Mapping[str, frozenset[str]] = {
+    "": frozenset({"format_version", "name", "description", "sensors", "design",
+                   "control_stage", "stages", "extractions", "metal", "sliding_pressure"}),
+    "design": frozenset({"main_steam_pressure", "main_steam_temperature", "main_steam_flow",
+                         "control_stage_pressure", "hp_exhaust_pressure",
+                         "hp_exhaust_temperature", "hp_power", "generator_power",
+                         "rotational_speed", "valve_pressure_drop"}),
+    "control_stage": _BLADING | {"nozzle_discharge_coefficient", "valves"},
+    "control_stage.valves": frozenset({"name", "opening_order", "admission_arc",
+                                       "open_at_design"}),
+    "stages": _BLADING | {"flow_capacity"},
+    "extractions": frozenset({"name", "after_stage", "design_flow", "design_pressure"}),
+    "metal": frozenset({"casing_sensor_group", "ambient_temperature", "casing_material",
+                        "rotor_material", "groups"}),
+    "metal.casing_material": _MATERIAL,
+    "metal.rotor_material": _MATERIAL,
+    "metal.groups": frozenset({"name", "stages", "casing_mass", "casing_area", "rotor_mass",
+                               "rotor_area", "insulation_conductance"}),
+    "sliding_pressure": frozenset({"load_fraction", "pressure"}),
+}
+#: Keys that may be left out (top level only): a unit without HP bleeds has no extractions.
+OPTIONAL_KEYS = frozenset({"extractions"})
+
+# pint's unit parser lets these through on malformed unit text ("1 m)", "1 MPa**", "1 m/0")
+# where steamtwin.units.parse_quantity expects UnitError (pint 0.24 behaviour).
+_PINT_PARSE_ERRORS = (AssertionError, ArithmeticError, tokenize.TokenError)
+
 
 class SpecError(ValueError):
     """A turbine spec is missing a field, has a bad value or is inconsistent."""
 
 
-class _Table:
-    """A TOML table with its dotted path, so every error names the field."""
+def _type_name(value: Any) -> str:
+    """The TOML name of a value's type, for messages."""
+    names = {bool: "a boolean", int: "an integer", float: "a float", str: "a string",
+             list: "an array", dict: "a table"}
+    return names.get(type(value), "a date/time")
 
-    def __init__(self, data: Any, path: str, source: str) -> None:
+
+def _parse_quantity(value: Any, si_unit: str, where: str) -> float:
+    """``value`` (``"16.7 MPa"``, or a plain number if dimensionless) in ``si_unit``.
+
+    ``where`` is the file and field, e.g. ``"unit.toml: design.hp_power"``.
+    """
+    if isinstance(value, bool) or not isinstance(value, str | int | float):
+        expected = (f"a string 'value unit' with a unit convertible to {si_unit}"
+                    if si_unit else "a plain number")
+        raise SpecError(f"{where} is {_type_name(value)}: expected {expected}")
+    try:
+        return parse_quantity(value, si_unit, where)
+    except UnitError as error:
+        raise SpecError(str(error)) from None
+    except _PINT_PARSE_ERRORS:
+        raise SpecError(f"{where}: cannot read the unit of {value!r} (e.g. '16.7 MPa')") from None
+
+
+class _Table:
+    """A TOML table with its dotted path, so every error names the field.
+
+    ``schema`` is the table's entry in :data:`SPEC_KEYS`; ``context`` (e.g. ``"stage 3"``)
+    follows the file name in messages. Unknown keys are refused on construction.
+    """
+
+    def __init__(self, data: Any, path: str, source: str, schema: str = "",
+                 context: str = "") -> None:
+        label = f"{source}: {context}" if context else source
         if not isinstance(data, dict):
-            raise SpecError(f"{source}: [{path}] must be a table")
-        self.data, self.path, self.source = data, path, source
+            raise SpecError(f"{label}: {path} is {_type_name(data)}: expected a table")
+        message = unknown_key_message(data, SPEC_KEYS[schema], path, label, "turbine spec")
+        if message is not None:
+            raise SpecError(message)
+        self.data, self.path, self.source, self.label = data, path, source, label
+        self.schema, self.context = schema, context
 
     def _where(self, key: str) -> str:
-        return f"{self.source}: {self.path}.{key}" if self.path else f"{self.source}: {key}"
+        return f"{self.label}: {self.path}.{key}" if self.path else f"{self.label}: {key}"
 
     def raw(self, key: str) -> Any:
         if key not in self.data:
@@ -55,10 +130,7 @@ class _Table:
 
     def quantity(self, key: str, si_unit: str, low: float, high: float) -> float:
         """A value in ``si_unit`` that must lie in [low, high] (in SI)."""
-        try:
-            value = parse_quantity(self.raw(key), si_unit, self._where(key))
-        except UnitError as error:
-            raise SpecError(str(error)) from None
+        value = _parse_quantity(self.raw(key), si_unit, self._where(key))
         if not math.isfinite(value) or not low <= value <= high:
             raise SpecError(
                 f"{self._where(key)} = {self.raw(key)!r} is outside the valid range "
@@ -86,23 +158,31 @@ class _Table:
             raise SpecError(f"{self._where(key)} = {value!r}: expected true or false")
         return value
 
-    def table(self, key: str) -> _Table:
-        path = f"{self.path}.{key}" if self.path else key
-        return _Table(self.raw(key), path, self.source)
+    def _child(self, key: str) -> tuple[str, str]:
+        """Path and schema entry of the sub-table ``key``."""
+        return (f"{self.path}.{key}" if self.path else key,
+                f"{self.schema}.{key}" if self.schema else key)
 
-    def tables(self, key: str) -> list[_Table]:
+    def table(self, key: str) -> _Table:
+        path, schema = self._child(key)
+        return _Table(self.raw(key), path, self.source, schema, self.context)
+
+    def tables(self, key: str, item: str = "") -> list[_Table]:
+        """The array of tables ``key``; ``item`` (e.g. ``"stage"``) labels each in messages."""
         value = self.raw(key)
-        path = f"{self.path}.{key}" if self.path else key
+        path, schema = self._child(key)
         if not isinstance(value, list) or not value:
             raise SpecError(f"{self._where(key)}: expected a non-empty array of tables")
-        return [_Table(item, f"{path}[{index}]", self.source) for index, item in enumerate(value)]
+        return [_Table(entry, f"{path}[{number}]", self.source, schema,
+                       f"{item} {number}" if item else self.context)
+                for number, entry in enumerate(value, start=1)]
 
 
 def load_spec(source: str | Path) -> TurbineSpec:
     """Load a built-in turbine (``"reference"``) or a TOML file and validate it.
 
-    Raises :class:`SpecError` naming the file and field for anything missing, out of range or
-    inconsistent.
+    Raises :class:`SpecError` naming the file and field for anything unreadable (not UTF-8 text,
+    not TOML), unknown, missing, out of range or inconsistent.
     """
     if str(source) in BUILT_IN:
         resource = resources.files("steamtwin.spec") / "data" / f"{source}.toml"
@@ -112,19 +192,34 @@ def load_spec(source: str | Path) -> TurbineSpec:
         raise SpecError(
             f"turbine spec {str(source)!r} is neither a built-in ({', '.join(BUILT_IN)}) nor a file"
         )
-    return parse_spec(path.read_text(encoding="utf-8"), str(path))
+    try:
+        content = path.read_bytes()
+    except OSError as error:
+        raise SpecError(f"{path}: cannot read the turbine spec: {error.strerror}") from None
+    try:
+        text = content.decode("utf-8-sig")  # a byte-order mark from a Windows editor is fine
+    except UnicodeDecodeError as error:
+        line = content.count(b"\n", 0, error.start) + 1
+        raise SpecError(
+            f"{path}: not UTF-8 text (byte 0x{content[error.start]:02x} on line {line}); a "
+            "turbine spec is a TOML file saved as UTF-8 — re-save it in that encoding"
+        ) from None
+    return parse_spec(text, str(path))
 
 
 def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
     """Parse and validate the TOML text of a turbine spec; ``source`` names it in errors."""
+    if not text.strip():
+        raise SpecError(f"{source}: the file is empty; expected a turbine spec in TOML")
     try:
-        document = _Table(tomllib.loads(text), "", source)
-    except tomllib.TOMLDecodeError as error:
+        data = tomllib.loads(text)
+    except (ValueError, RecursionError) as error:  # TOMLDecodeError, over-long integers, nesting
         raise SpecError(f"{source}: not valid TOML: {error}") from None
+    document = _Table(data, "", source)
     document.integer("format_version", FORMAT_VERSION, FORMAT_VERSION)
     design = _design(document.table("design"))
     control_stage = _control_stage(document.table("control_stage"))
-    stages = tuple(_pressure_stage(table) for table in document.tables("stages"))
+    stages = tuple(_pressure_stage(table) for table in document.tables("stages", "stage"))
     bleeds = document.tables("extractions") if "extractions" in document.data else []
     extractions = tuple(_extraction(table, len(stages)) for table in bleeds)
     metal = document.table("metal")
@@ -257,7 +352,7 @@ def _metal_group(table: _Table, stage_count: int) -> MetalGroup:
         or not 0 <= stages[0] <= stages[-1] <= stage_count
     ):
         raise SpecError(
-            f"{table.source}: {table.path}.stages = {stages!r}: expected consecutive stage numbers "
+            f"{table.label}: {table.path}.stages = {stages!r}: expected consecutive stage numbers "
             f"within 0…{stage_count} (0 = control stage)"
         )
     return MetalGroup(
@@ -282,9 +377,9 @@ def _sliding_pressure(table: _Table) -> SlidingPressureLine:
             f"{where}: load_fraction has {len(loads)} values but pressure has {len(pressures)}"
         )
     load_values = _quantities(loads, "", f"{where}.load_fraction")
-    if any(b <= a for a, b in itertools.pairwise(load_values)) or not (
-        load_values[0] >= 0.0 and load_values[-1] <= 1.2
-    ):
+    if (not all(math.isfinite(value) for value in load_values)
+            or any(b <= a for a, b in itertools.pairwise(load_values))
+            or not (load_values[0] >= 0.0 and load_values[-1] <= 1.2)):
         raise SpecError(f"{where}.load_fraction must increase within 0…1.2, got {list(loads)}")
     pressure_values = _quantities(pressures, "Pa", f"{where}.pressure")
     if any(not 1e5 <= p <= 25e6 for p in pressure_values):
@@ -293,23 +388,19 @@ def _sliding_pressure(table: _Table) -> SlidingPressureLine:
 
 
 def _quantities(values: list, si_unit: str, where: str) -> tuple[float, ...]:
-    """Each entry of a TOML array in ``si_unit``; errors name the entry."""
-    try:
-        return tuple(
-            parse_quantity(value, si_unit, f"{where}[{i}]") for i, value in enumerate(values)
-        )
-    except UnitError as error:
-        raise SpecError(str(error)) from None
+    """Each entry of a TOML array in ``si_unit``; errors name the entry (counted from 1)."""
+    return tuple(_parse_quantity(value, si_unit, f"{where}[{number}]")
+                 for number, value in enumerate(values, start=1))
 
 
 def _sensors(document: _Table) -> tuple[str, ...]:
     names = document.raw("sensors")
     if not isinstance(names, list) or not names:
         raise SpecError(f"{document.source}: sensors must be a non-empty array of signal names")
-    for index, name in enumerate(names):
+    for number, name in enumerate(names, start=1):
         if not isinstance(name, str) or name not in SIGNALS:
             raise SpecError(
-                f"{document.source}: sensors[{index}] = {name!r} is not a canonical signal "
+                f"{document.source}: sensors[{number}] = {name!r} is not a canonical signal "
                 f"(known: {', '.join(SIGNALS)})"
             )
     return tuple(names)
