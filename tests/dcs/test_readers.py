@@ -350,3 +350,278 @@ def test_random_values_round_trip(values, seconds, suffix):
     assert back.signals.index.equals(index)  # order and duplicates as written
     scale = np.maximum(np.abs(signals.to_numpy()), 1e-6)
     assert np.all(np.abs(back.signals.to_numpy() - signals.to_numpy()) <= 1e-12 * scale + 1e-9)
+
+
+# --- CSV dialect and encoding (issue 16, findings 6 and 7) ---------------------------------------
+
+CHINESE = """
+[historian]
+layout = "wide"
+time_column = "时间"
+time_zone = "Asia/Shanghai"
+{extra}
+
+[signals.load]
+column = "1号机负荷"
+unit = "MW"
+
+[signals.main_steam_temperature]
+column = "主汽温度"
+unit = "degC"
+"""
+CHINESE_ROWS = ("时间,1号机负荷,主汽温度\n2026-03-01 10:00:00,600.5,538.5\n"
+                "2026-03-01 10:00:01,601,539\n")
+
+
+def _chinese_map(extra: str = ""):
+    return parse_tag_map(CHINESE.format(extra=extra), "plant.toml")
+
+
+def _bytes(tmp_path: Path, data: bytes, name: str = "h.csv") -> Path:
+    path = tmp_path / name
+    path.write_bytes(data)
+    return path
+
+
+def _check_chinese(data) -> None:
+    assert data.signals["load"].tolist() == [600.5e6, 601e6]
+    assert data.signals["main_steam_temperature"].tolist() == pytest.approx([811.65, 812.15])
+    assert data.signals.index[0] == pd.Timestamp("2026-03-01 02:00:00", tz="UTC")
+
+
+def test_gbk_csv_reads_by_sniffing_and_with_the_encoding_key(tmp_path):
+    path = _bytes(tmp_path, CHINESE_ROWS.encode("gbk"))
+    sniffed = read_historian(path, _chinese_map())
+    _check_chinese(sniffed)
+    assert sniffed.dialect == {"encoding": "gb18030", "encoding_source": "sniffed",
+                               "delimiter": ",", "delimiter_source": "sniffed",
+                               "decimal": ".", "decimal_source": "default"}
+    declared = read_historian(path, _chinese_map('encoding = "gbk"'))
+    _check_chinese(declared)
+    assert (declared.dialect["encoding"], declared.dialect["encoding_source"]) == (
+        "gbk", "tag map")
+    _raises(path, _chinese_map('encoding = "utf-8"'), f"{path}: cannot decode the file as "
+            "'utf-8' (historian.encoding in plant.toml): 'utf-8' codec can't decode byte")
+
+
+def test_utf8_with_and_without_bom_and_utf16(tmp_path):
+    plain = read_historian(_bytes(tmp_path, CHINESE_ROWS.encode("utf-8")), _chinese_map())
+    _check_chinese(plain)
+    assert (plain.dialect["encoding"], plain.dialect["encoding_source"]) == ("utf-8", "default")
+    bom = read_historian(_bytes(tmp_path, CHINESE_ROWS.encode("utf-8-sig"), "b.csv"),
+                         _chinese_map())
+    _check_chinese(bom)
+    assert (bom.dialect["encoding"], bom.dialect["encoding_source"]) == ("utf-8-sig", "sniffed")
+    utf16 = read_historian(_bytes(tmp_path, CHINESE_ROWS.encode("utf-16"), "u.csv"),
+                           _chinese_map())
+    _check_chinese(utf16)
+    assert utf16.dialect["encoding"] == "utf-16"
+
+
+def test_western_cp1252_export_is_sniffed(tmp_path):
+    text = "Timestamp;10MKA01CE001;Temp °C\n2026-03-01 10:00:00;600;1\n"
+    data = read_historian(_bytes(tmp_path, text.encode("cp1252")), _map())
+    assert (data.dialect["encoding"], data.dialect["encoding_source"]) == ("cp1252", "sniffed")
+    assert list(data.extras.columns) == ["Temp °C"]
+    assert data.signals["load"].tolist() == [600e6]
+
+
+def test_undecodable_and_binary_files_name_the_key(tmp_path):
+    path = _bytes(tmp_path, b"Timestamp,x\n\x81\x8d\x8f\x90\x9d\x80\xff\n")
+    _raises(path, _map(), f"{path}: cannot tell the file's encoding: not UTF-8 (byte 12), "
+            "GB18030 or cp1252; set historian.encoding in plant.toml")
+    binary = _bytes(tmp_path, b"Timestamp,x\n\x00\x01\x02\n", "bin.csv")
+    _raises(binary, _map(), f"{binary}: line 2 holds a NUL character: not CSV text in utf-8 "
+            "(default); set historian.encoding in plant.toml")
+
+
+@pytest.mark.parametrize("delimiter", [";", "\t", "|"])
+def test_delimiter_and_decimal_comma_are_sniffed(tmp_path, delimiter):
+    rows = [["Timestamp", "10LBA10CP001", "10MKA01CE001", "note, free text"],
+            ["2026-03-01 10:00:00", "160,5", "600", "a"],
+            ["2026-03-01 10:00:01", "161,25", "-1,5e2", "b"]]
+    path = _csv(tmp_path, "\n".join(delimiter.join(row) for row in rows) + "\n")
+    data = read_historian(path, _map())
+    assert data.dialect == {"encoding": "utf-8", "encoding_source": "default",
+                            "delimiter": delimiter, "delimiter_source": "sniffed",
+                            "decimal": ",", "decimal_source": "sniffed"}
+    assert data.signals["main_steam_pressure"].tolist() == pytest.approx([160.5e5, 161.25e5])
+    assert data.signals["load"].tolist() == [600e6, -150e6]
+    assert list(data.extras.columns) == ["note, free text"]
+
+
+def test_dialect_from_the_tag_map(tmp_path):
+    tag_map = parse_tag_map(HISTORIAN.format(
+        layout="wide", zone='time_zone = "UTC"\ndelimiter = ";"\ndecimal = ","', long=""),
+        "plant.toml")
+    # One column name with a comma and one-number lines: sniffing alone could not tell.
+    path = _csv(tmp_path, "Timestamp;10LBA10CP001\n2026-03-01 10:00:00;160,5\n")
+    data = read_historian(path, tag_map)
+    assert data.signals["main_steam_pressure"].tolist() == [160.5e5]
+    assert data.dialect["delimiter_source"] == data.dialect["decimal_source"] == "tag map"
+    # With decimal "," a "." is not a decimal point (it may be a thousands separator).
+    path = _csv(tmp_path, "Timestamp;10LBA10CP001\n2026-03-01 10:00:00;1.605\n", "dot.csv")
+    _raises(path, tag_map, f"{path}: column '10LBA10CP001' line 2: '1.605' is not a number in bar "
+            "(signal main_steam_pressure); the file is read with decimal ',' (tag map): if '.' is "
+            "its decimal separator, set historian.decimal = \".\" in plant.toml")
+
+
+def test_wrong_dialect_errors_suggest_the_tag_map_key(tmp_path):
+    comma_map = parse_tag_map(HISTORIAN.format(
+        layout="wide", zone='time_zone = "UTC"\ndelimiter = ","', long=""), "plant.toml")
+    path = _csv(tmp_path, "Timestamp;10LBA10CP001\n2026-03-01 10:00:00;160\n")
+    _raises(path, comma_map, f"{path}: no column 'Timestamp' (historian.time_column in "
+            "plant.toml); columns are: Timestamp;10LBA10CP001; the header holds ';' but was split "
+            "at ',' (tag map); if the file is ';'-separated, set historian.delimiter = \";\" in "
+            "plant.toml")
+    dot_map = parse_tag_map(HISTORIAN.format(
+        layout="wide", zone='time_zone = "UTC"\ndecimal = "."', long=""), "plant.toml")
+    path = _csv(tmp_path, "Timestamp;10LBA10CP001\n2026-03-01 10:00:00;160,5\n", "c.csv")
+    _raises(path, dot_map, f"{path}: column '10LBA10CP001' line 2: '160,5' is not a number in bar "
+            "(signal main_steam_pressure); it looks like a decimal comma: set historian.decimal = "
+            "\",\" in plant.toml")
+    path = _csv(tmp_path, 'Timestamp,10LBA10CP001\n2026-03-01 10:00:00,"160,5"\n', "q.csv")
+    _raises(path, _map(), f"{path}: column '10LBA10CP001' line 2: '160,5' is not a number in bar "
+            "(signal main_steam_pressure); it looks like a decimal comma: set historian.decimal = "
+            "\",\" and another historian.delimiter in plant.toml")
+
+
+def test_lines_with_more_fields_than_the_header(tmp_path):
+    how = ("read with delimiter ',' (sniffed), decimal '.' (default), encoding 'utf-8' "
+           "(default); set historian.delimiter/decimal/encoding in plant.toml if these are wrong)")
+    path = _csv(tmp_path, "Timestamp,10LBA10CP001\n2026-03-01 10:00:00,1,2,3\n"
+                "2026-03-01 10:00:01,1,2,3\n")
+    _raises(path, _map(), f"{path}: the first data line has 4 fields but the header (line 1) has "
+            f"2 ({how}")
+    path = _csv(tmp_path, "Timestamp,10LBA10CP001\n2026-03-01 10:00:00,1\n"
+                "2026-03-01 10:00:01,1,2\n", "later.csv")
+    _raises(path, _map(), f"{path}: cannot read CSV: Error tokenizing data. C error: Expected 2 "
+            f"fields in line 3, saw 3 ({how}")
+
+
+def test_parquet_has_no_dialect(tmp_path):
+    data = read_historian(_write(_wide_frame(), tmp_path / "h.parquet"), _map())
+    assert data.dialect == {}
+
+
+# --- header-only files (finding 7) ---------------------------------------------------------------
+
+@pytest.mark.parametrize("layout", ["wide", "long"])
+def test_header_only_files_are_errors(tmp_path, layout):
+    frame = (_wide_frame() if layout == "wide" else _long_frame()).iloc[:0]
+    parquet = _write(frame, tmp_path / "h.parquet")
+    _raises(parquet, _map(layout), f"{parquet}: no data rows: the file holds 0 rows (columns: "
+            f"{', '.join(frame.columns)}); a historian export needs at least one sample")
+    header = ",".join(frame.columns)
+    for name, text in (("h.csv", header + "\n"), ("blank.csv", header + "\n\n\n"),
+                       ("bare.csv", header)):
+        path = _csv(tmp_path, text, name)
+        _raises(path, _map(layout), f"{path}: no data rows: the file holds only its header "
+                "(line 1); a historian export needs at least one sample")
+
+
+# --- quality column (finding 4) -----------------------------------------------------------------
+
+def _long_quality(tmp_path: Path, qualities: list[object], tag_map=None, name="q.csv"):
+    lines = ["Timestamp,tag,value,quality"]
+    for second, quality in enumerate(qualities):
+        lines.append(f"2026-03-01 10:00:{second:02d},10LBA10CT001,{538 + second},{quality}")
+        lines.append(f"2026-03-01 10:00:{second:02d},10MKA01CE001,600,Good")
+    path = _csv(tmp_path, "\n".join(lines) + "\n", name)
+    return path, read_historian(path, tag_map or _map("long"))
+
+
+def test_long_quality_bad_and_uncertain_are_masked(tmp_path):
+    qualities = ["Good", "Bad", "Uncertain_LastUsableValue", "GOOD_LOCAL_OVERRIDE",
+                 "bad sensor failure", "Good"]
+    _, data = _long_quality(tmp_path, qualities)
+    assert set(data.bad_quality) == {"main_steam_temperature", "load"}
+    assert data.bad_quality["main_steam_temperature"].tolist() == [
+        False, True, True, False, True, False]
+    assert data.bad_quality["main_steam_temperature"].dtype == bool
+    assert not data.bad_quality["load"].any()
+    assert data.quality_counts == {
+        "main_steam_temperature": {"good": 3, "uncertain": 1, "bad": 2},
+        "load": {"good": 6, "uncertain": 0, "bad": 0}}
+    assert data.notes["quality_excluded"] == 3
+    # The values themselves are read unchanged; the mask says which to exclude.
+    assert data.signals["main_steam_temperature"].tolist() == pytest.approx(
+        [811.15 + k for k in range(6)])
+
+
+def test_quality_exclude_and_explicit_mapping(tmp_path):
+    keep_uncertain = parse_tag_map(HISTORIAN.format(
+        layout="long", zone='time_zone = "UTC"',
+        long=LONG_FIELDS + '\n[historian.quality]\nexclude = ["bad"]'), "plant.toml")
+    _, data = _long_quality(tmp_path, ["Good", "Bad", "Uncertain"], keep_uncertain)
+    assert data.bad_quality["main_steam_temperature"].tolist() == [False, True, False]
+    explicit = parse_tag_map(HISTORIAN.format(
+        layout="long", zone='time_zone = "UTC"',
+        long=LONG_FIELDS + '\n[historian.quality]\ngood = ["OK", "Good", 0]\n'
+                           'uncertain = ["?"]\nbad = ["FAIL"]'), "plant.toml")
+    _, data = _long_quality(tmp_path, ["OK", "FAIL", "?", "ok ", "0"], explicit, "e.csv")
+    assert data.bad_quality["main_steam_temperature"].tolist() == [
+        False, True, True, False, False]
+    with pytest.raises(HistorianFormatError, match=re.escape(
+            "x.csv: tag '10LBA10CT001' (column 'quality') line 4: quality 'Bad' (signal "
+            "main_steam_temperature) is not classified by "
+            "historian.quality; list it under [historian.quality] good, uncertain or bad in "
+            "plant.toml")):
+        _long_quality(tmp_path, ["OK", "Bad"], explicit, "x.csv")
+
+
+def test_opc_da_numeric_quality_by_default(tmp_path):
+    path = _write(pd.DataFrame({
+        "Timestamp": [f"2026-03-01T00:00:0{k}Z" for k in range(6)],
+        "tag": ["10LBA10CT001"] * 6,
+        "value": [538.0] * 6,
+        "quality": [192, 216, 64, 87, 0, 28],  # good, good override, uncertain x2, bad x2
+    }), tmp_path / "q.parquet")
+    data = read_historian(path, _map("long", zone=None))
+    assert data.bad_quality["main_steam_temperature"].tolist() == [
+        False, False, True, True, True, True]
+    assert data.quality_counts["main_steam_temperature"] == {"good": 2, "uncertain": 2, "bad": 2}
+    _, data = _long_quality(tmp_path, [192, 0, 64, "192.0"])  # text integers in a CSV
+    assert data.bad_quality["main_steam_temperature"].tolist() == [False, True, True, False]
+
+
+@pytest.mark.parametrize("value", ["OK", "128", "300", "-1", "1.5"])
+def test_unclassifiable_quality_names_file_column_line_value(tmp_path, value):
+    path = _csv(tmp_path, "Timestamp,tag,value,quality\n"
+                "2026-03-01 10:00:00,10LBA10CT001,538,Good\n"
+                f"2026-03-01 10:00:01,10LBA10CT001,539,{value}\n")
+    _raises(path, _map("long"), f"{path}: tag '10LBA10CT001' (column 'quality') line 3: quality "
+            f"{value!r} (signal main_steam_temperature) is not classified by the default OPC "
+            "mapping (text 'Good…'/'Uncertain…'/'Bad…', OPC DA integers 0–255); list it under "
+            "[historian.quality] good, uncertain or bad in plant.toml")
+
+
+def test_empty_quality_of_a_sample_is_an_error(tmp_path):
+    path = _csv(tmp_path, "Timestamp,tag,value,quality\n"
+                "2026-03-01 10:00:00,10LBA10CT001,538,Good\n"
+                "2026-03-01 10:00:01,10LBA10CT001,,\n"
+                "2026-03-01 10:00:02,10LBA10CT001,539, \n")
+    _raises(path, _map("long"), f"{path}: tag '10LBA10CT001' (column 'quality') line 4: empty "
+            "quality for a sample of signal main_steam_temperature; every sample needs a quality")
+
+
+def test_wide_quality_column_per_signal(tmp_path):
+    text = HISTORIAN.format(layout="wide", zone='time_zone = "UTC"', long="").replace(
+        'unit = "degC"', 'unit = "degC"\nquality_column = "CT001 Q"').replace(
+        'unit = "MW"', 'unit = "MW"\nquality_column = "CE001 Q"')
+    tag_map = parse_tag_map(text, "plant.toml")
+    path = _csv(tmp_path, "Timestamp,10LBA10CT001,CT001 Q,10LBA10CP001\n"
+                "2026-03-01 10:00:00,538,Good,160\n2026-03-01 10:00:01,539,Bad,161\n"
+                "2026-03-01 10:00:02,,,162\n")
+    data = read_historian(path, tag_map)
+    assert {name: mask.tolist() for name, mask in data.bad_quality.items()} == {
+        "main_steam_temperature": [False, True, False],  # no sample, no quality: not excluded
+        "main_steam_pressure": [False, False, False]}  # no quality column
+    assert data.quality_counts == {"main_steam_temperature": {"good": 1, "uncertain": 0, "bad": 1}}
+    assert data.notes["missing_quality_column"] == 0  # load is absent, so is its quality column
+    assert data.notes["quality_excluded"] == 1
+    path = _csv(tmp_path, "Timestamp,10LBA10CT001,10MKA01CE001\n2026-03-01 10:00:00,538,600\n",
+                "noq.csv")
+    data = read_historian(path, tag_map)
+    assert data.notes["missing_quality_column"] == 2
+    assert data.quality_counts == {}

@@ -15,14 +15,40 @@ rows of the same tag at the same timestamp — so repeated entries are kept in o
 If every tag's own rows are in time order the keys are merged in time order; otherwise the keys
 appear in order of first appearance in the file (so the disorder stays visible).
 
+CSV dialect: the tag map's ``historian.delimiter``, ``decimal`` and ``encoding`` when set;
+otherwise sniffed, and recorded with their source ("tag map", "sniffed", "default") in
+:attr:`HistorianData.dialect`:
+
+- encoding: a byte-order mark (UTF-8, UTF-16) decides; else UTF-8 ("default") if the bytes are
+  valid UTF-8; else GB18030 (a superset of GBK/GB2312) when every non-ASCII byte of the first MiB
+  sits in a GB2312 pair (both bytes 0xA1–0xFE, the simplified-Chinese plant exports); else
+  cp1252 (Western Windows exports); else GB18030 (GBK with rarer characters); else an error
+  asking for ``historian.encoding``. The whole file must decode.
+- delimiter: each of ``,`` ``;`` tab ``|`` splits the header and the first lines (64 KiB); the
+  one whose header holds most names of the tag map wins, then the one splitting most lines into
+  the header's field count. One column under every candidate → ``,`` ("default").
+- decimal: ``,`` when the delimiter is not ``,`` and the first lines hold numbers like ``12,5``
+  but none like ``12.5``; otherwise ``.`` ("default"). With decimal ``,`` a value holding a
+  ``.`` is not a number (it may be a thousands separator).
+
+Quality: a quality column (``historian.quality_column`` in the long layout,
+``signals.<name>.quality_column`` in the wide one) is classified with the tag map's
+:class:`~steamtwin.dcs.tagmap.QualityMapping`; :attr:`HistorianData.bad_quality` marks, per
+signal, the samples whose class the mapping excludes. An unclassifiable value, or a sample with a
+value but an empty quality, is an error.
+
 Errors (:class:`HistorianFormatError`) name the file, column or tag, the row — ``line N`` (1-based
 line in a CSV file, header = line 1, one record per line) or ``row index N`` (0-based, Parquet) —
-and the expected unit or format.
+and the expected unit or format; when the dialect looks wrong they say which tag-map key to set.
+A file without data rows is an error.
 """
 
 from __future__ import annotations
 
+import codecs
 import csv
+import io
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -30,7 +56,7 @@ import numpy as np
 import pandas as pd
 
 from steamtwin.dcs.signals import SIGNALS
-from steamtwin.dcs.tagmap import TagMap
+from steamtwin.dcs.tagmap import QUALITY_CLASSES, TagMap
 from steamtwin.units import convert
 
 _ISO_EXAMPLE = "ISO 8601, e.g. '2026-03-01 10:00:00' or '2026-03-01T10:00:00+08:00'"
@@ -42,8 +68,17 @@ NOTE_KEYS = (
     "duplicate_column_names",  # repeated unmapped CSV header names (pandas appends ".1", ...)
     "long_duplicate_entries",  # long rows repeating a tag at a timestamp (kept as extra rows)
     "long_tags_out_of_order",  # tags whose own long rows go back in time (index in file order)
-    "missing_quality_column",  # historian.quality_column configured but absent from the file
+    "missing_quality_column",  # configured quality columns absent from the file
+    "quality_excluded",  # samples whose quality class the tag map excludes (bad_quality True)
 )
+DELIMITERS = (",", ";", "\t", "|")  # sniffed candidates, in order of preference on a tie
+_SNIFF_CHARS = 1 << 16  # delimiter and decimal are sniffed from the first 64 KiB of text
+_SNIFF_LINES = 50
+_GB2312_SAMPLE = 1 << 20  # bytes tested for GB2312 pairs before GB18030 is chosen
+# ASCII bytes or GB2312 pairs (lead 0xA1-0xF7, trail 0xA1-0xFE; GB 2312-80 EUC-CN code space).
+_GB2312_TEXT = re.compile(rb"(?:[\x00-\x7f]|[\xa1-\xf7][\xa1-\xfe])*")
+_COMMA_NUMBER = re.compile(r"[+-]?\d+,\d+(?:[eE][+-]?\d+)?")
+_DOT_NUMBER = re.compile(r"[+-]?\d*\.\d+(?:[eE][+-]?\d+)?")
 
 
 class HistorianFormatError(ValueError):
@@ -57,7 +92,12 @@ class HistorianData:
     ``signals`` and ``extras`` share one UTC ``DatetimeIndex`` named ``"time"`` in file order.
     ``extras`` holds unmapped columns (wide) or unmapped tags (long), as read, plus
     ``quality:<tag>`` columns in the long layout. ``notes`` counts reader decisions (see
-    :data:`NOTE_KEYS`).
+    :data:`NOTE_KEYS`). ``dialect`` says how a CSV was read: ``delimiter``, ``decimal`` and
+    ``encoding`` (a Python codec name), each with a ``<key>_source`` of "tag map", "sniffed" or
+    "default" (empty for Parquet). ``bad_quality`` holds, for every signal in ``signals``, a
+    boolean mask over its rows: True where the sample's quality class is excluded by the tag map
+    (all False without a quality column). ``quality_counts`` counts the samples per quality class
+    ("good", "uncertain", "bad") of each signal that has a quality column.
     """
 
     signals: pd.DataFrame
@@ -65,6 +105,9 @@ class HistorianData:
     tag_map: TagMap
     source: str
     notes: dict[str, int] = field(default_factory=dict)
+    dialect: dict[str, str] = field(default_factory=dict)
+    bad_quality: dict[str, np.ndarray] = field(default_factory=dict)
+    quality_counts: dict[str, dict[str, int]] = field(default_factory=dict)
 
     @property
     def missing_signals(self) -> dict[str, str]:
@@ -87,8 +130,11 @@ def read_historian(path: str | Path, tag_map: TagMap) -> HistorianData:
         signals, extras = reader.wide()
     else:
         signals, extras = reader.long()
+    reader.notes["quality_excluded"] = int(sum(mask.sum() for mask in reader.bad_quality.values()))
     return HistorianData(
-        signals=signals, extras=extras, tag_map=tag_map, source=str(path), notes=reader.notes
+        signals=signals, extras=extras, tag_map=tag_map, source=str(path), notes=reader.notes,
+        dialect=reader.dialect, bad_quality=reader.bad_quality,
+        quality_counts=reader.quality_counts,
     )
 
 
@@ -123,6 +169,9 @@ class _Reader:
     def __init__(self, path: Path, tag_map: TagMap) -> None:
         self.path, self.tag_map = path, tag_map
         self.notes = dict.fromkeys(NOTE_KEYS, 0)
+        self.dialect: dict[str, str] = {}
+        self.bad_quality: dict[str, np.ndarray] = {}
+        self.quality_counts: dict[str, dict[str, int]] = {}
         suffix = path.suffix.lower()
         if suffix not in (".csv", ".parquet"):
             raise HistorianFormatError(
@@ -130,27 +179,56 @@ class _Reader:
             )
         self.is_csv = suffix == ".csv"
         self.frame = self._read_csv() if self.is_csv else self._read_parquet()
+        if len(self.frame) == 0:
+            holds = ("only its header (line 1)" if self.is_csv
+                     else f"0 rows (columns: {self._column_list()})")
+            raise HistorianFormatError(
+                f"{path}: no data rows: the file holds {holds}; a historian export needs at "
+                "least one sample"
+            )
 
     # --- files ----------------------------------------------------------------------------------
 
     def _read_csv(self) -> pd.DataFrame:
-        text_columns = [self.tag_map.time_column]
-        if self.tag_map.layout == "long":
-            text_columns.append(self.tag_map.tag_column)
+        tag_map = self.tag_map
         try:
-            header = self._csv_header()
+            data = self.path.read_bytes()
+        except OSError as error:
+            raise HistorianFormatError(f"{self.path}: cannot read CSV: {error}") from None
+        text = self._decode(data)
+        sample = text[:_SNIFF_CHARS].splitlines()
+        if len(text) > _SNIFF_CHARS:
+            sample = sample[:-1]  # the last sampled line may be cut
+        rows = [line for line in sample if line.strip()][:_SNIFF_LINES]
+        delimiter = self._delimiter(rows)
+        decimal = self._decimal(rows, delimiter)
+        text_columns = [tag_map.time_column, *self._quality_columns()]
+        if tag_map.layout == "long":
+            text_columns.append(tag_map.tag_column)
+        try:
+            header = next(csv.reader(io.StringIO(text), delimiter=delimiter), [])
             frame = pd.read_csv(
-                self.path,
-                encoding="utf-8-sig",
+                io.StringIO(text),
+                sep=delimiter,
+                decimal=decimal,
                 skip_blank_lines=False,
                 keep_default_na=False,
                 na_values=[""],
                 dtype=dict.fromkeys(text_columns, str),
                 low_memory=False,
             )
-        except (OSError, UnicodeDecodeError, pd.errors.ParserError,
-                pd.errors.EmptyDataError) as error:
-            raise HistorianFormatError(f"{self.path}: cannot read CSV: {error}") from None
+        except (pd.errors.ParserError, pd.errors.EmptyDataError, csv.Error, ValueError,
+                OverflowError) as error:
+            raise HistorianFormatError(  # pandas' messages may end in a line break
+                f"{self.path}: cannot read CSV: {' '.join(str(error).split())} "
+                f"({self._dialect_text()})"
+            ) from None
+        if not isinstance(frame.index, pd.RangeIndex):  # pandas made the surplus an index
+            width = len(frame.columns)
+            raise HistorianFormatError(
+                f"{self.path}: the first data line has {width + frame.index.nlevels} fields but "
+                f"the header (line 1) has {width} ({self._dialect_text()})"
+            )
         self._check_duplicate_names(header)
         blank = frame.isna().all(axis=1).to_numpy()
         if blank.any():
@@ -158,17 +236,133 @@ class _Reader:
             frame = frame.loc[~blank]  # keeps the row labels, so labels still give the line
         return frame
 
-    def _csv_header(self) -> list[str]:
-        with self.path.open(encoding="utf-8-sig", newline="") as handle:
-            return next(csv.reader(handle), [])
+    def _decode(self, data: bytes) -> str:
+        """The file's text; records ``encoding`` and its source in ``self.dialect``."""
+        encoding = self.tag_map.encoding
+        if encoding is not None:
+            try:
+                text = data.decode(encoding)
+            except (UnicodeError, LookupError) as error:
+                raise HistorianFormatError(
+                    f"{self.path}: cannot decode the file as {encoding!r} (historian.encoding in "
+                    f"{self.tag_map.source}): {error}; check the export's "
+                    "encoding (e.g. \"utf-8\", \"gbk\", \"cp1252\") or remove the key to sniff it"
+                ) from None
+            source = "tag map"
+        else:
+            encoding, source, text = self._sniff_encoding(data)
+        self.dialect.update(encoding=encoding, encoding_source=source)
+        text = text.removeprefix("\ufeff")
+        if "\x00" in text:
+            line = text.count("\n", 0, text.index("\x00")) + 1
+            raise HistorianFormatError(
+                f"{self.path}: line {line} holds a NUL character: not CSV text in {encoding} "
+                f"({source}); set historian.encoding in {self.tag_map.source} if the export uses "
+                "another encoding (e.g. \"utf-16\")"
+            )
+        return text
+
+    def _sniff_encoding(self, data: bytes) -> tuple[str, str, str]:
+        """(codec, source, text) by the order of the module docstring."""
+        for mark, name in ((codecs.BOM_UTF8, "utf-8-sig"), (codecs.BOM_UTF16_LE, "utf-16"),
+                           (codecs.BOM_UTF16_BE, "utf-16")):
+            if data.startswith(mark):
+                try:
+                    return name, "sniffed", data.decode(name)
+                except UnicodeDecodeError as error:
+                    raise HistorianFormatError(
+                        f"{self.path}: the file starts with a {name} byte-order mark but is not "
+                        f"valid {name} at byte {error.start}; set historian.encoding in "
+                        f"{self.tag_map.source}"
+                    ) from None
+        try:
+            return "utf-8", "default", data.decode("utf-8")
+        except UnicodeDecodeError as error:
+            not_utf8 = error.start
+        sample = data[:_GB2312_SAMPLE]
+        candidates = ["cp1252", "gb18030"]
+        if _GB2312_TEXT.match(sample).end() >= len(sample) - 1:  # a cut pair may end the sample
+            candidates.insert(0, "gb18030")
+        for name in candidates:
+            try:
+                return name, "sniffed", data.decode(name)
+            except UnicodeDecodeError:
+                continue
+        raise HistorianFormatError(
+            f"{self.path}: cannot tell the file's encoding: not UTF-8 (byte {not_utf8}), "
+            f"GB18030 or cp1252; set historian.encoding in {self.tag_map.source} "
+            "(e.g. \"utf-16\", \"shift_jis\")"
+        )
+
+    def _expected_names(self) -> set[str]:
+        """Column names the tag map expects in the header (to tell delimiters apart)."""
+        tag_map = self.tag_map
+        names = {tag_map.time_column, *self._quality_columns()}
+        if tag_map.layout == "long":
+            names |= {tag_map.tag_column, tag_map.value_column}
+        else:
+            names |= {spec.column for spec in tag_map.signals.values()}
+        return names
+
+    def _quality_columns(self) -> list[str]:
+        if self.tag_map.layout == "long":
+            return [self.tag_map.quality_column] if self.tag_map.quality_column else []
+        return [spec.quality_column for spec in self.tag_map.signals.values()
+                if spec.quality_column is not None]
+
+    def _delimiter(self, rows: list[str]) -> str:
+        """The tag map's delimiter, else the sniffed one (module docstring); recorded."""
+        if self.tag_map.delimiter is not None:
+            self.dialect.update(delimiter=self.tag_map.delimiter, delimiter_source="tag map")
+            return self.tag_map.delimiter
+        expected = self._expected_names()
+        best, best_score = None, (0, 0, 1)
+        for candidate in DELIMITERS:
+            if candidate == self.tag_map.decimal:
+                continue
+            split = list(csv.reader(rows, delimiter=candidate))
+            width = len(split[0]) if split else 0
+            known = len(expected.intersection(name.strip() for name in split[0])) if split else 0
+            same = sum(len(fields) == width for fields in split)
+            score = (known, same if width > 1 else 0, width)
+            if score > best_score:
+                best, best_score = candidate, score
+        if best is None:
+            default = ";" if self.tag_map.decimal == "," else ","
+            self.dialect.update(delimiter=default, delimiter_source="default")
+            return default
+        self.dialect.update(delimiter=best, delimiter_source="sniffed")
+        return best
+
+    def _decimal(self, rows: list[str], delimiter: str) -> str:
+        """The tag map's decimal separator, else the sniffed one (module docstring); recorded."""
+        if self.tag_map.decimal is not None:
+            self.dialect.update(decimal=self.tag_map.decimal, decimal_source="tag map")
+            return self.tag_map.decimal
+        decimal, source = ".", "default"
+        if delimiter != ",":
+            fields = [value.strip() for line in csv.reader(rows[1:], delimiter=delimiter)
+                      for value in line]
+            comma = any(_COMMA_NUMBER.fullmatch(value) for value in fields)
+            dot = any(_DOT_NUMBER.fullmatch(value) for value in fields)
+            if comma and not dot:
+                decimal, source = ",", "sniffed"
+        self.dialect.update(decimal=decimal, decimal_source=source)
+        return decimal
+
+    def _dialect_text(self) -> str:
+        """How the CSV was read, for messages."""
+        parts = [f"{key} {self.dialect[key]!r} ({self.dialect[key + '_source']})"
+                 for key in ("delimiter", "decimal", "encoding") if key in self.dialect]
+        return (f"read with {', '.join(parts)}; set historian.delimiter/decimal/encoding in "
+                f"{self.tag_map.source} if these are wrong")
 
     def _check_duplicate_names(self, header: list[str]) -> None:
-        protected = {self.tag_map.time_column}
+        protected = {self.tag_map.time_column, *self._quality_columns()}
         if self.tag_map.layout == "wide":
             protected |= {spec.column for spec in self.tag_map.signals.values()}
         else:
-            protected |= {self.tag_map.tag_column, self.tag_map.value_column,
-                          self.tag_map.quality_column}
+            protected |= {self.tag_map.tag_column, self.tag_map.value_column}
         seen: set[str] = set()
         for name in header:
             if name in seen:
@@ -191,14 +385,39 @@ class _Reader:
         """Row label (0-based data row in the file) → ``line N`` (CSV) or ``row index N``."""
         return f"line {label + 2}" if self.is_csv else f"row index {label}"
 
+    def _column_list(self) -> str:
+        columns = self.frame.columns
+        return ", ".join(map(str, columns[:20])) + (" ..." if len(columns) > 20 else "")
+
     def _require(self, column: str, key: str) -> pd.Series:
         if column not in self.frame.columns:
             raise HistorianFormatError(
                 f"{self.path}: no column {column!r} (historian.{key} in {self.tag_map.source}); "
-                f"columns are: {', '.join(map(str, self.frame.columns[:20]))}"
-                + (" ..." if len(self.frame.columns) > 20 else "")
+                f"columns are: {self._column_list()}{self._header_hint()}"
             )
         return self.frame[column]
+
+    def _header_hint(self) -> str:
+        """Why a CSV header may not hold the expected names: delimiter or encoding."""
+        if not self.is_csv:
+            return ""
+        header = "".join(map(str, self.frame.columns))
+        dialect, source, hints = self.dialect, self.tag_map.source, []
+        for char in DELIMITERS:
+            if char != dialect["delimiter"] and char in header:
+                hints.append(
+                    f"the header holds {char!r} but was split at {dialect['delimiter']!r} "
+                    f"({dialect['delimiter_source']}); if the file is {char!r}-separated, set "
+                    f"historian.delimiter = {_toml_text(char)} in {source}"
+                )
+                break
+        if not header.isascii() and dialect["encoding_source"] != "default":
+            hints.append(
+                f"the file was decoded as {dialect['encoding']} ({dialect['encoding_source']}); "
+                f"if the names look garbled, set historian.encoding (e.g. \"gbk\", \"cp1252\") "
+                f"in {source}"
+            )
+        return "".join(f"; {hint}" for hint in hints)
 
     # --- time -----------------------------------------------------------------------------------
 
@@ -280,21 +499,80 @@ class _Reader:
             )
         if pd.api.types.is_numeric_dtype(raw.dtype):
             return raw.to_numpy(dtype=float, na_value=np.nan)
-        values = pd.to_numeric(raw, errors="coerce")
-        bad = values.isna().to_numpy() & raw.notna().to_numpy()
-        if bad.any():
-            blank = raw[bad].astype(str).str.strip().eq("").to_numpy()
-            bad[np.flatnonzero(bad)[blank]] = False
+        present = raw.notna().to_numpy()
+        text = raw.astype(str).str.strip().where(present)
+        if self.dialect.get("decimal") == ",":  # "12,5" → 12.5; a "." is not a decimal here
+            text = text.where(~text.str.contains(".", regex=False, na=False), "")
+            text = text.str.replace(",", ".", regex=False)
+        values = pd.to_numeric(text.where(text != "", "not a number"), errors="coerce")
+        bad = values.isna().to_numpy() & present & raw.astype(str).str.strip().ne("").to_numpy()
         if bad.any():
             position = int(np.flatnonzero(bad)[0])
             raise HistorianFormatError(
                 f"{self.path}: {what} {self._where(int(raw.index[position]))}: "
                 f"{raw.iloc[position]!r} is not a number in {unit} (signal {signal})"
+                f"{self._decimal_hint(str(raw.iloc[position]).strip())}"
             )
         return values.to_numpy(dtype=float, na_value=np.nan)
 
+    def _decimal_hint(self, value: str) -> str:
+        """A hint when a value that failed to parse suggests the other decimal separator."""
+        if not self.is_csv:
+            return ""
+        decimal, source = self.dialect["decimal"], self.dialect["decimal_source"]
+        if decimal == "." and _COMMA_NUMBER.fullmatch(value):
+            also = (" and another historian.delimiter" if self.dialect["delimiter"] == ","
+                    else "")
+            return (f"; it looks like a decimal comma: set historian.decimal = \",\"{also} in "
+                    f"{self.tag_map.source}")
+        if decimal == "," and _DOT_NUMBER.fullmatch(value):
+            return (f"; the file is read with decimal ',' ({source}): if '.' is its decimal "
+                    f"separator, set historian.decimal = \".\" in {self.tag_map.source}")
+        return ""
+
     def _to_si(self, name: str, values: np.ndarray) -> np.ndarray:
         return convert(values, self.tag_map.signals[name].unit, SIGNALS[name].si_unit)
+
+    def _quality(self, name: str, raw: pd.Series, values: np.ndarray, what: str) -> np.ndarray:
+        """Quality classes of one signal's samples: True where excluded; counts recorded.
+
+        ``raw`` holds the quality values of the samples, ``values`` the samples (NaN: none).
+        """
+        mapping = self.tag_map.quality
+        try:
+            codes, uniques = pd.factorize(raw, use_na_sentinel=True)
+        except TypeError:  # unhashable cells (Parquet lists, ...)
+            raise HistorianFormatError(
+                f"{self.path}: {what} holds values that are not quality codes "
+                "(expected text or integers)"
+            ) from None
+        classes = np.full(len(uniques) + 1, -1)  # the last entry serves NaN's code -1
+        for position, value in enumerate(uniques):
+            if isinstance(value, str) and not value.strip():
+                continue
+            found = mapping.classify(value)
+            if found is None:
+                row = int(np.flatnonzero(codes == position)[0])
+                raise HistorianFormatError(
+                    f"{self.path}: {what} {self._where(int(raw.index[row]))}: quality "
+                    f"{raw.iloc[row]!r} (signal {name}) is not classified by "
+                    f"{mapping.describe()}; list it under [historian.quality] good, uncertain "
+                    f"or bad in {self.tag_map.source}"
+                )
+            classes[position] = QUALITY_CLASSES.index(found)
+        row_classes = classes[codes]
+        unknown = (row_classes < 0) & ~np.isnan(values)
+        if unknown.any():
+            row = int(np.flatnonzero(unknown)[0])
+            raise HistorianFormatError(
+                f"{self.path}: {what} {self._where(int(raw.index[row]))}: empty quality for a "
+                f"sample of signal {name}; every sample needs a quality (good, uncertain or bad)"
+            )
+        self.quality_counts[name] = {
+            cls: int((row_classes == k).sum()) for k, cls in enumerate(QUALITY_CLASSES)
+        }
+        excluded = [QUALITY_CLASSES.index(cls) for cls in mapping.exclude]
+        return np.isin(row_classes, excluded)
 
     # --- layouts --------------------------------------------------------------------------------
 
@@ -311,6 +589,15 @@ class _Reader:
             raw = frame[spec.column]
             values = self._numbers(raw, f"column {spec.column!r}", spec.unit, name)
             signals[name] = self._to_si(name, values)
+            self.bad_quality[name] = np.zeros(len(values), dtype=bool)
+            if spec.quality_column is None:
+                continue
+            if spec.quality_column not in frame.columns:
+                self.notes["missing_quality_column"] += 1
+                continue
+            self.bad_quality[name] = self._quality(
+                name, frame[spec.quality_column], values, f"column {spec.quality_column!r}"
+            )
         signals_frame = pd.DataFrame(signals, index=index, columns=list(signals))
         rest = [c for c in frame.columns if c != tag_map.time_column and c not in mapped]
         extras = frame[rest].set_axis(index, axis=0)
@@ -361,6 +648,12 @@ class _Reader:
             column = np.full(n_rows, np.nan)
             column[rows[picked]] = self._to_si(name, values)
             signals[name] = column
+            self.bad_quality[name] = np.zeros(n_rows, dtype=bool)
+            if quality_raw is not None:
+                self.bad_quality[name][rows[picked]] = self._quality(
+                    name, quality_raw.iloc[picked], values,
+                    f"tag {spec.column!r} (column {tag_map.quality_column!r})",
+                )
         signals_frame = pd.DataFrame(signals, index=index, columns=list(signals))
 
         extras = {}
@@ -421,3 +714,8 @@ def _scatter(
     """Values of one long-layout tag placed on their output rows (NaN elsewhere), dtype as read."""
     values = raw.iloc[picked].set_axis(rows)
     return values.reindex(np.arange(n_rows)).array
+
+
+def _toml_text(char: str) -> str:
+    """One character as a TOML string for messages (tab as ``"\\t"``)."""
+    return '"\\t"' if char == "\t" else f'"{char}"'

@@ -9,36 +9,81 @@ map (TOML) translates them to the canonical names of :data:`steamtwin.dcs.signal
     time_zone = "Asia/Shanghai"  # IANA zone for timestamps without a UTC offset
     tag_column = "tag"           # long layout only
     value_column = "value"       # long layout only
-    quality_column = "quality"   # long layout only, optional
+    quality_column = "quality"   # long layout only, optional: the quality of each row's value
+    delimiter = ";"              # CSV only, optional: one character (";", "\t", "|", ",")
+    decimal = ","                # CSV only, optional: "." or ","
+    encoding = "gbk"             # CSV only, optional: a Python codec ("gb18030", "cp1252", ...)
+
+    [historian.quality]          # optional: how quality values are classified
+    good = ["Good", 192]         # strings (case-insensitive) or integers, as in the file
+    uncertain = ["Uncertain", 64]
+    bad = ["Bad", 0]
+    exclude = ["bad", "uncertain"]  # classes excluded from model inputs (default: both)
 
     [signals.main_steam_pressure]
     column = "10LBA10CP001"      # wide: column name; long: the tag value
     unit = "MPa"                 # convertible to the signal's SI unit (Pa)
     range = [0.0, 25.0]          # optional valid range, in `unit`
+    noise = 0.02                 # optional instrument white-noise σ, in `unit`
+    resolution = 0.001           # optional historian quantum (smallest step), in `unit`
+    max_rate = 0.05              # optional physical rate limit, in `unit` per second
+    quality_column = "CP001_Q"   # wide layout only, optional: this signal's quality column
+
+``noise``, ``resolution`` and ``max_rate`` are differences, so they convert without the unit's
+offset (0.5 degC of noise is 0.5 K; 1 degF is 5/9 K).
+
+CSV dialect: ``delimiter``, ``decimal`` and ``encoding`` are sniffed from the file when absent
+(see :mod:`steamtwin.dcs.readers`); set them when the sniffed choice is wrong.
+
+Quality classes: without ``good``/``uncertain``/``bad`` lists (``exclude`` alone may be given) a
+value is classified by the OPC conventions — a text by its OPC UA status-code name prefix
+("Good…", "Uncertain…", "Bad…", case-insensitive; OPC 10000-4, UA Part 4, "StatusCode", and
+the symbolic names of OPC 10000-6 Annex A) and an integer 0–255 by bits 7–6 of the OPC DA
+quality byte QQSSSSLL (0b11 good: 192–255, 0b01 uncertain: 64–127, 0b00 bad: 0–63; 0b10,
+128–191, is not used; OPC Data Access Custom Interface Standard 2.05a, §6.8 "OPC Quality
+flags"). An OPC UA numeric status code is *not*
+understood by default (its 0 is Good, while DA's 0 is Bad): list the codes. With any list
+given, only the listed values are known. A value that cannot be classified is an error, never
+a guess.
 
 Every validation error names the file and the field.
 """
 
 from __future__ import annotations
 
+import codecs
 import math
+import re
 import tomllib
 import zoneinfo
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import pint
 
 from steamtwin.dcs.signals import SIGNALS
+from steamtwin.keys import unknown_key_message
 from steamtwin.units import convert, unit_registry
 
 LAYOUTS = ("wide", "long")
+QUALITY_CLASSES = ("good", "uncertain", "bad")
+DECIMALS = (".", ",")
 _HISTORIAN_KEYS = (
     "layout", "time_column", "time_zone", "tag_column", "value_column", "quality_column",
+    "delimiter", "decimal", "encoding", "quality",
 )
 _LONG_ONLY = ("tag_column", "value_column", "quality_column")
-_SIGNAL_KEYS = ("column", "unit", "range")
+_QUALITY_KEYS = (*QUALITY_CLASSES, "exclude")
+_SIGNAL_KEYS = ("column", "unit", "range", "noise", "resolution", "max_rate", "quality_column")
+_DELTA_KEYS = {  # tag-map key → (TagSpec field, what it is, unit suffix)
+    "noise": ("noise_si", "instrument white-noise standard deviation", ""),
+    "resolution": ("resolution_si", "historian quantum", ""),
+    "max_rate": ("max_rate_si", "physical rate limit", " per second"),
+}
+_INTEGER_TEXT = re.compile(r"[+-]?\d{1,18}(?:\.0*)?")  # integer text (".0" allowed)
+# OPC DA Custom Interface 2.05a §6.8: bits 7-6 of the quality byte QQSSSSLL; 0b10 is unused.
+_OPC_DA_QUALITY_BITS = {0b11: "good", 0b01: "uncertain", 0b00: "bad"}
 
 
 class TagMapError(ValueError):
@@ -50,18 +95,76 @@ class TagSpec:
     """One mapped signal: historian ``column`` (wide) or tag value (long), its ``unit``.
 
     ``valid_range_si`` is the optional valid range converted to the signal's SI unit
-    (e.g. Pa, K, kg/s, W).
+    (e.g. Pa, K, kg/s, W). ``noise_si`` (instrument white-noise σ), ``resolution_si``
+    (historian quantum) and ``max_rate_si`` (physical rate limit, per second) are optional
+    differences in the SI unit (K, Pa, ...; per second for the rate). ``quality_column`` is the
+    wide layout's column holding this signal's quality, if any.
     """
 
     signal: str
     column: str
     unit: str
     valid_range_si: tuple[float, float] | None = None
+    noise_si: float | None = None
+    resolution_si: float | None = None
+    max_rate_si: float | None = None
+    quality_column: str | None = None
+
+
+@dataclass(frozen=True)
+class QualityMapping:
+    """Quality value → class ("good", "uncertain", "bad"); ``exclude`` lists the excluded classes.
+
+    With all three value lists empty, the OPC defaults of the module docstring apply. Strings
+    match case-insensitively after stripping blanks; integers match integers and integer text.
+    """
+
+    good: tuple[str | int, ...] = ()
+    uncertain: tuple[str | int, ...] = ()
+    bad: tuple[str | int, ...] = ()
+    exclude: tuple[str, ...] = ("bad", "uncertain")
+
+    @property
+    def is_default(self) -> bool:
+        """True when values are classified by the OPC defaults (no value lists given)."""
+        return not (self.good or self.uncertain or self.bad)
+
+    def classify(self, value: object) -> str | None:
+        """The class of one quality value as read (text or number), or None if unknown."""
+        text, number = _quality_key(value)
+        if text is None:
+            return None
+        if self.is_default:
+            folded = text.casefold()
+            for name in QUALITY_CLASSES:
+                if folded.startswith(name):
+                    return name
+            if number is not None and 0 <= number <= 255:
+                return _OPC_DA_QUALITY_BITS.get(number >> 6)
+            return None
+        for name in QUALITY_CLASSES:
+            for known in getattr(self, name):
+                if isinstance(known, int) and known == number:
+                    return name
+                if isinstance(known, str) and known.strip().casefold() == text.casefold():
+                    return name
+        return None
+
+    def describe(self) -> str:
+        """How values are classified, for messages."""
+        if self.is_default:
+            return ("the default OPC mapping (text 'Good…'/'Uncertain…'/'Bad…', "
+                    "OPC DA integers 0–255)")
+        return "historian.quality"
 
 
 @dataclass(frozen=True)
 class TagMap:
-    """A validated tag map; ``source`` names the file it came from (used in error messages)."""
+    """A validated tag map; ``source`` names the file it came from (used in error messages).
+
+    ``delimiter``, ``decimal`` and ``encoding`` are the CSV dialect the map sets (None: sniffed
+    from the file); ``quality`` classifies quality values.
+    """
 
     layout: str
     time_column: str
@@ -71,6 +174,10 @@ class TagMap:
     quality_column: str | None
     signals: dict[str, TagSpec]
     source: str
+    delimiter: str | None = None
+    decimal: str | None = None
+    encoding: str | None = None
+    quality: QualityMapping = field(default_factory=QualityMapping)
 
     def column_of(self, signal: str) -> str:
         """Historian column (wide) or tag (long) of a canonical signal; KeyError if unmapped."""
@@ -81,6 +188,13 @@ class TagMap:
                 f"{self.source}: signal {signal!r} is not mapped "
                 f"(mapped: {', '.join(self.signals)})"
             ) from None
+
+    @property
+    def has_quality(self) -> bool:
+        """True when a quality column is configured (long layout or any wide signal)."""
+        return self.quality_column is not None or any(
+            spec.quality_column is not None for spec in self.signals.values()
+        )
 
 
 def load_tag_map(path: str | Path) -> TagMap:
@@ -136,13 +250,14 @@ def parse_tag_map(text: str, source: str = "<string>") -> TagMap:
                     f"(this map has layout = {layout!r})"
                 )
         tag_column = value_column = quality_column = None
+    delimiter, decimal, encoding = _dialect(historian, source)
     signals_table = _table(document, "signals", "", source)
     if not signals_table:
         raise TagMapError(f"{source}: [signals] maps no signal; add e.g. [signals.load]")
     signals: dict[str, TagSpec] = {}
     owners: dict[str, str] = {}
     for name, entry in signals_table.items():
-        spec = _tag_spec(name, entry, source)
+        spec = _tag_spec(name, entry, layout, source)
         if spec.column in owners:
             raise TagMapError(
                 f"{source}: signals.{name}.column = {spec.column!r} is already mapped to "
@@ -155,7 +270,18 @@ def parse_tag_map(text: str, source: str = "<string>") -> TagMap:
             )
         owners[spec.column] = name
         signals[name] = spec
-    return TagMap(
+    for name, spec in signals.items():
+        if spec.quality_column is None:
+            continue
+        if spec.quality_column == time_column:
+            raise TagMapError(f"{source}: signals.{name}.quality_column = "
+                              f"{spec.quality_column!r} is the time column (historian.time_column)")
+        if spec.quality_column in owners:
+            raise TagMapError(
+                f"{source}: signals.{name}.quality_column = {spec.quality_column!r} is the value "
+                f"column of signals.{owners[spec.quality_column]}"
+            )
+    tag_map = TagMap(
         layout=layout,
         time_column=time_column,
         time_zone=time_zone,
@@ -164,28 +290,54 @@ def parse_tag_map(text: str, source: str = "<string>") -> TagMap:
         quality_column=quality_column,
         signals=signals,
         source=source,
+        delimiter=delimiter,
+        decimal=decimal,
+        encoding=encoding,
     )
+    if "quality" not in historian:
+        return tag_map
+    if not tag_map.has_quality:
+        raise TagMapError(
+            f"{source}: [historian.quality] is set but no quality column is configured "
+            "(historian.quality_column in the long layout, signals.<name>.quality_column in "
+            "the wide layout)"
+        )
+    return TagMap(**{**tag_map.__dict__, "quality": _quality(historian["quality"], source)})
 
 
 def write_tag_map(tag_map: TagMap, path: str | Path) -> None:
-    """Write a tag map as TOML that :func:`load_tag_map` reads back (ranges in the tag's unit)."""
+    """Write a tag map as TOML that :func:`load_tag_map` reads back (values in the tag's unit)."""
     lines = ["[historian]", f"layout = {_toml_string(tag_map.layout)}"]
-    for key in ("time_column", "time_zone", "tag_column", "value_column", "quality_column"):
+    for key in ("time_column", "time_zone", "tag_column", "value_column", "quality_column",
+                "delimiter", "decimal", "encoding"):
         value = getattr(tag_map, key)
         if value is not None:
             lines.append(f"{key} = {_toml_string(value)}")
+    quality = tag_map.quality
+    if quality != QualityMapping():
+        lines += ["", "[historian.quality]"]
+        for name in QUALITY_CLASSES:
+            values = getattr(quality, name)
+            if values:
+                lines.append(f"{name} = [{', '.join(map(_toml_value, values))}]")
+        lines.append(f"exclude = [{', '.join(map(_toml_string, quality.exclude))}]")
     for name, spec in tag_map.signals.items():
+        si_unit = SIGNALS[spec.signal].si_unit
         lines += ["", f"[signals.{_toml_key(name)}]", f"column = {_toml_string(spec.column)}",
                   f"unit = {_toml_string(spec.unit)}"]
         if spec.valid_range_si is not None:
-            low, high = convert(
-                list(spec.valid_range_si), SIGNALS[spec.signal].si_unit, spec.unit
-            ).tolist()
+            low, high = convert(list(spec.valid_range_si), si_unit, spec.unit).tolist()
             lines.append(f"range = [{_toml_float(low)}, {_toml_float(high)}]")
+        for key, (attribute, _, _) in _DELTA_KEYS.items():
+            value = getattr(spec, attribute)
+            if value is not None:
+                lines.append(f"{key} = {_toml_float(_delta(value, si_unit, spec.unit))}")
+        if spec.quality_column is not None:
+            lines.append(f"quality_column = {_toml_string(spec.quality_column)}")
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
-def _tag_spec(name: str, entry: Any, source: str) -> TagSpec:
+def _tag_spec(name: str, entry: Any, layout: str, source: str) -> TagSpec:
     where = f"{source}: signals.{name}"
     if name not in SIGNALS:
         raise TagMapError(
@@ -201,7 +353,7 @@ def _tag_spec(name: str, entry: Any, source: str) -> TagSpec:
     try:
         parsed = registry.Unit(unit)
     except (pint.errors.UndefinedUnitError, pint.errors.DefinitionSyntaxError, ValueError,
-            AttributeError, TypeError):
+            AttributeError, TypeError, AssertionError):
         raise TagMapError(
             f"{where}.unit = {unit!r}: unknown unit (signal {name} is in {si_unit!r})"
         ) from None
@@ -225,8 +377,142 @@ def _tag_spec(name: str, entry: Any, source: str) -> TagSpec:
                 f"[low, high] in {unit}"
             )
         low, high = convert([float(b) for b in bounds], unit, si_unit).tolist()
+        if not (math.isfinite(low) and math.isfinite(high) and low < high):
+            raise TagMapError(f"{where}.range = {bounds!r}: out of the representable range "
+                              f"once converted to {si_unit}")
         valid_range = (low, high)
-    return TagSpec(signal=name, column=column, unit=unit, valid_range_si=valid_range)
+    deltas: dict[str, float] = {}
+    for key, (attribute, meaning, per) in _DELTA_KEYS.items():
+        if key not in entry:
+            continue
+        value = entry[key]
+        if (not isinstance(value, int | float) or isinstance(value, bool)
+                or not math.isfinite(value) or value <= 0):
+            raise TagMapError(f"{where}.{key} = {value!r}: expected the {meaning} as a positive "
+                              f"finite number in {unit}{per}")
+        converted = _delta(float(value), unit, si_unit)
+        if not (math.isfinite(converted) and converted > 0):
+            raise TagMapError(f"{where}.{key} = {value!r}: out of the representable range once "
+                              f"converted to {si_unit}{per}")
+        deltas[attribute] = converted
+    quality_column = None
+    if "quality_column" in entry:
+        if layout != "wide":
+            raise TagMapError(
+                f"{where}.quality_column is only used with layout = \"wide\"; the long layout "
+                "has one quality column for all tags (historian.quality_column)"
+            )
+        quality_column = _text(entry, "quality_column", f"signals.{name}", source)
+    return TagSpec(signal=name, column=column, unit=unit, valid_range_si=valid_range,
+                   quality_column=quality_column, **deltas)
+
+
+def _delta(value: float, from_unit: str, to_unit: str) -> float:
+    """Convert a difference (σ, quantum, rate) between units, without the units' offsets."""
+    registry = unit_registry()
+    return float(registry.Quantity(value, _difference_unit(from_unit))
+                 .to(_difference_unit(to_unit)).magnitude)
+
+
+def _difference_unit(unit: str) -> str:
+    """``unit``, or ``delta_<unit>`` for a unit with an offset (degC, degF: 0 is not 0 K)."""
+    registry = unit_registry()
+    parsed = registry.Unit(unit)
+    offset = registry.Quantity(0.0, parsed).to_base_units().magnitude != 0.0
+    return f"delta_{parsed}" if offset else str(parsed)
+
+
+def _dialect(historian: dict[str, Any], source: str) -> tuple[str | None, str | None, str | None]:
+    """The CSV ``delimiter``, ``decimal`` and ``encoding`` the map sets (None when absent)."""
+    delimiter = decimal = encoding = None
+    if "delimiter" in historian:
+        delimiter = historian["delimiter"]
+        if (not isinstance(delimiter, str) or len(delimiter) != 1 or delimiter.isalnum()
+                or delimiter in '"\r\n' or (delimiter.isspace() and delimiter not in " \t")):
+            raise TagMapError(
+                f"{source}: historian.delimiter = {delimiter!r}: expected one character that is "
+                "not a letter, digit, quote or line break, e.g. \",\", \";\", \"\\t\" or \"|\""
+            )
+    if "decimal" in historian:
+        decimal = historian["decimal"]
+        if decimal not in DECIMALS:
+            raise TagMapError(
+                f"{source}: historian.decimal = {decimal!r}: expected \".\" or \",\""
+            )
+    if delimiter is not None and delimiter == decimal:
+        raise TagMapError(
+            f"{source}: historian.delimiter and historian.decimal are both {delimiter!r}; "
+            "a CSV cannot use one character for both"
+        )
+    if "encoding" in historian:
+        encoding = _text(historian, "encoding", "historian", source)
+        try:
+            codecs.lookup(encoding)
+            "a".encode(encoding)  # refuses codecs that are not text encodings (hex, rot13, ...)
+        except (LookupError, ValueError, TypeError):
+            raise TagMapError(
+                f"{source}: historian.encoding = {encoding!r}: not a text encoding Python knows "
+                "(e.g. \"utf-8\", \"gbk\", \"gb18030\", \"cp1252\")"
+            ) from None
+    return delimiter, decimal, encoding
+
+
+def _quality(table: Any, source: str) -> QualityMapping:
+    """The ``[historian.quality]`` table as a :class:`QualityMapping`."""
+    if not isinstance(table, dict):
+        raise TagMapError(f"{source}: historian.quality must be a table "
+                          "(good, uncertain, bad, exclude)")
+    _check_keys(table, _QUALITY_KEYS, "historian.quality", source)
+    lists: dict[str, tuple[str | int, ...]] = {}
+    owner: dict[str | int, str] = {}
+    for name in QUALITY_CLASSES:
+        values = table.get(name, [])
+        if not isinstance(values, list) or not all(
+            (isinstance(v, str) and v.strip()) or (isinstance(v, int) and not isinstance(v, bool))
+            for v in values
+        ):
+            raise TagMapError(
+                f"{source}: historian.quality.{name} = {values!r}: expected a list of quality "
+                "values as they appear in the file: non-empty strings or integers"
+            )
+        for value in values:
+            key = value.strip().casefold() if isinstance(value, str) else value
+            if key in owner:
+                raise TagMapError(
+                    f"{source}: historian.quality.{name} lists {value!r}, which "
+                    f"historian.quality.{owner[key]} lists too; a value has one class"
+                )
+            owner[key] = name
+        lists[name] = tuple(values)
+    exclude = table.get("exclude", ["bad", "uncertain"])
+    if (not isinstance(exclude, list) or not all(v in ("bad", "uncertain") for v in exclude)
+            or len(set(exclude)) != len(exclude)):
+        raise TagMapError(
+            f"{source}: historian.quality.exclude = {exclude!r}: expected a list of the classes "
+            "excluded from model inputs, from \"bad\" and \"uncertain\""
+        )
+    return QualityMapping(**lists, exclude=tuple(exclude))
+
+
+def _quality_key(value: object) -> tuple[str | None, int | None]:
+    """A quality value as (stripped text, integer or None); (None, None) when missing."""
+    if value is None or isinstance(value, bool):
+        return (None, None) if value is None else (str(value), None)
+    if isinstance(value, int):  # Python and numpy integers (numpy ints are not int subclasses)
+        return str(value), value
+    if hasattr(value, "dtype") and getattr(value.dtype, "kind", "") in "iu":
+        return str(int(value)), int(value)
+    if isinstance(value, float) or (hasattr(value, "dtype") and value.dtype.kind == "f"):
+        number = float(value)
+        if math.isnan(number):
+            return None, None
+        if number.is_integer():
+            return str(int(number)), int(number)
+        return repr(number), None
+    text = str(value).strip()
+    if not text:
+        return None, None
+    return text, int(text.split(".")[0]) if _INTEGER_TEXT.fullmatch(text) else None
 
 
 def _time_zone(historian: dict[str, Any], source: str) -> str | None:
@@ -263,12 +549,9 @@ def _text(table: dict[str, Any], key: str, path: str, source: str) -> str:
 
 
 def _check_keys(table: dict[str, Any], allowed: tuple[str, ...], path: str, source: str) -> None:
-    for key in table:
-        if key not in allowed:
-            field = f"{path}.{key}" if path else key
-            raise TagMapError(
-                f"{source}: {field} is not a tag map field (expected: {', '.join(allowed)})"
-            )
+    message = unknown_key_message(table, allowed, path, source, "tag map")
+    if message is not None:
+        raise TagMapError(message)
 
 
 def _toml_string(text: str) -> str:
@@ -282,6 +565,11 @@ def _toml_string(text: str) -> str:
         else:
             out.append(char)
     return '"' + "".join(out) + '"'
+
+
+def _toml_value(value: str | int) -> str:
+    """A quality value (string or integer) as TOML."""
+    return _toml_string(value) if isinstance(value, str) else str(value)
 
 
 def _toml_key(key: str) -> str:
