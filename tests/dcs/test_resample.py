@@ -22,8 +22,20 @@ def frame(seconds: list[float], values: list[float], start: pd.Timestamp = START
 
 
 def test_codes_do_not_collide_with_quality_flags() -> None:
-    assert [int(f) for f in ResampleFlag] == [256, 512, 1024, 2048]
+    assert [int(f) for f in ResampleFlag] == [512, 1024, 2048, 4096]
     assert all(int(f) & int(g) == 0 for f in ResampleFlag for g in Flag)
+    assert max(int(g) for g in Flag) == 256  # BAD_QUALITY, the highest quality bit
+
+
+def test_bad_quality_flag_is_carried_and_higher_codes_refused() -> None:
+    data = frame([0, 1, 2, 3], [np.nan, np.nan, 3.0, 4.0])
+    codes = pd.DataFrame({"load": [Flag.BAD_QUALITY | Flag.REMOVED, Flag.MISSING, 0, 0]},
+                         index=data.index, dtype=np.uint16)
+    result = resample(data, 2.0, flags=codes)  # the empty bin tells why it is empty
+    assert list(result.flags["load"]) == [GAP | Flag.BAD_QUALITY | Flag.REMOVED | Flag.MISSING,
+                                          AVG]
+    with pytest.raises(ValueError, match="0–511"):
+        resample(data, 2.0, flags=codes.assign(load=[0, int(ResampleFlag.AVERAGED), 0, 0]))
 
 
 def test_mean_exact_bin_averages_labelled_by_bin_start() -> None:
@@ -121,7 +133,7 @@ def test_flags_and_counts_agree_and_nan_iff_gap() -> None:
                         index=START + pd.to_timedelta(seconds, unit="s"))
     for method in ("mean", "linear"):
         result = resample(data, 15.0, method=method)
-        codes = result.flags.to_numpy() & 0xF00
+        codes = result.flags.to_numpy() & 0x1E00
         # exactly one resample code per value
         assert np.isin(codes, [AVG, ONE, INT, GAP]).all()
         for kind, code in COUNT_KINDS.items():

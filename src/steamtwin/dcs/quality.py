@@ -12,39 +12,70 @@ Severity policy
     error: a required signal is missing or entirely NaN; a signal's level is explained by a common
     unit confusion (bar/MPa, kPa/MPa, °C/K, t/h/kg/s, kW/MW); duplicate timestamps with
     conflicting values (which value is true is unknown); more than ``out_of_range_error_fraction``
-    (default 1 %) of a signal's samples outside its physical range.
+    (default 1 %) of a signal's samples outside its physical range, or marked bad by the
+    historian's quality column.
     warning: everything that is repairable without guessing or that affects only a few samples:
     unsorted timestamps, identical duplicate rows, gaps, NaN, spikes, stuck runs, a constant
     signal, a few out-of-range values, a level outside the typical range that no unit confusion
     explains (e.g. the unit was shut down), non-numeric columns.
 
-Detectors (all on the time-sorted frame with duplicate timestamps reduced to their first row)
+Detectors (all on the time-sorted frame with duplicate timestamps reduced to their first row;
+samples that are NaN, out of range or marked bad by the historian take no part)
     gaps: steps longer than ``gap_factor`` (3) × the nominal step (median step unless given).
-    spikes: Hampel filter [Hampel 1974; Pearson 2002, "Outliers in process modeling and
-    identification", IEEE Trans. Control Syst. Technol. 10(1)]: a sample is a spike when
-    ``|x − median| > n · 1.4826 · MAD`` over a centred window of ``hampel_window`` valid samples
-    (NaN and out-of-range samples are skipped; edges replicate the end sample). Windows with
-    MAD = 0 (flat or quantised data) are ignored, so clean steps are never spikes; runs of
-    identical values longer than half the window are left out of the windows (next to one the
-    MAD collapses and plain noise would look like spikes). Defaults:
-    61 samples, n = 6. Pearson's n = 3 with short (7-sample) windows marks 0.3–5 % of white
-    sensor noise, thousands of samples per signal-day at 1 s. With 61/6 we measured about 0.5
-    false spikes per signal-day of white noise on plausible ramps and holds (61/5: ~3), while a
-    single-sample glitch larger than 6 σ of the local noise is still found; a longer window
-    also tolerates bursts of up to 30 bad samples.
-    stuck: a value exactly repeated (run of zero differences) for longer than
-    ``stuck_min_duration_s`` (600 s). A signal constant over the whole record is reported once
-    as ``constant`` instead, since it cannot be told from a legitimately constant one.
+    noise σ and quantum q of each signal (overridable with ``noise_si``/``resolution_si``):
+    q is the historian's resolution, the largest step of which (nearly) all non-zero
+    differences between consecutive values are whole multiples (:func:`estimate_resolution`);
+    σ is the white-noise standard deviation from the second differences
+    ``(x[i−1] − 2·x[i] + x[i+1])/√6`` (variance σ² for white noise; a linear trend cancels)
+    [Gasser, Sroka & Jennen-Steinmetz 1986, Biometrika 73(3) 625–633], taken as the standard
+    deviation of the central 99 % of them divided by 0.9616 (the truncated-normal factor), then
+    Sheppard-corrected for quantisation (σ² − q²/12) (:func:`estimate_noise_sigma`). A MAD
+    estimate is not used because it collapses to 0 once half the differences are 0, i.e. on
+    any signal quantised at about its noise level. σ is estimated again without the samples of
+    stuck runs found in a first pass.
+    stuck: a run of n exactly repeated values is stuck when chance explains it less than
+    :data:`STUCK_CHANCE_RUNS_PER_DAY` (0.1) times per signal-day, i.e. when
+    ``(86400 s / step) · P < 0.1`` with ``P = ∏ p_i`` over n − 1 of its samples, and it lasts at
+    least ``stuck_min_duration_s`` (30 s). ``p_i`` is the probability that a sample falls into
+    the held value's quantisation cell: ``Φ((q/2 − δ_i)/σ) − Φ((−q/2 − δ_i)/σ)`` with
+    ``δ_i`` the offset of the local trend (the slope between the medians of up to 30 valid
+    samples before and after the run) from the run's centre; it is never taken below the
+    fraction of consecutive equal pairs observed in the signal outside stuck runs, so a
+    legitimately flat or coarsely quantised signal is not called stuck. Without trend
+    ``P = p^(n−1)``, ``p = 2Φ(q/2σ) − 1``; for σ = 0.5 K and q = 0.1 K, p = 0.08 and 7
+    equal samples at 1 s are already improbable, so the duration floor decides. A signal
+    constant over the whole record is reported once as ``constant`` instead, since it cannot
+    be told from a legitimately constant one.
+    spikes: the local trend is the rolling median over ``spike_window`` (61) valid samples; a
+    sample is a spike when its departure from the trend exceeds both ``spike_n_sigmas`` (k)
+    × the noise scale and the signal's physical rate limit × the longer of its two time steps
+    (:data:`MAX_RATES`, overridable with ``max_rate_si``), and the excursion returns: at most
+    :data:`SPIKE_MAX_SAMPLES` (3) consecutive departures of one sign with a non-departing
+    valid sample on each side. A step, however fast, does not return and is never a spike.
+    The noise scale is the larger of √(σ² + q²/12) and the spread of the departures
+    themselves (std of their central 99 % / 0.9616), so coloured noise or process
+    fluctuations that the second differences do not see do not raise false spikes.
+    k = 4.5 from the false-alarm budget of ≤ 1 false spike per signal-day at 1 s: for white
+    Gaussian noise the expected number is 86400 · 2·(1 − Φ(4.5)) = 0.59 per day. The price
+    is the Neyman–Pearson limit for a single sample: a spike of 5σ is found with probability
+    Φ(0.5) ≈ 0.69, 6σ with 0.93, 95 % is reached at about 6.2σ (measured on the virtual
+    plant in ``benchmarks/bench_quality_detection.py``; docs/benchmarks.md).
+    historian quality: samples the historian's quality column marked bad or uncertain
+    (``bad_quality`` masks, one per signal in the frame-as-read row order); a warning, an
+    error when more than ``out_of_range_error_fraction`` of the signal's samples.
     unit: the median is compared with :data:`TYPICAL_RANGES`; main-steam flow is also compared
     with the load (steam rate 2.5–4.0 kg/kWh) when the load looks right, since the t/h vs kg/s
     factor 3.6 is smaller than the flow range itself.
 
-Flag codes (:class:`Flag`, a bitmask per sample in ``CleaningResult.flags``)
+Flag codes (:class:`Flag`, a bitmask per sample in ``CleaningResult.flags``, uint16)
     1 MISSING (NaN as read, left NaN), 2 SPIKE, 4 OUT_OF_RANGE, 8 STUCK (part of a stuck run),
     16 DUPLICATE (the row's timestamp had other rows, which were dropped; the first kept),
     32 DUPLICATE_CONFLICT (those dropped rows held a different value of this signal),
     64 OUT_OF_ORDER (the row came after a later timestamp in the file and was moved),
-    128 REMOVED (cleaning replaced the value by NaN). A value is changed iff REMOVED is set.
+    128 REMOVED (cleaning replaced the value by NaN), 256 BAD_QUALITY (the historian's quality
+    column marked the sample bad or uncertain). A value is changed iff REMOVED is set.
+    :func:`clean` removes spikes, out-of-range, stuck and bad-quality samples, and every sample
+    of a signal with an error-level unit finding (a unit mix-up never feeds a model).
 """
 
 from __future__ import annotations
@@ -57,12 +88,16 @@ from typing import Any, Literal
 
 import numpy as np
 import pandas as pd
-from scipy.ndimage import maximum_filter1d, median_filter, minimum_filter1d
+from scipy.ndimage import median_filter
+from scipy.special import ndtr
 
 from steamtwin.dcs.signals import SIGNALS
 from steamtwin.units import convert
 
 __all__ = [
+    "MAX_RATES",
+    "SPIKE_MAX_SAMPLES",
+    "STUCK_CHANCE_RUNS_PER_DAY",
     "TYPICAL_RANGES",
     "CleaningResult",
     "Finding",
@@ -70,6 +105,8 @@ __all__ = [
     "QualityReport",
     "check_quality",
     "clean",
+    "estimate_noise_sigma",
+    "estimate_resolution",
 ]
 
 Severity = Literal["error", "warning"]
@@ -78,8 +115,19 @@ Action = Literal["detected", "repaired", "rejected"]
 INDEX = "(index)"
 """Pseudo-signal under which index findings (order, duplicates, gaps) are counted."""
 
-MAD_TO_SIGMA = 1.4826
-"""MAD of a normal distribution × 1.4826 = its standard deviation."""
+SECONDS_PER_DAY = 86400.0
+
+STUCK_CHANCE_RUNS_PER_DAY = 0.1
+"""A run is stuck when chance would produce fewer such runs per signal-day than this."""
+
+SPIKE_MAX_SAMPLES = 3
+"""Longest excursion (consecutive samples) that counts as a spike; longer ones are steps."""
+
+_TRIM = 0.99
+"""Share of the central values kept by the trimmed standard deviation."""
+#: std of N(0, 1) truncated to its central 99 % (|z| ≤ 2.5758):
+#: sqrt(1 − 2·c·φ(c)/(2Φ(c) − 1)) [Johnson, Kotz & Balakrishnan 1994, ch. 13, truncated normal].
+_TRIMMED_STD_FACTOR = 0.96164
 
 #: Typical operating range of each canonical signal in SI, for a 600 MW subcritical unit
 #: (16.7 MPa / 538 °C, sliding pressure, nozzle governing) between 30 and 100 % load, with
@@ -107,6 +155,39 @@ TYPICAL_RANGES: dict[str, tuple[float, float]] = {
     "hp_power": (20.0e6, 250.0e6),
 }
 
+#: Physical rate limit of each canonical signal in SI per second (Pa/s, K/s, kg/s², W/s): the
+#: fastest the *measured* signal genuinely moves in operation (load ramps up to 5 %/min, boiler-
+#: limited pressure ramps, sensor lag, metal heat-up limits). A departure from the local trend
+#: that returns within a few samples needs at least departure/step in and out; below this
+#: limit × step it may be real. Trips, load rejections and valve steps are faster but are
+#: monotone steps, which never count as spikes whatever their rate.
+MAX_RATES: dict[str, float] = {
+    # Sliding pressure 0.45–1.0 × 16.7 MPa: 7.7 kPa/s at a 5 %/min ramp; drum saturation-
+    # temperature limits of a few K/min (EN 12952-3) at dTsat/dp ≈ 5 K/MPa near 16.7 MPa allow
+    # ~1 MPa/min = 17 kPa/s → 20 kPa/s (1.2 MPa/min).
+    "main_steam_pressure": 20.0e3,
+    # Steam-temperature ramps are held to a few K/min (turbine thermal stress; the plant's
+    # firing/spray dip is ~1.2 K per %/min through 300 s); a 20-s thermowell passes at most
+    # ΔT/τ → 0.1 K/s (6 K/min).
+    "main_steam_temperature": 0.1,
+    # 500 kg/s rated: 10 %/min = 0.83 kg/s² → 1 kg/s per s.
+    "main_steam_flow": 1.0,
+    # ∝ flow (Stodola), 13 MPa rated: 5 %/min = 10.8 kPa/s → 15 kPa/s (7 %/min).
+    "control_stage_pressure": 15.0e3,
+    # Nozzle throttling: ~30 K over a 30–100 % ramp, at 5 %/min 0.08 K/s → 0.2 K/s.
+    "control_stage_temperature": 0.2,
+    # ∝ flow, 3.9 MPa rated: 5 %/min = 3.3 kPa/s → 5 kPa/s.
+    "hp_exhaust_pressure": 5.0e3,
+    # ~100 K over the load range through a 30-s well: 0.1 K/s.
+    "hp_exhaust_temperature": 0.1,
+    # Casing-metal heat-up limits of start-up curves, 1.5–5 K/min (thermal stress) → 0.05 K/s.
+    "hp_inner_casing_temperature": 0.05,
+    # 600 MW: 10 %/min = 1 MW/s (coordinated-control ramps ≤ 5 %/min, primary response faster).
+    "load": 1.0e6,
+    # ~177 MW HP share: 10 %/min ≈ 0.3 MW/s.
+    "hp_power": 0.3e6,
+}
+
 #: Units a value of each SI kind is commonly (mis)declared in; the unit check tries each.
 _CANDIDATE_UNITS: dict[str, tuple[str, ...]] = {
     "Pa": ("Pa", "kPa", "bar", "MPa"),
@@ -130,6 +211,7 @@ class Flag(IntFlag):
     DUPLICATE_CONFLICT = 32
     OUT_OF_ORDER = 64
     REMOVED = 128
+    BAD_QUALITY = 256
 
 
 @dataclass(frozen=True)
@@ -280,21 +362,32 @@ def check_quality(
     source: str = "",
     nominal_step_s: float | None = None,
     gap_factor: float = 3.0,
-    hampel_window: int = 61,
-    hampel_n_sigmas: float = 6.0,
-    stuck_min_duration_s: float = 600.0,
+    spike_window: int = 61,
+    spike_n_sigmas: float = 4.5,
+    stuck_min_duration_s: float = 30.0,
     out_of_range_error_fraction: float = 0.01,
+    noise_si: Mapping[str, float] | None = None,
+    resolution_si: Mapping[str, float] | None = None,
+    max_rate_si: Mapping[str, float] | None = None,
+    bad_quality: Mapping[str, np.ndarray] | None = None,
 ) -> QualityReport:
     """Check DCS data in SI units on a time index; nothing is changed.
 
     ``ranges`` are physical validity limits in SI (Pa, K, kg/s, W); ``declared_units`` the units
     the historian declared (e.g. ``{"main_steam_pressure": "MPa"}``; SI assumed if absent);
     ``tag_names`` map signal → historian tag for the messages. ``nominal_step_s`` is the
-    sampling step in s (median step if None). See the module docstring for the detectors.
+    sampling step in s (median step if None). ``spike_window`` (odd, samples) and
+    ``spike_n_sigmas`` (k) set the spike detector; ``stuck_min_duration_s`` (s) is the shortest
+    run reported as stuck. ``noise_si``: white-noise σ per signal (SI, before quantisation;
+    estimated when absent); ``resolution_si``: quantum per signal (SI; estimated when absent);
+    ``max_rate_si``: physical rate limit per signal (SI per s; overrides :data:`MAX_RATES`);
+    ``bad_quality``: per signal, a boolean mask over the frame's rows as read of samples the
+    historian's quality column marked bad or uncertain. See the module docstring.
     """
     options = _Options.make(
         required, ranges, declared_units, tag_names, source, nominal_step_s, gap_factor,
-        hampel_window, hampel_n_sigmas, stuck_min_duration_s, out_of_range_error_fraction,
+        spike_window, spike_n_sigmas, stuck_min_duration_s, out_of_range_error_fraction,
+        noise_si, resolution_si, max_rate_si, bad_quality,
     )
     analysis = _analyse(frame, options)
     return QualityReport(
@@ -313,23 +406,30 @@ def clean(
     source: str = "",
     nominal_step_s: float | None = None,
     gap_factor: float = 3.0,
-    hampel_window: int = 61,
-    hampel_n_sigmas: float = 6.0,
-    stuck_min_duration_s: float = 600.0,
+    spike_window: int = 61,
+    spike_n_sigmas: float = 4.5,
+    stuck_min_duration_s: float = 30.0,
     out_of_range_error_fraction: float = 0.01,
-    reject_stuck: bool = False,
+    noise_si: Mapping[str, float] | None = None,
+    resolution_si: Mapping[str, float] | None = None,
+    max_rate_si: Mapping[str, float] | None = None,
+    bad_quality: Mapping[str, np.ndarray] | None = None,
+    reject_stuck: bool = True,
 ) -> CleaningResult:
     """Sort, de-duplicate and reject bad samples (→ NaN), flagging and counting every change.
 
     Exact duplicate rows are removed; of conflicting duplicates the first row as read is kept.
-    Spikes and out-of-range values become NaN, stuck runs too when ``reject_stuck``. Nothing is
-    interpolated. ``report``: a :func:`check_quality` report of this same frame, carried into
-    the result instead of rebuilding the detection findings (the per-sample masks are always
-    recomputed with the options given here). Other options as in :func:`check_quality`.
+    Spikes, out-of-range values, samples the historian marked bad (``bad_quality``) and stuck
+    runs (unless ``reject_stuck=False``) become NaN, and so does every sample of a signal with
+    an error-level unit finding. Nothing is interpolated. ``report``: a :func:`check_quality`
+    report of this same frame, carried into the result instead of rebuilding the detection
+    findings (the per-sample masks are always recomputed with the options given here). Other
+    options as in :func:`check_quality`.
     """
     options = _Options.make(
         required, ranges, declared_units, tag_names, source, nominal_step_s, gap_factor,
-        hampel_window, hampel_n_sigmas, stuck_min_duration_s, out_of_range_error_fraction,
+        spike_window, spike_n_sigmas, stuck_min_duration_s, out_of_range_error_fraction,
+        noise_si, resolution_si, max_rate_si, bad_quality,
     )
     analysis = _analyse(frame, options)
     if report is not None and report.n_rows != len(frame):
@@ -340,29 +440,30 @@ def clean(
     detected = (
         list(report.findings) if report is not None else _detection_findings(analysis, options)
     )
+    unit_errors = {f.signal for f in _unit_findings(analysis, options)
+                   if f.kind == "unit" and f.severity == "error"}
 
     a = analysis
     data = frame.iloc[a.rows].copy()
-    flags = np.zeros((len(a.rows), frame.shape[1]), dtype=np.uint8)
+    flags = np.zeros((len(a.rows), frame.shape[1]), dtype=np.uint16)
     actions: list[Finding] = []
-    common = (a.kept_has_dup.astype(np.uint8) * np.uint8(Flag.DUPLICATE)) | (
-        a.kept_late.astype(np.uint8) * np.uint8(Flag.OUT_OF_ORDER)
+    common = (a.kept_has_dup.astype(np.uint16) * np.uint16(Flag.DUPLICATE)) | (
+        a.kept_late.astype(np.uint16) * np.uint16(Flag.OUT_OF_ORDER)
     )
     position = {name: j for j, name in enumerate(frame.columns)}
     for name in frame.columns:
         flags[:, position[name]] |= common
     for name, col in a.columns.items():
-        j = position[name]
-        f = flags[:, j]
-        f[col.nan] |= np.uint8(Flag.MISSING)
-        f[col.spike] |= np.uint8(Flag.SPIKE)
-        f[col.out_of_range] |= np.uint8(Flag.OUT_OF_RANGE)
-        f[col.stuck] |= np.uint8(Flag.STUCK)
-        f[col.conflict] |= np.uint8(Flag.DUPLICATE_CONFLICT)
-        remove = col.spike | col.out_of_range
-        if reject_stuck:
-            remove = remove | (col.stuck & ~col.nan)
-        f[remove] |= np.uint8(Flag.REMOVED)
+        f = flags[:, position[name]]
+        for bit, mask in ((Flag.MISSING, col.nan), (Flag.SPIKE, col.spike),
+                          (Flag.OUT_OF_RANGE, col.out_of_range), (Flag.STUCK, col.stuck),
+                          (Flag.DUPLICATE_CONFLICT, col.conflict),
+                          (Flag.BAD_QUALITY, col.bad)):
+            f[mask] |= np.uint16(bit)
+        stuck = col.stuck & ~col.nan if reject_stuck else np.zeros_like(col.nan)
+        unit = ~col.nan if name in unit_errors else np.zeros_like(col.nan)
+        remove = col.spike | col.out_of_range | (col.bad & ~col.nan) | stuck | unit
+        f[remove] |= np.uint16(Flag.REMOVED)
         if remove.any():
             values = col.values.copy()
             values[remove] = np.nan
@@ -373,8 +474,11 @@ def clean(
              "first row as read kept"),
             ("spike", col.spike, "spike(s) replaced by NaN"),
             ("out_of_range", col.out_of_range, "out-of-range value(s) replaced by NaN"),
-            ("stuck", col.stuck & ~col.nan if reject_stuck else np.zeros(0, bool),
-             "stuck value(s) replaced by NaN"),
+            ("historian_quality", col.bad & ~col.nan,
+             "value(s) marked bad/uncertain by the historian replaced by NaN"),
+            ("stuck", stuck, "stuck value(s) replaced by NaN"),
+            ("unit", unit, "value(s) replaced by NaN: the signal's unit is probably wrong "
+             "(unit error), so none of it may feed a model"),
         ):
             if mask.any():
                 actions.append(where.finding(kind, "warning", mask, f"{what}", "rejected"))
@@ -417,19 +521,45 @@ class _Options:
     n_sigmas: float
     stuck_s: float
     oor_error_fraction: float
+    noise: dict[str, float]
+    resolution: dict[str, float]
+    max_rate: dict[str, float]
+    bad: dict[str, np.ndarray]
 
     @classmethod
     def make(cls, required, ranges, declared, tags, source, nominal, gap_factor, window,
-             n_sigmas, stuck_s, oor_fraction) -> _Options:  # type: ignore[no-untyped-def]
+             n_sigmas, stuck_s, oor_fraction, noise, resolution, max_rate,
+             bad) -> _Options:  # type: ignore[no-untyped-def]
+        where = source or "quality check"
         if window < 3 or window % 2 == 0:
-            raise ValueError(f"hampel_window must be an odd number ≥ 3 of samples, got {window}")
+            raise ValueError(f"spike_window must be an odd number ≥ 3 of samples, got {window}")
         if n_sigmas <= 0 or gap_factor <= 1 or stuck_s <= 0:
-            raise ValueError("hampel_n_sigmas > 0, gap_factor > 1, stuck_min_duration_s > 0")
+            raise ValueError("spike_n_sigmas > 0, gap_factor > 1, stuck_min_duration_s > 0")
         if nominal is not None and not nominal > 0:
             raise ValueError(f"nominal_step_s must be > 0 s, got {nominal}")
+        per_signal: list[dict[str, float]] = []
+        for option, mapping in (("noise_si", noise), ("resolution_si", resolution),
+                                ("max_rate_si", max_rate)):
+            checked: dict[str, float] = {}
+            for name, value in dict(mapping or {}).items():
+                number = float(value)
+                if not (math.isfinite(number) and number >= 0.0):
+                    raise ValueError(f"{where}: {option}[{name!r}] must be a finite number ≥ 0 "
+                                     f"in SI units, got {value!r}")
+                checked[str(name)] = number
+            per_signal.append(checked)
+        masks: dict[str, np.ndarray] = {}
+        for name, mask in dict(bad or {}).items():
+            array = np.asarray(mask)
+            if array.ndim != 1 or array.dtype != np.bool_:
+                raise ValueError(f"{where}: bad_quality[{name!r}] must be a 1-D boolean mask "
+                                 f"over the rows as read, got dtype {array.dtype}, "
+                                 f"shape {array.shape}")
+            masks[str(name)] = array
         return cls(tuple(required), dict(ranges or {}), dict(declared or {}), dict(tags or {}),
                    source, nominal, gap_factor, int(window), float(n_sigmas), float(stuck_s),
-                   float(oor_fraction))
+                   float(oor_fraction), per_signal[0], per_signal[1],
+                   {**MAX_RATES, **per_signal[2]}, masks)
 
 
 @dataclass
@@ -437,9 +567,14 @@ class _Column:
     values: np.ndarray
     nan: np.ndarray
     out_of_range: np.ndarray
+    bad: np.ndarray
     spike: np.ndarray
     stuck: np.ndarray
     conflict: np.ndarray
+    sigma: float = math.nan  # white-noise σ before quantisation, SI
+    quantum: float = 0.0  # historian resolution, SI (0: none found)
+    spike_scale: float = math.nan  # noise scale of the spike test, SI
+    max_rate: float = 0.0  # SI per s
     stuck_runs: int = 0
     stuck_duration_s: float = 0.0
     constant: bool = False
@@ -541,8 +676,18 @@ def _analyse(frame: pd.DataFrame, options: _Options) -> _Analysis:
     gaps = np.flatnonzero(dts > options.gap_factor * step) if dts.size else np.zeros(0, int)
 
     columns: dict[str, _Column] = {}
-    stuck_ns = options.stuck_s * 1e9
+    where = options.source or "quality check"
+    for name, mask in options.bad.items():
+        if name not in numeric:
+            raise ValueError(f"{where}: bad_quality has a mask for {name!r}, which is not a "
+                             "numeric column of the data")
+        if mask.size != n:
+            raise ValueError(f"{where}: bad_quality[{name!r}] has {mask.size} entries, the data "
+                             f"have {n} rows (one entry per row as read)")
+    seconds = (times - times[0]) / 1e9 if times.size else np.zeros(0)
+    step_s = step if math.isfinite(step) and step > 0 else 1.0
     for j, name in enumerate(numeric):
+        key = str(name)
         x = np.ascontiguousarray(kept_values[:, j])
         nan = np.isnan(x)
         oor = np.zeros_like(nan)
@@ -550,16 +695,15 @@ def _analyse(frame: pd.DataFrame, options: _Options) -> _Analysis:
             lo, hi = options.ranges[name]
             with np.errstate(invalid="ignore"):
                 oor = ~nan & ((x < lo) | (x > hi))
-        col = _Column(x, nan, oor, np.zeros_like(nan), np.zeros_like(nan),
+        bad = options.bad[key][rows] if key in options.bad else np.zeros_like(nan)
+        col = _Column(x, nan, oor, bad, np.zeros_like(nan), np.zeros_like(nan),
                       conflict[:, j].copy())
-        flat = _runs(x, times, stuck_ns, options.window // 2, col)
-        valid = ~nan & ~oor & ~flat
-        col.spike[valid] = _hampel(x[valid], options.window, options.n_sigmas)
+        _detect(col, seconds, step_s, options, key)
         if (~nan).sum() > 1 and np.nanmin(x) == np.nanmax(x):
             col.constant = True
             col.stuck[:] = False
             col.stuck_runs, col.stuck_duration_s = 0, 0.0
-        columns[str(name)] = col
+        columns[key] = col
 
     return _Analysis(
         n=n, signals=tuple(str(c) for c in numeric), missing_required=missing,
@@ -573,50 +717,175 @@ def _analyse(frame: pd.DataFrame, options: _Options) -> _Analysis:
     )
 
 
-def _hampel(x: np.ndarray, window: int, n_sigmas: float) -> np.ndarray:
-    """Hampel spikes of ``x`` (no NaN), with the exact window MAD.
+def estimate_noise_sigma(values: np.ndarray, resolution: float = 0.0) -> float:
+    """White-noise σ of evenly sampled ``values`` (SI; NaN breaks the series), before quantisation.
 
-    Windows are truncated at the ends (no padding). In the interior the MAD is bounded below
-    by median_j |x_j − m_j| − max_j |m_j − m_i| (m = rolling median), both from fast 1-D
-    filters; only samples that this bound cannot clear are evaluated exactly.
+    From the second differences ``(x[i−1] − 2·x[i] + x[i+1])/√6`` (variance σ² for white
+    noise, a linear trend cancels) [Gasser, Sroka & Jennen-Steinmetz 1986, Biometrika 73(3)]:
+    the standard deviation of their central 99 % / 0.9616 (truncated normal), robust to < 1 %
+    of steps and spikes and, unlike a MAD, not collapsing on quantised data; then corrected
+    for the quantisation noise ``resolution²/12`` (Sheppard 1898). NaN with fewer than 3
+    triples of finite values.
     """
-    size = x.size
-    out = np.zeros(size, dtype=bool)
-    half = window // 2
-    scale = n_sigmas * MAD_TO_SIGMA
-    if size < 3:
+    x = np.asarray(values, dtype=float)
+    if x.size < 3:
+        return math.nan
+    second = x[:-2] - 2.0 * x[1:-1] + x[2:]
+    second = second[np.isfinite(second)]
+    if second.size < 3:
+        return math.nan
+    total = _trimmed_std(second) / math.sqrt(6.0)
+    return math.sqrt(max(total**2 - resolution**2 / 12.0, 0.0))
+
+
+def estimate_resolution(values: np.ndarray) -> float:
+    """Quantum (SI) of a historian signal: its values' grid step; 0 when no grid is found.
+
+    Non-zero absolute differences of consecutive finite values (ignoring float noise below
+    1e-9 of the largest magnitude) are tried against the smallest one divided by 1 … 8; the
+    first candidate of which ≥ 99.9 % of the differences are whole multiples (within 1 %) is
+    taken, refined as the median difference per step. Fewer than 10 non-zero differences:
+    0 (no evidence of a grid).
+    """
+    x = np.asarray(values, dtype=float)
+    x = x[np.isfinite(x)]
+    if x.size < 2:
+        return 0.0
+    tolerance = 1e-9 * float(np.max(np.abs(x))) + 1e-300
+    steps = np.abs(np.diff(x))
+    steps = steps[steps > tolerance]
+    if steps.size < 10:
+        return 0.0
+    smallest = float(steps.min())
+    for divisor in range(1, 9):
+        candidate = smallest / divisor
+        multiples = steps / candidate
+        whole = np.round(multiples)
+        if np.mean(np.abs(multiples - whole) <= 0.01) >= 0.999:
+            return float(np.median(steps / whole))
+    return 0.0
+
+
+def _trimmed_std(v: np.ndarray) -> float:
+    """Std about the median of the central 99 % of ``v``, scaled to σ for a normal sample."""
+    deviation = np.abs(v - np.median(v))
+    central = deviation[deviation <= np.quantile(deviation, _TRIM)]
+    return float(np.sqrt(np.mean(central**2)) / _TRIMMED_STD_FACTOR)
+
+
+def _detect(col: _Column, seconds: np.ndarray, step_s: float, options: _Options,
+            name: str) -> None:
+    """Noise, quantum, stuck runs and spikes of one column (sets the fields of ``col``)."""
+    usable = ~col.nan & ~col.out_of_range & ~col.bad
+    x = np.where(usable, col.values, np.nan)
+    quantum = options.resolution.get(name)
+    col.quantum = estimate_resolution(x) if quantum is None else quantum
+    col.max_rate = options.max_rate.get(name, 0.0)
+    given = options.noise.get(name)
+    sigma = given if given is not None else estimate_noise_sigma(x, col.quantum)
+    stuck = _stuck(x, seconds, sigma, col.quantum, step_s, options.stuck_s,
+                   np.zeros_like(usable))
+    if given is None and stuck.any():  # again without the stuck runs' zero differences
+        sigma = estimate_noise_sigma(np.where(stuck, np.nan, x), col.quantum)
+        stuck = _stuck(x, seconds, sigma, col.quantum, step_s, options.stuck_s, stuck)
+    col.sigma, col.stuck = sigma, stuck
+    if stuck.any():
+        starts, ends, _ = _segments(np.r_[False, stuck[1:] & stuck[:-1]])
+        runs = stuck[starts]
+        col.stuck_runs = int(runs.sum())
+        col.stuck_duration_s = float((seconds[ends] - seconds[starts])[runs].sum())
+    col.spike, col.spike_scale = _spikes(x, seconds, usable & ~stuck, col, options)
+
+
+def _cell_probability(offset: np.ndarray, sigma: float, quantum: float) -> np.ndarray:
+    """Probability that a sample with noise σ, ``offset`` from a cell's centre, falls in it."""
+    if not math.isfinite(sigma):
+        return np.ones_like(offset)
+    if quantum == 0.0:
+        return np.full_like(offset, 0.0 if sigma > 0.0 else 1.0)
+    if sigma == 0.0:
+        return (offset < quantum / 2.0).astype(float)
+    half = quantum / 2.0
+    return ndtr((half - offset) / sigma) - ndtr((-half - offset) / sigma)
+
+
+def _stuck(x: np.ndarray, seconds: np.ndarray, sigma: float, quantum: float, step_s: float,
+           min_duration_s: float, exclude: np.ndarray) -> np.ndarray:
+    """Stuck mask: runs of equal values too improbable for noise σ and quantum (module doc).
+
+    ``exclude``: samples (stuck runs of a first pass) left out of the observed equal-pair
+    fraction.
+    """
+    out = np.zeros(x.size, dtype=bool)
+    if x.size < 2:
         return out
-    if size <= 2 * half:
-        edges = np.arange(size)
-    else:
-        edges = np.r_[np.arange(half), np.arange(size - half, size)]
-    # ends: truncated windows, exact, via NaN padding
-    padded = np.concatenate([np.full(half, np.nan), x, np.full(half, np.nan)])
-    windows = padded[edges[:, None] + np.arange(window)]
-    edge_med = np.nanmedian(windows, axis=1)
-    edge_mad = np.nanmedian(np.abs(windows - edge_med[:, None]), axis=1)
-    edge_dev = np.abs(x[edges] - edge_med)
-    out[edges] = (edge_mad > 0.0) & (edge_dev > scale * edge_mad)
-    if size <= 2 * half:
-        return out
-    med = median_filter(x, size=window, mode="nearest")
-    med[edges] = edge_med
-    dev = np.abs(x - med)
-    approx = median_filter(dev, size=window, mode="nearest")
-    spread = np.maximum(
-        maximum_filter1d(med, window, mode="nearest") - med,
-        med - minimum_filter1d(med, window, mode="nearest"),
-    )
-    bound = np.maximum(approx - spread, 0.0) * (1.0 - 1e-9)
-    interior = np.zeros(size, dtype=bool)
-    interior[half:size - half] = True
-    candidates = np.flatnonzero(interior & (dev > scale * bound) & (dev > 0.0))
-    offsets = np.arange(-half, half + 1)
-    for start in range(0, candidates.size, 100_000):
-        chunk = candidates[start:start + 100_000]
-        mad = np.median(np.abs(x[chunk[:, None] + offsets] - med[chunk, None]), axis=1)
-        out[chunk] = (mad > 0.0) & (dev[chunk] > scale * mad)
+    same = np.zeros(x.size, dtype=bool)
+    same[1:] = x[1:] == x[:-1]
+    pairs = np.isfinite(x[1:]) & np.isfinite(x[:-1]) & ~exclude[1:] & ~exclude[:-1]
+    observed = float(same[1:][pairs].mean()) if pairs.any() else 1.0
+    starts, ends, _ = _segments(same)
+    duration = seconds[ends] - seconds[starts]
+    limit = math.log(STUCK_CHANCE_RUNS_PER_DAY * step_s / SECONDS_PER_DAY)
+    for s, e in zip(starts[(ends > starts) & (duration >= min_duration_s)],
+                    ends[(ends > starts) & (duration >= min_duration_s)], strict=True):
+        slope = _slope_around(x, seconds, int(s), int(e))
+        offset = abs(slope) * np.abs(seconds[s:e + 1] - 0.5 * (seconds[s] + seconds[e]))
+        p = np.maximum(_cell_probability(offset, sigma, quantum), observed)
+        with np.errstate(divide="ignore"):
+            log_p = np.log(p)
+        if np.sort(log_p)[:-1].sum() < limit:  # n − 1 factors: the first sample is free
+            out[s:e + 1] = True
     return out
+
+
+def _slope_around(x: np.ndarray, seconds: np.ndarray, start: int, end: int,
+                  reach: int = 30, least: int = 10) -> float:
+    """Local trend (SI/s) across a run: medians of ≤ ``reach`` finite samples either side."""
+    before = slice(max(start - reach, 0), start)
+    after = slice(end + 1, end + 1 + reach)
+    xb, xa = x[before], x[after]
+    fb, fa = np.isfinite(xb), np.isfinite(xa)
+    if fb.sum() < least or fa.sum() < least:
+        return 0.0
+    tb, ta = float(np.median(seconds[before][fb])), float(np.median(seconds[after][fa]))
+    return float((np.median(xa[fa]) - np.median(xb[fb])) / (ta - tb))
+
+
+def _spikes(x: np.ndarray, seconds: np.ndarray, valid: np.ndarray, col: _Column,
+            options: _Options) -> tuple[np.ndarray, float]:
+    """Spike mask (module doc) and the noise scale used (SI)."""
+    out = np.zeros(x.size, dtype=bool)
+    index = np.flatnonzero(valid)
+    if index.size < 3:
+        return out, math.nan
+    xv, tv = x[index], seconds[index]
+    residual = xv - _rolling_median(xv, options.window)
+    noise = math.sqrt(col.sigma**2 + col.quantum**2 / 12.0) if math.isfinite(col.sigma) else 0.0
+    scale = max(noise, _trimmed_std(residual))
+    dt = np.diff(tv)
+    longer_step = np.maximum(np.r_[dt[0], dt], np.r_[dt, dt[-1]])
+    threshold = np.maximum(options.n_sigmas * scale, col.max_rate * longer_step)
+    candidate = (threshold > 0.0) & (np.abs(residual) > threshold)
+    sign = np.sign(residual)
+    joined = np.zeros(index.size, dtype=bool)
+    joined[1:] = candidate[1:] & candidate[:-1] & (sign[1:] == sign[:-1])
+    starts, ends, ids = _segments(joined)
+    last = index.size - 1
+    returns = (candidate[starts] & (ends - starts + 1 <= SPIKE_MAX_SAMPLES)
+               & (starts > 0) & (ends < last)
+               & ~candidate[np.maximum(starts - 1, 0)] & ~candidate[np.minimum(ends + 1, last)])
+    out[index] = returns[ids] & candidate
+    return out, scale
+
+
+def _rolling_median(x: np.ndarray, window: int) -> np.ndarray:
+    """Centred rolling median over ``window`` samples, windows truncated at the ends."""
+    trend = median_filter(x, size=window, mode="nearest")
+    half = min(window // 2, x.size)
+    edges = np.unique(np.r_[np.arange(half), np.arange(x.size - half, x.size)])
+    padded = np.concatenate([np.full(window // 2, np.nan), x, np.full(window // 2, np.nan)])
+    trend[edges] = np.nanmedian(padded[edges[:, None] + np.arange(window)], axis=1)
+    return trend
 
 
 def _segments(mask_continue: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -626,26 +895,6 @@ def _segments(mask_continue: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.nda
     ids = np.cumsum(~mask_continue) - 1
     return starts, ends, ids
 
-
-def _runs(x: np.ndarray, times: np.ndarray, stuck_ns: float, flat_samples: int,
-          col: _Column) -> np.ndarray:
-    """Mark stuck runs in ``col``; return the mask of flat runs longer than ``flat_samples``.
-
-    Flat runs are left out of the Hampel windows: next to one, the MAD collapses and plain
-    noise would look like spikes. A flat run is a step or a stuck sensor, not a spike.
-    """
-    if x.size == 0:
-        return np.zeros(0, dtype=bool)
-    same = np.zeros(x.size, dtype=bool)
-    same[1:] = x[1:] == x[:-1]
-    starts, ends, ids = _segments(same)
-    real = ~np.isnan(x[starts])
-    duration = times[ends] - times[starts]
-    long = (duration > stuck_ns) & real
-    col.stuck = long[ids]
-    col.stuck_runs = int(long.sum())
-    col.stuck_duration_s = float(duration[long].sum() / 1e9)
-    return ((ends - starts + 1 > flat_samples) & real)[ids]
 
 # --------------------------------------------------------------------------------------------
 # findings
@@ -689,13 +938,18 @@ def _unit_of(signal: str | None, options: _Options) -> tuple[str, str]:
     return "", ""
 
 
-def _show(value: float, signal: str | None, options: _Options) -> str:
-    """A SI value as text in the signal's display unit (e.g. ``16.7 MPa``)."""
+def _show(value: float, signal: str | None, options: _Options, *, delta: bool = False) -> str:
+    """A SI value as text in the signal's display unit (e.g. ``16.7 MPa``).
+
+    ``delta``: the value is a difference (a 0.5 K step is 0.5 °C, not −272.65 °C).
+    """
     unit, si = _unit_of(signal, options)
     if not unit or not math.isfinite(value):
         return f"{value:.4g}"
     try:
         shown = float(convert(value, si, unit))
+        if delta:
+            shown -= float(convert(0.0, si, unit))
     except Exception:  # unknown declared unit: show SI
         return f"{value:.4g} {si}"
     return f"{shown:.4g} {unit}"
@@ -823,19 +1077,37 @@ def _signal_findings(a: _Analysis, options: _Options, name: str, col: _Column) -
             f"{_show(float(bad.max()), name, options)}",
             low=lo, high=hi, min=float(bad.min()), max=float(bad.max()), fraction=fraction,
         ))
+    if col.bad.any():
+        fraction = int(col.bad.sum()) / max(col.values.size, 1)
+        severity = "error" if fraction > options.oor_error_fraction else "warning"
+        out.append(where.finding(
+            "historian_quality", severity, col.bad,
+            f"sample(s) ({fraction:.2%}) marked bad or uncertain by the historian's quality "
+            "column", fraction=fraction,
+        ))
+    grid = (f"quantum {_show(col.quantum, name, options, delta=True)}" if col.quantum > 0.0
+            else "no quantum")
+    noise = f"noise σ {_show(col.sigma, name, options, delta=True)}, {grid}"
     if col.spike.any():
         i = int(np.argmax(col.spike))
         out.append(where.finding(
             "spike", "warning", col.spike,
-            f"spike(s) beyond {options.n_sigmas:g}·1.4826·MAD of the {options.window}-sample "
-            f"rolling median (Hampel); first value {_show(float(col.values[i]), name, options)}",
+            f"spike(s): excursion(s) of ≤ {SPIKE_MAX_SAMPLES} sample(s) that return, beyond "
+            f"{options.n_sigmas:g} × {_show(col.spike_scale, name, options, delta=True)} "
+            f"(noise scale) and beyond the physical rate limit "
+            f"{_show(col.max_rate, name, options, delta=True)}/s × step from the "
+            f"{options.window}-sample rolling median; first value "
+            f"{_show(float(col.values[i]), name, options)}",
+            noise_scale=col.spike_scale, n_sigmas=options.n_sigmas, max_rate=col.max_rate,
         ))
     if col.stuck.any():
         out.append(where.finding(
             "stuck", "warning", col.stuck,
-            f"sample(s) in {col.stuck_runs} stuck run(s) (value exactly repeated for more than "
-            f"{options.stuck_s:g} s), {col.stuck_duration_s:g} s in total",
-            runs=col.stuck_runs, duration_s=col.stuck_duration_s,
+            f"sample(s) in {col.stuck_runs} stuck run(s) (value exactly repeated for at least "
+            f"{options.stuck_s:g} s, fewer than {STUCK_CHANCE_RUNS_PER_DAY:g} such runs per day "
+            f"expected by chance with {noise}), {col.stuck_duration_s:g} s in total",
+            runs=col.stuck_runs, duration_s=col.stuck_duration_s, sigma=col.sigma,
+            quantum=col.quantum,
         ))
     if col.constant:
         value = float(col.values[~col.nan][0])

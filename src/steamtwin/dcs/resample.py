@@ -23,10 +23,10 @@ Methods
     runs over grid times within ``[first sample, last sample]``.
 
 Flag codes (:class:`ResampleFlag`, bits above the :class:`~steamtwin.dcs.quality.Flag` bits)
-    256 AVERAGED (mean of N ≥ 2 valid samples), 512 SINGLE (one valid sample, copied unchanged),
-    1024 INTERPOLATED (linear between two valid samples), 2048 GAP (left NaN: empty bin, or
+    512 AVERAGED (mean of N ≥ 2 valid samples), 1024 SINGLE (one valid sample, copied unchanged),
+    2048 INTERPOLATED (linear between two valid samples), 4096 GAP (left NaN: empty bin, or
     neighbours more than ``max_gap_s`` apart, or outside the valid data). Exactly one of them is
-    set on every output value. When input ``flags`` are given, the low bits (1–128) are the OR of
+    set on every output value. When input ``flags`` are given, the low bits (1–256) are the OR of
     the input flags of the samples that made the value (those averaged, copied or interpolated
     between); for a GAP value in ``"mean"`` they are the OR of the flags of the (NaN) samples in
     the bin, which tell why it is empty.
@@ -51,10 +51,10 @@ Method = Literal["mean", "linear"]
 class ResampleFlag(IntFlag):
     """How a resampled value was made (bitmask); see the module docstring."""
 
-    AVERAGED = 256
-    SINGLE = 512
-    INTERPOLATED = 1024
-    GAP = 2048
+    AVERAGED = 512
+    SINGLE = 1024
+    INTERPOLATED = 2048
+    GAP = 4096
 
 
 #: Columns of :attr:`ResampleResult.counts`, in order, and the flag each one counts.
@@ -196,8 +196,8 @@ def _input_flags(frame: pd.DataFrame, flags: pd.DataFrame | None) -> np.ndarray:
     if not all(pd.api.types.is_integer_dtype(table[c].dtype) for c in table.columns):
         raise TypeError("flags must be integer bitmasks (quality.Flag codes)")
     array = table.to_numpy(dtype=np.int64) if shape[1] else np.zeros(shape, dtype=np.int64)
-    if ((array < 0) | (array > 0xFF)).any():
-        raise ValueError("flags must hold quality.Flag codes (0–255); resample raw flags only")
+    if ((array < 0) | (array > 0x1FF)).any():
+        raise ValueError("flags must hold quality.Flag codes (0–511); resample raw flags only")
     return array.astype(np.uint16)
 
 
