@@ -1,4 +1,4 @@
-"""Fixtures of the calibration tests: a short plant run and a small analytic simulator."""
+"""Fixtures of the calibration tests: a short plant run, a small analytic simulator and data."""
 
 from __future__ import annotations
 
@@ -31,9 +31,23 @@ class LinearSimulator:
         }, index=inputs.index)
 
 
-@pytest.fixture
+@pytest.fixture(scope="session")
 def linear_simulator() -> LinearSimulator:
     return LinearSimulator()
+
+
+@pytest.fixture(scope="session")
+def linear_window() -> pd.DataFrame:
+    """Two minutes of 1-s data that :class:`LinearSimulator` fits at (1.02, 1.2, 0.8) ± 0.5 K."""
+    n = 120
+    random = np.random.default_rng(7)
+    index = pd.date_range("2026-03-01", periods=n, freq="1s", tz="UTC")
+    t0 = 810.0 + random.normal(0.0, 1.0, n)
+    inputs = pd.DataFrame({"main_steam_pressure": 16.0e6, "main_steam_temperature": t0,
+                           "main_steam_flow": 400.0, "hp_exhaust_pressure": 3.5e6}, index=index)
+    truth = LinearSimulator().simulate(inputs, ModelParameters(1.02, 1.2, 0.8))
+    measured = truth[list(LinearSimulator.output_signals[:3])] + random.normal(0.0, 0.5, (n, 3))
+    return pd.concat([inputs, measured], axis=1)
 
 
 @pytest.fixture(scope="session")

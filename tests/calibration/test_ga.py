@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from pymoo.core.population import Population
 from pymoo.core.problem import Problem
 
@@ -39,3 +40,27 @@ def test_operator_settings():
     assert ga.mating.crossover.prob.value == 0.8
     assert ga.mating.mutation.prob_var.value == 1.0 / 3
     assert isinstance(ga.repair, RemutationRepair)
+
+
+@pytest.mark.parametrize(("arguments", "message"), [
+    ({"n_var": 0}, r"^n_var must be an integer ≥ 1 \(got 0\)$"),
+    ({"population": 0}, r"^population must be an integer ≥ 2 \(got 0\)$"),
+    ({"population": 3, "tournament_size": 4},
+     r"^tournament_size must be an integer within \[2, 3\] \(got 4\)$"),
+    ({"tournament_size": 1.0}, r"^tournament_size must be an integer within \[2, 50\]"),
+    ({"crossover_probability": "0.9"},
+     r"^crossover_probability must be a number within \[0, 1\] \(got '0\.9'\)$"),
+    ({"mutation_probability": 2}, r"^mutation_probability must be a number within \[0, 1\]"),
+    ({"crossover_eta": -15.0}, r"^crossover_eta must be a finite number > 0 \(got -15\.0\)$"),
+    ({"mutation_eta": float("nan")}, r"^mutation_eta must be a finite number > 0 \(got nan\)$"),
+])
+def test_make_ga_names_the_argument_out_of_range(arguments, message):
+    with pytest.raises(ValueError, match=message):
+        make_ga(**{"n_var": 3, **arguments})
+
+
+def test_repair_arguments_are_named():
+    with pytest.raises(ValueError, match=r"^eta must be a finite number > 0 \(got 0\)$"):
+        RemutationRepair(eta=0)
+    with pytest.raises(ValueError, match=r"^max_tries must be an integer ≥ 1 \(got 0\)$"):
+        RemutationRepair(max_tries=0)

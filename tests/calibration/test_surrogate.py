@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
-from steamtwin.calibration import Calibrator
+from steamtwin.calibration import DEFAULT_SENSORS, CalibrationError, Calibrator
 from steamtwin.calibration.objective import PARAMETER_NAMES
 from steamtwin.calibration.surrogate import SurrogateCalibrator
+from steamtwin.model.fom import InputError
 from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.simulator import INPUT_SIGNALS
 
 
 @pytest.fixture(scope="module")
@@ -46,3 +49,46 @@ def test_surrogate_settings_are_checked(reference_model, low_load_window):
     with pytest.raises(ValueError, match="initial_samples"):
         SurrogateCalibrator(reference_model, initial_samples=3, workers=1).fit(
             [low_load_window])
+
+
+@pytest.mark.parametrize(("arguments", "message"), [
+    ({"max_evaluations": 10}, r"^max_evaluations must be an integer ≥ initial_samples \+ "
+                              r"infill_per_round = 34 \(got 10\)$"),
+    ({"max_evaluations": True}, r"^max_evaluations must be an integer ≥"),
+    ({"max_evaluations": 400.0}, r"^max_evaluations must be an integer ≥"),
+    ({"initial_samples": 4}, r"^initial_samples must be an integer ≥ 5 \(got 4\)$"),
+    ({"infill_per_round": 0}, r"^infill_per_round must be an integer ≥ 1 \(got 0\)$"),
+    ({"patience": -1}, r"^patience must be an integer ≥ 1 \(got -1\)$"),
+    ({"generations": 0}, r"^generations must be an integer ≥ 1 \(got 0\)$"),
+    ({"population": 0}, r"^population must be an integer ≥ 2 \(got 0\)$"),
+    ({"improvement_tolerance": -0.1},
+     r"^improvement_tolerance must be a finite number ≥ 0 K \(got -0\.1\)$"),
+    ({"improvement_tolerance": float("nan")}, r"^improvement_tolerance must be a finite"),
+    ({"seed": -3}, r"^seed must be an integer ≥ 0 \(got -3\)$"),
+    ({"min_samples": 0}, r"^min_samples must be an integer ≥ 1 \(got 0\)$"),
+])
+def test_each_bad_surrogate_argument_is_named_with_its_range(linear_simulator, arguments,
+                                                             message):
+    # checked before any work: the empty window list is never looked at
+    with pytest.raises(ValueError, match=message):
+        SurrogateCalibrator(linear_simulator, workers=1, **arguments).fit([])
+
+
+class _RejectsEverything:
+    """A model that cannot run on these inputs (as the FOM with inputs in the wrong unit)."""
+
+    input_signals = INPUT_SIGNALS
+    output_signals = DEFAULT_SENSORS
+
+    def simulate(self, inputs: pd.DataFrame, params: ModelParameters) -> pd.DataFrame:
+        raise InputError("main_steam_flow 1.2e4 kg/s exceeds what the valves pass")
+
+
+def test_surrogate_with_no_finite_rmse_is_a_calibration_error(linear_window):
+    calibrator = SurrogateCalibrator(_RejectsEverything(), initial_samples=6, infill_per_round=2,
+                                     max_evaluations=12, population=6, generations=3,
+                                     workers=1)
+    with pytest.raises(CalibrationError, match=r"^no candidate gave a finite RMSE: the model "
+                       r"rejected all 12 runs \(last reason: main_steam_flow 1\.2e4 kg/s"):
+        calibrator.fit([linear_window])
+    assert not hasattr(calibrator, "params_")

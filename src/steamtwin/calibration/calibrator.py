@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict
 from pathlib import Path
@@ -14,27 +15,79 @@ from pymoo.core.algorithm import Algorithm
 
 from steamtwin.calibration.checkpoint import (
     load_checkpoint,
+    restore_algorithm,
     run_fingerprint,
     save_checkpoint,
 )
 from steamtwin.calibration.evaluation import make_evaluator
-from steamtwin.calibration.ga import RemutationRepair, make_ga
+from steamtwin.calibration.ga import RemutationRepair, check_ga_settings, make_ga
 from steamtwin.calibration.identifiability import check_identifiability
 from steamtwin.calibration.objective import (
     DEFAULT_SENSORS,
     MAX_INPUT_GAP_S,
     MIN_WINDOW_SAMPLES,
     PARAMETER_NAMES,
+    PENALTY_RMSE,
     CalibrationProblem,
     fitness,
 )
 from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
 from steamtwin.model.simulator import Simulator
 
-__all__ = ["Calibrator", "ProgressCallback", "write_parameters"]
+__all__ = ["HISTORY_COLUMNS", "CalibrationError", "Calibrator", "ProgressCallback",
+           "check_calibration_result", "check_common_settings", "write_parameters"]
 
 ProgressCallback = Callable[[float, str], None]
 """``progress(fraction_done, message)``, fraction in 0…1 (as elsewhere in steamtwin)."""
+
+HISTORY_COLUMNS: tuple[str, ...] = (
+    "generation", "best_rmse", "mean_rmse", "best_fitness", "mean_fitness", *PARAMETER_NAMES,
+    "evaluations", "penalised", "remutations")
+"""Columns of a GA history row (``generation`` becomes the index of ``history_``)."""
+
+
+class CalibrationError(ValueError):
+    """A calibration that found no usable result (no candidate gave a finite RMSE)."""
+
+
+def check_calibration_result(rmse: float, problem: CalibrationProblem) -> None:
+    """Raise :class:`CalibrationError` unless the best RMSE (K) is a real, finite fit.
+
+    A candidate the model rejects scores :data:`PENALTY_RMSE`; a best RMSE at or above it means
+    that no candidate gave a finite RMSE, and such a "result" must never be written.
+    """
+    if math.isfinite(rmse) and rmse < PENALTY_RMSE:
+        return
+    runs = problem.n_evaluations
+    reason = f" (last reason: {problem.last_error})" if problem.last_error else ""
+    if problem.n_penalised >= runs:
+        raise CalibrationError(
+            f"no candidate gave a finite RMSE: the model rejected all {runs} runs{reason}. "
+            "It may be unable to run on the windows' inputs: check their units and ranges "
+            "(e.g. a pressure declared in the wrong unit) and the parameter bounds")
+    raise CalibrationError(
+        f"no candidate gave a finite RMSE better than the {PENALTY_RMSE:g} K penalty of a "
+        f"rejected run (best {rmse:.6g} K; {problem.n_penalised} of {runs} runs "
+        f"rejected{reason}). The "
+        "measured temperatures may be in another unit than declared, or the model cannot run "
+        "on the windows' inputs: check their units and ranges")
+
+
+def check_common_settings(*, seed: object, max_input_gap_s: object, min_samples: object
+                          ) -> None:
+    """Check the arguments every calibrator shares; ValueError naming the argument.
+
+    ``seed`` an integer ≥ 0, ``max_input_gap_s`` a number ≥ 0 (s), ``min_samples`` an
+    integer ≥ 1.
+    """
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed must be an integer ≥ 0 (got {seed!r})")
+    if isinstance(max_input_gap_s, bool) or not isinstance(
+            max_input_gap_s, int | float | np.integer | np.floating) or not max_input_gap_s >= 0:
+        raise ValueError(f"max_input_gap_s must be a number ≥ 0 s (got {max_input_gap_s!r})")
+    if isinstance(min_samples, bool) or not isinstance(min_samples, int | np.integer) or (
+            min_samples < 1):
+        raise ValueError(f"min_samples must be an integer ≥ 1 (got {min_samples!r})")
 
 
 class Calibrator:
@@ -105,14 +158,18 @@ class Calibrator:
         return algorithm, repair
 
     def _validate(self) -> None:
-        for name in ("population", "generations", "tournament_size", "seed"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int | np.integer):
-                raise TypeError(f"{name} must be an integer (got {value!r})")
-        if self.generations < 1:
-            raise ValueError(f"generations must be ≥ 1 (got {self.generations})")
-        if self.tournament_size > self.population:
-            raise ValueError("tournament_size must not exceed population")
+        """Check every argument, one message each, before any work (ValueError)."""
+        check_ga_settings(len(PARAMETER_NAMES), population=self.population,
+                          crossover_probability=self.crossover_probability,
+                          crossover_eta=self.crossover_eta,
+                          mutation_probability=self.mutation_probability,
+                          mutation_eta=self.mutation_eta, tournament_size=self.tournament_size)
+        generations = self.generations
+        if (isinstance(generations, bool) or not isinstance(generations, int | np.integer)
+                or generations < 1):
+            raise ValueError(f"generations must be an integer ≥ 1 (got {generations!r})")
+        check_common_settings(seed=self.seed, max_input_gap_s=self.max_input_gap_s,
+                              min_samples=self.min_samples)
 
     # -- public API -------------------------------------------------------------------------
 
@@ -126,8 +183,12 @@ class Calibrator:
     def fit(self, windows: Sequence[pd.DataFrame], resume: bool = False) -> Calibrator:
         """Calibrate against measured windows (canonical SI signals); returns self.
 
-        ``resume=True`` continues from ``checkpoint`` (an error if there is none, or if it was
-        written for other settings or data); a finished checkpoint just gives its result.
+        ``resume=True`` continues from ``checkpoint`` (a
+        :class:`~steamtwin.calibration.checkpoint.CheckpointError` if there is none, if it is
+        not a valid checkpoint or if it was written for other settings or data); a finished
+        checkpoint just gives its result. Arguments outside their range raise ``ValueError``
+        naming the argument; a run in which no candidate gave a finite RMSE raises
+        :class:`CalibrationError`.
         """
         self._validate()
         if resume and self.checkpoint is None:
@@ -135,16 +196,18 @@ class Calibrator:
         problem = self._problem(windows)
         fingerprint = run_fingerprint(self._settings(), problem.objective)
         checkpoint = None if self.checkpoint is None else Path(self.checkpoint)
+        algorithm, repair = self._algorithm(problem)
+        algorithm.setup(problem, termination=("n_gen", self.generations),
+                        seed=int(self.seed), verbose=False, save_history=False)
+        rows: list[dict[str, object]] = []
         if resume:
-            state = load_checkpoint(checkpoint, problem, fingerprint)
-            algorithm, rows = state.algorithm, state.history
+            state = load_checkpoint(checkpoint, problem, fingerprint,
+                                    population=self.population, generations=self.generations,
+                                    history_columns=HISTORY_COLUMNS)
+            restore_algorithm(algorithm, state)
+            rows = state.history
             problem.n_evaluations, problem.n_penalised = state.evaluations, state.penalised
-            repair = algorithm.repair
-        else:
-            algorithm, repair = self._algorithm(problem)
-            algorithm.setup(problem, termination=("n_gen", self.generations),
-                            seed=int(self.seed), verbose=False, save_history=False)
-            rows = []
+            problem.last_error = state.last_error
         evaluator = make_evaluator(self.workers, self.scheduler)
         evaluator.start(problem.objective)
         problem.evaluator = evaluator
@@ -163,6 +226,7 @@ class Calibrator:
             problem.evaluator = None
             evaluator.close()
         best = algorithm.opt[0]
+        check_calibration_result(float(best.F[0]), problem)
         self.params_ = problem.parameters(best.X)
         self.rmse_ = float(best.F[0])
         self.history_ = pd.DataFrame(rows).set_index("generation")

@@ -19,6 +19,8 @@ counters show whether it acted.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from pymoo.algorithms.soo.nonconvex.ga import GA
 from pymoo.core.population import Population
@@ -29,7 +31,8 @@ from pymoo.operators.mutation.pm import PM
 from pymoo.operators.sampling.rnd import FloatRandomSampling
 from pymoo.operators.selection.tournament import TournamentSelection, compare
 
-__all__ = ["RemutationRepair", "make_ga", "polynomial_perturbation", "tournament_by_fitness"]
+__all__ = ["RemutationRepair", "check_ga_settings", "make_ga", "polynomial_perturbation",
+           "tournament_by_fitness"]
 
 
 def tournament_by_fitness(pop: Population, P: np.ndarray,
@@ -73,8 +76,9 @@ class RemutationRepair(Repair):
 
     def __init__(self, eta: float = 20.0, max_tries: int = 20) -> None:
         super().__init__()
-        if not eta > 0 or max_tries < 1:
-            raise ValueError("eta must be > 0 and max_tries ≥ 1")
+        if not (_is_real(eta) and math.isfinite(eta) and eta > 0):
+            raise ValueError(f"eta must be a finite number > 0 (got {eta!r})")
+        _check_integer("max_tries", max_tries, 1)
         self.eta = float(eta)
         self.max_tries = int(max_tries)
         self.n_out_of_bounds = 0
@@ -112,6 +116,41 @@ class RemutationRepair(Repair):
         return values
 
 
+def _check_integer(name: str, value: object, low: int, high: int | None = None) -> None:
+    allowed = f"within [{low}, {high}]" if high is not None else f"≥ {low}"
+    if (isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low
+            or (high is not None and value > high)):
+        raise ValueError(f"{name} must be an integer {allowed} (got {value!r})")
+
+
+def _is_real(value: object) -> bool:
+    return not isinstance(value, bool) and isinstance(value, int | float | np.integer
+                                                      | np.floating)
+
+
+def check_ga_settings(n_var: int, *, population: int = 50, crossover_probability: float = 0.9,
+                      crossover_eta: float = 15.0, mutation_probability: float | None = None,
+                      mutation_eta: float = 20.0, tournament_size: int = 2) -> None:
+    """Raise ``ValueError`` naming the first argument of :func:`make_ga` outside its range.
+
+    ``n_var`` ≥ 1, ``population`` ≥ 2, ``tournament_size`` within [2, population], the
+    probabilities within [0, 1] (``mutation_probability`` may be None: 1/n_var), the
+    distribution indices ``crossover_eta`` and ``mutation_eta`` finite and > 0.
+    """
+    _check_integer("n_var", n_var, 1)
+    _check_integer("population", population, 2)
+    _check_integer("tournament_size", tournament_size, 2, int(population))
+    probabilities = [("crossover_probability", crossover_probability)]
+    if mutation_probability is not None:
+        probabilities.append(("mutation_probability", mutation_probability))
+    for name, value in probabilities:
+        if not (_is_real(value) and 0.0 <= value <= 1.0):
+            raise ValueError(f"{name} must be a number within [0, 1] (got {value!r})")
+    for name, value in (("crossover_eta", crossover_eta), ("mutation_eta", mutation_eta)):
+        if not (_is_real(value) and math.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be a finite number > 0 (got {value!r})")
+
+
 def make_ga(n_var: int, *, population: int = 50, crossover_probability: float = 0.9,
             crossover_eta: float = 15.0, mutation_probability: float | None = None,
             mutation_eta: float = 20.0, tournament_size: int = 2,
@@ -120,17 +159,14 @@ def make_ga(n_var: int, *, population: int = 50, crossover_probability: float = 
 
     ``mutation_probability`` per variable, default ``1/n_var``; ``repair`` defaults to a
     :class:`RemutationRepair` with ``eta = mutation_eta``; ``initial_population`` (rows of
-    variables) warm-starts the GA instead of uniform random sampling.
+    variables) warm-starts the GA instead of uniform random sampling. Arguments outside
+    their range raise ``ValueError`` naming the argument (:func:`check_ga_settings`).
     """
-    if n_var < 1 or population < 2 or tournament_size < 2:
-        raise ValueError("need n_var ≥ 1, population ≥ 2 and tournament_size ≥ 2")
+    check_ga_settings(n_var, population=population,
+                      crossover_probability=crossover_probability, crossover_eta=crossover_eta,
+                      mutation_probability=mutation_probability, mutation_eta=mutation_eta,
+                      tournament_size=tournament_size)
     p_m = 1.0 / n_var if mutation_probability is None else float(mutation_probability)
-    for name, value in (("crossover_probability", crossover_probability),
-                        ("mutation_probability", p_m)):
-        if not 0.0 <= value <= 1.0:
-            raise ValueError(f"{name} must lie within [0, 1] (got {value!r})")
-    if not (crossover_eta > 0 and mutation_eta > 0):
-        raise ValueError("crossover_eta and mutation_eta must be > 0")
     sampling = FloatRandomSampling() if initial_population is None else np.atleast_2d(
         np.asarray(initial_population, dtype=float))
     return GA(

@@ -37,9 +37,14 @@ from pymoo.optimize import minimize
 from scipy.interpolate import RBFInterpolator
 from scipy.stats import qmc
 
-from steamtwin.calibration.calibrator import ProgressCallback, write_parameters
+from steamtwin.calibration.calibrator import (
+    ProgressCallback,
+    check_calibration_result,
+    check_common_settings,
+    write_parameters,
+)
 from steamtwin.calibration.evaluation import make_evaluator
-from steamtwin.calibration.ga import make_ga
+from steamtwin.calibration.ga import check_ga_settings, make_ga
 from steamtwin.calibration.identifiability import check_identifiability
 from steamtwin.calibration.objective import (
     DEFAULT_SENSORS,
@@ -110,31 +115,43 @@ class SurrogateCalibrator:
         self.min_samples = min_samples
 
     def _validate(self, n_var: int) -> int:
+        """Check every argument, one message each, before any work; the initial design size."""
         initial = 10 * n_var if self.initial_samples is None else self.initial_samples
         for name, value, low in (("initial_samples", initial, n_var + 2),
                                  ("infill_per_round", self.infill_per_round, 1),
                                  ("patience", self.patience, 1),
-                                 ("population", self.population, 2),
                                  ("generations", self.generations, 1)):
             if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
                 raise ValueError(f"{name} must be an integer ≥ {low} (got {value!r})")
-        if not isinstance(self.max_evaluations, int | np.integer) or (
-                self.max_evaluations < initial + self.infill_per_round):
+        least = int(initial) + int(self.infill_per_round)
+        if isinstance(self.max_evaluations, bool) or not isinstance(
+                self.max_evaluations, int | np.integer) or self.max_evaluations < least:
             raise ValueError(f"max_evaluations must be an integer ≥ initial_samples + "
-                             f"infill_per_round = {initial + self.infill_per_round} "
-                             f"(got {self.max_evaluations!r})")
-        if not self.improvement_tolerance >= 0.0:
-            raise ValueError("improvement_tolerance must be ≥ 0 (K)")
+                             f"infill_per_round = {least} (got {self.max_evaluations!r})")
+        tolerance = self.improvement_tolerance
+        if isinstance(tolerance, bool) or not isinstance(
+                tolerance, int | float | np.integer | np.floating) or not (
+                0.0 <= tolerance < float("inf")):
+            raise ValueError(f"improvement_tolerance must be a finite number ≥ 0 K "
+                             f"(got {tolerance!r})")
+        check_ga_settings(n_var, population=self.population)
+        check_common_settings(seed=self.seed, max_input_gap_s=self.max_input_gap_s,
+                              min_samples=self.min_samples)
         return int(initial)
 
     def fit(self, windows: Sequence[pd.DataFrame]) -> SurrogateCalibrator:
-        """Calibrate against measured windows (canonical SI signals); returns self."""
+        """Calibrate against measured windows (canonical SI signals); returns self.
+
+        Arguments outside their range raise ``ValueError`` naming the argument; a run in which
+        no model run gave a finite RMSE raises
+        :class:`~steamtwin.calibration.calibrator.CalibrationError`.
+        """
+        initial = self._validate(len(PARAMETER_NAMES))
         problem = CalibrationProblem(self.simulator, windows, bounds=self.bounds,
                                      sensors=self.sensors, weights=self.weights,
                                      max_input_gap_s=self.max_input_gap_s,
                                      min_samples=self.min_samples)
         n_var = problem.n_var
-        initial = self._validate(n_var)
         low, high = np.asarray(problem.xl, float), np.asarray(problem.xu, float)
         random = np.random.default_rng(self.seed)
         evaluator = make_evaluator(self.workers, self.scheduler)
@@ -174,6 +191,7 @@ class SurrogateCalibrator:
             problem.evaluator = None
             evaluator.close()
         best_index = int(np.argmin(values))
+        check_calibration_result(float(values[best_index]), problem)
         self.params_ = problem.parameters(low + points[best_index] * (high - low))
         self.rmse_ = float(values[best_index])
         self.n_evaluations_ = problem.n_evaluations
