@@ -11,7 +11,7 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-from steamtwin.calibration import Calibrator
+from steamtwin.calibration import CalibrationError, Calibrator
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
 from steamtwin.calibration.online import OnlineCalibrator, ParameterStore
 from steamtwin.calibration.report import (
@@ -22,45 +22,35 @@ from steamtwin.calibration.report import (
     trajectory_figure,
 )
 from steamtwin.calibration.surrogate import SurrogateCalibrator
-from steamtwin.dcs.quality import clean
-from steamtwin.dcs.readers import HistorianFormatError, read_historian
-from steamtwin.dcs.tagmap import TagMapError, load_tag_map
-from steamtwin.dcs.windows import find_steady_windows, select_window
+from steamtwin.cli.paths import OutputPathError, prepare_output_file, prepare_output_folder
+from steamtwin.dcs.history import OVERRIDE_OPTION, DataQualityError, load_history
+from steamtwin.dcs.readers import HistorianFormatError
+from steamtwin.dcs.tagmap import TagMapError
+from steamtwin.dcs.windows import find_steady_windows, parse_window, select_window
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import SpecError, load_spec
 
 
-def _read_cleaned(data: Path, tags: Path) -> pd.DataFrame:
-    """The historian export as canonical SI signals, cleaned (every change flagged, counted)."""
-    tag_map = load_tag_map(tags)
-    historian = read_historian(data, tag_map)
-    specs = tag_map.signals.values()
-    return clean(
-        historian.signals,
-        required=INPUT_SIGNALS,
-        ranges={s.signal: s.valid_range_si for s in specs if s.valid_range_si is not None},
-        declared_units={s.signal: s.unit for s in specs},
-        tag_names={s.signal: s.column for s in specs},
-        source=str(data),
-    ).data
+def _read_cleaned(data: Path, tags: Path, accept_errors: bool, console: Console
+                  ) -> pd.DataFrame:
+    """The export through the quality gate (bad samples excluded); prints what it excluded."""
+    history = load_history(data, tags, required=INPUT_SIGNALS, accept_errors=accept_errors)
+    excluded = {name: n for name, n in history.excluded.items() if n}
+    if excluded:
+        console.print(f"data quality: excluded {sum(excluded.values())} sample(s) "
+                      f"({', '.join(f'{name} {n}' for name, n in excluded.items())}); "
+                      "'steamtwin dcs check' lists why")
+    for finding in history.report.errors:
+        console.print(f"accepted data-quality error: {finding.message}")
+    return history.data
 
 
 def _pick_windows(data: pd.DataFrame, window: list[str] | None, rated_load_w: float
                   ) -> list[pd.DataFrame]:
     if window:
-        picked = []
-        for text in window:
-            start, sep, end = text.partition("/")
-            if not sep or not start or not end:
-                raise ValueError(f"--window {text!r}: expected START/END (ISO 8601 times)")
-            try:
-                bounds = pd.Timestamp(start), pd.Timestamp(end)
-            except ValueError as error:
-                raise ValueError(f"--window {text!r}: {error} (expected ISO 8601 times)") from None
-            picked.append(select_window(data, *bounds))
-        return picked
+        return [select_window(data, *parse_window(text)) for text in window]
     if "load" not in data.columns:
         raise ValueError(
             "no --window given and the data have no 'load' signal, which the automatic search "
@@ -104,6 +94,9 @@ def calibrate(
     sensitivity: bool = typer.Option(
         False, "--sensitivity", help="Also run Table 7 (GA settings varied: P 30/50/80, p_c, "
         "p_m) into --report; nine more calibrations."),
+    accept_quality_errors: bool = typer.Option(
+        False, OVERRIDE_OPTION, help="Go on despite error-level data-quality findings (unit "
+        "mix-ups, conflicting duplicates, ...); the bad samples stay excluded."),
 ) -> None:
     """Calibrate flow, friction and heat-transfer coefficients against DCS temperatures.
 
@@ -121,8 +114,11 @@ def calibrate(
                    err=True)
         raise typer.Exit(code=2)
     try:
+        prepare_output_file(out, "--out")
+        if report is not None:
+            prepare_output_folder(report, "--report")
         spec = load_spec(turbine)
-        cleaned = _read_cleaned(data, tags)
+        cleaned = _read_cleaned(data, tags, accept_quality_errors, console)
         windows = _pick_windows(cleaned, window, spec.design.generator_power)
         model = FullOrderModel(spec)
         with console.status("preparing the model (the first run compiles it, ~20 s)"):
@@ -153,7 +149,11 @@ def calibrate(
         if report is not None:
             written = _write_report(report, model, windows, calibrator, sensitivity,
                                     {**settings, "generations": generations}, console)
-    except (SpecError, TagMapError, HistorianFormatError, ValueError, KeyError) as error:
+    except (DataQualityError, CalibrationError) as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=1) from None
+    except (SpecError, TagMapError, HistorianFormatError, OutputPathError, ValueError,
+            KeyError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=2) from None
     for warning in caught:
@@ -220,6 +220,9 @@ def calibrate_online(
     seed: int = typer.Option(0, help="Seed of the GA's random generator."),
     workers: int = typer.Option(1, min=1, help="Local worker processes per update."),
     scheduler: str | None = typer.Option(None, help="Dask scheduler address."),
+    accept_quality_errors: bool = typer.Option(
+        False, OVERRIDE_OPTION, help="Go on despite error-level data-quality findings; the "
+        "bad samples stay excluded."),
 ) -> None:
     """Keep the parameters current: recalibrate on a sliding window as the data stream in.
 
@@ -232,9 +235,9 @@ def calibrate_online(
     """  # noqa: E501
     console = Console(stderr=True)
     try:
+        prepare_output_folder(out, "--out")
         spec = load_spec(turbine)
-        cleaned = _read_cleaned(data, tags)
-        out.mkdir(parents=True, exist_ok=True)
+        cleaned = _read_cleaned(data, tags, accept_quality_errors, console)
         model = FullOrderModel(spec)
         with console.status("preparing the model (the first run compiles it, ~20 s)"):
             _ = model.design_
@@ -250,7 +253,11 @@ def calibrate_online(
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", IdentifiabilityWarning)
                 online.run(cleaned)
-    except (SpecError, TagMapError, HistorianFormatError, ValueError, KeyError) as error:
+    except DataQualityError as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=1) from None
+    except (SpecError, TagMapError, HistorianFormatError, OutputPathError, ValueError,
+            KeyError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=2) from None
     trajectory = online.trajectory_

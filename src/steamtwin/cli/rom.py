@@ -13,12 +13,20 @@ from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from steamtwin.blade.mesh import MeshError
-from steamtwin.dcs.readers import HistorianFormatError, read_historian
-from steamtwin.dcs.tagmap import TagMapError, load_tag_map
+from steamtwin.cli.paths import OutputPathError, prepare_output_file, prepare_output_folder
+from steamtwin.dcs.history import OVERRIDE_OPTION, DataQualityError, load_history
+from steamtwin.dcs.readers import HistorianFormatError
+from steamtwin.dcs.tagmap import TagMapError
 from steamtwin.model.fom import InputError
 from steamtwin.model.parameters import ModelParameters, ParameterError
 from steamtwin.rom.estimator import ExtrapolationWarning
-from steamtwin.rom.reconstruction import DISTANCE, FLAG_EXTRAPOLATED, FLAG_INVALID
+from steamtwin.rom.reconstruction import (
+    DISTANCE,
+    FLAG_EXTRAPOLATED,
+    FLAG_INVALID,
+    FLAG_OUT_OF_DOMAIN,
+    MAX_EXTRAPOLATION,
+)
 from steamtwin.rom.romfile import RomFileError, load_rom, save_rom
 from steamtwin.spec import SpecError, load_spec
 
@@ -64,6 +72,7 @@ def build(
 
     console = Console(stderr=True)
     try:
+        prepare_output_file(out, "--out")
         spec = load_spec(turbine)
         parameters = ModelParameters.from_json(params) if params else ModelParameters()
         with console.status("meshing the control-stage blade"):
@@ -76,7 +85,8 @@ def build(
                                   seed=seed, layout=layout, progress=progress,
                                   projection_tolerance=projection_tolerance or None,
                                   physics_features=physics_features)
-    except (SpecError, ParameterError, InputError, MeshError, ValueError, OSError) as error:
+    except (SpecError, ParameterError, InputError, MeshError, OutputPathError, ValueError,
+            OSError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=2) from None
     save_rom(bundle, out)
@@ -106,11 +116,23 @@ def predict(
     fields_every: int | None = typer.Option(None, help="Also reconstruct the field every N "
                                             "samples (needs --vtu-dir)."),
     vtu_dir: Path | None = typer.Option(None, help="Folder for the fields as VTU (ParaView)."),
+    max_extrapolation: float = typer.Option(
+        MAX_EXTRAPOLATION, min=0.0, help="Farthest a sample may lie outside the snapshots "
+        "and still be predicted, in snapshot spans of each input."),
+    accept_quality_errors: bool = typer.Option(
+        False, OVERRIDE_OPTION, help="Go on despite error-level data-quality findings; the "
+        "bad samples stay excluded."),
 ) -> None:
     """Predict steam-path sensors and blade temperatures for every sample of DCS data.
 
-    Samples with missing inputs are flagged (rom_invalid_input) and left empty; samples
-    outside the snapshots' range are flagged (rom_extrapolated) with their distance.
+    The data pass the quality gate first: samples outside the tag map's valid range, spikes,
+    stuck runs and samples the historian marks Bad/Uncertain are excluded (and counted), and
+    error-level findings (e.g. a unit mix-up) stop the command unless
+    --accept-quality-errors. Samples with missing or excluded inputs, or outside the physical
+    domain (main steam not superheated, farther than --max-extrapolation outside the
+    snapshots), are flagged (rom_invalid_input, rom_out_of_domain) and left empty; samples
+    outside the snapshots' range but within the limit are flagged (rom_extrapolated) with
+    their distance.
 
     Example: steamtwin rom predict --rom rom.npz --data plant-data/historian.parquet --tags plant-data/tags.toml --out monitored.csv --fields-every 600 --vtu-dir fields
     """  # noqa: E501
@@ -120,20 +142,34 @@ def predict(
         typer.echo("error: --fields-every and --vtu-dir go together", err=True)
         raise typer.Exit(code=2)
     try:
+        prepare_output_file(out, "--out")
+        if vtu_dir is not None:
+            prepare_output_folder(vtu_dir, "--vtu-dir")
         bundle = load_rom(rom)
-        historian = read_historian(data, load_tag_map(tags))
+        history = load_history(data, tags, required=[str(n) for n in bundle.rom.input_names_],
+                               accept_errors=accept_quality_errors)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ExtrapolationWarning)
-            result = predict_series(bundle, historian.signals, fields_every=fields_every)
-    except (RomFileError, TagMapError, HistorianFormatError, ValueError, OSError) as error:
+            result = predict_series(bundle, history.data, fields_every=fields_every,
+                                    max_extrapolation=max_extrapolation)
+    except DataQualityError as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=1) from None
+    except (RomFileError, TagMapError, HistorianFormatError, OutputPathError, ValueError,
+            OSError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=2) from None
+    excluded = {name: n for name, n in history.excluded.items() if n}
+    if excluded:
+        typer.echo(f"data quality: excluded {sum(excluded.values())} sample(s) ("
+                   + ", ".join(f"{name} {n}" for name, n in excluded.items())
+                   + "); 'steamtwin dcs check' lists why", err=True)
     for warning in caught:
         typer.echo(f"warning: {warning.message}", err=True)
     table = result.sensors
     wire = pd.DataFrame(index=table.index)
     for name in table.columns:
-        if name in (FLAG_INVALID, FLAG_EXTRAPOLATED, DISTANCE):
+        if name in (FLAG_INVALID, FLAG_OUT_OF_DOMAIN, FLAG_EXTRAPOLATED, DISTANCE):
             wire[name] = table[name]
             continue
         unit, convert = _WIRE[_si_unit(name)]
@@ -141,9 +177,9 @@ def predict(
     wire.index.name = "time"
     wire.to_csv(out)
     typer.echo(f"wrote {len(wire)} samples to {out} ({int(table[FLAG_INVALID].sum())} invalid, "
+               f"of which {int(table[FLAG_OUT_OF_DOMAIN].sum())} outside the physical domain; "
                f"{int(table[FLAG_EXTRAPOLATED].sum())} extrapolated)")
     if vtu_dir is not None:
-        vtu_dir.mkdir(parents=True, exist_ok=True)
         for row, field in result.fields.items():
             stamp = pd.Timestamp(table.index[row]).strftime("%Y%m%dT%H%M%S")
             write_vtu(bundle.mesh, {"temperature_K": field}, vtu_dir / f"field_{row:06d}_"

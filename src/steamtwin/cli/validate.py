@@ -11,10 +11,12 @@ import pandas as pd
 import typer
 from rich.console import Console
 
-from steamtwin.dcs.quality import QualityReport, clean
-from steamtwin.dcs.readers import HistorianFormatError, read_historian
+from steamtwin.cli.paths import OutputPathError, prepare_output_folder
+from steamtwin.dcs.history import OVERRIDE_OPTION, DataQualityError, load_history
+from steamtwin.dcs.quality import QualityReport
+from steamtwin.dcs.readers import HistorianFormatError
 from steamtwin.dcs.tagmap import TagMap, TagMapError, load_tag_map
-from steamtwin.dcs.windows import find_steady_windows, select_window
+from steamtwin.dcs.windows import find_steady_windows, parse_window, select_window
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.measurement import TYPICAL_TIME_CONSTANTS_S
 from steamtwin.model.parameters import ModelParameters, ParameterError
@@ -54,6 +56,9 @@ def validate(
     field_check: bool = typer.Option(
         False, "--field-check", help="Also solve the FOM blade field at each window's mean "
         "conditions and compare it with the ROM's (Figure 9)."),
+    accept_quality_errors: bool = typer.Option(
+        False, OVERRIDE_OPTION, help="Go on despite error-level data-quality findings; the "
+        "bad samples stay excluded (and are counted in the report)."),
 ) -> None:
     """Compare the ROM's monitored temperatures with measured DCS data and write a report.
 
@@ -73,6 +78,7 @@ def validate(
     console = Console(stderr=True)
     timings: dict[str, float] = {}
     try:
+        prepare_output_folder(report, "--report")
         clock = time.perf_counter()
         bundle = load_rom(rom)
         spec = load_spec(turbine)
@@ -80,7 +86,7 @@ def validate(
         clock = time.perf_counter()
         tag_map = load_tag_map(tags)
         needed = _needed_signals(bundle, field_check or monitor == "fom")
-        signals, quality = _read_cleaned(data, tag_map, needed)
+        signals, quality = _read_cleaned(data, tag_map, needed, accept_quality_errors)
         timings["read and clean data"] = time.perf_counter() - clock
         clock = time.perf_counter()
         windows = _pick_windows(signals, window, hours, spec.design.generator_power)
@@ -111,8 +117,11 @@ def validate(
                                         extra_sections=[quality_section(
                                             quality, "Data quality of the export (whole "
                                             "file, before windowing)")])
+    except DataQualityError as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=1) from None
     except (RomFileError, SpecError, TagMapError, HistorianFormatError, ParameterError,
-            ValueError, OSError) as error:
+            OutputPathError, ValueError, OSError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=2) from None
     for warning in caught:
@@ -120,6 +129,10 @@ def validate(
     table8 = result.tables["table8_deviation"]
     shown = table8["signal"].iloc[0]  # the HP exhaust when the data hold it
     for row in table8[table8["signal"] == shown].itertuples(index=False):
+        if row.n_used == 0:
+            typer.echo(f"{row.window}: {shown}: no usable sample ({row.n_samples} missing, "
+                       "excluded by the quality gate or flagged by the ROM); nothing to compare")
+            continue
         typer.echo(f"{row.window}: {shown} mean abs deviation {row.mean_abs_deviation_K:.2f} K, "
                    f"max {row.max_abs_deviation_K:.2f} K, RMSE {row.rmse_K:.2f} K "
                    f"({row.n_used} of {row.n_samples} samples used)")
@@ -144,27 +157,11 @@ def _needed_signals(bundle: BladeRom, with_model: bool) -> tuple[str, ...]:
     return tuple(needed)
 
 
-def _read_cleaned(data: Path, tag_map: TagMap, needed: tuple[str, ...]
+def _read_cleaned(data: Path, tag_map: TagMap, needed: tuple[str, ...], accept_errors: bool
                   ) -> tuple[pd.DataFrame, QualityReport]:
-    """The export as cleaned canonical SI signals; errors name the tag map or the file's tag."""
-    unmapped = [name for name in needed if name not in tag_map.signals]
-    if unmapped:
-        raise ValueError(f"{tag_map.source}: the ROM needs signal(s) {unmapped}, which the tag "
-                         "map does not map; add [signals.<name>] with column and unit")
-    historian = read_historian(data, tag_map)
-    absent = {name: tag for name, tag in historian.missing_signals.items() if name in needed}
-    if absent:
-        kind = "column" if tag_map.layout == "wide" else "tag"
-        raise ValueError(f"{data}: no {kind} " + ", ".join(
-            f"{tag!r} (signal {name}, mapped in {tag_map.source})" for name, tag in absent.items())
-            + "; the ROM needs it")
-    specs = tag_map.signals.values()
-    cleaned = clean(
-        historian.signals, required=needed,
-        ranges={s.signal: s.valid_range_si for s in specs if s.valid_range_si is not None},
-        declared_units={s.signal: s.unit for s in specs},
-        tag_names={s.signal: s.column for s in specs}, source=str(data))
-    return cleaned.data, cleaned.report
+    """The export through the quality gate: cleaned SI signals (bad samples NaN) and report."""
+    history = load_history(data, tag_map, required=needed, accept_errors=accept_errors)
+    return history.data, history.report
 
 
 def _pick_windows(data: pd.DataFrame, window: list[str] | None, hours: float,
@@ -173,11 +170,9 @@ def _pick_windows(data: pd.DataFrame, window: list[str] | None, hours: float,
     picked: list[pd.DataFrame] = []
     if window:
         for text in window:
-            start, sep, end = text.partition("/")
-            if not sep or not start or not end:
-                raise ValueError(f"--window {text!r}: expected START/END (ISO 8601 times)")
+            bounds = parse_window(text)
             try:
-                picked.append(select_window(data, pd.Timestamp(start), pd.Timestamp(end)))
+                picked.append(select_window(data, *bounds))
             except ValueError as error:
                 raise ValueError(f"--window {text!r}: {error}") from None
     else:

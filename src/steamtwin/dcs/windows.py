@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-__all__ = ["SteadyWindow", "find_steady_windows", "select_window"]
+__all__ = ["SteadyWindow", "find_steady_windows", "parse_window", "select_window"]
 
 _NS = 1_000_000_000
 _MAX_SPLITS = 10_000  # bound on region splits (only reached on pathological data)
@@ -52,6 +52,30 @@ class SteadyWindow:
     duration_s: float
     n_samples: int
     nan_fraction: float
+
+
+def parse_window(text: str, option: str = "--window") -> tuple[pd.Timestamp, pd.Timestamp]:
+    """START/END (ISO 8601, each with its UTC offset) → two tz-aware timestamps.
+
+    A time without an offset is refused: it could be any plant's local time, and reading it as
+    UTC would shift the window by hours without a word. ``option`` names the source in errors.
+    """
+    start, sep, end = text.partition("/")
+    if not sep or not start or not end:
+        raise ValueError(f"{option} {text!r}: expected START/END (ISO 8601 times)")
+    bounds = []
+    for part in (start, end):
+        try:
+            stamp = pd.Timestamp(part)
+        except ValueError as error:
+            raise ValueError(f"{option} {text!r}: {error} (expected ISO 8601 times)") from None
+        if stamp.tzinfo is None:
+            raise ValueError(f"{option} {text!r}: {part!r} has no UTC offset; write e.g. "
+                             f"'{stamp.isoformat()}+08:00' or '{stamp.isoformat()}Z'")
+        bounds.append(stamp)
+    if not bounds[0] < bounds[1]:
+        raise ValueError(f"{option} {text!r}: START must be before END")
+    return bounds[0], bounds[1]
 
 
 def select_window(frame: pd.DataFrame, start: Any, end: Any) -> pd.DataFrame:
