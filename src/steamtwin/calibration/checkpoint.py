@@ -150,7 +150,7 @@ def load_checkpoint(path: Path, problem: Problem, fingerprint: str, *, populatio
     except (UnicodeDecodeError, ValueError, RecursionError) as error:
         raise CheckpointError(
             f"{path}: not a readable calibration checkpoint (expected a {CHECKPOINT_FORMAT} "
-            f"JSON document: {error})") from None
+            f"JSON document: {error}); run again without resume") from None
     check = _Checker(path)
     if not isinstance(document, dict):
         raise check.error("(document)", "expected a JSON object")
