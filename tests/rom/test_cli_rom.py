@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import meshio
 import pandas as pd
 import pytest
@@ -9,6 +11,7 @@ from typer.testing import CliRunner
 
 from steamtwin.cli.rom import rom_app
 from steamtwin.dcs.plant import run_plant, write_plant
+from steamtwin.dcs.tagmap import load_tag_map, write_tag_map
 
 
 @pytest.fixture(scope="module")
@@ -51,6 +54,28 @@ def test_build_info_predict(tmp_path, plant_files, reference_model):
     assert table.loc[valid, "blade_leading_edge [degC]"].between(400, 560).all()
     files = sorted((tmp_path / "vtu").glob("*.vtu"))
     assert files and "temperature_K" in meshio.read(files[0]).point_data
+
+    # issue 16, finding 3: the tag map's valid range applies to predict (the quality gate)
+    measured = run.measured["main_steam_temperature"] - 273.15
+    limit = float(measured.quantile(0.99))
+    tag_map = load_tag_map(paths["tag_map"])
+    spec = tag_map.signals["main_steam_temperature"]
+    signals = {**tag_map.signals, "main_steam_temperature": dataclasses.replace(
+        spec, valid_range_si=(673.15, limit + 273.15))}
+    ranged = tmp_path / "ranged.toml"
+    write_tag_map(dataclasses.replace(tag_map, signals=signals), ranged)
+    gated = runner.invoke(rom_app, [
+        "predict", "--rom", str(rom_path), "--data", str(paths["historian"]),
+        "--tags", str(ranged), "--out", str(tmp_path / "gated.csv"),
+        "--accept-quality-errors"])
+    assert gated.exit_code == 0, gated.output
+    assert "excluded" in gated.output
+    gated_table = pd.read_csv(tmp_path / "gated.csv", index_col="time")
+    above = (measured > limit).to_numpy()
+    assert above.any()
+    assert gated_table["rom_invalid_input"].to_numpy()[above].all()
+    assert gated_table["blade_leading_edge [degC]"].to_numpy()[above].size == above.sum()
+    assert pd.isna(gated_table["blade_leading_edge [degC]"].to_numpy()[above]).all()
 
 
 def test_errors_are_reported(tmp_path):
