@@ -200,7 +200,7 @@ def test_metal_stores_exactly_the_heat_it_takes(reference_model, reference_spec)
 def test_low_flow_is_refused_and_deep_part_load_stays_physical(reference_model, reference_spec):
     flows = np.array([0.2, 0.1]) * reference_spec.design.main_steam_flow
     frame = _constant_pressure_frame(reference_spec, flows)
-    with pytest.raises(InputError, match=r"row 1 .*below 15% of rated flow"):
+    with pytest.raises(InputError, match=r"row 2 \(1-based.*below 15% of rated flow"):
         reference_model.simulate(frame)
     row = reference_model.simulate_detailed(frame.iloc[:1], stages=False).diagnostics.iloc[0]
     assert 0.0 < row.control_stage_efficiency < 1.0 and row.hp_power > 0.0
@@ -220,10 +220,12 @@ def test_time_index_kinds(reference_model, reference_spec):
 @pytest.mark.parametrize(
     ("column", "value", "message"),
     [
-        ("main_steam_temperature", np.nan, r"'main_steam_temperature' row 3 .*nan"),
-        ("main_steam_pressure", -1.0, r"'main_steam_pressure' row 3 .*within"),
-        ("hp_exhaust_pressure", 17.0e6, r"row 3 .*pressure ratio"),
-        ("main_steam_temperature", 600.0, r"'main_steam_temperature' row 3 .*not superheated"),
+        ("main_steam_temperature", np.nan,
+         r"'main_steam_temperature' row 4 \(1-based; time .*\): nan K is not"),
+        ("main_steam_pressure", -1.0,
+         r"'main_steam_pressure' row 4 .*: -1 Pa is not a number within \[1e\+06, 2\.5e\+07\] Pa"),
+        ("hp_exhaust_pressure", 17.0e6, r"row 4 .*pressure ratio"),
+        ("main_steam_temperature", 600.0, r"'main_steam_temperature' row 4 .*not superheated"),
     ],
 )
 def test_bad_input_names_column_and_row(reference_model, reference_spec, column, value, message):
@@ -237,17 +239,17 @@ def test_missing_column_and_bad_time_index(reference_model, reference_spec):
     frame = load_profile_inputs(reference_spec, np.full(4, 1.0))
     with pytest.raises(InputError, match=r"lack required column\(s\) \['main_steam_flow'\]"):
         reference_model.simulate(frame.drop(columns="main_steam_flow"))
-    with pytest.raises(InputError, match=r"row 2 .*must increase strictly"):
+    with pytest.raises(InputError, match=r"'time' row 3 .*must increase strictly"):
         reference_model.simulate(frame.iloc[[0, 1, 1, 2]])
 
 
 def test_flow_beyond_valves_wide_open_is_an_error(reference_model, reference_spec):
     frame = _constant_pressure_frame(reference_spec, np.array([1.0, 1.15]) * 500.0)
     frame["hp_exhaust_pressure"] = reference_spec.design.hp_exhaust_pressure
-    with pytest.raises(InputError, match=r"row 1 .*exceeds what the wide-open governing valves"):
+    with pytest.raises(InputError, match=r"row 2 .*exceeds what the wide-open governing valves"):
         reference_model.simulate(frame)
     frame = _constant_pressure_frame(reference_spec, np.array([1.0, 1.3]) * 500.0)
-    with pytest.raises(InputError, match=r"row 1 .*stage pressures reach the throttle pressure"):
+    with pytest.raises(InputError, match=r"row 2 .*stage pressures reach the throttle pressure"):
         reference_model.simulate(frame)
 
 
@@ -348,7 +350,7 @@ def test_parameters_varying_in_time(reference_model, reference_spec):
     low = reference_model.simulate(frame, ModelParameters(0.94, 1.2, 1.3))
     assert stepped.control_stage_pressure.iloc[600] == pytest.approx(
         low.control_stage_pressure.iloc[600], rel=1e-4)
-    with pytest.raises(InputError, match="flow_coefficient' row 3"):
+    with pytest.raises(InputError, match=r"flow_coefficient' row 4 \(1-based\): 0\.5 outside"):
         bad = schedule.copy()
         bad.iloc[3, 0] = 0.5
         reference_model.simulate_varying(frame, bad)
@@ -374,7 +376,7 @@ def test_superheat_screen_agrees_with_the_row_by_row_check(rows):
                          index=np.arange(len(rows), dtype=float))
     cold = np.flatnonzero(t0 <= lower_boundary_temperature(p0))
     if cold.size:
-        with pytest.raises(InputError, match=rf"row {cold[0]} .*not superheated"):
+        with pytest.raises(InputError, match=rf"row {cold[0] + 1} .*not superheated"):
             _validated_inputs(frame)
     else:
         _validated_inputs(frame)
@@ -398,7 +400,7 @@ def test_checked_inputs_run_as_simulate_does(reference_spec):
     with pytest.raises(ValueError, match="does not predict"):
         lagged.simulate_checked(checked, params, ["heat_to_metal"])
     frame.iloc[7, frame.columns.get_loc("main_steam_flow")] = 10.0
-    with pytest.raises(InputError, match="'main_steam_flow' row 7"):
+    with pytest.raises(InputError, match="'main_steam_flow' row 8"):
         lagged.check_inputs(frame)
 
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import typer
 
+from steamtwin.cli.paths import prepare_output_file
 from steamtwin.dcs.quality import check_quality
 from steamtwin.dcs.readers import HistorianFormatError, read_historian
 from steamtwin.dcs.tagmap import TagMapError, load_tag_map
@@ -28,6 +29,8 @@ def check(
 
     Example: steamtwin dcs check history.parquet --tags tags.toml --json quality.json
     """
+    if json_out is not None:
+        prepare_output_file(json_out, "--json")
     try:
         tag_map = load_tag_map(tags)
         historian = read_historian(data, tag_map)

@@ -8,6 +8,7 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
 
+from steamtwin.cli.paths import prepare_output_folder
 from steamtwin.pipeline import STAGES, DemoSettings, run_demo
 
 
@@ -31,6 +32,7 @@ def demo(
 
     Example: steamtwin demo --out demo-output
     """
+    prepare_output_folder(out, "--out")
     settings = (DemoSettings.full if full else DemoSettings.quick)(
         hold_hours=hold_hours, workers=workers, seed=seed)
     console = Console()

@@ -5,8 +5,11 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import NoReturn
 
 import typer
+
+from steamtwin.cli.paths import prepare_output_file, prepare_output_folder
 
 geometry_app = typer.Typer(
     help="Blade geometry: virtual scans, scan preprocessing, reconstruction, simulation meshes.",
@@ -14,7 +17,7 @@ geometry_app = typer.Typer(
 )
 
 
-def _fail(message: str) -> None:
+def _fail(message: str) -> NoReturn:
     typer.echo(f"error: {message}", err=True)
     raise typer.Exit(code=2)
 
@@ -26,7 +29,6 @@ def _spec(turbine: str):  # returns a steamtwin.spec.TurbineSpec
         return load_spec(turbine)
     except (SpecError, OSError, ValueError) as error:
         _fail(f"cannot load turbine {turbine!r}: {error}")
-        raise  # unreachable, keeps type checkers calm
 
 
 def _preprocess_settings(manifest: dict, target_points: int | None):  # -> PreprocessSettings
@@ -42,7 +44,7 @@ def _preprocess_settings(manifest: dict, target_points: int | None):  # -> Prepr
 
 def _read_scan(folder: Path) -> tuple[list, dict]:
     """The views (m) and the manifest of a 'geometry scan' folder."""
-    from steamtwin.geometry.pointcloud import PointCloudError, read_point_cloud
+    from steamtwin.geometry.pointcloud import read_point_cloud
 
     manifest_path = folder / "scan.json"
     if not manifest_path.is_file():
@@ -50,9 +52,21 @@ def _read_scan(folder: Path) -> tuple[list, dict]:
     try:
         manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
         views = [read_point_cloud(folder / name) for name in manifest["views"]]
-    except (PointCloudError, KeyError, json.JSONDecodeError) as error:
+    except KeyError as error:
+        _fail(f"{manifest_path}: no key {error} (is {folder} a 'geometry scan' folder?)")
+    except (ValueError, OSError, TypeError) as error:  # PointCloudError is a ValueError
         _fail(f"{manifest_path}: {error}")
     return views, manifest
+
+
+def _point_cloud_out(path: Path) -> Path:
+    """``--out`` of a point cloud: a known format, a writable file."""
+    from steamtwin.geometry.pointcloud import SUFFIXES
+
+    if path.suffix.lower() not in SUFFIXES:
+        _fail(f"--out {path}: unknown point-cloud format {path.suffix!r}; use "
+              f"{', '.join(SUFFIXES)}")
+    return prepare_output_file(path, "--out")
 
 
 @geometry_app.command()
@@ -91,6 +105,7 @@ def scan(
 
     if file_format not in ("ply", "pcd"):
         _fail(f"--file-format must be 'ply' or 'pcd' (got {file_format!r})")
+    prepare_output_folder(out, "--out")
     spec = _spec(turbine)
     try:
         blade = make_blade(spec, row)
@@ -126,9 +141,17 @@ def preprocess(
     from steamtwin.geometry.fidelity import align_to_nominal, surface_deviation
     from steamtwin.geometry.pointcloud import write_point_cloud
     from steamtwin.geometry.preprocess import preprocess_views, transform
-    from steamtwin.geometry.profile import make_blade
+    from steamtwin.geometry.profile import GeometryError, make_blade
 
+    _point_cloud_out(out)
+    if report is not None:
+        prepare_output_file(report.with_suffix(".json"), "--report")
     views, manifest = _read_scan(folder)
+    if report is not None:
+        try:
+            blade = make_blade(_spec(turbine), str(manifest.get("row")))
+        except GeometryError as error:
+            _fail(f"--report: {folder / 'scan.json'}: {error}")
     tracked = manifest.get("tracked_poses")
     try:
         fused, _, steps = preprocess_views(views, _preprocess_settings(manifest, target_points),
@@ -143,7 +166,6 @@ def preprocess(
         typer.echo(f"  reference spheres: {steps.spheres_matched} matched across views, "
                    f"points removed per view: {steps.sphere_points_removed}")
     if report is not None:
-        blade = make_blade(_spec(turbine), manifest["row"])
         pose, fit_rms = align_to_nominal(fused, blade)
         deviation = surface_deviation(blade, transform(fused, pose))
         document = {"row": manifest["row"], "steps": steps.as_dict(),
@@ -153,7 +175,6 @@ def preprocess(
                                      "hausdorff": deviation.hausdorff * 1e3,
                                      "p95": deviation.p95 * 1e3}}
         path = report.with_suffix(".json")
-        path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(document, indent=2), encoding="utf-8")
         typer.echo(f"  deviation from the nominal blade: mean {deviation.mean * 1e3:.4f} mm, "
                    f"RMS {deviation.rms * 1e3:.4f} mm, max {deviation.max * 1e3:.4f} mm; "
@@ -204,9 +225,22 @@ def reconstruct(
 
     if not 0.0 < tolerance <= 1.0:
         _fail(f"--tolerance must lie within (0, 1] mm (got {tolerance})")
-    if source.is_dir():
-        views, manifest = _read_scan(source)
-        row = row or manifest.get("row")
+    prepare_output_file(out, "--out")
+    if report is not None:
+        for suffix in (".json", ".csv", ".png"):
+            prepare_output_file(report.with_suffix(suffix), "--report")
+    scan = _read_scan(source) if source.is_dir() else None
+    if scan is not None:
+        row = row or scan[1].get("row")
+    if report is not None and row is None:
+        _fail("--report needs the row of the blade (--row, or a scan folder)")
+    if row is not None:
+        try:
+            blade = make_blade(_spec(turbine), row)
+        except GeometryError as error:
+            _fail(str(error))
+    if scan is not None:
+        views, manifest = scan
         try:
             cloud, _, steps = preprocess_views(
                 views, _preprocess_settings(manifest, target_points),
@@ -218,15 +252,9 @@ def reconstruct(
     else:
         try:
             cloud = read_point_cloud(source)
-        except PointCloudError as error:
+        except (PointCloudError, OSError) as error:
             _fail(str(error))
-    if report is not None and row is None:
-        _fail("--report needs the row of the blade (--row, or a scan folder)")
     if row is not None:
-        try:
-            blade = make_blade(_spec(turbine), row)
-        except GeometryError as error:
-            _fail(str(error))
         pose, fit_rms = align_to_nominal(cloud, blade)
         cloud = transform(cloud, pose)
         typer.echo(f"best fit to the nominal blade {row}: RMS {fit_rms * 1e3:.4f} mm")
@@ -284,6 +312,9 @@ def mesh(
     from steamtwin.geometry.profile import GeometryError
     from steamtwin.geometry.volume_mesh import MeshError, write_volume_mesh
 
+    if out.suffix.lower() not in (".msh", ".vtu"):
+        _fail(f"--out {out}: unknown mesh format {out.suffix!r}; use .msh or .vtu")
+    prepare_output_file(out, "--out")
     size = None if element_size is None else element_size * 1e-3
     try:
         if stl is not None:
@@ -319,6 +350,7 @@ def assemble(
         _fail(f"unknown row(s) {unknown}; known rows: {', '.join(ROWS)}")
     if not 0.1 <= spacing <= 20.0:
         _fail(f"--spacing must lie within 0.1-20 mm (got {spacing})")
+    prepare_output_file(out, "--out")
     spec = _spec(turbine)
     components = build_assembly(spec, rows=chosen, spacing=spacing * 1e-3)
     paths = write_assembly(components, out)
@@ -347,6 +379,8 @@ def uncertainty(
 
     if samples < 2 or not 0.0 < bound <= 1.0:
         _fail(f"--samples must be >= 2 and --bound within (0, 1] mm (got {samples}, {bound})")
+    if out is not None:
+        prepare_output_file(out, "--out")
     spec = _spec(turbine)
     try:
         blade = make_blade(spec, row)
@@ -356,7 +390,6 @@ def uncertainty(
                               rng=seed)
     document = result.as_dict()
     if out is not None:
-        out.parent.mkdir(parents=True, exist_ok=True)
         out.write_text(json.dumps(document, indent=2), encoding="utf-8")
     typer.echo(f"throat-area multiplier {document['throat_area_ratio_min']:.5f}…"
                f"{document['throat_area_ratio_max']:.5f}; HP-exhaust temperature spread "

@@ -1,8 +1,17 @@
-"""The ``steamtwin`` command: one sub-command per pipeline stage, plus ``demo``."""
+"""The ``steamtwin`` command: one sub-command per pipeline stage, plus ``demo``.
+
+Every command runs under one error handler (:class:`HandledGroup`): an exception that escapes a
+command becomes a one-line ``error: ...`` on stderr and an exit code (:data:`EXIT_CODES`);
+``steamtwin --debug <command>`` shows the full traceback instead.
+"""
 
 from __future__ import annotations
 
+import errno
+from typing import Any
+
 import typer
+from typer.core import TyperGroup
 
 from steamtwin.cli.calibrate import calibrate, calibrate_online
 from steamtwin.cli.dcs import dcs_app
@@ -14,13 +23,81 @@ from steamtwin.cli.simulate import simulate
 from steamtwin.cli.turbine import turbine_app
 from steamtwin.cli.validate import validate
 
+EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_CODES = {
+    EXIT_OK: "success",
+    EXIT_FAILURE: "the command failed: a check found errors, or an internal error",
+    EXIT_USAGE: "bad usage or input: an unknown option, an unreadable or invalid file, a value "
+                "out of range, an output path that cannot be written",
+    EXIT_INTERRUPTED: "interrupted (Ctrl-C)",
+}
+
+
+def exit_code_for(error: BaseException) -> int:
+    """The exit code of an exception that escaped a command: 2 for bad input (``ValueError``,
+    ``OSError`` and their subclasses, e.g. a spec or CSV error, a missing file), 1 otherwise."""
+    return EXIT_USAGE if isinstance(error, ValueError | OSError) else EXIT_FAILURE
+
+
+def one_line(error: BaseException) -> str:
+    """The exception's message on one line (its type name when it has no message, or when it
+    is not an input error and the type says what went wrong, e.g. ``KeyError: 'x'``)."""
+    message = " ".join(str(error).split())
+    if exit_code_for(error) == EXIT_USAGE and message:
+        return message
+    return f"{type(error).__name__}: {message}" if message else type(error).__name__
+
+
+class HandledGroup(TyperGroup):
+    """The top-level command group: exceptions escaping a sub-command become one-line errors.
+
+    typer's own exceptions (usage errors, ``typer.Exit``, ``typer.Abort``) keep their
+    behaviour and exit codes; a broken pipe (``steamtwin ... | head``) is left to typer.
+    """
+
+    def invoke(self, ctx: typer.Context) -> Any:
+        try:
+            return super().invoke(ctx)
+        except (typer.TyperException, typer.Exit, typer.Abort):
+            raise
+        except KeyboardInterrupt:
+            typer.echo("\nerror: interrupted", err=True)
+            raise typer.Exit(EXIT_INTERRUPTED) from None
+        except Exception as error:
+            if ctx.params.get("debug") or (isinstance(error, OSError)
+                                           and error.errno == errno.EPIPE):
+                raise
+            hint = "" if exit_code_for(error) == EXIT_USAGE else (
+                " (unexpected; 'steamtwin --debug ...' shows the traceback)")
+            typer.echo(f"error: {one_line(error)}{hint}", err=True)
+            raise typer.Exit(exit_code_for(error)) from None
+
+
+_HELP = (
+    "Digital twin of a steam turbine in deep peak-shaving operation.\n\n"
+    "Example: steamtwin demo --out demo-output\n\n"
+    "Exit codes: " + "; ".join(f"{code} {text}" for code, text in EXIT_CODES.items()) + ".\n\n"
+    "An error is one line on stderr; 'steamtwin --debug COMMAND ...' shows its traceback."
+)
+
 app = typer.Typer(
     name="steamtwin",
-    help="Digital twin of a steam turbine in deep peak-shaving operation.\n\n"
-    "Example: steamtwin demo --out demo-output",
+    cls=HandledGroup,
+    help=_HELP,
     no_args_is_help=True,
     add_completion=False,
+    pretty_exceptions_enable=False,
 )
+
+
+@app.callback()
+def _options(
+    debug: bool = typer.Option(False, "--debug", help="Show the full traceback of an error "
+                               "instead of the one-line message."),
+) -> None:
+    """Options for every command (read by :class:`HandledGroup`)."""
+
+
 app.add_typer(turbine_app, name="turbine")
 app.add_typer(dcs_app, name="dcs")
 app.add_typer(geometry_app, name="geometry")

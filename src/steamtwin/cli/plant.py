@@ -8,6 +8,7 @@ import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
+from steamtwin.cli.paths import prepare_output_folder
 from steamtwin.dcs.plant import SCENARIOS, run_plant, write_plant
 
 
@@ -41,6 +42,7 @@ def plant(
         for problem in problems:
             typer.echo(f"error: {problem}", err=True)
         raise typer.Exit(code=2)
+    prepare_output_folder(out, "--out")
     columns = (TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn())
     with Progress(*columns, console=console, transient=True) as bar:
         task = bar.add_task(f"plant {scenario}", total=1.0)

@@ -9,9 +9,11 @@ and inner casing per stage group (``metal``), solved sample by sample in a compi
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -51,7 +53,33 @@ _STATUS_TEXT = {
 
 
 class InputError(ValueError):
-    """Model inputs are missing, not finite, or outside the model's validity."""
+    """Model inputs are missing, not finite, or outside the model's validity.
+
+    When one sample is at fault the error says where, so that a caller can re-word it in its
+    own terms (a file's line numbers, its units): ``row`` is the sample's 0-based position in
+    the input frame (the message says it 1-based), ``column`` the signal (``"time"`` for the
+    index, None when the sample as a whole fails), ``reason`` the message without the
+    location and ``count`` how many rows fail the same check. A range check also gives the SI
+    ``value`` and its valid ``limits`` in the SI ``unit``.
+    """
+
+    def __init__(self, message: str, *, row: int | None = None, column: str | None = None,
+                 reason: str | None = None, count: int = 1, value: float | None = None,
+                 limits: tuple[float, float] | None = None, unit: str | None = None) -> None:
+        super().__init__(message)
+        self.row, self.column, self.reason, self.count = row, column, reason or message, count
+        self.value, self.limits, self.unit = value, limits, unit
+
+    @classmethod
+    def at(cls, index: pd.Index, row: int, column: str | None, reason: str, **details: Any
+           ) -> InputError:
+        """The error for the sample at 0-based position ``row`` of ``index``: the message
+        names the column, the 1-based row and the sample's time."""
+        stamp = index[row]
+        time = f"{stamp:g} s" if isinstance(stamp, numbers.Real) else str(stamp)
+        where = f"column {column!r} row" if column else "row"
+        return cls(f"inputs {where} {row + 1} (1-based; time {time}): {reason}", row=row,
+                   column=column, reason=reason, **details)
 
 
 @dataclass(frozen=True)
@@ -215,8 +243,10 @@ class FullOrderModel:
             outside = np.flatnonzero(~((schedule[:, j] >= low) & (schedule[:, j] <= high)))
             if outside.size:
                 row = int(outside[0])
-                raise InputError(f"parameters column {name!r} row {row}: {schedule[row, j]!r} "
-                                 f"outside [{low}, {high}]")
+                raise InputError(f"parameters column {name!r} row {row + 1} (1-based): "
+                                 f"{schedule[row, j]:g} outside [{low:g}, {high:g}] "
+                                 f"({_rows(outside.size)})", row=row, column=name,
+                                 count=outside.size)
         return self._run(self.design_.kernel, inputs, schedule, stages)
 
     def check_inputs(self, inputs: pd.DataFrame) -> CheckedInputs:
@@ -230,12 +260,11 @@ class FullOrderModel:
         low = np.flatnonzero(flow < minimum_flow)
         if low.size:
             row = int(low[0])
-            raise InputError(
-                f"inputs column 'main_steam_flow' row {row} ({inputs.index[row]}): "
+            raise InputError.at(
+                inputs.index, row, "main_steam_flow",
                 f"{flow[row] * 3.6:.0f} t/h is below {MINIMUM_FLOW_FRACTION:.0%} of rated flow "
                 f"({minimum_flow * 3.6:.0f} t/h), outside the validity of the stage-efficiency "
-                f"and partial-admission loss correlations ({low.size} rows)"
-            )
+                f"and partial-admission loss correlations ({_rows(low.size)})", count=low.size)
         return CheckedInputs(index=inputs.index, columns=columns, time_step=time_step)
 
     def simulate_checked(self, checked: CheckedInputs, params: ModelParameters | None = None,
@@ -316,8 +345,8 @@ class FullOrderModel:
                                    p_exhaust, parameter_array, tolerance, pressures, enthalpies,
                                    metal, results, status, stage_p, stage_t)
         if solved < n:
-            raise InputError(
-                f"inputs row {solved} ({checked.index[solved]}): "
+            raise InputError.at(
+                checked.index, int(solved), None,
                 f"{_STATUS_TEXT[int(status[solved])]} (main_steam_pressure "
                 f"{p0[solved] / 1e6:.3f} MPa, main_steam_temperature "
                 f"{t0[solved] - 273.15:.1f} °C, main_steam_flow {flow[solved] * 3.6:.0f} t/h, "
@@ -340,20 +369,21 @@ def _validated_inputs(inputs: pd.DataFrame) -> tuple[dict[str, np.ndarray], np.n
         bad = np.flatnonzero(~np.isfinite(values) | (values < low) | (values > high))
         if bad.size:
             row = int(bad[0])
-            raise InputError(
-                f"inputs column {name!r} row {row} ({inputs.index[row]}): "
-                f"{inputs[name].iloc[row]!r} is not a number within [{low:g}, {high:g}] {unit} "
-                f"({bad.size} bad rows)"
-            )
+            raw = inputs[name].iloc[row]
+            shown = repr(raw) if isinstance(raw, str) else f"{values[row]:g} {unit}"
+            raise InputError.at(
+                inputs.index, row, name, f"{shown} is not a number within [{low:g}, {high:g}] "
+                f"{unit} ({_rows(bad.size)})", count=bad.size, value=float(values[row]),
+                limits=(low, high), unit=unit)
         columns[name] = np.ascontiguousarray(values)
     ratio = columns["hp_exhaust_pressure"] / columns["main_steam_pressure"]
     bad = np.flatnonzero(ratio >= 0.95)
     if bad.size:
         row = int(bad[0])
-        raise InputError(
-            f"inputs row {row} ({inputs.index[row]}): pressure ratio hp_exhaust_pressure/"
-            f"main_steam_pressure = {ratio[row]:.3f} ≥ 0.95: the HP section cannot expand"
-        )
+        raise InputError.at(
+            inputs.index, row, None, f"pressure ratio hp_exhaust_pressure/main_steam_pressure = "
+            f"{ratio[row]:.3f} ≥ 0.95: the HP section cannot expand ({_rows(bad.size)})",
+            count=bad.size)
     p0, t0 = columns["main_steam_pressure"], columns["main_steam_temperature"]
     # the boundary rises with pressure (Tsat, then the B23 line), so rows hotter than the
     # boundary at the series' highest pressure are superheated; only the others are looked up
@@ -362,12 +392,15 @@ def _validated_inputs(inputs: pd.DataFrame) -> tuple[dict[str, np.ndarray], np.n
     if bad.size:
         row = int(bad[0])
         t_min = float(lower_boundary_temperature(p0[row]))
-        raise InputError(
-            f"inputs column 'main_steam_temperature' row {row} ({inputs.index[row]}): "
+        raise InputError.at(
+            inputs.index, row, "main_steam_temperature",
             f"{t0[row] - 273.15:.1f} °C is not superheated at {p0[row] / 1e6:.3f} MPa "
-            f"(must exceed {t_min - 273.15:.1f} °C)"
-        )
+            f"(must exceed {t_min - 273.15:.1f} °C; {_rows(bad.size)})", count=bad.size)
     return columns, _time_steps(inputs.index)
+
+
+def _rows(count: int) -> str:
+    return f"{count} bad row" if count == 1 else f"{count} bad rows"
 
 
 def _time_steps(index: pd.Index) -> np.ndarray:
@@ -387,8 +420,6 @@ def _time_steps(index: pd.Index) -> np.ndarray:
     steps[1:] = np.diff(seconds)
     bad = np.flatnonzero(~(steps[1:] > 0.0))
     if bad.size:
-        row = int(bad[0]) + 1
-        raise InputError(
-            f"inputs time index row {row} ({index[row]}): timestamps must increase strictly"
-        )
+        raise InputError.at(index, int(bad[0]) + 1, "time",
+                            "timestamps must increase strictly", count=bad.size)
     return steps
