@@ -69,9 +69,12 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
 #: Keys that may be left out (top level only): a unit without HP bleeds has no extractions.
 OPTIONAL_KEYS = frozenset({"extractions"})
 
-# pint's unit parser lets these through on malformed unit text ("1 m)", "1 MPa**", "1 m/0")
-# where steamtwin.units.parse_quantity expects UnitError (pint 0.24 behaviour).
-_PINT_PARSE_ERRORS = (AssertionError, ArithmeticError, tokenize.TokenError)
+# pint's expression parser lets these through on malformed unit text, past the UnitError of
+# steamtwin.units.parse_quantity: "1 m)" (TokenError), "1 MPa/" (AssertionError), "1 m/0"
+# (ZeroDivisionError), "1 adegC" (OffsetUnitCalculusError, a TypeError), "1 ma^0^2" (KeyError)
+# — found by fuzzing this loader (tests/spec/test_spec_fuzz.py) with pint 0.25.
+_PINT_PARSE_ERRORS = (AssertionError, ArithmeticError, LookupError, TypeError,
+                      tokenize.TokenError)
 
 
 class SpecError(ValueError):
