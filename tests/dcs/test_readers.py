@@ -232,7 +232,9 @@ def _csv(tmp_path: Path, text: str, name: str = "h.csv") -> Path:
 
 def test_unreadable_files(tmp_path):
     _raises(tmp_path / "none.csv", _map(), f"{tmp_path / 'none.csv'}: cannot read CSV:")
-    _raises(_csv(tmp_path, "", "empty.csv"), _map(), f"{tmp_path / 'empty.csv'}: cannot read CSV:")
+    for name, text in (("empty.csv", ""), ("blank.csv", "\n \n")):
+        _raises(_csv(tmp_path, text, name), _map(), f"{tmp_path / name}: cannot read CSV: the file "
+                "is empty (no header, no data rows)")
     garbage = tmp_path / "g.parquet"
     garbage.write_bytes(b"not parquet at all")
     _raises(garbage, _map(), f"{garbage}: cannot read Parquet:")

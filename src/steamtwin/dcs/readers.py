@@ -122,7 +122,9 @@ class HistorianData:
 def read_historian(path: str | Path, tag_map: TagMap) -> HistorianData:
     """Read a ``.csv`` or ``.parquet`` historian export into SI canonical signals.
 
-    Raises :class:`HistorianFormatError` naming file, column/tag, row and expected format.
+    The CSV dialect used is in ``dialect``; samples whose quality class the tag map excludes are
+    True in ``bad_quality`` (the values are kept as read). Raises :class:`HistorianFormatError`
+    naming file, column/tag, row and expected format.
     """
     path = Path(path)
     reader = _Reader(path, tag_map)
@@ -196,6 +198,9 @@ class _Reader:
         except OSError as error:
             raise HistorianFormatError(f"{self.path}: cannot read CSV: {error}") from None
         text = self._decode(data)
+        if not text.strip():
+            raise HistorianFormatError(f"{self.path}: cannot read CSV: the file is empty "
+                                       "(no header, no data rows)")
         sample = text[:_SNIFF_CHARS].splitlines()
         if len(text) > _SNIFF_CHARS:
             sample = sample[:-1]  # the last sampled line may be cut
@@ -412,10 +417,11 @@ class _Reader:
                 )
                 break
         if not header.isascii() and dialect["encoding_source"] != "default":
+            action = "check" if dialect["encoding_source"] == "tag map" else "set"
             hints.append(
                 f"the file was decoded as {dialect['encoding']} ({dialect['encoding_source']}); "
-                f"if the names look garbled, set historian.encoding (e.g. \"gbk\", \"cp1252\") "
-                f"in {source}"
+                f"if the names look garbled, {action} historian.encoding (e.g. \"gbk\", "
+                f"\"cp1252\") in {source}"
             )
         return "".join(f"; {hint}" for hint in hints)
 
