@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
 from steamtwin.cli.geometry import geometry_app
+from steamtwin.geometry.pointcloud import write_point_cloud
 from steamtwin.geometry.volume_mesh import read_volume_mesh
 
 runner = CliRunner()
@@ -69,3 +71,20 @@ def test_assemble_and_uncertainty(tmp_path) -> None:
     assert "largest deviation" in result.output
     assert (0.5 * document["hp_exhaust_temperature_spread_K"] - 1e-12
             <= document["hp_exhaust_temperature_max_deviation_K"])
+
+
+def test_preprocess_refuses_a_truncated_view(tmp_path) -> None:
+    """Issue 16: a cut-off view used to be read with zeros or garbage and fused (exit 0)."""
+    points = np.random.default_rng(2).normal(scale=0.02, size=(500, 3))
+    for k in range(2):
+        write_point_cloud(points, tmp_path / f"view_{k:02d}.ply")
+    view = tmp_path / "view_01.ply"
+    view.write_bytes(view.read_bytes()[:-2405])
+    (tmp_path / "scan.json").write_text(json.dumps(
+        {"row": "hp1", "views": ["view_00.ply", "view_01.ply"], "sphere_radius": None}))
+    result = runner.invoke(geometry_app, ["preprocess", str(tmp_path), "--out",
+                                          str(tmp_path / "fused.ply")])
+    assert result.exit_code != 0 and isinstance(result.exception, SystemExit)
+    assert "view_01.ply: element 'vertex' promises 500 points" in result.output
+    assert "399 complete points): the file is truncated" in result.output
+    assert not (tmp_path / "fused.ply").exists()

@@ -293,6 +293,8 @@ def test_xyz_files_get_the_same_checks(tmp_path) -> None:
     path.write_text("".join(lines)[:-3])
     with pytest.raises(PointCloudError, match=r"line 500 has no line break"):
         read_point_cloud(path)
+    path.write_text("".join(lines).replace(" ", "\t", 5).replace(" ", "\r", 1))
+    np.testing.assert_array_equal(read_point_cloud(path), CLOUD)  # any whitespace separates
     path.write_text("# only a comment\n")
     with pytest.raises(PointCloudError, match=r"scan\.xyz: the file holds no points"):
         read_point_cloud(path)

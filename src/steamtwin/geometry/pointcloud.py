@@ -15,6 +15,7 @@ the body were checked, and its result is checked against the header's count.
 
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -93,24 +94,26 @@ def _text_lines(path: Path, body: bytes, first_line: int) -> list[tuple[int, str
 def _parse_rows(path: Path, lines: list[tuple[int, str]], names: list[str],
                 element: str) -> np.ndarray:
     """Rows of whitespace-separated numbers, one row a line, one value per name → (n, k)."""
+    try:  # numpy's C parser first; the loop below only runs to find what it refused
+        values = np.loadtxt(io.StringIO("\n".join(line.strip() for _, line in lines)),
+                            dtype=np.float64, comments=None, ndmin=2)
+        if values.shape == (len(lines), len(names)):
+            return values
+    except ValueError:
+        pass
     rows = []
     for number, line in lines:
         tokens = line.split()
         if len(tokens) != len(names):
             raise PointCloudError(f"{path}: line {number}: {len(tokens)} values where element "
                                   f"{element!r} has {len(names)} ({' '.join(names)})")
+        for name, token in zip(names, tokens, strict=True):
+            if not _is_number(token):
+                raise PointCloudError(f"{path}: line {number}: property {name!r} of element "
+                                      f"{element!r} is {token!r}, not a number")
         rows.append(tokens)
-    if all("_" not in line for _, line in lines):
-        try:
-            return np.array(rows, dtype=np.float64).reshape(len(rows), len(names))
-        except ValueError:
-            pass
-    number, name, token = next((number, name, token)
-                               for (number, _), tokens in zip(lines, rows, strict=True)
-                               for name, token in zip(names, tokens, strict=True)
-                               if not _is_number(token))
-    raise PointCloudError(f"{path}: line {number}: property {name!r} of element {element!r} "
-                          f"is {token!r}, not a number")
+    # every token is a number, only separated by whitespace numpy's parser does not split at
+    return np.array(rows, dtype=np.float64)
 
 
 def _is_number(token: str) -> bool:
@@ -523,7 +526,8 @@ def check_point_cloud(points: np.ndarray, source: str = "point cloud") -> np.nda
                               "1-based)")
     if len(points) < MIN_POINTS:
         raise PointCloudError(f"{source}: only {len(points)} points (need >= {MIN_POINTS})")
-    extent = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    with np.errstate(over="ignore"):  # a diagonal beyond 1e308 m is inf: refused below
+        extent = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
     if extent < MIN_EXTENT or extent > MAX_EXTENT:
         hint = (" — is the file in millimetres? read it with unit_scale=1e-3"
                 if MAX_EXTENT < extent <= 1e4 else "")
