@@ -246,7 +246,8 @@ def test_dialect_keys_parse():
 
 @pytest.mark.parametrize(("line", "message"), [
     ('delimiter = ";;"', "historian.delimiter = ';;': expected one character that is not a "
-     "letter, digit, quote or line break, e.g. \",\", \";\", \"\\t\" or \"|\""),
+     "letter, digit, '.', quote or line break, e.g. \",\", \";\", \"\\t\" or \"|\""),
+    ('delimiter = "."', "historian.delimiter = '.': expected one character"),
     ('delimiter = "a"', "historian.delimiter = 'a': expected one character"),
     ('delimiter = "\\""', "historian.delimiter = '\"': expected one character"),
     ('delimiter = "\\n"', "historian.delimiter = '\\n': expected one character"),

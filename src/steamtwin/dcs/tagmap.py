@@ -428,10 +428,10 @@ def _dialect(historian: dict[str, Any], source: str) -> tuple[str | None, str | 
     if "delimiter" in historian:
         delimiter = historian["delimiter"]
         if (not isinstance(delimiter, str) or len(delimiter) != 1 or delimiter.isalnum()
-                or delimiter in '"\r\n' or (delimiter.isspace() and delimiter not in " \t")):
+                or delimiter in '."\r\n' or (delimiter.isspace() and delimiter not in " \t")):
             raise TagMapError(
                 f"{source}: historian.delimiter = {delimiter!r}: expected one character that is "
-                "not a letter, digit, quote or line break, e.g. \",\", \";\", \"\\t\" or \"|\""
+                "not a letter, digit, '.', quote or line break, e.g. \",\", \";\", \"\\t\" or \"|\""
             )
     if "decimal" in historian:
         decimal = historian["decimal"]
