@@ -305,6 +305,16 @@ def test_dcs_check_names_any_bad_data_file(tmp_path, kind):
         assert result.exit_code == 2 and f"error: {data}" in result.output
 
 
+def test_simulate_names_an_inputs_file_that_is_not_utf8(tmp_path, monkeypatch):
+    monkeypatch.setattr(simulate_cli, "FullOrderModel", _work_started)
+    inputs = tmp_path / "gbk.csv"
+    inputs.write_bytes((HEADER.replace("time", "时间") + "0,16.7,538,1800,3.9\n").encode("gbk"))
+    result = runner.invoke(app, ["simulate", "--inputs", str(inputs), "--out",
+                                 str(tmp_path / "o.csv")])
+    assert result.exit_code == 2
+    assert result.output.startswith(f"error: {inputs}: not UTF-8 text (byte 0xbc at offset 2)")
+
+
 def test_geometry_refuses_a_short_point_cloud(tmp_path):
     cloud = tmp_path / "short.ply"
     write_point_cloud(np.random.default_rng(0).normal(size=(200, 3)), cloud)

@@ -61,9 +61,15 @@ def simulate(
     try:
         spec = load_spec(turbine)
         parameters = ModelParameters.from_json(params) if params else ModelParameters()
-        frame = read_canonical_csv(inputs, required=INPUT_SIGNALS)
-    except (SpecError, ParameterError, CsvFormatError) as error:
+    except (SpecError, ParameterError) as error:
         _fail(str(error))
+    try:
+        frame = read_canonical_csv(inputs, required=INPUT_SIGNALS)
+    except CsvFormatError as error:
+        _fail(str(error))
+    except UnicodeDecodeError as error:  # the CSV reader leaves the encoding to pandas
+        _fail(f"{inputs}: not UTF-8 text (byte 0x{error.object[error.start]:02x} at offset "
+              f"{error.start}); save the inputs CSV as UTF-8")
     if isinstance(frame.index, pd.DatetimeIndex):
         frame.index = _explicit_times(frame.index, inputs, zone, time_zone)
     model = FullOrderModel(spec)
