@@ -182,6 +182,10 @@ def test_more_rows_than_the_header_declares_are_refused(tmp_path) -> None:
      r"header line 5: property 'x' declared twice in element 'vertex'"),
     ("ply\nelement vertex 5\nproperty float x\nend_header\n", r"has no 'format' line"),
     ("ply\nformat ascii 1.0\nelement face 5\nend_header\n", r"declares no element 'vertex'"),
+    ("ply\nformat ascii 1.0\nelement vertex 5\nelement vertex 5\nend_header\n",
+     r"header line 4: element 'vertex' declared twice"),
+    ("ply\nformat ascii 1.0\nelement vertex 5\nproperty float\nend_header\n",
+     r"header line 4: 'property float' is not 'property <type> <name>'"),
     ("ply\nformat ascii 1.0\nvertex 5\n", r"header line 3: 'vertex 5' is not a PLY header line"),
     ("ply\nformat ascii 1.0\nelement vertex -5\nend_header\n",
      r"header line 3: 'element vertex -5' is not"),
@@ -306,3 +310,117 @@ def test_unit_scale_must_be_a_positive_factor(tmp_path, scale: float) -> None:
     write_point_cloud(CLOUD, path)
     with pytest.raises(PointCloudError, match=r"cloud\.ply: unit_scale must be a positive"):
         read_point_cloud(path, unit_scale=scale)
+
+
+PCD_HEADER = ("# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+              "WIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n")
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ("", "", r"only 2 points"),  # the base file is well-formed
+    ("VERSION 0.7\n", "hello\n", r"header line 2: 'hello' is not a PCD header line"),
+    ("VERSION 0.7\n", "WIDTH 2\n", r"header line 7: WIDTH given twice"),
+    ("SIZE 4 4 4\n", "", r"the PCD header has no SIZE line"),
+    ("SIZE 4 4 4", "SIZE 4 4", r"FIELDS, SIZE, TYPE and COUNT differ in length \(3, 2, 3, 3\)"),
+    ("TYPE F F F", "TYPE F F Q", r"field 'z': TYPE Q SIZE 4 COUNT 1 is not a supported field"),
+    ("SIZE 4 4 4", "SIZE 4 4 3", r"field 'z': TYPE F SIZE 3 COUNT 1 is not a supported"),
+    ("COUNT 1 1 1", "COUNT 1 2 1", r"fields x, y and z must have COUNT 1"),
+    ("FIELDS x y z", "FIELDS x y w", r"element 'point' has no property 'z'"),
+    ("WIDTH 2\nHEIGHT 1\nPOINTS 2\n", "", r"has neither POINTS nor WIDTH"),
+    ("WIDTH 2", "WIDTH two", r"PCD WIDTH must be one integer >= 0, got 'two'"),
+    ("DATA ascii", "DATA zipped", r"PCD DATA 'zipped' is not ascii, binary or binary_comp"),
+    ("DATA ascii\n", "DATA ascii\n0 0 0\n", r"line 13: 1 data lines after the 2 points"),
+    ("DATA ascii\n", "", r"header line 10: '0 0 0' is not a PCD header line"),
+])
+def test_malformed_pcd_files_are_refused_clearly(tmp_path, old: str, new: str,
+                                                  message: str) -> None:
+    path = tmp_path / "bad.pcd"
+    path.write_text(PCD_HEADER.replace(old, new, 1) + "0 0 0\n0.01 0.02 0.03\n")
+    with pytest.raises(PointCloudError, match=rf"bad\.pcd: .*{message}"):
+        read_point_cloud(path)
+
+
+def test_pcd_padding_fields_and_body_sizes(tmp_path) -> None:
+    import open3d as o3d
+
+    table = np.zeros(len(CLOUD), [("x", "<f8"), ("pad", "u1", (3,)), ("y", "<f8"), ("z", "<f8")])
+    for axis, column in zip("xyz", CLOUD.T, strict=True):
+        table[axis] = column
+    header = (b"FIELDS x _ y z\nSIZE 8 1 8 8\nTYPE F U F F\nCOUNT 1 3 1 1\nWIDTH 500\n"
+              b"DATA binary\n")
+    path = tmp_path / "padded.pcd"
+    path.write_bytes(header + table.tobytes())
+    np.testing.assert_array_equal(read_point_cloud(path), CLOUD)
+    path.write_bytes(header + table.tobytes() + b"\n")
+    with pytest.raises(PointCloudError, match=r"padded\.pcd: 1 bytes after the 500 points"):
+        read_point_cloud(path)
+    packed = tmp_path / "packed.pcd"
+    o3d.io.write_point_cloud(str(packed), o3d.geometry.PointCloud(
+        o3d.utility.Vector3dVector(CLOUD)), compressed=True)
+    data = packed.read_bytes()
+    body = data.index(b"DATA binary_compressed\n") + len(b"DATA binary_compressed\n")
+    sizes = np.frombuffer(data, "<u4", count=2, offset=body)
+    wrong = np.array([sizes[0], sizes[1] - 12], "<u4").tobytes()
+    packed.write_bytes(data[:body] + wrong + data[body + 8:])
+    with pytest.raises(PointCloudError, match=r"decodes to 5988 bytes, but the header's 500 "
+                                              r"points of 12 bytes need 6000"):
+        read_point_cloud(packed)
+    garbled = data[:body + 8] + bytes([255]) * (len(data) - body - 8)
+    packed.write_bytes(garbled)
+    with pytest.raises(PointCloudError, match=r"packed\.pcd: the compressed block could not be "
+                                              r"decoded: 0 of the header's 500 points read"):
+        read_point_cloud(packed)
+    packed.write_bytes(data[:body + 5])
+    with pytest.raises(PointCloudError, match=r"ends before the compressed block's sizes"):
+        read_point_cloud(packed)
+
+
+def test_ply_list_and_line_errors(tmp_path) -> None:
+    path = tmp_path / "lists.ply"
+    path.write_text("ply\nply\nformat ascii 1.0\nend_header\n")
+    with pytest.raises(PointCloudError, match=r"header line 2: a second 'ply' line"):
+        read_point_cloud(path)
+    path.write_text("ply\nformat ascii 1.0\nelement face 1\nproperty list float int v\n"
+                    "end_header\n")
+    with pytest.raises(PointCloudError, match=r"header line 4: a list's length must have an "
+                                              r"integer type, not 'float'"):
+        read_point_cloud(path)
+    header = (b"ply\nformat binary_little_endian 1.0\nelement vertex 500\nproperty double x\n"
+              b"property double y\nproperty double z\nelement face 2\n"
+              b"property list char int vertex_indices\nend_header\n")
+    faces = bytes([3]) + np.array([0, 1, 2], "<i4").tobytes() + bytes([255])
+    path.write_bytes(header + CLOUD.tobytes() + faces)
+    with pytest.raises(PointCloudError, match=r"lists\.ply: element 'face' row 2: list "
+                                              r"'vertex_indices' has a negative length -1"):
+        read_point_cloud(path)
+    path.write_bytes(header + CLOUD.tobytes() + faces[:-1])
+    with pytest.raises(PointCloudError, match=r"element 'face' promises 2 rows but the file "
+                                              r"ends in row 2"):
+        read_point_cloud(path)
+
+
+def test_binary_ply_checks_fixed_size_elements_after_the_vertices(tmp_path) -> None:
+    header = (b"ply\nformat binary_little_endian 1.0\nelement vertex 500\nproperty double x\n"
+              b"property double y\nproperty double z\nelement camera 2\nproperty float f\n"
+              b"end_header\n")
+    path = tmp_path / "camera.ply"
+    path.write_bytes(header + CLOUD.tobytes() + bytes(8))
+    np.testing.assert_array_equal(read_point_cloud(path), CLOUD)
+    path.write_bytes(header + CLOUD.tobytes() + bytes(5))
+    with pytest.raises(PointCloudError, match=r"camera\.ply: element 'camera' promises 2 rows "
+                                              r"of 4 bytes \(8 bytes\) but only 5 bytes follow "
+                                              r"\(1 complete rows\)"):
+        read_point_cloud(path)
+
+
+def test_an_unreadable_file_is_named(tmp_path, monkeypatch) -> None:
+    path = tmp_path / "locked.ply"
+    write_point_cloud(CLOUD, path)
+
+    def refuse(self):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(type(path), "read_bytes", refuse)
+    with pytest.raises(PointCloudError, match=r"locked\.ply: cannot read the file: Permission "
+                                              "denied"):
+        read_point_cloud(path)

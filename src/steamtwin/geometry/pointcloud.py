@@ -295,17 +295,12 @@ def _read_ply_ascii(path: Path, body: bytes, elements: list[_PlyElement],
             values = _parse_rows(path, rows, names, "vertex")
             xyz = _require_finite(path, values[:, _axes(path, names, "vertex")], "vertex", rows)
         start += element.count
-    _refuse_extra_lines(path, lines[start:], elements)
-    return xyz
-
-
-def _refuse_extra_lines(path: Path, extra: list[tuple[int, str]],
-                        elements: list[_PlyElement]) -> None:
-    if extra:
+    if start < len(lines):
         declared = ", ".join(f"{e.count} {e.name}" for e in elements)
-        raise PointCloudError(f"{path}: line {extra[0][0]}: {len(extra)} data lines after the "
-                              f"last row the header declares ({declared}); is a count in the "
-                              "header too small?")
+        raise PointCloudError(f"{path}: line {lines[start][0]}: {len(lines) - start} data lines "
+                              f"after the last row the header declares ({declared}); is a "
+                              "count in the header too small?")
+    return xyz
 
 
 def _read_ply_binary(path: Path, body: bytes, elements: list[_PlyElement],
