@@ -74,10 +74,12 @@ def simulate(
         frame.index = _explicit_times(frame.index, inputs, zone, time_zone)
     model = FullOrderModel(spec)
     try:
+        checked = model.check_inputs(frame)  # before the model is prepared: bad rows fail fast
         with console.status("preparing the model (the first run compiles it, ~20 s)"):
             _ = model.design_
         with console.status(f"simulating {len(frame)} samples"):
-            outputs = model.simulate(frame, parameters)
+            outputs = pd.DataFrame(model.simulate_checked(checked, parameters),
+                                   index=frame.index, columns=list(model.output_signals))
     except InputError as error:
         _fail(in_file_terms(error, inputs))
     write_canonical_csv(outputs, out)
