@@ -143,3 +143,56 @@ def test_dcs_check_names_a_bad_tag_map(tmp_path):
     result = runner.invoke(app, ["dcs", "check", str(tmp_path / "x.csv"), "--tags", str(tags)])
     assert result.exit_code == 2
     assert "main_steam_flow" in result.output and "MPa" in result.output
+
+
+def _one_line(output):
+    """CLI output with rich's error-box borders and line wraps removed."""
+    import re
+
+    return re.sub(r"[\s│╭╮╰╯─]+", " ", output)
+
+
+def _reference_text():
+    from importlib import resources
+
+    return (resources.files("steamtwin.spec") / "data" / "reference.toml").read_text()
+
+
+@pytest.mark.parametrize(("content", "expected"), [
+    (_reference_text().replace("[[extractions]]", "[[extraction]]").encode(),
+     "unit.toml: extraction is not a turbine spec field (did you mean 'extractions'?)"),
+    (_reference_text().replace('mean_diameter = "0.9539 m"', 'pitch_diameter = "0.9539 m"')
+     .encode(), "unit.toml: stage 3: stages[3].pitch_diameter is not a turbine spec field "
+     "(did you mean 'mean_diameter'?)"),
+    (bytes(range(256)) * 4, "unit.toml: not UTF-8 text (byte 0x80 on line 2)"),
+], ids=["extraction-typo", "stage-key", "binary"])
+def test_turbine_show_refuses_a_bad_spec_without_traceback(tmp_path, content, expected):
+    """Issue 16, findings 5 and 6: exit 0 on a dropped bleed, a traceback on a binary file."""
+    spec = tmp_path / "unit.toml"
+    spec.write_bytes(content)
+    result = runner.invoke(app, ["turbine", "show", str(spec)])
+    assert result.exit_code == 2 and isinstance(result.exception, SystemExit)
+    assert expected in _one_line(result.output)
+    assert "Traceback" not in result.output
+
+
+@pytest.mark.parametrize(("document", "expected"), [
+    ("{}", "params.json: missing coefficient(s) flow_coefficient, friction_coefficient, "
+     "heat_transfer_coefficient"),
+    ('{"parameters": {"flow_coefficient": 1.0, "heat_transfer_coefficient": 1.0}}',
+     "params.json: missing coefficient(s) parameters.friction_coefficient"),
+    ('{"flow_coefficient": 1.0, "frictoin_coefficient": 1.2, "heat_transfer_coefficient": 1.0}',
+     "params.json: frictoin_coefficient is not a parameter file field "
+     "(did you mean 'friction_coefficient'?)"),
+], ids=["empty", "missing", "misspelled"])
+def test_simulate_refuses_a_params_file_that_would_default(tmp_path, document, expected):
+    """Issue 16, finding 5: ``{}`` or a missing/misspelled coefficient used to run at 1.0."""
+    params, inputs, out = tmp_path / "params.json", tmp_path / "in.csv", tmp_path / "out.csv"
+    params.write_text(document)
+    inputs.write_text("time,main_steam_pressure,main_steam_temperature,main_steam_flow,"
+                      "hp_exhaust_pressure\n0,16.7,538,1800,3.9\n")
+    result = runner.invoke(app, ["simulate", "--inputs", str(inputs), "--out", str(out),
+                                 "--params", str(params)])
+    assert result.exit_code == 2 and isinstance(result.exception, SystemExit)
+    assert expected in _one_line(result.output)
+    assert "Traceback" not in result.output and not out.exists()

@@ -138,7 +138,8 @@ def test_misspelled_table_header_is_refused():
      r"to W"),
     ('hp_power = "177.3 MW"', "hp_power = 1979-05-27", r"design\.hp_power is a date/time"),
     ('hp_power = "177.3 MW"', 'hp_power = "177.3 M)W"',
-     r"design\.hp_power: cannot read the unit of '177\.3 M\)W'"),
+     r"design\.hp_power: cannot read the unit of .177\.3 M\)W.: expected .value unit. with a "
+     r"unit convertible to W"),
     ("valve_pressure_drop = 0.03", "valve_pressure_drop = {value = 0.03}",
      r"design\.valve_pressure_drop is a table: expected a plain number"),
     ("load_fraction = [0.0, 0.27", "load_fraction = [0.0, nan",
@@ -176,3 +177,15 @@ def test_a_byte_order_mark_is_accepted(tmp_path, reference_spec):
     path = tmp_path / "unit.toml"
     path.write_bytes(b"\xef\xbb\xbf" + REFERENCE_TEXT.encode("utf-8"))
     assert load_spec(path) == reference_spec
+
+
+def test_an_unreadable_spec_file_is_named(tmp_path, monkeypatch):
+    path = tmp_path / "unit.toml"
+    path.write_text(REFERENCE_TEXT)
+
+    def refuse(self):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(type(path), "read_bytes", refuse)
+    with pytest.raises(SpecError, match=r"unit\.toml: cannot read the turbine spec: Permission"):
+        load_spec(path)

@@ -148,7 +148,7 @@ class ModelParameters:
         if missing:
             raise ParameterError(
                 f"{source}: missing coefficient(s) {', '.join(prefix + name for name in missing)};"
-                f" a parameter file gives all of {', '.join(PARAMETER_BOUNDS)}"
+                " a parameter file must give all three, none is defaulted"
             )
         checked = {}
         for name, (low, high) in PARAMETER_BOUNDS.items():

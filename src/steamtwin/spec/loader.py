@@ -102,7 +102,8 @@ def _parse_quantity(value: Any, si_unit: str, where: str) -> float:
     except UnitError as error:
         raise SpecError(str(error)) from None
     except _PINT_PARSE_ERRORS:
-        raise SpecError(f"{where}: cannot read the unit of {value!r} (e.g. '16.7 MPa')") from None
+        raise SpecError(f"{where}: cannot read the unit of {value!r}: expected 'value unit' with "
+                        f"a unit convertible to {si_unit or 'a plain number'}") from None
 
 
 class _Table:
