@@ -8,10 +8,18 @@ engineering units plant engineers read (MPa, °C, t/h, MW).
 from __future__ import annotations
 
 import re
+import tokenize
 from functools import lru_cache
 
 import numpy as np
 import pint
+
+# pint's expression parser lets these through on malformed unit text, past its own error
+# types: "1 m)" (TokenError), "1 MPa/" (AssertionError), "1 m/0" (ZeroDivisionError),
+# "1 adegC" (OffsetUnitCalculusError, a TypeError), "1 ma^0^2" (KeyError) — found by fuzzing
+# the spec loader (tests/spec/test_spec_fuzz.py) with pint 0.25.
+_PINT_PARSE_ERRORS = (AssertionError, ArithmeticError, LookupError, TypeError,
+                      tokenize.TokenError)
 
 _QUANTITY = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*(.*?)\s*$")
 
@@ -36,7 +44,7 @@ def parse_quantity(text: str | float | int, expected_si_unit: str, where: str) -
     """
     registry = unit_registry()
     target = registry.Unit(expected_si_unit) if expected_si_unit else registry.dimensionless
-    if isinstance(text, bool):
+    if isinstance(text, bool) or not isinstance(text, str | int | float):
         raise UnitError(
             f"{where}: expected a quantity in units of {expected_si_unit!r}, got {text!r}"
         )
@@ -55,6 +63,9 @@ def parse_quantity(text: str | float | int, expected_si_unit: str, where: str) -
         quantity = registry.Quantity(value, unit_text)
     except (pint.UndefinedUnitError, pint.errors.DefinitionSyntaxError, ValueError) as error:
         raise UnitError(f"{where}: unknown unit {unit_text!r} in {text!r}") from error
+    except _PINT_PARSE_ERRORS:
+        raise UnitError(f"{where}: cannot read the unit of {text!r}: expected 'value unit' with "
+                        f"a unit convertible to {expected_si_unit or 'a plain number'}") from None
     if quantity.dimensionality != (1 * target).dimensionality:
         raise UnitError(
             f"{where}: {text!r} is not convertible to {expected_si_unit or 'a plain number'}"

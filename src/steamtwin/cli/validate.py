@@ -19,12 +19,13 @@ from steamtwin.dcs.tagmap import TagMap, TagMapError, load_tag_map
 from steamtwin.dcs.windows import find_steady_windows, parse_window, select_window
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.measurement import TYPICAL_TIME_CONSTANTS_S
-from steamtwin.model.parameters import ModelParameters, ParameterError
+from steamtwin.model.parameters import ParameterError
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.rom.estimator import ExtrapolationWarning
 from steamtwin.rom.romfile import BladeRom, RomFileError, load_rom
 from steamtwin.rom.snapshots import SnapshotSet, generate_snapshots
 from steamtwin.spec import SpecError, TurbineSpec, load_spec
+from steamtwin.validation.monitor import rom_parameters
 from steamtwin.validation.monitor import validate as run_validation
 from steamtwin.validation.tables import quality_section
 
@@ -221,11 +222,7 @@ def _check_windows(bundle: BladeRom, windows: dict[str, pd.DataFrame]) -> None:
 def _reference_fields(bundle: BladeRom, spec: TurbineSpec,
                       windows: dict[str, pd.DataFrame]) -> SnapshotSet:
     """FOM blade fields at each window's mean boundary conditions, with the ROM's parameters."""
-    try:
-        params = ModelParameters(**bundle.provenance.get("model_parameters", {}))
-    except TypeError as error:
-        raise ValueError(f"the ROM's provenance holds unusable model_parameters ({error})"
-                         ) from None
+    params = rom_parameters(bundle)
     conditions = pd.DataFrame([frame[list(INPUT_SIGNALS)].mean() for frame in windows.values()])
     if conditions.isna().any().any():
         raise ValueError("--field-check: a window has no valid sample of "

@@ -67,7 +67,7 @@ def monitor_windows(bundle: BladeRom, windows: Mapping[str, pd.DataFrame],
     inputs are gap-filled as in calibration (≤ 60 s held, longer gaps raise); rows before the
     first complete input row are flagged ``rom_invalid_input``.
     """
-    params = _model_parameters(bundle) if simulator is not None else None
+    params = rom_parameters(bundle) if simulator is not None else None
     monitored = {}
     for name, frame in windows.items():
         missing = [str(s) for s in bundle.rom.input_names_ if s not in frame.columns]
@@ -85,13 +85,14 @@ def monitor_windows(bundle: BladeRom, windows: Mapping[str, pd.DataFrame],
     return monitored
 
 
-def _model_parameters(bundle: BladeRom) -> ModelParameters:
-    """The parameters the ROM was built with (its provenance)."""
+def rom_parameters(bundle: BladeRom) -> ModelParameters:
+    """The model parameters the ROM was built with, from its provenance (strictly checked:
+    a missing or misspelled coefficient is a ParameterError, never a default)."""
     values = bundle.provenance.get("model_parameters")
     if not isinstance(values, dict):
         raise ValueError("the ROM file records no model_parameters in its provenance; rebuild "
                          "it with 'steamtwin rom build' or monitor with the ROM alone")
-    return ModelParameters(**values)
+    return ModelParameters.from_dict(values, "the ROM file's provenance.model_parameters")
 
 
 def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str | Path, *,
