@@ -367,3 +367,49 @@ def test_clean_carries_a_given_report(good):
     assert result.report.counts("rejected").loc["main_steam_pressure", "spike"] == 1
     with pytest.raises(ValueError, match="rows"):
         clean(frame.iloc[:10], report, **OPTIONS)
+
+
+def test_historian_bad_quality_masks(good):
+    frame = good.iloc[np.r_[0:100, 101, 100, 102:N]]  # unsorted: masks follow rows as read
+    mask = np.zeros(N, dtype=bool)
+    mask[[100, 500, 501]] = True  # row 100 as read is the sample of 08:01:41
+    report = check_quality(frame, bad_quality={"load": mask}, **OPTIONS)
+    finding = only(report, "historian_quality", "load")
+    assert (finding.count, finding.first_row, finding.severity) == (3, 100, "warning")
+    assert finding.first_time == good.index[101]
+    assert "load (tag 10MKA01CE001): 3 sample(s) (0.08%) marked bad or uncertain" in (
+        finding.message
+    )
+    result = clean(frame, bad_quality={"load": mask}, **OPTIONS)
+    bad = (result.flags["load"] & int(Flag.BAD_QUALITY)).astype(bool)
+    assert list(np.flatnonzero(bad)) == [101, 500, 501]  # time order
+    assert (result.flags["load"][bad] & int(Flag.REMOVED)).all()
+    assert result.data["load"][bad].isna().all() and result.data["load"][~bad].notna().all()
+    assert result.flags.dtypes.eq(np.uint16).all()
+    assert result.report.counts("rejected").loc["load", "historian_quality"] == 3
+    # more than out_of_range_error_fraction (1 %) of the samples: an error
+    mask[1000:1100] = True
+    report = check_quality(frame, bad_quality={"load": mask}, **OPTIONS)
+    assert only(report, "historian_quality", "load").severity == "error" and not report.ok
+
+
+def test_bad_quality_masks_are_checked(good):
+    with pytest.raises(ValueError, match=r"unit1.csv: bad_quality\['load'\] has 10 entries, "
+                                         r"the data have 3600 rows"):
+        check_quality(good, bad_quality={"load": np.zeros(10, dtype=bool)}, **OPTIONS)
+    with pytest.raises(ValueError, match="'nope', which is not a numeric column"):
+        check_quality(good, bad_quality={"nope": np.zeros(N, dtype=bool)}, **OPTIONS)
+    with pytest.raises(ValueError, match="1-D boolean mask"):
+        clean(good, bad_quality={"load": np.zeros(N)}, **OPTIONS)
+
+
+def test_unit_error_removes_the_whole_signal(good):
+    frame = good.assign(main_steam_pressure=good["main_steam_pressure"] * 10.0)  # bar as MPa
+    result = clean(frame, **{**OPTIONS, "ranges": {}})
+    assert result.data["main_steam_pressure"].isna().all()
+    assert (result.flags["main_steam_pressure"] == int(Flag.REMOVED)).all()
+    rejected = [f for f in result.report.findings
+                if f.action == "rejected" and f.kind == "unit"]
+    assert [(f.signal, f.count) for f in rejected] == [("main_steam_pressure", N)]
+    pd.testing.assert_frame_equal(result.data.drop(columns="main_steam_pressure"),
+                                  good.drop(columns="main_steam_pressure"), check_freq=False)

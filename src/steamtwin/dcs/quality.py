@@ -39,9 +39,12 @@ samples that are NaN, out of range or marked bad by the historian take no part)
     least ``stuck_min_duration_s`` (30 s). ``p_i`` is the probability that a sample falls into
     the held value's quantisation cell: ``Φ((q/2 − δ_i)/σ) − Φ((−q/2 − δ_i)/σ)`` with
     ``δ_i`` the offset of the local trend (the slope between the medians of up to 30 valid
-    samples before and after the run) from the run's centre; it is never taken below the
-    fraction of consecutive equal pairs observed in the signal outside stuck runs, so a
-    legitimately flat or coarsely quantised signal is not called stuck. Without trend
+    samples before and after the run) from the run's centre. ``p_i`` is never taken below the
+    signal's observed persistence: the largest chance, estimated from its own runs of equal
+    values (capped at the floor, censored there; runs that white noise of σ cannot explain are
+    left out), that a run of m = 1, 2, 4, … samples goes on by one more. So a legitimately flat,
+    coarsely quantised or slowly wandering (coloured) signal is not called stuck. Pairs of
+    equal samples are treated as independent. Without trend and persistence
     ``P = p^(n−1)``, ``p = 2Φ(q/2σ) − 1``; for σ = 0.5 K and q = 0.1 K, p = 0.08 and 7
     equal samples at 1 s are already improbable, so the duration floor decides. A signal
     constant over the whole record is reported once as ``constant`` instead, since it cannot
@@ -56,10 +59,13 @@ samples that are NaN, out of range or marked bad by the historian take no part)
     themselves (std of their central 99 % / 0.9616), so coloured noise or process
     fluctuations that the second differences do not see do not raise false spikes.
     k = 4.5 from the false-alarm budget of ≤ 1 false spike per signal-day at 1 s: for white
-    Gaussian noise the expected number is 86400 · 2·(1 − Φ(4.5)) = 0.59 per day. The price
-    is the Neyman–Pearson limit for a single sample: a spike of 5σ is found with probability
-    Φ(0.5) ≈ 0.69, 6σ with 0.93, 95 % is reached at about 6.2σ (measured on the virtual
-    plant in ``benchmarks/bench_quality_detection.py``; docs/benchmarks.md).
+    Gaussian noise the expected number is 86400 · 2·(1 − Φ(4.5)) = 0.59 per day (0.63
+    measured on the virtual plant). The price is the Neyman–Pearson limit for a single
+    sample: a spike of A·σ is found with probability Φ(A/1.013 − 4.5) (1.013 = √(1 + π/122):
+    the 61-sample median's own variance πσ²/(2·61) [Kendall & Stuart, sample median]),
+    0.67 at 5σ, 0.92 at 6σ, 95 % at about 6.2σ; measured 0.675, 0.923 and 0.988 at 7σ over
+    10 instrument draws of the virtual plant (``benchmarks/bench_quality_detection.py``;
+    docs/benchmarks.md).
     historian quality: samples the historian's quality column marked bad or uncertain
     (``bad_quality`` masks, one per signal in the frame-as-read row order); a warning, an
     error when more than ``out_of_range_error_fraction`` of the signal's samples.
@@ -783,11 +789,10 @@ def _detect(col: _Column, seconds: np.ndarray, step_s: float, options: _Options,
     col.max_rate = options.max_rate.get(name, 0.0)
     given = options.noise.get(name)
     sigma = given if given is not None else estimate_noise_sigma(x, col.quantum)
-    stuck = _stuck(x, seconds, sigma, col.quantum, step_s, options.stuck_s,
-                   np.zeros_like(usable))
+    stuck = _stuck(x, seconds, sigma, col.quantum, step_s, options.stuck_s)
     if given is None and stuck.any():  # again without the stuck runs' zero differences
         sigma = estimate_noise_sigma(np.where(stuck, np.nan, x), col.quantum)
-        stuck = _stuck(x, seconds, sigma, col.quantum, step_s, options.stuck_s, stuck)
+        stuck = _stuck(x, seconds, sigma, col.quantum, step_s, options.stuck_s)
     col.sigma, col.stuck = sigma, stuck
     if stuck.any():
         starts, ends, _ = _segments(np.r_[False, stuck[1:] & stuck[:-1]])
@@ -810,32 +815,61 @@ def _cell_probability(offset: np.ndarray, sigma: float, quantum: float) -> np.nd
 
 
 def _stuck(x: np.ndarray, seconds: np.ndarray, sigma: float, quantum: float, step_s: float,
-           min_duration_s: float, exclude: np.ndarray) -> np.ndarray:
-    """Stuck mask: runs of equal values too improbable for noise σ and quantum (module doc).
-
-    ``exclude``: samples (stuck runs of a first pass) left out of the observed equal-pair
-    fraction.
-    """
+           min_duration_s: float) -> np.ndarray:
+    """Stuck mask: runs of equal values too improbable for noise σ and quantum (module doc)."""
     out = np.zeros(x.size, dtype=bool)
     if x.size < 2:
         return out
     same = np.zeros(x.size, dtype=bool)
     same[1:] = x[1:] == x[:-1]
-    pairs = np.isfinite(x[1:]) & np.isfinite(x[:-1]) & ~exclude[1:] & ~exclude[:-1]
-    observed = float(same[1:][pairs].mean()) if pairs.any() else 1.0
     starts, ends, _ = _segments(same)
     duration = seconds[ends] - seconds[starts]
+    real = np.isfinite(x[starts])
+    long = np.flatnonzero((ends > starts) & (duration >= min_duration_s) & real)
     limit = math.log(STUCK_CHANCE_RUNS_PER_DAY * step_s / SECONDS_PER_DAY)
-    for s, e in zip(starts[(ends > starts) & (duration >= min_duration_s)],
-                    ends[(ends > starts) & (duration >= min_duration_s)], strict=True):
+    cells: list[np.ndarray] = []
+    for s, e in zip(starts[long], ends[long], strict=True):
         slope = _slope_around(x, seconds, int(s), int(e))
         offset = abs(slope) * np.abs(seconds[s:e + 1] - 0.5 * (seconds[s] + seconds[e]))
-        p = np.maximum(_cell_probability(offset, sigma, quantum), observed)
-        with np.errstate(divide="ignore"):
-            log_p = np.log(p)
-        if np.sort(log_p)[:-1].sum() < limit:  # n − 1 factors: the first sample is free
-            out[s:e + 1] = True
+        cells.append(_cell_probability(offset, sigma, quantum))
+    # runs that white noise alone (without trend) cannot explain take no part in the persistence
+    flat = float(_cell_probability(np.zeros(1), sigma, quantum)[0])
+    impossible = np.array([_log_run(np.full(p.size, flat)) < limit for p in cells], dtype=bool)
+    keep = real.copy()
+    keep[long[impossible]] = False
+    cap = max(round(min_duration_s / step_s), 2)
+    observed = _persistence(np.minimum(ends - starts + 1, cap)[keep], cap)
+    for run, p in zip(long, cells, strict=True):
+        if _log_run(np.maximum(p, observed)) < limit:
+            out[starts[run]:ends[run] + 1] = True
     return out
+
+
+def _log_run(p: np.ndarray) -> float:
+    """log of the product of the n − 1 smallest of ``p`` (the first sample of a run is free)."""
+    with np.errstate(divide="ignore"):
+        return float(np.sort(np.log(p))[:-1].sum())
+
+
+def _persistence(lengths: np.ndarray, cap: int, least_runs: int = 20) -> float:
+    """Largest observed chance that a run of equal values goes on one more sample.
+
+    ``lengths``: run lengths (samples) capped at ``cap`` (runs that reach it are censored).
+    For m = 1, 2, 4, … < cap with at least ``least_runs`` runs reaching m, the geometric
+    estimate Σ(c − m) / Σ(c − m + [c < cap]) over those runs; the largest is returned (0 with
+    no data). Coloured noise or a slowly wandering level makes runs persist longer than white
+    noise would; this floor keeps such legitimate runs from being called stuck.
+    """
+    best, m = 0.0, 1
+    while m < cap:
+        reach = lengths[lengths >= m]
+        if reach.size < least_runs:
+            break
+        trials = float((reach - m).sum() + (reach < cap).sum())
+        if trials > 0.0:
+            best = max(best, float((reach - m).sum()) / trials)
+        m *= 2
+    return best
 
 
 def _slope_around(x: np.ndarray, seconds: np.ndarray, start: int, end: int,
