@@ -397,8 +397,11 @@ def test_bad_quality_masks_are_checked(good):
     with pytest.raises(ValueError, match=r"unit1.csv: bad_quality\['load'\] has 10 entries, "
                                          r"the data have 3600 rows"):
         check_quality(good, bad_quality={"load": np.zeros(10, dtype=bool)}, **OPTIONS)
-    with pytest.raises(ValueError, match="'nope', which is not a numeric column"):
+    with pytest.raises(ValueError, match="'nope', which is not a column of the data"):
         check_quality(good, bad_quality={"nope": np.zeros(N, dtype=bool)}, **OPTIONS)
+    text = good.assign(load="n/a")  # a non-numeric column is reported, its mask ignored
+    report = check_quality(text, bad_quality={"load": np.ones(N, dtype=bool)}, **OPTIONS)
+    assert only(report, "not_numeric", "load") and "historian_quality" not in kinds(report)
     with pytest.raises(ValueError, match="1-D boolean mask"):
         clean(good, bad_quality={"load": np.zeros(N)}, **OPTIONS)
 

@@ -684,9 +684,9 @@ def _analyse(frame: pd.DataFrame, options: _Options) -> _Analysis:
     columns: dict[str, _Column] = {}
     where = options.source or "quality check"
     for name, mask in options.bad.items():
-        if name not in numeric:
+        if name not in frame.columns:  # a non-numeric column is reported, not checked
             raise ValueError(f"{where}: bad_quality has a mask for {name!r}, which is not a "
-                             "numeric column of the data")
+                             "column of the data")
         if mask.size != n:
             raise ValueError(f"{where}: bad_quality[{name!r}] has {mask.size} entries, the data "
                              f"have {n} rows (one entry per row as read)")
