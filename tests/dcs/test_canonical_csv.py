@@ -37,7 +37,7 @@ def test_round_trip_keeps_time_and_converts_units(tmp_path, index):
 def test_missing_column_and_bad_time_are_named(tmp_path):
     path = tmp_path / "bad.csv"
     path.write_text("time,main_steam_pressure\nyesterday,16.7\n")
-    with pytest.raises(CsvFormatError, match=r"column 'time' row 2 .*'yesterday'"):
+    with pytest.raises(CsvFormatError, match=r"column .time. data row 1 \(line 2\): .yesterday."):
         read_canonical_csv(path)
     with pytest.raises(CsvFormatError, match=r"missing column\(s\) \['main_steam_flow'\]"):
         read_canonical_csv(path, required=("main_steam_flow",))

@@ -7,11 +7,8 @@ counted) with its line in the file (data row + 1), and values in the file's unit
 from __future__ import annotations
 
 import math
-import re
-from datetime import timedelta, timezone, tzinfo
 from pathlib import Path
 from typing import NoReturn
-from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 import numpy as np
 import pandas as pd
@@ -19,7 +16,12 @@ import typer
 from rich.console import Console
 
 from steamtwin.cli.paths import prepare_output_file
-from steamtwin.dcs.canonical_csv import CsvFormatError, read_canonical_csv, write_canonical_csv
+from steamtwin.dcs.canonical_csv import (
+    CsvFormatError,
+    parse_time_zone,
+    read_canonical_csv,
+    write_canonical_csv,
+)
 from steamtwin.dcs.signals import SIGNALS
 from steamtwin.model.fom import FullOrderModel, InputError
 from steamtwin.model.parameters import ModelParameters, ParameterError
@@ -27,9 +29,6 @@ from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import SpecError, load_spec
 from steamtwin.units import convert
 
-# An ISO 8601 time of day followed by its UTC offset: 'Z' or ±hh[[:]mm].
-_WITH_OFFSET = re.compile(r"\d{2}:\d{2}(?::\d{2}(?:[.,]\d+)?)?\s*(?:[Zz]|[+-]\d{2}(?::?\d{2})?)$")
-_FIXED_OFFSET = re.compile(r"([+-])(\d{2}):?(\d{2})")
 _DISPLAY_UNITS = {"degC": "°C"}
 
 
@@ -56,7 +55,10 @@ def simulate(
     Example: steamtwin simulate --inputs dcs-local.csv --time-zone Asia/Shanghai --out o.csv
     """
     prepare_output_file(out, "--out")
-    zone = None if time_zone is None else _zone(time_zone)
+    try:
+        zone = None if time_zone is None else parse_time_zone(time_zone)
+    except ValueError as error:
+        _fail(f"--time-zone {error}")
     console = Console(stderr=True)
     try:
         spec = load_spec(turbine)
@@ -64,14 +66,9 @@ def simulate(
     except (SpecError, ParameterError) as error:
         _fail(str(error))
     try:
-        frame = read_canonical_csv(inputs, required=INPUT_SIGNALS)
+        frame = read_canonical_csv(inputs, required=INPUT_SIGNALS, time_zone=zone)
     except CsvFormatError as error:
         _fail(str(error))
-    except UnicodeDecodeError as error:  # the CSV reader leaves the encoding to pandas
-        _fail(f"{inputs}: not UTF-8 text (byte 0x{error.object[error.start]:02x} at offset "
-              f"{error.start}); save the inputs CSV as UTF-8")
-    if isinstance(frame.index, pd.DatetimeIndex):
-        frame.index = _explicit_times(frame.index, inputs, zone, time_zone)
     model = FullOrderModel(spec)
     try:
         checked = model.check_inputs(frame)  # before the model is prepared: bad rows fail fast
@@ -109,48 +106,3 @@ def in_file_terms(error: InputError, path: Path) -> str:
 def _fail(message: str) -> NoReturn:
     typer.echo(f"error: {message}", err=True)
     raise typer.Exit(code=2)
-
-
-def _zone(name: str) -> tzinfo:
-    """The zone of ``--time-zone``: a fixed offset (``+08:00``) or an IANA name."""
-    fixed = _FIXED_OFFSET.fullmatch(name.strip())
-    if fixed:
-        sign, hours, minutes = fixed.groups()
-        offset = timedelta(hours=int(hours), minutes=int(minutes))
-        if offset > timedelta(hours=14):
-            _fail(f"--time-zone {name}: offsets lie within ±14:00")
-        return timezone(-offset if sign == "-" else offset)
-    try:
-        return ZoneInfo(name.strip())
-    except (ZoneInfoNotFoundError, ValueError):
-        _fail(f"--time-zone {name!r}: not a time zone; give an IANA name such as "
-              "Asia/Shanghai or Europe/Berlin, UTC, or an offset such as +08:00")
-
-
-def _explicit_times(index: pd.DatetimeIndex, path: Path, zone: tzinfo | None,
-                    zone_name: str | None) -> pd.DatetimeIndex:
-    """The time index with every timestamp written without a UTC offset read in ``zone``.
-
-    The CSV reader takes such timestamps as UTC; without ``--time-zone`` they are refused,
-    naming the first one.
-    """
-    raw = pd.read_csv(path, usecols=["time"], dtype=str, keep_default_na=False)["time"]
-    naive = ~raw.str.strip().str.contains(_WITH_OFFSET).to_numpy()
-    if not naive.any():
-        return index
-    first = int(np.flatnonzero(naive)[0])
-    where = f"{path}: column 'time' data row {first + 1} (line {first + 2})"
-    if zone is None:
-        _fail(f"{where}: {raw.iloc[first]!r} has no UTC offset ({int(naive.sum())} such rows); "
-              "write the offset (e.g. 2026-03-01T10:00:00+08:00, or Z for UTC) or give the "
-              "zone of the plant's clock with --time-zone (e.g. --time-zone Asia/Shanghai)")
-    wall_clock = index[naive].tz_localize(None)
-    local = wall_clock.tz_localize(zone, ambiguous="NaT", nonexistent="NaT")
-    if local.isna().any():
-        bad = int(np.flatnonzero(naive)[int(np.flatnonzero(local.isna())[0])])
-        _fail(f"{path}: column 'time' data row {bad + 1} (line {bad + 2}): "
-              f"{raw.iloc[bad]!r} is ambiguous or does not exist in {zone_name} (a "
-              "daylight-saving change); write these timestamps with their UTC offset")
-    utc = index.tz_convert("UTC").tz_localize(None).to_numpy().copy()
-    utc[naive] = local.tz_convert("UTC").tz_localize(None).to_numpy()
-    return pd.DatetimeIndex(utc, name=index.name).tz_localize("UTC")
