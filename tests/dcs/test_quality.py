@@ -102,7 +102,7 @@ def test_unsorted_timestamps(good):
     assert (finding.count, finding.first_row, finding.severity) == (1, 101, "warning")
     assert finding.first_time == good.index[100]
     assert "unit1.csv: time index: 1 backwards" in finding.message
-    assert "row 101 (2024-03-01T08:01:40+08:00)" in finding.message
+    assert "data row 102 (2024-03-01T08:01:40+08:00)" in finding.message
     result = clean(frame, **OPTIONS)
     assert result.data.index.is_monotonic_increasing
     assert int((result.flags.iloc[:, 0] & int(Flag.OUT_OF_ORDER)).astype(bool).sum()) == 1
@@ -120,7 +120,7 @@ def test_duplicates_identical_and_conflicting(good):
     conflict = only(report, "duplicate_conflict")
     assert (conflict.count, conflict.first_row, conflict.severity) == (1, 32, "error")
     assert "main_steam_temperature (tag 10LBA10CT001)" in conflict.message
-    assert "row 32 (2024-03-01T08:00:20+08:00)" in conflict.message
+    assert "data row 33 (2024-03-01T08:00:20+08:00)" in conflict.message
     assert not report.ok
 
     result = clean(frame, **OPTIONS)
@@ -144,7 +144,7 @@ def test_gaps(good):
     assert details["largest_gap_s"] == 101.0
     assert details["missing_s"] == 100.0
     assert details["largest_gap_start"] == good.index[999]
-    assert "largest 101 s from 2024-03-01T08:16:39+08:00 (row 999)" in finding.message
+    assert "largest 101 s from 2024-03-01T08:16:39+08:00 (data row 1000)" in finding.message
     # a declared nominal step of 60 s makes 101 s no gap
     assert "gap" not in kinds(check_quality(frame, nominal_step_s=60.0, **OPTIONS))
 
@@ -173,7 +173,8 @@ def test_spikes_found_exactly(good):
     finding = only(report, "spike", "main_steam_pressure")
     assert (finding.count, finding.first_row) == (3, 300)
     assert "main_steam_pressure (tag 10LBA10CP001): 3 spike(s)" in finding.message
-    assert "MPa" in finding.message and "row 300 (2024-03-01T08:05:00+08:00)" in finding.message
+    assert "MPa" in finding.message
+    assert "data row 301 (2024-03-01T08:05:00+08:00)" in finding.message
     result = clean(frame, **OPTIONS)
     assert np.isnan(result.data["main_steam_pressure"].iloc[rows]).all()
     code = int(Flag.SPIKE) | int(Flag.REMOVED)
@@ -228,7 +229,7 @@ def test_out_of_range_warning_and_error(good):
     finding = only(check_quality(frame, **OPTIONS), "out_of_range", "main_steam_pressure")
     assert (finding.count, finding.first_row, finding.severity) == (4, 50, "warning")
     assert "outside the physical range 0 MPa … 25 MPa; seen -1 MPa … -1 MPa" in finding.message
-    assert "(tag 10LBA10CP001)" in finding.message and "row 50" in finding.message
+    assert "(tag 10LBA10CP001)" in finding.message and "data row 51" in finding.message
     frame.iloc[1000:1100, 0] = 30e6  # 104 of 3600 > 1 %
     finding = only(check_quality(frame, **OPTIONS), "out_of_range", "main_steam_pressure")
     assert (finding.count, finding.severity) == (104, "error")

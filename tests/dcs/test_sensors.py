@@ -299,7 +299,7 @@ def test_quality_checker_finds_injected_faults(day: pd.DataFrame) -> None:
     assert report.loc["main_steam_pressure", "nan"] == injected["dropout"]
     assert report.loc["main_steam_pressure", "stuck"] == injected["stuck"]
     spikes = result.injected.faults.query("kind == 'spike'")
-    # a spike next to a dropout or stuck run may escape the Hampel window; most are found
+    # a spike next to a dropout or stuck run may escape the spike test's window; most are found
     assert report.loc["main_steam_pressure", "spike"] >= 0.8 * len(spikes)
 
 

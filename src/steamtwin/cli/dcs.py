@@ -8,6 +8,7 @@ from pathlib import Path
 import typer
 
 from steamtwin.cli.paths import prepare_output_file
+from steamtwin.dcs.history import quality_options
 from steamtwin.dcs.quality import check_quality
 from steamtwin.dcs.readers import HistorianFormatError, read_historian
 from steamtwin.dcs.tagmap import TagMapError, load_tag_map
@@ -37,15 +38,17 @@ def check(
     except (TagMapError, HistorianFormatError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=2) from None
-    specs = tag_map.signals.values()
-    report = check_quality(
-        historian.signals,
-        required=tuple(name.strip() for name in require.split(",") if name.strip()),
-        ranges={s.signal: s.valid_range_si for s in specs if s.valid_range_si is not None},
-        declared_units={s.signal: s.unit for s in specs},
-        tag_names={s.signal: s.column for s in specs},
-        source=str(data),
-    )
+    required = tuple(name.strip() for name in require.split(",") if name.strip())
+    report = check_quality(historian.signals, **quality_options(historian, required))
+    if historian.dialect:
+        typer.echo("read as: " + ", ".join(
+            f"{key} {historian.dialect[key]!r} ({historian.dialect[f'{key}_source']})"
+            for key in ("delimiter", "decimal", "encoding") if key in historian.dialect))
+    marked = {name: int(mask.sum()) for name, mask in historian.bad_quality.items()
+              if mask.any()}
+    if marked:
+        typer.echo("historian quality marks excluded: " + ", ".join(
+            f"{name} {count}" for name, count in marked.items()))
     typer.echo(report.to_text())
     if json_out is not None:
         json_out.write_text(json.dumps(report.to_dict(), indent=2) + "\n", encoding="utf-8")

@@ -20,14 +20,15 @@ from __future__ import annotations
 from collections.abc import Collection
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 
-from steamtwin.dcs.quality import CleaningResult, Flag, QualityReport, clean
+from steamtwin.dcs.quality import Flag, QualityReport, clean
 from steamtwin.dcs.readers import HistorianData, read_historian
 from steamtwin.dcs.tagmap import TagMap, load_tag_map
 
-__all__ = ["DataQualityError", "History", "load_history"]
+__all__ = ["DataQualityError", "History", "load_history", "quality_options"]
 
 OVERRIDE_OPTION = "--accept-quality-errors"
 """The CLI option that lets a command go on past error-level findings."""
@@ -95,31 +96,34 @@ def load_history(data: str | Path, tags: str | Path | TagMap, *,
         raise ValueError(f"{data}: no {kind} " + ", ".join(
             f"{tag!r} (signal {name}, mapped in {tag_map.source})" for name, tag in absent.items())
             + "; it is needed")
-    result = _clean(historian, required)
+    result = clean(historian.signals, **quality_options(historian, required))
     if result.report.errors and not accept_errors:
         raise DataQualityError(result.report)
     return History(data=result.data, flags=result.flags, report=result.report,
                    historian=historian)
 
 
-def _clean(historian: HistorianData, required: tuple[str, ...]) -> CleaningResult:
-    """The quality layer with every per-signal setting the tag map gives."""
+def quality_options(historian: HistorianData, required: Collection[str] = ()
+                    ) -> dict[str, Any]:
+    """Keyword arguments of :func:`~steamtwin.dcs.quality.check_quality` and
+    :func:`~steamtwin.dcs.quality.clean` from everything the tag map and the export give: valid
+    ranges, declared units, tags, noise, resolution, rate limits, the historian's quality marks.
+    ``dcs check`` and the gate use the same, so what one reports is what the other excludes."""
     specs = [spec for spec in historian.tag_map.signals.values()
              if spec.signal in historian.signals.columns]
 
-    def per_signal(attribute: str) -> dict[str, float]:
+    def per_signal(attribute: str) -> dict[str, Any]:
         return {s.signal: getattr(s, attribute) for s in specs
                 if getattr(s, attribute) is not None}
 
-    return clean(
-        historian.signals,
-        required=required,
-        ranges=per_signal("valid_range_si"),
-        declared_units={s.signal: s.unit for s in specs},
-        tag_names={s.signal: s.column for s in specs},
-        source=historian.source,
-        bad_quality=historian.bad_quality,
-        noise_si=per_signal("noise_si"),
-        resolution_si=per_signal("resolution_si"),
-        max_rate_si=per_signal("max_rate_si"),
-    )
+    return {
+        "required": tuple(required),
+        "ranges": per_signal("valid_range_si"),
+        "declared_units": {s.signal: s.unit for s in specs},
+        "tag_names": {s.signal: s.column for s in specs},
+        "source": historian.source,
+        "bad_quality": historian.bad_quality,
+        "noise_si": per_signal("noise_si"),
+        "resolution_si": per_signal("resolution_si"),
+        "max_rate_si": per_signal("max_rate_si"),
+    }

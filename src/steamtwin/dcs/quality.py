@@ -5,8 +5,10 @@ as read (possibly unsorted, with duplicate timestamps and gaps); :func:`clean` r
 what it safely can and flags and counts every sample it touched. Cleaning never interpolates and
 never fills a gap; resampling is a later, separate, explicit step.
 
-Each finding names the source, the signal and its historian tag, the first offending row (0-based
-position in the frame as read) with its timestamp, and the expected unit or range.
+Each finding names the source, the signal and its historian tag, the first offending row with
+its timestamp, and the expected unit or range. Messages and the printed table count data rows
+from 1 in the frame as read (the header not counted); ``Finding.first_row`` and the JSON's
+``first_row`` keep the 0-based position for programs.
 
 Severity policy
     error: a required signal is missing or entirely NaN; a signal's level is explained by a common
@@ -321,7 +323,7 @@ class QualityReport:
         table = [
             (
                 f.severity, f.action, f.kind, f.signal or INDEX, f.tag or "", str(f.count),
-                "" if f.first_row is None else str(f.first_row), f.message,
+                "" if f.first_row is None else str(f.first_row + 1), f.message,
             )
             for f in self.findings
         ]
@@ -1011,7 +1013,7 @@ class _Where:
     def make(self, kind: str, severity: Severity, count: int, row: int | None, time: Any,
              text: str, action: Action = "detected", *, counted: bool = True,
              **details: Any) -> Finding:
-        at = "" if row is None else f"; first at row {row} ({_time_text(time)})"
+        at = "" if row is None else f"; first at data row {row + 1} ({_time_text(time)})"
         message = f"{self.name}: {f'{count} ' if counted else ''}{text}{at}"
         return Finding(kind, severity, self.signal, self.tag, int(count), row, time, message,
                        action, tuple(details.items()))
@@ -1076,7 +1078,7 @@ def _detection_findings(a: _Analysis, options: _Options) -> list[Finding]:
             "gap", "warning", mask,
             f"gap(s) longer than {options.gap_factor:g} × the {a.step_s:g} s step, "
             f"{missing_s:g} s missing in total; largest {a.gap_steps_s[largest]:g} s from "
-            f"{_time_text(start)} (row {int(a.rows[i])})",
+            f"{_time_text(start)} (data row {int(a.rows[i]) + 1})",
             missing_s=missing_s, largest_gap_s=float(a.gap_steps_s[largest]),
             largest_gap_start=start, step_s=a.step_s,
         ))
