@@ -130,6 +130,26 @@ def test_same_table8_from_other_tags_units_and_layout(tmp_path, rom_file, measur
     assert "FOM blade fields (Figure 9)" in document["timings_s"]
 
 
+def test_a_sensor_without_any_value_is_said_not_reported_as_nan(tmp_path, rom_file, measured):
+    """Issue 16, finding 7: an all-NaN sensor gave NaN in report.json and the summary."""
+    blank = measured.copy()
+    blank["hp_exhaust_temperature"] = np.nan
+    data, tags = _write(blank, plant_tag_map("wide"), tmp_path / "data", "parquet")
+    result = _run(rom_file, data, tags, tmp_path / "report",
+                  "--window", "2026-03-01T00:30:00Z/2026-03-01T00:40:00Z")
+    assert result.exit_code == 0, result.output
+    assert "hp_exhaust_temperature: no usable sample" in result.output
+    assert "nan" not in result.output.lower()
+    text = (tmp_path / "report" / "report.json").read_text(encoding="utf-8")
+    json.loads(text, parse_constant=lambda name: pytest.fail(f"{name} in report.json"))
+    records = pd.DataFrame(_report(tmp_path / "report")["tables"]["table8_deviation"]["records"])
+    exhaust = records[records["signal"] == "hp_exhaust_temperature"].iloc[0]
+    assert exhaust["n_used"] == 0 and exhaust["n_skipped_missing"] == 600
+    assert exhaust["rmse_K"] is None or np.isnan(exhaust["rmse_K"])
+    quality = pd.DataFrame(_report(tmp_path / "report")["tables"]["data_quality"]["records"])
+    assert ((quality["signal"] == "hp_exhaust_temperature") & (quality["kind"] == "nan")).any()
+
+
 def test_explicit_window(tmp_path, rom_file, measured):
     data, tags = _write(measured, plant_tag_map("wide"), tmp_path / "data", "parquet")
     result = _run(rom_file, data, tags, tmp_path / "report",
