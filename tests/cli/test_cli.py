@@ -67,7 +67,7 @@ def test_simulate_reports_bad_rows_without_traceback(tmp_path):
     result = runner.invoke(app, ["simulate", "--inputs", str(inputs), "--out",
                                  str(tmp_path / "o.csv")])
     assert result.exit_code == 2
-    assert "column 'main_steam_temperature' row 3" in result.output
+    assert "column 'main_steam_temperature' data row 2 (line 3)" in result.output
     assert "Traceback" not in result.output
 
 
@@ -164,7 +164,7 @@ def _reference_text():
     (_reference_text().replace('mean_diameter = "0.9539 m"', 'pitch_diameter = "0.9539 m"')
      .encode(), "unit.toml: stage 3: stages[3].pitch_diameter is not a turbine spec field "
      "(did you mean 'mean_diameter'?)"),
-    (bytes(range(256)) * 4, "unit.toml: not UTF-8 text (byte 0x80 on line 2)"),
+    (bytes(range(256)) * 4, "unit.toml: not UTF-8 text (byte 0x80 at offset 128, line 2)"),
 ], ids=["extraction-typo", "stage-key", "binary"])
 def test_turbine_show_refuses_a_bad_spec_without_traceback(tmp_path, content, expected):
     """Issue 16, findings 5 and 6: exit 0 on a dropped bleed, a traceback on a binary file."""

@@ -135,7 +135,7 @@ def test_bad_value_names_file_key_and_bounds(tmp_path, text, shown):
     (b'{"flow_coefficient": 1, "flow_coefficient": 1}',
      r"not valid JSON: key 'flow_coefficient' appears twice"),
     (b"[" * 100_000, r"not valid JSON"),
-    (b"\x89PNG\r\n\x1a\n\x00\x00", r"not UTF-8 text \(byte 0x89 at offset 0\)"),
+    (b"\x89PNG\r\n\x1a\n\x00\x00", r"not UTF-8 text \(byte 0x89 at offset 0, line 1\)"),
     ('{"注释": "摩擦系数"}'.encode("gbk"), r"not UTF-8 text"),
     (json.dumps({**_calibrated(), "bounds": [0.9, 1.1]}).encode(),
      r"bounds must be a JSON object \(informational metadata\), got list"),
@@ -158,9 +158,10 @@ def test_a_byte_order_mark_is_accepted(tmp_path):
 
 
 def test_a_folder_or_missing_file_is_refused(tmp_path):
-    with pytest.raises(ParameterError, match=r"cannot read parameters: Is a directory"):
+    with pytest.raises(ParameterError, match=r"cannot read the parameter file: Is a directory"):
         ModelParameters.from_json(tmp_path)
-    with pytest.raises(ParameterError, match=r"nope\.json: cannot read parameters: No such file"):
+    with pytest.raises(ParameterError,
+                       match=r"nope\.json: cannot read the parameter file: No such file"):
         ModelParameters.from_json(tmp_path / "nope.json")
 
 

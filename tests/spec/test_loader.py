@@ -156,9 +156,10 @@ def test_value_of_the_wrong_type_is_named(old, new, message):
 
 
 @pytest.mark.parametrize(("content", "message"), [
-    (bytes(range(256)) * 4, r"not UTF-8 text \(byte 0x80 on line 2\)"),
+    (bytes(range(256)) * 4, r"not UTF-8 text \(byte 0x80 at offset 128, line 2\)"),
     (REFERENCE_TEXT.replace("reference unit", "参考机组").encode("gbk"),
-     r"not UTF-8 text \(byte 0xb2 on line 1\); a turbine spec is a TOML file saved as UTF-8"),
+     r"not UTF-8 text \(byte 0xb2 at offset 21, line 1\); a turbine spec is a TOML file "
+     "saved as UTF-8"),
     (b"", r"the file is empty"),
     (b"\n \n", r"the file is empty"),
     (b"\x00\x01 binary", r"not valid TOML"),

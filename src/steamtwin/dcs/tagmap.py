@@ -64,6 +64,7 @@ import pint
 
 from steamtwin.dcs.signals import SIGNALS
 from steamtwin.keys import unknown_key_message
+from steamtwin.textfile import read_utf8_text
 from steamtwin.units import convert, unit_registry
 
 LAYOUTS = ("wide", "long")
@@ -200,11 +201,7 @@ class TagMap:
 def load_tag_map(path: str | Path) -> TagMap:
     """Load and validate a tag map TOML file; raises :class:`TagMapError` naming file and field."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as error:
-        raise TagMapError(f"{path}: cannot read tag map: {error}") from None
-    return parse_tag_map(text, str(path))
+    return parse_tag_map(read_utf8_text(path, "tag map", "TOML", TagMapError), str(path))
 
 
 def parse_tag_map(text: str, source: str = "<string>") -> TagMap:

@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from steamtwin.keys import unknown_key_message
+from steamtwin.textfile import read_utf8_text
 
 PARAMETER_BOUNDS: dict[str, tuple[float, float]] = {
     "flow_coefficient": (0.90, 1.10),
@@ -93,20 +94,7 @@ class ModelParameters:
         :class:`ParameterError` naming the file and the key (with a "did you mean" hint).
         """
         path = Path(path)
-        try:
-            content = path.read_bytes()
-        except OSError as error:
-            raise ParameterError(f"{path}: cannot read parameters: {error.strerror}") from None
-        try:
-            text = content.decode("utf-8-sig")  # a byte-order mark from a Windows editor is fine
-        except UnicodeDecodeError as error:
-            raise ParameterError(
-                f"{path}: not UTF-8 text (byte 0x{content[error.start]:02x} at offset "
-                f"{error.start}); a parameter file is JSON saved as UTF-8"
-            ) from None
-        if not text.strip():
-            raise ParameterError(f"{path}: the file is empty; expected a JSON object with "
-                                 f"{', '.join(PARAMETER_BOUNDS)}")
+        text = read_utf8_text(path, "parameter file", "JSON", ParameterError)
         try:
             document = json.loads(text, object_pairs_hook=_reject_duplicate_keys)
         except (ValueError, RecursionError) as error:  # JSONDecodeError, duplicates, nesting

@@ -35,6 +35,7 @@ from steamtwin.spec.turbine import (
     TurbineSpec,
 )
 from steamtwin.steam.tables import lower_boundary_temperature
+from steamtwin.textfile import read_utf8_text
 from steamtwin.units import UnitError, parse_quantity
 
 FORMAT_VERSION = 1
@@ -184,18 +185,7 @@ def load_spec(source: str | Path) -> TurbineSpec:
         raise SpecError(
             f"turbine spec {str(source)!r} is neither a built-in ({', '.join(BUILT_IN)}) nor a file"
         )
-    try:
-        content = path.read_bytes()
-    except OSError as error:
-        raise SpecError(f"{path}: cannot read the turbine spec: {error.strerror}") from None
-    try:
-        text = content.decode("utf-8-sig")  # a byte-order mark from a Windows editor is fine
-    except UnicodeDecodeError as error:
-        line = content.count(b"\n", 0, error.start) + 1
-        raise SpecError(
-            f"{path}: not UTF-8 text (byte 0x{content[error.start]:02x} on line {line}); a "
-            "turbine spec is a TOML file saved as UTF-8 — re-save it in that encoding"
-        ) from None
+    text = read_utf8_text(path, "turbine spec", "TOML", SpecError)
     return parse_spec(text, str(path))
 
 
