@@ -1,7 +1,9 @@
 """Read a turbine spec from TOML, validating every field and naming the offending one.
 
 Dimensional values are written with their unit (``"16.7 MPa"``, ``"538 degC"``, ``"1800 t/h"``)
-and converted to SI with pint; plain numbers are for dimensionless fields only.
+and converted to SI with pint; plain numbers are for dimensionless fields only. Each field's
+unit and valid range come from :mod:`steamtwin.spec.schema`, the table ``docs/spec.md`` is
+generated from.
 
 The schema is strict: each table and array of tables may hold only the keys :data:`SPEC_KEYS`
 lists for it, and every one of them is required except the top-level ``[[extractions]]``. An
@@ -13,7 +15,6 @@ otherwise drop the bleed without a word. Positions in arrays are counted from 1 
 from __future__ import annotations
 
 import itertools
-import math
 import tomllib
 from collections.abc import Mapping
 from importlib import resources
@@ -22,6 +23,7 @@ from typing import Any
 
 from steamtwin.dcs.signals import SIGNALS
 from steamtwin.keys import unknown_key_message
+from steamtwin.spec.schema import FORMAT_VERSION, METAL_DEPTH_RANGE_M, Field, field_for
 from steamtwin.spec.turbine import (
     ControlStage,
     DesignPoint,
@@ -38,7 +40,9 @@ from steamtwin.steam.tables import lower_boundary_temperature
 from steamtwin.textfile import read_utf8_text
 from steamtwin.units import UnitError, parse_quantity
 
-FORMAT_VERSION = 1
+__all__ = ["BUILT_IN", "FORMAT_VERSION", "OPTIONAL_KEYS", "SPEC_KEYS", "SpecError", "load_spec",
+           "parse_spec"]
+
 BUILT_IN = ("reference",)
 
 _BLADING = frozenset({"mean_diameter", "blade_height", "blade_count", "reaction",
@@ -69,6 +73,7 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
 #: Keys that may be left out (top level only): a unit without HP bleeds has no extractions.
 OPTIONAL_KEYS = frozenset({"extractions"})
 
+
 class SpecError(ValueError):
     """A turbine spec is missing a field, has a bad value or is inconsistent."""
 
@@ -93,6 +98,18 @@ def _parse_quantity(value: Any, si_unit: str, where: str) -> float:
         return parse_quantity(value, si_unit, where)
     except UnitError as error:
         raise SpecError(str(error)) from None
+
+
+def _checked_quantity(raw: Any, field: Field, where: str) -> float:
+    """``raw`` in ``field``'s SI unit, refused outside its valid range; ``where`` names it."""
+    value = _parse_quantity(raw, field.unit, where)
+    if not field.contains(value):
+        shown = field.range_text(display=True)
+        also = f" = {shown}" if field.display_unit not in ("", field.unit) else ""
+        raise SpecError(
+            f"{where} = {raw!r} is outside the valid range {field.range_text()}{also}"
+        )
+    return value
 
 
 class _Table:
@@ -121,19 +138,23 @@ class _Table:
             raise SpecError(f"{self._where(key)} is missing")
         return self.data[key]
 
-    def quantity(self, key: str, si_unit: str, low: float, high: float) -> float:
-        """A value in ``si_unit`` that must lie in [low, high] (in SI)."""
-        value = _parse_quantity(self.raw(key), si_unit, self._where(key))
-        if not math.isfinite(value) or not low <= value <= high:
-            raise SpecError(
-                f"{self._where(key)} = {self.raw(key)!r} is outside the valid range "
-                f"[{low:g}, {high:g}] {si_unit or '(dimensionless)'}"
-            )
-        return value
+    def field(self, key: str) -> Field:
+        """The schema's entry for ``key`` of this table (unit and valid range)."""
+        return field_for(self.schema, key)
 
-    def integer(self, key: str, low: int, high: int) -> int:
+    def quantity(self, key: str) -> float:
+        """A quantity or plain number in its SI unit, within the schema's range."""
+        field = self.field(key)
+        return _checked_quantity(self.raw(key), field, self._where(key))
+
+    def integer(self, key: str, high: int | None = None) -> int:
+        """An integer within the schema's range; ``high`` for a bound the schema leaves open."""
+        field = self.field(key)
+        low = int(field.low) if field.low is not None else None
+        high = int(field.high) if field.high is not None else high
         value = self.raw(key)
-        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        if (isinstance(value, bool) or not isinstance(value, int)
+                or (low is not None and value < low) or (high is not None and value > high)):
             raise SpecError(
                 f"{self._where(key)} = {value!r}: expected an integer in [{low}, {high}]"
             )
@@ -198,7 +219,7 @@ def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
     except (ValueError, RecursionError) as error:  # TOMLDecodeError, over-long integers, nesting
         raise SpecError(f"{source}: not valid TOML: {error}") from None
     document = _Table(data, "", source)
-    document.integer("format_version", FORMAT_VERSION, FORMAT_VERSION)
+    document.integer("format_version")
     design = _design(document.table("design"))
     control_stage = _control_stage(document.table("control_stage"))
     stages = tuple(_pressure_stage(table) for table in document.tables("stages", "stage"))
@@ -217,7 +238,7 @@ def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
         rotor_material=_material(metal.table("rotor_material")),
         metal_groups=groups,
         casing_sensor_group=metal.text("casing_sensor_group"),
-        ambient_temperature=metal.quantity("ambient_temperature", "K", 223.15, 373.15),
+        ambient_temperature=metal.quantity("ambient_temperature"),
         sliding_pressure=_sliding_pressure(document.table("sliding_pressure")),
         sensors=_sensors(document),
     )
@@ -227,30 +248,28 @@ def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
 
 def _design(table: _Table) -> DesignPoint:
     return DesignPoint(
-        main_steam_pressure=table.quantity("main_steam_pressure", "Pa", 1e6, 25e6),
-        main_steam_temperature=table.quantity("main_steam_temperature", "K", 573.15, 923.15),
-        main_steam_flow=table.quantity("main_steam_flow", "kg/s", 1.0, 2000.0),
-        control_stage_pressure=table.quantity("control_stage_pressure", "Pa", 0.1e6, 25e6),
-        hp_exhaust_pressure=table.quantity("hp_exhaust_pressure", "Pa", 0.05e6, 25e6),
-        hp_exhaust_temperature=table.quantity("hp_exhaust_temperature", "K", 373.15, 923.15),
-        hp_power=table.quantity("hp_power", "W", 1e5, 2e9),
-        generator_power=table.quantity("generator_power", "W", 1e5, 2e9),
-        rotational_speed=table.quantity("rotational_speed", "rad/s", 100.0, 420.0),
-        valve_pressure_drop=table.quantity("valve_pressure_drop", "", 0.0, 0.2),
+        main_steam_pressure=table.quantity("main_steam_pressure"),
+        main_steam_temperature=table.quantity("main_steam_temperature"),
+        main_steam_flow=table.quantity("main_steam_flow"),
+        control_stage_pressure=table.quantity("control_stage_pressure"),
+        hp_exhaust_pressure=table.quantity("hp_exhaust_pressure"),
+        hp_exhaust_temperature=table.quantity("hp_exhaust_temperature"),
+        hp_power=table.quantity("hp_power"),
+        generator_power=table.quantity("generator_power"),
+        rotational_speed=table.quantity("rotational_speed"),
+        valve_pressure_drop=table.quantity("valve_pressure_drop"),
     )
 
 
 def _blading(table: _Table) -> StageGeometry:
     return StageGeometry(
-        mean_diameter=table.quantity("mean_diameter", "m", 0.2, 3.5),
-        blade_height=table.quantity("blade_height", "m", 0.005, 1.5),
-        blade_count=table.integer("blade_count", 4, 1000),
-        reaction=table.quantity("reaction", "", 0.0, 0.9),
-        nozzle_exit_angle=table.quantity(
-            "nozzle_exit_angle", "rad", math.radians(5), math.radians(40)
-        ),
-        peak_blade_efficiency=table.quantity("peak_blade_efficiency", "", 0.3, 1.0),
-        friction_loss=table.quantity("friction_loss", "", 0.0, 0.3),
+        mean_diameter=table.quantity("mean_diameter"),
+        blade_height=table.quantity("blade_height"),
+        blade_count=table.integer("blade_count"),
+        reaction=table.quantity("reaction"),
+        nozzle_exit_angle=table.quantity("nozzle_exit_angle"),
+        peak_blade_efficiency=table.quantity("peak_blade_efficiency"),
+        friction_loss=table.quantity("friction_loss"),
     )
 
 
@@ -258,8 +277,8 @@ def _control_stage(table: _Table) -> ControlStage:
     valves = tuple(
         GoverningValve(
             name=valve.text("name"),
-            opening_order=valve.integer("opening_order", 1, 32),
-            admission_arc=valve.quantity("admission_arc", "", 1e-3, 1.0),
+            opening_order=valve.integer("opening_order"),
+            admission_arc=valve.quantity("admission_arc"),
             open_at_design=valve.flag("open_at_design"),
         )
         for valve in table.tables("valves")
@@ -278,7 +297,7 @@ def _control_stage(table: _Table) -> ControlStage:
     _check_valve_sequence(valves, table.source)
     return ControlStage(
         blading=_blading(table),
-        nozzle_discharge_coefficient=table.quantity("nozzle_discharge_coefficient", "", 0.8, 1.0),
+        nozzle_discharge_coefficient=table.quantity("nozzle_discharge_coefficient"),
         valves=valves,
     )
 
@@ -303,48 +322,49 @@ def _check_valve_sequence(valves: tuple[GoverningValve, ...], source: str) -> No
 
 def _pressure_stage(table: _Table) -> PressureStage:
     return PressureStage(
-        blading=_blading(table), flow_capacity=table.quantity("flow_capacity", "m^2", 1e-5, 10.0)
+        blading=_blading(table), flow_capacity=table.quantity("flow_capacity")
     )
 
 
 def _extraction(table: _Table, stage_count: int) -> Extraction:
     return Extraction(
         name=table.text("name"),
-        after_stage=table.integer("after_stage", 1, stage_count - 1),
-        design_flow=table.quantity("design_flow", "kg/s", 0.0, 500.0),
-        design_pressure=table.quantity("design_pressure", "Pa", 0.05e6, 25e6),
+        after_stage=table.integer("after_stage", high=stage_count - 1),
+        design_flow=table.quantity("design_flow"),
+        design_pressure=table.quantity("design_pressure"),
     )
 
 
 def _material(table: _Table) -> Material:
     return Material(
-        density=table.quantity("density", "kg/m^3", 1000.0, 20000.0),
-        specific_heat=table.quantity("specific_heat", "J/(kg*K)", 100.0, 2000.0),
-        thermal_conductivity=table.quantity("thermal_conductivity", "W/(m*K)", 1.0, 200.0),
+        density=table.quantity("density"),
+        specific_heat=table.quantity("specific_heat"),
+        thermal_conductivity=table.quantity("thermal_conductivity"),
     )
 
 
 def _metal_group(table: _Table, stage_count: int) -> MetalGroup:
     stages = table.raw("stages")
+    first = int(table.field("stages").low or 0)
     if (
         not isinstance(stages, list)
         or not stages
         or not all(isinstance(s, int) and not isinstance(s, bool) for s in stages)
         or stages != list(range(stages[0], stages[0] + len(stages)))
-        or not 0 <= stages[0] <= stages[-1] <= stage_count
+        or not first <= stages[0] <= stages[-1] <= stage_count
     ):
         raise SpecError(
             f"{table.label}: {table.path}.stages = {stages!r}: expected consecutive stage numbers "
-            f"within 0…{stage_count} (0 = control stage)"
+            f"within {first}…{stage_count} (0 = control stage)"
         )
     return MetalGroup(
         name=table.text("name"),
         stages=tuple(stages),
-        casing_mass=table.quantity("casing_mass", "kg", 1.0, 1e6),
-        casing_area=table.quantity("casing_area", "m^2", 1e-3, 1e3),
-        rotor_mass=table.quantity("rotor_mass", "kg", 1.0, 1e6),
-        rotor_area=table.quantity("rotor_area", "m^2", 1e-3, 1e3),
-        insulation_conductance=table.quantity("insulation_conductance", "W/(m^2*K)", 0.0, 50.0),
+        casing_mass=table.quantity("casing_mass"),
+        casing_area=table.quantity("casing_area"),
+        rotor_mass=table.quantity("rotor_mass"),
+        rotor_area=table.quantity("rotor_area"),
+        insulation_conductance=table.quantity("insulation_conductance"),
     )
 
 
@@ -352,27 +372,25 @@ def _sliding_pressure(table: _Table) -> SlidingPressureLine:
     loads = table.raw("load_fraction")
     pressures = table.raw("pressure")
     where = f"{table.source}: sliding_pressure"
-    if not isinstance(loads, list) or not isinstance(pressures, list) or len(loads) < 2:
-        raise SpecError(f"{where}: load_fraction and pressure must be arrays of ≥ 2 values")
+    load_field, pressure_field = table.field("load_fraction"), table.field("pressure")
+    least = max(load_field.min_items, pressure_field.min_items)
+    if not isinstance(loads, list) or not isinstance(pressures, list) or len(loads) < least:
+        raise SpecError(f"{where}: load_fraction and pressure must be arrays of ≥ {least} values")
     if len(loads) != len(pressures):
         raise SpecError(
             f"{where}: load_fraction has {len(loads)} values but pressure has {len(pressures)}"
         )
-    load_values = _quantities(loads, "", f"{where}.load_fraction")
-    if (not all(math.isfinite(value) for value in load_values)
-            or any(b <= a for a, b in itertools.pairwise(load_values))
-            or not (load_values[0] >= 0.0 and load_values[-1] <= 1.2)):
-        raise SpecError(f"{where}.load_fraction must increase within 0…1.2, got {list(loads)}")
-    pressure_values = _quantities(pressures, "Pa", f"{where}.pressure")
-    if any(not 1e5 <= p <= 25e6 for p in pressure_values):
-        raise SpecError(f"{where}.pressure values must lie within 0.1…25 MPa")
+    load_values = tuple(_parse_quantity(value, load_field.unit, f"{where}.load_fraction[{number}]")
+                        for number, value in enumerate(loads, start=1))
+    if (not all(load_field.contains(value) for value in load_values)
+            or any(b <= a for a, b in itertools.pairwise(load_values))):
+        raise SpecError(f"{where}.load_fraction must increase within "
+                        f"{load_field.low:g}…{load_field.high:g}, got {list(loads)}")
+    pressure_values = tuple(
+        _checked_quantity(value, pressure_field, f"{where}.pressure[{number}]")
+        for number, value in enumerate(pressures, start=1)
+    )
     return SlidingPressureLine(load_values, pressure_values)
-
-
-def _quantities(values: list, si_unit: str, where: str) -> tuple[float, ...]:
-    """Each entry of a TOML array in ``si_unit``; errors name the entry (counted from 1)."""
-    return tuple(_parse_quantity(value, si_unit, f"{where}[{number}]")
-                 for number, value in enumerate(values, start=1))
 
 
 def _sensors(document: _Table) -> tuple[str, ...]:
@@ -393,10 +411,10 @@ def _check_consistency(spec: TurbineSpec, source: str) -> None:
     design = spec.design
     if not design.main_steam_pressure > design.control_stage_pressure > design.hp_exhaust_pressure:
         raise SpecError(
-            f"{source}: design pressures must fall along the steam path: main steam "
-            f"{design.main_steam_pressure / 1e6:g} MPa > control stage "
-            f"{design.control_stage_pressure / 1e6:g} MPa > HP exhaust "
-            f"{design.hp_exhaust_pressure / 1e6:g} MPa"
+            f"{source}: design pressures must fall along the steam path: "
+            f"design.main_steam_pressure {design.main_steam_pressure / 1e6:g} MPa > "
+            f"design.control_stage_pressure {design.control_stage_pressure / 1e6:g} MPa > "
+            f"design.hp_exhaust_pressure {design.hp_exhaust_pressure / 1e6:g} MPa"
         )
     if design.hp_exhaust_temperature >= design.main_steam_temperature:
         raise SpecError(
@@ -404,12 +422,13 @@ def _check_consistency(spec: TurbineSpec, source: str) -> None:
         )
     if design.hp_power >= design.generator_power:
         raise SpecError(f"{source}: design.hp_power must be below design.generator_power")
-    for extraction in spec.extractions:
+    for number, extraction in enumerate(spec.extractions, start=1):
         upstream, downstream = design.control_stage_pressure, design.hp_exhaust_pressure
         if not upstream > extraction.design_pressure > downstream:
             raise SpecError(
-                f"{source}: extraction {extraction.name!r} design_pressure must lie between the "
-                "control-stage and HP-exhaust design pressures"
+                f"{source}: extractions[{number}].design_pressure ({extraction.name!r}, "
+                f"{extraction.design_pressure / 1e6:g} MPa) must lie between the control-stage "
+                f"and HP-exhaust design pressures ({upstream / 1e6:g} and {downstream / 1e6:g} MPa)"
             )
     bled = sum(extraction.design_flow for extraction in spec.extractions)
     if bled >= design.main_steam_flow:
@@ -427,12 +446,12 @@ def _check_consistency(spec: TurbineSpec, source: str) -> None:
     names = [group.name for group in spec.metal_groups]
     if len(set(names)) != len(names):
         raise SpecError(f"{source}: metal.groups names repeat: {names}")
-    control_groups = [group for group in spec.metal_groups if 0 in group.stages]
-    if control_groups and control_groups[0].stages != (0,):
-        raise SpecError(
-            f"{source}: metal group {control_groups[0].name!r}: the control stage (stage 0) "
-            "must be a group of its own — its chamber carries the casing thermocouple"
-        )
+    for number, group in enumerate(spec.metal_groups, start=1):
+        if 0 in group.stages and group.stages != (0,):
+            raise SpecError(
+                f"{source}: metal.groups[{number}] ({group.name!r}): the control stage (stage 0) "
+                "must be a group of its own — its chamber carries the casing thermocouple"
+            )
     covered = [stage for group in spec.metal_groups for stage in group.stages]
     expected = list(range(len(spec.stages) + 1))
     if sorted(covered) != expected:
@@ -444,14 +463,16 @@ def _check_consistency(spec: TurbineSpec, source: str) -> None:
         raise SpecError(
             f"{source}: metal.casing_sensor_group {spec.casing_sensor_group!r} names no group"
         )
-    for group in spec.metal_groups:
+    shallowest, deepest = METAL_DEPTH_RANGE_M
+    for number, group in enumerate(spec.metal_groups, start=1):
         for body, mass, area, material in (
             ("casing", group.casing_mass, group.casing_area, spec.casing_material),
             ("rotor", group.rotor_mass, group.rotor_area, spec.rotor_material),
         ):
             thickness = mass / (material.density * area)
-            if not 0.01 <= thickness <= 1.0:
+            if not shallowest <= thickness <= deepest:
                 raise SpecError(
-                    f"{source}: metal group {group.name!r}: {body}_mass/{body}_area imply a metal "
-                    f"depth of {thickness:.3f} m (expected 0.01–1 m)"
+                    f"{source}: metal.groups[{number}] ({group.name!r}): {body}_mass/{body}_area "
+                    f"imply a metal depth of {thickness:.3f} m (expected {shallowest:g}–"
+                    f"{deepest:g} m)"
                 )
