@@ -210,6 +210,7 @@ def test_exclusive_bounds_are_honoured_and_shown():
     assert not field.contains(0.0) and field.contains(1e-12) and field.contains(1.0)
     assert not field.contains(math.nan) and not field.contains(1.0 + 1e-12)
     assert field.range_text() == "(0, 1] (dimensionless)"
+    assert dataclasses.replace(field, low=None).range_text() == "(−∞, 1] (dimensionless)"
     assert _value_schema(field, "number") == {"type": "number", "exclusiveMinimum": 0.0,
                                               "maximum": 1.0}
 
@@ -299,3 +300,12 @@ def test_the_json_schema_flags_a_missing_field_and_an_out_of_range_number():
         if field.kind in ("number", "integer") and field.high is not None:
             keys, _, _ = _located(field)
             assert list(validator.iter_errors(_with(REFERENCE, keys, _written(field, value))))
+
+
+def test_the_error_quoted_in_the_rules_is_the_loaders():
+    quoted = re.search(r"`(unit\.toml: stage 3: [^`]*?) \.\.\.`", render_markdown())
+    assert quoted is not None
+    text = REFERENCE_TEXT.replace('flow_capacity = "0.06286 m^2"', 'flow_capacity = "0 m^2"')
+    with pytest.raises(SpecError) as error:
+        parse_spec(text, "unit.toml")
+    assert str(error.value).startswith(quoted.group(1))

@@ -80,6 +80,7 @@ class Field:
 
     @property
     def required(self) -> bool:
+        """Whether a spec must give the field (it has no default)."""
         return self.default is None
 
     @property
@@ -105,15 +106,15 @@ class Field:
             return ""
         unit = self.display_unit if display and self.display_unit else self.unit
 
-        def shown(value: float | None) -> str:
+        def shown(value: float | None, infinity: str) -> str:
             if value is None:
-                return "∞"
+                return infinity
             if unit != self.unit:
                 value = float(convert(value, self.unit, unit))
-            return f"{value:.6g}" if display else f"{value:g}"
+            return f"{value:g}"
 
-        interval = (f"{'[' if self.low_inclusive else '('}{shown(self.low)}, "
-                    f"{shown(self.high)}{']' if self.high_inclusive else ')'}")
+        interval = (f"{'[' if self.low_inclusive else '('}{shown(self.low, '−∞')}, "
+                    f"{shown(self.high, '∞')}{']' if self.high_inclusive else ')'}")
         return f"{interval} {unit or '(dimensionless)'}" if self.kind != "integer" else interval
 
 
