@@ -1,49 +1,164 @@
-"""``steamtwin turbine show``: the design heat balance and stage table of a turbine spec."""
+"""``steamtwin turbine show|check``: a turbine spec, and the model's own design point and line.
+
+Both run the full-order model on the spec (``model.design_check``): ``show`` puts its design
+point beside the heat balance, ``check`` also refuses a spec that cannot pass its rated flow
+and runs the off-design line. Tables in engineering units (MPa, °C, t/h, MW, %).
+"""
 
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
+import numpy as np
+import pandas as pd
 import typer
 from rich.console import Console
 from rich.table import Table
 
+from steamtwin.cli.paths import prepare_output_file
+from steamtwin.model.design_check import (
+    DEFAULT_LOADS,
+    DesignError,
+    checked_loads,
+    consistency_problems,
+    design_line,
+    design_point,
+)
+from steamtwin.model.fom import FullOrderModel
 from steamtwin.spec import SpecError, TurbineSpec, load_spec
 
-turbine_app = typer.Typer(help="Inspect turbine specs.", no_args_is_help=True)
+turbine_app = typer.Typer(help="Inspect and check turbine specs.", no_args_is_help=True)
+
+_PREPARING = "running the model's design step (the first run compiles it, ~20 s)"
+_KELVIN = 273.15
+
+# design-line columns in engineering units: SI column → (header, CSV column, SI → shown)
+_LINE_COLUMNS = {
+    "main_steam_pressure": ("p0 (MPa)", "main_steam_pressure_MPa", lambda x: x / 1e6),
+    "main_steam_temperature": ("T0 (°C)", "main_steam_temperature_degC", lambda x: x - _KELVIN),
+    "main_steam_flow": ("flow (t/h)", "main_steam_flow_t_per_h", lambda x: x * 3.6),
+    "control_stage_pressure": ("p1 (MPa)", "control_stage_pressure_MPa", lambda x: x / 1e6),
+    "control_stage_temperature": ("T1 (°C)", "control_stage_temperature_degC",
+                                  lambda x: x - _KELVIN),
+    "hp_exhaust_pressure": ("p ex (MPa)", "hp_exhaust_pressure_MPa", lambda x: x / 1e6),
+    "hp_exhaust_temperature": ("T ex (°C)", "hp_exhaust_temperature_degC",
+                               lambda x: x - _KELVIN),
+    "hp_power": ("HP power (MW)", "hp_power_MW", lambda x: x / 1e6),
+    "control_stage_efficiency": ("η cs (%)", "control_stage_efficiency_pct", lambda x: x * 100),
+    "admission_arc": ("arc (%)", "admission_arc_pct", lambda x: x * 100),
+}
 
 
 @turbine_app.command("show")
 def show(
     turbine: str = typer.Argument(..., help="'reference' or a path to a turbine spec TOML."),
 ) -> None:
-    """Print the design heat balance and the stage table.
+    """Print the design heat balance beside the model's own design point, the valves and the
+    stage table. Exit code 1, with the reason, if the model cannot run the spec.
 
     Example: steamtwin turbine show reference
     """
-    try:
-        spec = load_spec(turbine)
-    except SpecError as error:
-        raise typer.BadParameter(str(error), param_hint="TURBINE") from None
+    spec = _load(turbine)
     console = Console()
     console.print(f"[bold]{spec.name}[/bold]: {spec.description}")
-    console.print(_heat_balance_table(spec))
+    try:
+        with Console(stderr=True).status(_PREPARING):
+            model_point = design_point(spec)
+    except DesignError as error:
+        model_point = None
+        reason = str(error)
+    console.print(_heat_balance_table(spec, model_point))
     console.print(_valve_table(spec))
     console.print(_stage_table(spec))
+    if model_point is None:
+        typer.echo(f"error: the model cannot run this spec: {reason}", err=True)
+        raise typer.Exit(code=1)
 
 
-def _heat_balance_table(spec: TurbineSpec) -> Table:
+@turbine_app.command("check")
+def check(
+    turbine: str = typer.Argument(..., help="'reference' or a path to a turbine spec TOML."),
+    loads: str = typer.Option(
+        ",".join(f"{load:g}" for load in DEFAULT_LOADS), "--loads",
+        help="Comma-separated fractions of rated load along the sliding-pressure line "
+             "(0.2 up to the line's end)."),
+    csv: Path | None = typer.Option(
+        None, "--csv", help="Also write the design line to this CSV (engineering units, the "
+                            "unit in each column name)."),
+) -> None:
+    """Check that the model can pass the spec's rated flow, then print its design point beside
+    the heat balance and its steady off-design line (MPa, °C, t/h, MW, %).
+
+    Exit code 1 with the reason when the spec cannot pass its rated flow (e.g. every governing
+    valve open at design) or the model cannot run one of the loads.
+
+    Example: steamtwin turbine check reference --loads 1,0.75,0.5,0.4,0.3 --csv line.csv
+    """
+    if csv is not None:
+        prepare_output_file(csv, "--csv")
+    spec = _load(turbine)
+    load_values = _parse_loads(spec, loads)
+    model = FullOrderModel(spec)
+    with Console(stderr=True).status(_PREPARING):
+        problems = consistency_problems(spec, model)
+    if problems:
+        typer.echo(f"{spec.name}: cannot pass its rated flow", err=True)
+        for problem in problems:
+            typer.echo(f"error: {problem}", err=True)
+        raise typer.Exit(code=1)
+    try:
+        model_point = design_point(spec, model=model)
+        line = design_line(spec, load_values, model=model)
+    except DesignError as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=1) from None
+    console = Console()
+    console.print(f"{spec.name}: consistent: the model passes the rated flow "
+                  f"({spec.design.main_steam_flow * 3.6:.0f} t/h) with a governing valve "
+                  "left for overload")
+    console.print(_design_point_table(model_point))
+    console.print(_line_table(spec, line))
+    if csv is not None:
+        _line_in_engineering_units(spec, line).to_csv(csv, float_format="%.6g")
+        console.print(f"wrote the design line ({len(line)} loads) to {csv}")
+
+
+def _load(turbine: str) -> TurbineSpec:
+    try:
+        return load_spec(turbine)
+    except SpecError as error:
+        raise typer.BadParameter(str(error), param_hint="TURBINE") from None
+
+
+def _parse_loads(spec: TurbineSpec, text: str) -> np.ndarray:
+    try:
+        return checked_loads(spec, [float(item) for item in text.split(",")])
+    except DesignError as error:
+        raise typer.BadParameter(str(error), param_hint="--loads") from None
+    except ValueError:
+        raise typer.BadParameter(f"{text!r}: expected comma-separated load fractions, e.g. "
+                                 "1,0.75,0.5", param_hint="--loads") from None
+
+
+def _heat_balance_table(spec: TurbineSpec, model_point: pd.DataFrame | None) -> Table:
     design = spec.design
-    table = Table(title="Design heat balance (rated load)")
+    title = "Design heat balance (rated load)" + (
+        ", the model's own design point beside it" if model_point is not None else "")
+    table = Table(title=title)
     table.add_column("quantity")
     table.add_column("value", justify="right")
+    if model_point is not None:
+        table.add_column("model", justify="right")
+        table.add_column("model − spec", justify="right")
+    predicted = _design_point_rows(model_point) if model_point is not None else {}
     rows = [
         ("main-steam pressure", f"{design.main_steam_pressure / 1e6:.2f} MPa"),
-        ("main-steam temperature", f"{design.main_steam_temperature - 273.15:.1f} °C"),
+        ("main-steam temperature", f"{design.main_steam_temperature - _KELVIN:.1f} °C"),
         ("main-steam flow", f"{design.main_steam_flow * 3.6:.0f} t/h"),
         ("control-stage pressure", f"{design.control_stage_pressure / 1e6:.2f} MPa"),
         ("HP-exhaust pressure", f"{design.hp_exhaust_pressure / 1e6:.2f} MPa"),
-        ("HP-exhaust temperature", f"{design.hp_exhaust_temperature - 273.15:.1f} °C"),
+        ("HP-exhaust temperature", f"{design.hp_exhaust_temperature - _KELVIN:.1f} °C"),
         ("HP power", f"{design.hp_power / 1e6:.1f} MW"),
         ("generator power", f"{design.generator_power / 1e6:.0f} MW"),
         ("speed", f"{design.rotational_speed * 60 / (2 * math.pi):.0f} rpm"),
@@ -53,7 +168,59 @@ def _heat_balance_table(spec: TurbineSpec) -> Table:
                      f"{extraction.design_flow * 3.6:.0f} t/h at "
                      f"{extraction.design_pressure / 1e6:.2f} MPa"))
     for name, value in rows:
-        table.add_row(name, value)
+        extra = predicted.get(name, ("", "", ""))[1:] if model_point is not None else ()
+        table.add_row(name, value, *extra)
+    return table
+
+
+def _design_point_rows(model_point: pd.DataFrame) -> dict[str, tuple[str, str, str]]:
+    """Quantity → (spec, model, model − spec) in engineering units."""
+    p1, t_ex, power = (model_point.loc[name] for name in
+                       ("control_stage_pressure", "hp_exhaust_temperature", "hp_power"))
+    return {
+        "control-stage pressure": (
+            f"{p1.spec / 1e6:.2f} MPa", f"{p1.model / 1e6:.3f} MPa",
+            f"{p1.difference / 1e6:+.3f} MPa ({p1.difference / p1.spec:+.2%})"),
+        "HP-exhaust temperature": (
+            f"{t_ex.spec - _KELVIN:.1f} °C", f"{t_ex.model - _KELVIN:.2f} °C",
+            f"{t_ex.difference:+.2f} K"),
+        "HP power": (
+            f"{power.spec / 1e6:.1f} MW", f"{power.model / 1e6:.2f} MW",
+            f"{power.difference / 1e6:+.2f} MW ({power.difference / power.spec:+.2%})"),
+    }
+
+
+def _design_point_table(model_point: pd.DataFrame) -> Table:
+    table = Table(title="Design point (rated load): heat balance and model")
+    for column in ("quantity", "spec", "model", "model − spec"):
+        table.add_column(column, justify="right" if column != "quantity" else "left")
+    for name, values in _design_point_rows(model_point).items():
+        table.add_row(name, *values)
+    return table
+
+
+def _line_in_engineering_units(spec: TurbineSpec, line: pd.DataFrame) -> pd.DataFrame:
+    """The design line with the unit in each column name (MPa, degC, t/h, MW, %)."""
+    shown = pd.DataFrame({csv_name: convert(line[name].to_numpy())
+                          for name, (_, csv_name, convert) in _LINE_COLUMNS.items()})
+    for valve in spec.control_stage.valves:
+        shown[f"{valve.name}_opening_pct"] = line[f"{valve.name}_opening"].to_numpy() * 100
+    shown.insert(0, "load_pct", line.index.to_numpy() * 100)
+    return shown.set_index("load_pct")
+
+
+def _line_table(spec: TurbineSpec, line: pd.DataFrame) -> Table:
+    table = Table(title="The model's steady off-design line (sliding pressure); a valve's "
+                        "opening is its nozzle group's flow as a share of its wide-open flow")
+    shown = _line_in_engineering_units(spec, line)
+    table.add_column("load")
+    for load in shown.index:
+        table.add_column(f"{load:g} %", justify="right")
+    headers = [*(header for header, _, _ in _LINE_COLUMNS.values()),
+               *(f"{valve.name} opening (%)" for valve in spec.control_stage.valves)]
+    decimals = [2, 1, 0, 3, 1, 3, 1, 1, 1, 1] + [1] * len(spec.control_stage.valves)
+    for header, column, d in zip(headers, shown.columns, decimals, strict=True):
+        table.add_row(header, *(f"{value:.{d}f}" for value in shown[column]))
     return table
 
 
