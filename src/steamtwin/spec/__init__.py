@@ -1,5 +1,14 @@
 """Turbine description: TOML in, validated SI dataclasses out."""
 
+from steamtwin.spec.heat_balance import (
+    HeatBalance,
+    HeatBalanceError,
+    HeatBalanceExtraction,
+    HeatBalancePoint,
+    MachineDescription,
+    load_heat_balance,
+    parse_heat_balance,
+)
 from steamtwin.spec.loader import SpecError, load_spec, parse_spec
 from steamtwin.spec.turbine import (
     ControlStage,
@@ -19,6 +28,11 @@ __all__ = [
     "DesignPoint",
     "Extraction",
     "GoverningValve",
+    "HeatBalance",
+    "HeatBalanceError",
+    "HeatBalanceExtraction",
+    "HeatBalancePoint",
+    "MachineDescription",
     "Material",
     "MetalGroup",
     "PressureStage",
@@ -26,6 +40,8 @@ __all__ = [
     "SpecError",
     "StageGeometry",
     "TurbineSpec",
+    "load_heat_balance",
     "load_spec",
+    "parse_heat_balance",
     "parse_spec",
 ]
