@@ -106,7 +106,7 @@ def cone_capacity(flow: float, p_in: float, h_in: float, p_out: float) -> float:
 def cone_inlet_pressure(capacity: float, flow: float, h_in: float, p_out: float) -> float:
     """Inlet pressure at which the cone law passes ``flow`` (bisection), Pa."""
     lo, hi = p_out * 1.0001, p_out * 20.0
-    for _ in range(80):
+    for _ in range(50):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if cone_capacity(flow, mid, h_in, p_out) > capacity else (lo, mid)
     return 0.5 * (lo + hi)
@@ -160,10 +160,13 @@ def point(load: float, flow: float, t0: float, eta_cs: float, eta_ps: float,
         bleed1, bleed2, t_fw = heater_bleeds(flow, p0, p_bleed, h_bleed, p_exh, h_exh)
         if design is None:
             break
+        previous = p_cs
         p_bleed = cone_inlet_pressure(design["k_b"], stage_flow - bleed1, h_bleed, p_exh)
         p_cs = cone_inlet_pressure(design["k_a"], stage_flow, h_cs, p_bleed)
         if flow <= THA_FLOW:
             p_valve = min(p0 * (1.0 - WIDE_OPEN_DROP), p_cs / design["ratio"])
+        if abs(p_cs - previous) < 1e-8 * p_cs:
+            break
     power = flow * (h0 - h_cs) + stage_flow * (h_cs - h_bleed) + (stage_flow - bleed1) * (
         h_bleed - h_exh)
     return {

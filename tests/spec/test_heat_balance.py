@@ -11,9 +11,11 @@ from __future__ import annotations
 import copy
 import json
 import re
+import runpy
 import tomllib
 from collections.abc import Callable
 from importlib import resources
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -26,7 +28,11 @@ from steamtwin.spec import (
     load_heat_balance,
     parse_heat_balance,
 )
+from steamtwin.spec.heat_balance import HEAT_BALANCE_KEYS
 from steamtwin.steam import if97
+
+ROOT = Path(__file__).resolve().parents[2]
+TOOL = ROOT / "tools" / "make_example_heat_balance.py"
 
 EXAMPLE_TEXT = (resources.files("steamtwin.spec") / "data" /
                 "example-600mw-heat-balance.toml").read_text(encoding="utf-8")
@@ -133,6 +139,12 @@ def test_example_loads_in_si_units():
     assert kit.source.endswith("example-600mw-heat-balance.toml")
 
 
+def test_example_is_what_the_tool_computes(capsys):
+    """The shipped kit is reproducible: tools/make_example_heat_balance.py prints it."""
+    runpy.run_path(str(TOOL), run_name="__main__")
+    assert capsys.readouterr().out == EXAMPLE_TEXT
+
+
 def test_example_is_not_the_reference_unit(reference_spec):
     tha = parse_heat_balance(EXAMPLE_TEXT).point("THA")
     design = reference_spec.design
@@ -160,6 +172,12 @@ def test_issue_snippet_loads():
 def test_control_stage_temperature_is_optional():
     kit = _parse(lambda d: [p.pop("control_stage_temperature") for p in d["points"]])
     assert all(p.control_stage_temperature_k is None for p in kit.points)
+
+
+def test_docs_describe_every_field():
+    docs = (ROOT / "docs" / "heat-balance.md").read_text(encoding="utf-8")
+    documented = set(re.findall(r"^\| `(\w+)` \|", docs, re.MULTILINE))
+    assert documented == set().union(*HEAT_BALANCE_KEYS.values())
 
 
 def test_point_lookup_names_the_labels():
