@@ -81,9 +81,10 @@ def consistency_problems(spec: TurbineSpec, model: FullOrderModel | None = None)
     spec) reuses a model already designed; otherwise one is built (the first run compiles the
     kernel, ~20 s).
     """
-    problems = _spec_problems(spec)
-    if any("open_at_design" in problem for problem in problems):
-        return problems  # the model's design step would only fail with a less telling reason
+    problems = _sliding_line_problems(spec)
+    if all(valve.open_at_design for valve in spec.control_stage.valves):
+        # the model's design step would only fail with a less telling reason
+        return [_all_valves_open_problem(spec), *problems]
     model = _model_of(spec, model)
     try:
         _ = model.design_
@@ -177,25 +178,28 @@ def valve_openings(spec: TurbineSpec, admission_arc: float) -> dict[str, float]:
     return {valve.name: openings[valve.name] for valve in valves}
 
 
-def _spec_problems(spec: TurbineSpec) -> list[str]:
-    """Problems visible in the spec itself, before the model runs."""
-    problems = []
+def _all_valves_open_problem(spec: TurbineSpec) -> str:
+    """What goes wrong, in plant terms, when every governing valve is open at rated load."""
     valves = spec.control_stage.valves
-    if all(valve.open_at_design for valve in valves):
-        last = max(valve.opening_order for valve in valves)
-        names = ", ".join(valve.name for valve in valves if valve.opening_order == last)
-        design = spec.design
-        problems.append(
-            f"turbine {spec.name!r}: every governing valve is open at rated load "
-            f"(control_stage.valves[*].open_at_design = true), so rated flow is the valves' "
-            f"full capacity: the nozzles are sized to pass exactly design.main_steam_flow "
-            f"({design.main_steam_flow * 3.6:.0f} t/h) at design.control_stage_pressure "
-            f"({design.control_stage_pressure / 1e6:.2f} MPa) with no valve left to open, and "
-            f"any higher control-stage pressure (the model's first steam-path sweep passes "
-            f"through one) or any flow above rated leaves them short of it; the model cannot "
-            f"solve the design point. A nozzle-governed unit reaches rated load at a valve "
-            f"point with a valve still closed (its overload reserve): set open_at_design = "
-            f"false on {names} (opening_order {last})")
+    last = max(valve.opening_order for valve in valves)
+    names = ", ".join(valve.name for valve in valves if valve.opening_order == last)
+    design = spec.design
+    return (
+        f"turbine {spec.name!r}: every governing valve is open at rated load "
+        f"(control_stage.valves[*].open_at_design = true), so rated flow is the valves' "
+        f"full capacity: the nozzles are sized to pass exactly design.main_steam_flow "
+        f"({design.main_steam_flow * 3.6:.0f} t/h) at design.control_stage_pressure "
+        f"({design.control_stage_pressure / 1e6:.2f} MPa) with no valve left to open, and "
+        f"any higher control-stage pressure (the model's first steam-path sweep passes "
+        f"through one) or any flow above rated leaves them short of it; the model cannot "
+        f"solve the design point. A nozzle-governed unit reaches rated load at a valve "
+        f"point with a valve still closed (its overload reserve): set open_at_design = "
+        f"false on {names} (opening_order {last})")
+
+
+def _sliding_line_problems(spec: TurbineSpec) -> list[str]:
+    """The sliding-pressure line must reach rated load at the design main-steam pressure."""
+    problems = []
     line = spec.sliding_pressure
     if line.load_fraction[-1] < 1.0:
         problems.append(
