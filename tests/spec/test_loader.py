@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from steamtwin.spec import SpecError, load_spec, parse_spec
+from steamtwin.spec.turbine import PartLoad
 
 REFERENCE_TEXT = (resources.files("steamtwin.spec") / "data" / "reference.toml").read_text()
 
@@ -190,3 +191,13 @@ def test_an_unreadable_spec_file_is_named(tmp_path, monkeypatch):
     monkeypatch.setattr(type(path), "read_bytes", refuse)
     with pytest.raises(SpecError, match=r"unit\.toml: cannot read the turbine spec: Permission"):
         load_spec(path)
+
+
+def test_part_load_table_is_optional_and_each_field_defaults(reference_spec):
+    text = REFERENCE_TEXT
+    assert reference_spec.part_load == PartLoad()
+    spec = parse_spec(text + "\n[part_load]\nreynolds_exponent = 0.2\n", "unit.toml")
+    assert spec.part_load == PartLoad(reynolds_exponent=0.2)
+    with pytest.raises(SpecError, match=r"unit\.toml: part_load\.flow_capacity_multiplier = 2\.0 "
+                                        r"is outside the valid range \[0\.8, 1\.25\]"):
+        parse_spec(text + "\n[part_load]\nflow_capacity_multiplier = 2.0\n", "unit.toml")

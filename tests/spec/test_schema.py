@@ -78,8 +78,8 @@ def _located(field: Field) -> tuple[list[str | int], str, str]:
 def _with(document: dict[str, Any], keys: list[str | int], value: Any) -> dict[str, Any]:
     changed = copy.deepcopy(document)
     node: Any = changed
-    for key in keys[:-1]:
-        node = node[key]
+    for key in keys[:-1]:  # an optional table the reference leaves out is added
+        node = node.setdefault(key, {}) if isinstance(key, str) else node[key]
     node[keys[-1]] = value
     return changed
 

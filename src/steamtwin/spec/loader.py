@@ -17,6 +17,7 @@ from __future__ import annotations
 import itertools
 import tomllib
 from collections.abc import Mapping
+from dataclasses import fields
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -31,6 +32,7 @@ from steamtwin.spec.turbine import (
     GoverningValve,
     Material,
     MetalGroup,
+    PartLoad,
     PressureStage,
     SlidingPressureLine,
     StageGeometry,
@@ -48,11 +50,13 @@ BUILT_IN = ("reference",)
 _BLADING = frozenset({"mean_diameter", "blade_height", "blade_count", "reaction",
                       "nozzle_exit_angle", "peak_blade_efficiency", "friction_loss"})
 _MATERIAL = frozenset({"density", "specific_heat", "thermal_conductivity"})
+_PART_LOAD = frozenset(field.name for field in fields(PartLoad))
 
 #: The keys each table may hold, by its path without array positions ("" is the top level).
 SPEC_KEYS: Mapping[str, frozenset[str]] = {
     "": frozenset({"format_version", "name", "description", "sensors", "design",
-                   "control_stage", "stages", "extractions", "metal", "sliding_pressure"}),
+                   "control_stage", "stages", "extractions", "metal", "sliding_pressure",
+                   "part_load"}),
     "design": frozenset({"main_steam_pressure", "main_steam_temperature", "main_steam_flow",
                          "control_stage_pressure", "hp_exhaust_pressure",
                          "hp_exhaust_temperature", "hp_power", "generator_power",
@@ -69,9 +73,12 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
     "metal.groups": frozenset({"name", "stages", "casing_mass", "casing_area", "rotor_mass",
                                "rotor_area", "insulation_conductance"}),
     "sliding_pressure": frozenset({"load_fraction", "pressure"}),
+    "part_load": _PART_LOAD,
 }
-#: Keys that may be left out (top level only): a unit without HP bleeds has no extractions.
-OPTIONAL_KEYS = frozenset({"extractions"})
+#: Keys that may be left out, by their path: a unit without HP bleeds has no extractions; the
+#: part-load laws and each of their fields have defaults (:class:`PartLoad`).
+OPTIONAL_KEYS = frozenset({"extractions", "part_load",
+                           *(f"part_load.{key}" for key in _PART_LOAD)})
 
 
 class SpecError(ValueError):
@@ -241,6 +248,8 @@ def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
         ambient_temperature=metal.quantity("ambient_temperature"),
         sliding_pressure=_sliding_pressure(document.table("sliding_pressure")),
         sensors=_sensors(document),
+        part_load=_part_load(document.table("part_load")) if "part_load" in document.data
+        else PartLoad(),
     )
     _check_consistency(spec, source)
     return spec
@@ -391,6 +400,11 @@ def _sliding_pressure(table: _Table) -> SlidingPressureLine:
         for number, value in enumerate(pressures, start=1)
     )
     return SlidingPressureLine(load_values, pressure_values)
+
+
+def _part_load(table: _Table) -> PartLoad:
+    """The part-load laws: the fields given, the others at their defaults."""
+    return PartLoad(**{key: table.quantity(key) for key in _PART_LOAD if key in table.data})
 
 
 def _sensors(document: _Table) -> tuple[str, ...]:

@@ -165,6 +165,7 @@ def _material(table: str, what: str) -> tuple[Field, ...]:
 
 
 HBD = "Rated-load (THA) heat-balance diagram of the OEM thermal kit"
+FIT = "Fitted to the thermal kit's part-load heat balances (steamtwin.model.design_fit)"
 
 #: Every field of the spec, in document order; tables and arrays of tables are fields too.
 FIELDS: tuple[Field, ...] = (
@@ -310,6 +311,34 @@ FIELDS: tuple[Field, ...] = (
           "Main-steam pressure at each load_fraction (same length).",
           "Sliding-pressure curve, pressure axis.", "Pa", "16.7 MPa", 1e5, 25e6,
           items="quantity", min_items=2),
+    Field("part_load", "table",
+          "Design-level part-load laws the off-design points of a thermal kit identify; every "
+          "field optional, the defaults leave the blading laws alone.",
+          f"`steamtwin turbine fit` against the thermal kit ({FIT}); else leave out.",
+          default="all defaults"),
+    Field("part_load.reynolds_exponent", "number",
+          "Exponent n of the pressure stages' Reynolds correction: each stage's loss 1 − η "
+          "grows as (m/m_design)^(−n) at part load (Reynolds number ∝ flow).",
+          f"{FIT}. Loss ∝ Re^(−0.1…−0.25) in the transition range [Traupel, Bd. 1, §7]; HP "
+          "part-load efficiency vs volume flow [Spencer, Cotton & Cannon 1963].",
+          example=0.2, low=0.0, high=0.5, default="0: no Reynolds correction"),
+    Field("part_load.admission_loss_multiplier", "number",
+          "Factor on the control stage's partial-admission losses (idle-arc windage and "
+          "sector-end loss, B_e = 0.15 and C_e = 0.012 m of a single-row wheel).",
+          f"{FIT}. The windage and sector-end coefficients of the literature spread by a factor "
+          "of 2-3 [Kang et al., §3.5; Traupel, Bd. 1, §8].",
+          example=1.0, low=0.2, high=4.0, default="1: the textbook coefficients"),
+    Field("part_load.control_stage_velocity_ratio_factor", "number",
+          "Factor on the control stage's optimum velocity ratio cos α1 / (2·sqrt(1 − R)) of "
+          "the ideal impulse blade: where its efficiency peaks against u/c0.",
+          f"{FIT}. Real single-row wheels peak at u/c0 ≈ 0.40-0.50, below the ideal "
+          "cos α1/2 ≈ 0.49 [Traupel, Bd. 1, §8; Cotton, ch. 6].",
+          example=1.0, low=0.8, high=1.25, default="1: the ideal blade's optimum"),
+    Field("part_load.flow_capacity_multiplier", "number",
+          "Factor on every pressure stage's Stodola flow capacity (stages[].flow_capacity).",
+          f"{FIT}: the control-stage pressures of the off-design points fix it [Stodola 1927; "
+          "Cooke 1985].", example=1.0, low=0.8, high=1.25,
+          default="1: the capacities as given"),
 )
 
 #: Each field by its path without array markers, as the loader looks it up.

@@ -131,6 +131,26 @@ class SlidingPressureLine:
 
 
 @dataclass(frozen=True)
+class PartLoad:
+    """Design-level part-load laws that a thermal kit's off-design points identify.
+
+    All dimensionless; the defaults leave the model's part-load behaviour as the blading laws
+    alone give it (the fit of :mod:`steamtwin.model.design_fit` adjusts them).
+
+    ``reynolds_exponent`` n: a pressure stage's loss 1 − η grows as (m/m_design)^(−n) (Reynolds
+    number ∝ flow). ``admission_loss_multiplier`` scales the control stage's partial-admission
+    losses (idle-arc windage and sector ends). ``control_stage_velocity_ratio_factor`` scales
+    the control stage's optimum velocity ratio. ``flow_capacity_multiplier`` scales every pressure
+    stage's Stodola flow capacity.
+    """
+
+    reynolds_exponent: float = 0.0
+    admission_loss_multiplier: float = 1.0
+    control_stage_velocity_ratio_factor: float = 1.0
+    flow_capacity_multiplier: float = 1.0
+
+
+@dataclass(frozen=True)
 class TurbineSpec:
     """A complete, validated turbine description (SI units)."""
 
@@ -147,3 +167,4 @@ class TurbineSpec:
     ambient_temperature: float
     sliding_pressure: SlidingPressureLine
     sensors: tuple[str, ...]
+    part_load: PartLoad = PartLoad()
