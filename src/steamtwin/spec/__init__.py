@@ -1,5 +1,6 @@
 """Turbine description: TOML in, validated SI dataclasses out."""
 
+from steamtwin.spec.derive import DerivedSpec, DeriveError, derive_spec
 from steamtwin.spec.heat_balance import (
     HeatBalance,
     HeatBalanceError,
@@ -25,6 +26,8 @@ from steamtwin.spec.turbine import (
 
 __all__ = [
     "ControlStage",
+    "DeriveError",
+    "DerivedSpec",
     "DesignPoint",
     "Extraction",
     "GoverningValve",
@@ -40,6 +43,7 @@ __all__ = [
     "SpecError",
     "StageGeometry",
     "TurbineSpec",
+    "derive_spec",
     "load_heat_balance",
     "load_spec",
     "parse_heat_balance",
