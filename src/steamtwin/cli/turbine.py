@@ -1,8 +1,10 @@
-"""``steamtwin turbine show|check``: a turbine spec, and the model's own design point and line.
+"""``steamtwin turbine show|check|derive``: a turbine spec, the model's own design point and
+line, and a spec derived from a heat balance.
 
 Both run the full-order model on the spec (``model.design_check``): ``show`` puts its design
 point beside the heat balance, ``check`` also refuses a spec that cannot pass its rated flow
-and runs the off-design line. Tables in engineering units (MPa, °C, t/h, MW, %).
+and runs the off-design line; ``derive`` writes a spec built from an OEM thermal kit
+(``spec.derive``). Tables in engineering units (MPa, °C, t/h, MW, %).
 """
 
 from __future__ import annotations
@@ -26,7 +28,15 @@ from steamtwin.model.design_check import (
     design_point,
 )
 from steamtwin.model.fom import FullOrderModel
-from steamtwin.spec import SpecError, TurbineSpec, load_spec
+from steamtwin.spec import (
+    DeriveError,
+    HeatBalanceError,
+    SpecError,
+    TurbineSpec,
+    derive_spec,
+    load_heat_balance,
+    load_spec,
+)
 
 turbine_app = typer.Typer(help="Inspect and check turbine specs.", no_args_is_help=True)
 
@@ -122,6 +132,38 @@ def check(
     if csv is not None:
         _line_in_engineering_units(spec, line).to_csv(csv, float_format="%.6g")
         console.print(f"wrote the design line ({len(line)} loads) to {csv}")
+
+
+@turbine_app.command("derive")
+def derive(
+    heat_balance: Path = typer.Argument(..., help="Heat-balance TOML (the OEM thermal kit, "
+                                        "see docs/heat-balance.md)."),
+    out: Path = typer.Option(..., "--out", help="Spec TOML to write."),
+    name: str | None = typer.Option(None, "--name", help="Name of the unit in the spec "
+                                    "(default: the heat balance's name)."),
+) -> None:
+    """Build a complete turbine spec from a heat balance, every derived figure commented with
+    how it was obtained (docs/heat-balance.md, 'Deriving a spec from a heat balance').
+
+    Exit code 2, with the point and field named, if no valid spec can be derived.
+
+    Example: steamtwin turbine derive heat-balance.toml --out unit.toml --name "Unit 3"
+    """
+    prepare_output_file(out, "--out")
+    try:
+        derived = derive_spec(load_heat_balance(heat_balance), name=name)
+    except (HeatBalanceError, DeriveError) as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=2) from None
+    out.write_text(derived.toml, encoding="utf-8")
+    for note in derived.notes:
+        typer.echo(f"note: {note}")
+    spec = load_spec(out)
+    typer.echo(f"wrote {out}: {spec.name!r}, {len(spec.stages)} pressure stages, "
+               f"{len(spec.control_stage.valves)} governing valves, design "
+               f"{spec.design.generator_power / 1e6:.0f} MW at "
+               f"{spec.design.main_steam_flow * 3.6:.0f} t/h; check it with "
+               f"'steamtwin turbine check {out}'")
 
 
 def _load(turbine: str) -> TurbineSpec:

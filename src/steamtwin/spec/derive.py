@@ -258,8 +258,9 @@ class _Writer:
         ``origin`` names the heat-balance point/field responsible in the error."""
         spec_field = FIELD_BY_KEY[schema_key]
         if not spec_field.contains(si_value):
+            where = origin if origin.startswith(self.source) else f"{self.source}: {origin}"
             raise DeriveError(
-                f"{self.source}: {origin}: the derived {schema_key} = {text.strip(chr(34))} is "
+                f"{where}: the derived {schema_key} = {text.strip(chr(34))} is "
                 f"outside the spec's range {spec_field.range_text(display=True)}")
         line = f"{key} = {text}"
         self.lines.append(f"{line:<40} # {comment}")
@@ -515,9 +516,10 @@ def derive_spec(heat_balance: HeatBalance, *, name: str | None = None) -> Derive
     _metal_block(w, hb, point, where, cs, expansion)
     _sliding_block(w, hb, point, where)
     notes.append(
-        f"pressure stages: efficiency {expansion.efficiency:.4f} at u/c0 = {STAGE_VELOCITY_RATIO} and root "
-        f"diameter {expansion.root_diameter:.4f} m reach {point.label}'s HP exhaust; control "
-        f"stage efficiency {cs.efficiency:.4f} at u/c0 = {cs.velocity_ratio:.3f}")
+        f"pressure stages: efficiency {expansion.efficiency:.4f} at u/c0 = "
+        f"{STAGE_VELOCITY_RATIO} and root diameter {expansion.root_diameter:.4f} m reach "
+        f"{point.label}'s HP exhaust; control stage efficiency {cs.efficiency:.4f} at u/c0 = "
+        f"{cs.velocity_ratio:.3f}")
     try:
         parse_spec(w.text, "<derived spec>")
     except SpecError as error:
@@ -797,5 +799,5 @@ def _sliding_block(w: _Writer, hb: HeatBalance, point: HeatBalancePoint, where: 
         if not FIELD_BY_KEY["sliding_pressure.pressure"].contains(value):
             raise DeriveError(f"{where}: main_steam_pressure: {value / 1e6:.4g} MPa is outside "
                               "the sliding-pressure line's range")
-    w.raw("load_fraction = [" + ", ".join(f"{f:.4f}" for f in fractions) + "]")
+    w.raw("load_fraction = [" + ", ".join(f"{f:.6g}" for f in fractions) + "]")
     w.raw("pressure = [" + ", ".join(_mpa(p) for p in pressures) + "]")
