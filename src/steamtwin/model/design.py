@@ -61,6 +61,7 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
     design = spec.design
     omega = design.rotational_speed
     cs = spec.control_stage
+    part_load = spec.part_load
     orders = sorted({valve.opening_order for valve in cs.valves})
     level_arc = np.array(
         [sum(v.admission_arc for v in cs.valves if v.opening_order == o) for o in orders]
@@ -113,12 +114,14 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         level_arc=level_arc,
         level_segments=level_segments,
         blade_speed=omega * cs.blading.mean_diameter / 2.0,
-        optimum_ratio=optimum_velocity_ratio(cs.blading.nozzle_exit_angle, cs.blading.reaction),
+        optimum_ratio=part_load.control_stage_velocity_ratio_factor
+        * optimum_velocity_ratio(cs.blading.nozzle_exit_angle, cs.blading.reaction),
         peak_efficiency=efficiency_scale * cs.blading.peak_blade_efficiency,
         friction_loss=cs.blading.friction_loss,
         diameter=cs.blading.mean_diameter,
         windage_area=WINDAGE_CONSTANT * math.pi * math.sin(cs.blading.nozzle_exit_angle)
         * cs.blading.mean_diameter * cs.blading.blade_height / 2.0,
+        admission_loss_multiplier=part_load.admission_loss_multiplier,
     )
     metal = MetalConstants(
         capacity=capacity,
@@ -134,7 +137,8 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
     return KernelConstants(
         control=control,
         metal=metal,
-        stage_capacity=np.array([s.flow_capacity for s in spec.stages]),
+        stage_capacity=part_load.flow_capacity_multiplier
+        * np.array([s.flow_capacity for s in spec.stages]),
         stage_blade_speed=np.array([omega * s.blading.mean_diameter / 2.0 for s in spec.stages]),
         stage_optimum_ratio=np.array(
             [optimum_velocity_ratio(s.blading.nozzle_exit_angle, s.blading.reaction)
@@ -143,6 +147,8 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         stage_peak_efficiency=efficiency_scale
         * np.array([s.blading.peak_blade_efficiency for s in spec.stages]),
         stage_friction_loss=np.array([s.blading.friction_loss for s in spec.stages]),
+        reynolds_exponent=part_load.reynolds_exponent,
+        design_flow=design.main_steam_flow,
         extraction_fraction=extraction_fraction,
         group_first_stage=np.array([group.stages[0] for group in groups], dtype=np.int64),
         group_ending_at_stage=np.array(

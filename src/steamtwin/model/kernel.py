@@ -135,6 +135,7 @@ class ControlStageConstants(NamedTuple):
     friction_loss: float
     diameter: float  # m
     windage_area: float  # m², B_e·π·sin α1·d·l/2 of the idle-arc windage power
+    admission_loss_multiplier: float  # on windage and sector-end loss (spec part_load)
 
 
 class MetalConstants(NamedTuple):
@@ -168,6 +169,8 @@ class KernelConstants(NamedTuple):
     stage_optimum_ratio: np.ndarray
     stage_peak_efficiency: np.ndarray  # with the design efficiency scale applied
     stage_friction_loss: np.ndarray
+    reynolds_exponent: float  # n of the stage loss (m/m_design)^(−n) (spec part_load)
+    design_flow: float  # kg/s, main-steam flow at rated load
     extraction_fraction: np.ndarray  # of throttle flow, bled after each stage
     group_first_stage: np.ndarray  # int, 0 = control stage
     group_ending_at_stage: np.ndarray  # int per stage 0…n: the group that ends there, or -1
@@ -292,10 +295,12 @@ def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params,
         return h0
     mean_drop = available / flow
     x_a = cs.blade_speed / math.sqrt(2.0 * mean_drop)
-    sector_end = SECTOR_END_CONSTANT * segments / (arc * cs.diameter) * x_a
+    sector_end = (cs.admission_loss_multiplier * SECTOR_END_CONSTANT * segments
+                  / (arc * cs.diameter) * x_a)
     h_mix = mixed / flow
     density = 1.0 / ph_property_at(tables, PH_V, cell_1, coordinate_1, p1, h_mix)
-    windage = windage_power(cs.windage_area, 1.0 - arc, density, cs.blade_speed)
+    windage = cs.admission_loss_multiplier * windage_power(cs.windage_area, 1.0 - arc, density,
+                                                           cs.blade_speed)
     disc = DISC_FRICTION_CONSTANT * density * cs.blade_speed**3 * cs.diameter**2
     loss_power = sector_end * available + friction_coefficient * (windage + disc)
     h1 = h_mix + loss_power / flow
@@ -442,7 +447,10 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
         heat_total += heat
         enthalpies[0] = h1 - heat / flow
         power = cs_out[1]
-        # 3. forward sweep over the pressure stages
+        # 3. forward sweep over the pressure stages; the Reynolds correction raises each
+        # stage's loss 1 − η by the factor (m/m_design)^(−n), added as (1 − η)·(factor − 1) so
+        # that n = 0 leaves η bit for bit
+        reynolds_excess = (flow / c.design_flow) ** -c.reynolds_exponent - 1.0
         stage_flow = flow
         extraction_energy = 0.0
         cell_in, coordinate_in = locate_pressure(tables, pressures[0])
@@ -454,6 +462,7 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             efficiency = stage_efficiency(velocity_ratio, c.stage_optimum_ratio[i],
                                           c.stage_peak_efficiency[i],
                                           params[1] * c.stage_friction_loss[i])
+            efficiency = max(efficiency - (1.0 - efficiency) * reynolds_excess, 0.0)
             h_out = enthalpies[i] - efficiency * drop
             power += stage_flow * efficiency * drop
             g = c.group_ending_at_stage[i + 1]

@@ -19,6 +19,11 @@ Equations and their sources:
   for: with the flow through the admitting arc m/e = ρ·c1·π·d·l·sin α1 and c1 ≈ c_a = sqrt(2·E0),
   ζ_w·m·E0 = (B_e·π·sin α1/2)·(1 − e)·ρ·d·l·u³ — the idle blades pump whatever the flow, which
   keeps the loss finite as a valve closes (Stodola's windage form, ∝ ρ·u³·d·l·(1 − e)).
+* Part-load laws of the spec's ``[part_load]`` table (fitted to a thermal kit by
+  ``model.design_fit``): a factor on both admission losses; a Reynolds correction of each
+  pressure stage, loss 1 − η ∝ Re^(−n) with Re ∝ m at the stage (Traupel, *Thermische
+  Turbomaschinen* Bd. 1, §7: n ≈ 0.1–0.25 in the transition range; Spencer, Cotton & Cannon,
+  ASME J. Eng. Power 85 (1963) 249–301, for HP part-load efficiency).
 """
 
 from __future__ import annotations
