@@ -1,10 +1,12 @@
-"""``steamtwin turbine show|check|derive``: a turbine spec, the model's own design point and
-line, and a spec derived from a heat balance.
+"""``steamtwin turbine show|check|derive|fit``: a turbine spec, the model's own design point and
+line, a spec derived from a heat balance and its part-load laws fitted to it.
 
-Both run the full-order model on the spec (``model.design_check``): ``show`` puts its design
-point beside the heat balance, ``check`` also refuses a spec that cannot pass its rated flow
-and runs the off-design line; ``derive`` writes a spec built from an OEM thermal kit
-(``spec.derive``). Tables in engineering units (MPa, °C, t/h, MW, %).
+``show`` and ``check`` run the full-order model on the spec (``model.design_check``): ``show``
+puts its design point beside the heat balance, ``check`` also refuses a spec that cannot pass
+its rated flow, runs the off-design line and, with ``--heat-balance``, puts the model beside
+every point of a thermal kit; ``derive`` writes a spec built from an OEM thermal kit
+(``spec.derive``); ``fit`` adjusts the spec's ``[part_load]`` laws to the kit
+(``model.design_fit``). Tables in engineering units (MPa, °C, t/h, MW, %).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import numpy as np
 import pandas as pd
 import typer
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 
 from steamtwin.cli.paths import prepare_output_file
@@ -27,10 +30,21 @@ from steamtwin.model.design_check import (
     design_line,
     design_point,
 )
+from steamtwin.model.design_fit import (
+    RESIDUALS,
+    DesignFit,
+    DesignFitError,
+    fit_design,
+    fitted_spec_toml,
+    point_residuals,
+)
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.spec import (
+    BUILT_IN,
     DeriveError,
+    HeatBalance,
     HeatBalanceError,
+    HeatBalancePoint,
     SpecError,
     TurbineSpec,
     derive_spec,
@@ -96,19 +110,27 @@ def check(
     csv: Path | None = typer.Option(
         None, "--csv", help="Also write the design line to this CSV (engineering units, the "
                             "unit in each column name)."),
+    heat_balance: Path | None = typer.Option(
+        None, "--heat-balance", help="Thermal kit (TOML, docs/heat-balance.md): also run the "
+        "model at every point's inputs and put it beside the kit's figures."),
 ) -> None:
     """Check that the model can pass the spec's rated flow, then print its design point beside
     the heat balance and its steady off-design line (MPa, °C, t/h, MW, %).
 
-    Exit code 1 with the reason when the spec cannot pass its rated flow (e.g. every governing
-    valve open at design) or the model cannot run one of the loads.
+    With --heat-balance the model runs at each point's main-steam pressure, temperature and flow
+    and HP-exhaust pressure, beside the kit's control-stage pressure and temperature and
+    HP-exhaust temperature; points outside ±0.5 % / ±1.0 K are marked.
 
-    Example: steamtwin turbine check reference --loads 1,0.75,0.5,0.4,0.3 --csv line.csv
+    Exit code 1 with the reason when the spec cannot pass its rated flow (e.g. every governing
+    valve open at design) or the model cannot run one of the loads or points.
+
+    Example: steamtwin turbine check unit.toml --heat-balance kit.toml --csv line.csv
     """
     if csv is not None:
         prepare_output_file(csv, "--csv")
     spec = _load(turbine)
     load_values = _parse_loads(spec, loads)
+    kit = _load_heat_balance(heat_balance) if heat_balance is not None else None
     model = FullOrderModel(spec)
     with Console(stderr=True).status(_PREPARING):
         problems = consistency_problems(spec, model)
@@ -132,6 +154,59 @@ def check(
     if csv is not None:
         _line_in_engineering_units(spec, line).to_csv(csv, float_format="%.6g")
         console.print(f"wrote the design line ({len(line)} loads) to {csv}")
+    if kit is not None:
+        try:
+            residuals = point_residuals(spec, kit)
+        except DesignFitError as error:
+            typer.echo(f"error: {error}", err=True)
+            raise typer.Exit(code=1) from None
+        console.print(_kit_table(kit, residuals, f"The model at the points of {kit.source}"))
+        _say_outside(residuals)
+
+
+@turbine_app.command("fit")
+def fit(
+    turbine: str = typer.Argument(..., help="'reference' or a path to a turbine spec TOML "
+                                  "(e.g. from 'steamtwin turbine derive')."),
+    heat_balance: Path = typer.Option(..., "--heat-balance", help="Thermal kit (TOML, "
+                                      "docs/heat-balance.md) whose points the model must meet."),
+    out: Path = typer.Option(..., "--out", help="Spec TOML to write: the input with its "
+                             "[part_load] table replaced by the fitted laws."),
+    parameters: str | None = typer.Option(
+        None, "--parameters", help="Comma-separated [part_load] fields to fit (default: all; "
+        "see docs/spec.md)."),
+) -> None:
+    """Fit the spec's part-load laws so the model meets every point of a thermal kit.
+
+    Bounded least squares on the model − kit residuals (control-stage pressure %, control-stage
+    and HP-exhaust temperature K) weighted by the acceptance band ±0.5 % / ±1.0 K; prints the
+    residuals before and after, the fitted laws and which points pin each one down, and writes
+    the fitted spec. Exit code 1 when a residual stays outside the band (the spec is written).
+
+    Example: steamtwin turbine fit unit.toml --heat-balance kit.toml --out fitted.toml
+    """
+    prepare_output_file(out, "--out")
+    spec = _load(turbine)
+    text = _spec_text(turbine)
+    kit = _load_heat_balance(heat_balance)
+    names = (tuple(name.strip() for name in parameters.split(",") if name.strip())
+             if parameters is not None else None)
+    try:
+        with Console(stderr=True).status(f"fitting the part-load laws to {len(kit.points)} "
+                                         "points"):
+            result = (fit_design(spec, kit) if names is None
+                      else fit_design(spec, kit, parameters=names))
+    except DesignFitError as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=2) from None
+    out.write_text(fitted_spec_toml(text, result.part_load), encoding="utf-8")
+    console = Console()
+    console.print(_kit_table(kit, result.initial_residuals, "Before the fit"))
+    console.print(_kit_table(kit, result.residuals, "After the fit"))
+    console.print(_fit_table(result))
+    typer.echo(f"{result.evaluations} model evaluations in {result.wall_time_s:.1f} s; "
+               f"wrote {out}")
+    _say_outside(result.residuals)
 
 
 @turbine_app.command("derive")
@@ -164,6 +239,91 @@ def derive(
                f"{spec.design.generator_power / 1e6:.0f} MW at "
                f"{spec.design.main_steam_flow * 3.6:.0f} t/h; check it with "
                f"'steamtwin turbine check {out}'")
+
+
+_BAND = {"control_stage_pressure_pct": 0.5, "control_stage_temperature_k": 1.0,
+         "hp_exhaust_temperature_k": 1.0}
+"""Issue 17's acceptance band of the design model against a thermal kit (% or K)."""
+
+
+def _load_heat_balance(path: Path) -> HeatBalance:
+    try:
+        return load_heat_balance(path)
+    except HeatBalanceError as error:
+        raise typer.BadParameter(str(error), param_hint="--heat-balance") from None
+
+
+def _spec_text(turbine: str) -> str:
+    """The spec's TOML text (the built-in's from the package)."""
+    if turbine in BUILT_IN:
+        from importlib import resources
+
+        return (resources.files("steamtwin.spec") / "data" / f"{turbine}.toml").read_text(
+            encoding="utf-8")
+    return Path(turbine).read_text(encoding="utf-8-sig")
+
+
+def _kit_value(point: HeatBalancePoint, column: str) -> float | None:
+    """The kit's figure behind a residual column, in MPa or °C (None: not given)."""
+    if column == "control_stage_pressure_pct":
+        return point.control_stage_pressure_pa / 1e6
+    kelvin = (point.control_stage_temperature_k if column == "control_stage_temperature_k"
+              else point.hp_exhaust_temperature_k)
+    return None if kelvin is None else kelvin - _KELVIN
+
+
+def _kit_table(kit: HeatBalance, residuals: pd.DataFrame, title: str) -> Table:
+    """Kit vs model per point: p1 (MPa), T1 and T ex (°C) with the difference; '!' outside the
+    acceptance band."""
+    table = Table(title=title)
+    table.add_column("point")
+    table.add_column("load (MW)", justify="right")
+    for header in ("p1 (MPa)", "T1 (°C)", "T ex (°C)"):
+        table.add_column(f"{header} kit → model", justify="right")
+    for point, (label, row) in zip(kit.points, residuals.iterrows(), strict=True):
+        cells = [str(label), f"{point.load_w / 1e6:.1f}"]
+        for column in RESIDUALS:
+            given, difference = _kit_value(point, column), float(row[column])
+            if given is None or not math.isfinite(difference):
+                cells.append("–")
+                continue
+            flag = " !" if abs(difference) > _BAND[column] else ""
+            if column == "control_stage_pressure_pct":
+                model = given * (1.0 + difference / 100.0)
+                cells.append(f"{given:.3f} → {model:.3f} ({difference:+.2f} %){flag}")
+            else:
+                cells.append(f"{given:.1f} → {given + difference:.1f} ({difference:+.2f} K)"
+                             f"{flag}")
+        table.add_row(*cells)
+    return table
+
+
+def _fit_table(result: DesignFit) -> Table:
+    """Fitted laws, their start values and the points that pin each one down (share ≥ 20 %)."""
+    table = Table(title=escape("Fitted [part_load] laws (docs/spec.md)"))
+    for header in ("law", "spec", "fitted", "identified mostly by"):
+        table.add_column(header, justify="left" if header in ("law", "identified mostly by")
+                         else "right")
+    for name in result.parameters:
+        shares = result.identified_share[name]
+        strong = ", ".join(f"{label} {share:.0%}" for label, share
+                           in shares.sort_values(ascending=False).items() if share >= 0.2)
+        if name in result.unidentified:
+            strong = "not identified by these points (kept near its start)"
+        table.add_row(name, f"{getattr(result.initial_part_load, name):.4g}",
+                      f"{getattr(result.part_load, name):.4g}", strong or "–")
+    return table
+
+
+def _say_outside(residuals: pd.DataFrame) -> None:
+    """Exit 1 naming the points outside the acceptance band."""
+    outside = [f"{label} ({column.rsplit('_', 1)[0]} {float(row[column]):+.2f} "
+               f"{'%' if column.endswith('pct') else 'K'})"
+               for label, row in residuals.iterrows() for column in RESIDUALS
+               if math.isfinite(float(row[column])) and abs(float(row[column])) > _BAND[column]]
+    if outside:
+        typer.echo(f"outside ±0.5 % / ±1.0 K: {'; '.join(outside)}", err=True)
+        raise typer.Exit(code=1)
 
 
 def _load(turbine: str) -> TurbineSpec:

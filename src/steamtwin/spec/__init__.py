@@ -10,7 +10,7 @@ from steamtwin.spec.heat_balance import (
     load_heat_balance,
     parse_heat_balance,
 )
-from steamtwin.spec.loader import SpecError, load_spec, parse_spec
+from steamtwin.spec.loader import BUILT_IN, SpecError, load_spec, parse_spec
 from steamtwin.spec.turbine import (
     ControlStage,
     DesignPoint,
@@ -18,6 +18,7 @@ from steamtwin.spec.turbine import (
     GoverningValve,
     Material,
     MetalGroup,
+    PartLoad,
     PressureStage,
     SlidingPressureLine,
     StageGeometry,
@@ -25,6 +26,7 @@ from steamtwin.spec.turbine import (
 )
 
 __all__ = [
+    "BUILT_IN",
     "ControlStage",
     "DeriveError",
     "DerivedSpec",
@@ -38,6 +40,7 @@ __all__ = [
     "MachineDescription",
     "Material",
     "MetalGroup",
+    "PartLoad",
     "PressureStage",
     "SlidingPressureLine",
     "SpecError",
