@@ -23,18 +23,18 @@ from steamtwin.calibration.report import (
 )
 from steamtwin.calibration.surrogate import SurrogateCalibrator
 from steamtwin.cli.paths import OutputPathError, prepare_output_file, prepare_output_folder
-from steamtwin.dcs.history import OVERRIDE_OPTION, DataQualityError, load_history
+from steamtwin.dcs.history import OVERRIDE_OPTION, DataQualityError, History, load_history
 from steamtwin.dcs.readers import HistorianFormatError
 from steamtwin.dcs.tagmap import TagMapError
 from steamtwin.dcs.windows import find_steady_windows, parse_window, select_window
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
-from steamtwin.spec import SpecError, load_spec
+from steamtwin.spec import SpecError, TurbineSpec, load_spec
 
 
 def _read_cleaned(data: Path, tags: Path, accept_errors: bool, console: Console
-                  ) -> pd.DataFrame:
+                  ) -> History:
     """The export through the quality gate (bad samples excluded); prints what it excluded."""
     history = load_history(data, tags, required=INPUT_SIGNALS, accept_errors=accept_errors)
     excluded = {name: n for name, n in history.excluded.items() if n}
@@ -44,7 +44,18 @@ def _read_cleaned(data: Path, tags: Path, accept_errors: bool, console: Console
                       "'steamtwin dcs check' lists why")
     for finding in history.report.errors:
         console.print(f"accepted data-quality error: {finding.message}")
-    return history.data
+    return history
+
+
+def _model(spec: TurbineSpec, history: History) -> FullOrderModel:
+    """The FOM, its readings lagged by the sensor time constants the tag map gives (none:
+    the model's temperatures as they are)."""
+    given = history.historian.tag_map.time_constants
+    if not given:
+        return FullOrderModel(spec)
+    outputs = FullOrderModel(spec).output_signals
+    return FullOrderModel(spec, sensor_time_constants={
+        name: tau for name, tau in given.items() if name in outputs})
 
 
 def _pick_windows(data: pd.DataFrame, window: list[str] | None, rated_load_w: float
@@ -118,9 +129,9 @@ def calibrate(
         if report is not None:
             prepare_output_folder(report, "--report")
         spec = load_spec(turbine)
-        cleaned = _read_cleaned(data, tags, accept_quality_errors, console)
-        windows = _pick_windows(cleaned, window, spec.design.generator_power)
-        model = FullOrderModel(spec)
+        history = _read_cleaned(data, tags, accept_quality_errors, console)
+        windows = _pick_windows(history.data, window, spec.design.generator_power)
+        model = _model(spec, history)
         with console.status("preparing the model (the first run compiles it, ~20 s)"):
             _ = model.design_
         columns = (TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn())
@@ -237,8 +248,8 @@ def calibrate_online(
     try:
         prepare_output_folder(out, "--out")
         spec = load_spec(turbine)
-        cleaned = _read_cleaned(data, tags, accept_quality_errors, console)
-        model = FullOrderModel(spec)
+        history = _read_cleaned(data, tags, accept_quality_errors, console)
+        model = _model(spec, history)
         with console.status("preparing the model (the first run compiles it, ~20 s)"):
             _ = model.design_
         columns = (TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn())
@@ -252,7 +263,7 @@ def calibrate_online(
                 progress=lambda f, m: bar.update(task, completed=f, description=m))
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", IdentifiabilityWarning)
-                online.run(cleaned)
+                online.run(history.data)
     except DataQualityError as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=1) from None

@@ -18,7 +18,7 @@ from steamtwin.dcs.readers import HistorianFormatError
 from steamtwin.dcs.tagmap import TagMap, TagMapError, load_tag_map
 from steamtwin.dcs.windows import find_steady_windows, parse_window, select_window
 from steamtwin.model.fom import FullOrderModel
-from steamtwin.model.measurement import TYPICAL_TIME_CONSTANTS_S
+from steamtwin.model.measurement import time_constants_for
 from steamtwin.model.parameters import ParameterError
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.rom.estimator import ExtrapolationWarning
@@ -52,8 +52,9 @@ def validate(
         "steady map)."),
     sensor_lag: bool = typer.Option(
         True, help="With --monitor fom: compare what the thermocouples read — the model's "
-        "temperatures through first-order lags of typical thermowells (control stage 20 s, "
-        "HP exhaust 30 s, casing metal 5 s)."),
+        "temperatures through first-order lags: the tag map's time_constant per signal where "
+        "given, else typical thermowells (control stage 20 s, HP exhaust 30 s, casing metal "
+        "5 s)."),
     field_check: bool = typer.Option(
         False, "--field-check", help="Also solve the FOM blade field at each window's mean "
         "conditions and compare it with the ROM's (Figure 9)."),
@@ -114,7 +115,7 @@ def validate(
                 result = run_validation(bundle, windows, report, settings=settings,
                                         timings=timings, field_check=reference,
                                         simulator=_monitoring_model(spec, monitor,
-                                                                    sensor_lag),
+                                                                    sensor_lag, tag_map),
                                         extra_sections=[quality_section(
                                             quality, "Data quality of the export (whole "
                                             "file, before windowing)")])
@@ -141,13 +142,17 @@ def validate(
                f"{len(result.tables)} CSV tables, figures)")
 
 
-def _monitoring_model(spec: TurbineSpec, monitor: str, sensor_lag: bool
+def _monitoring_model(spec: TurbineSpec, monitor: str, sensor_lag: bool, tag_map: TagMap
                       ) -> FullOrderModel | None:
-    """The FOM that monitors the steam path (None: the ROM does)."""
+    """The FOM that monitors the steam path (None: the ROM does), lagged like the plant's
+    sensors (the tag map's time constants, typical thermowells' otherwise)."""
     if monitor != "fom":
         return None
-    return FullOrderModel(spec, sensor_time_constants=TYPICAL_TIME_CONSTANTS_S
-                          if sensor_lag else None)
+    if not sensor_lag:
+        return FullOrderModel(spec)
+    outputs = FullOrderModel(spec).output_signals
+    return FullOrderModel(spec, sensor_time_constants=time_constants_for(
+        outputs, tag_map.time_constants))
 
 
 def _needed_signals(bundle: BladeRom, with_model: bool) -> tuple[str, ...]:

@@ -27,6 +27,8 @@ map (TOML) translates them to the canonical names of :data:`steamtwin.dcs.signal
     noise = 0.02                 # optional instrument white-noise σ, in `unit`
     resolution = 0.001           # optional historian quantum (smallest step), in `unit`
     max_rate = 0.05              # optional physical rate limit, in `unit` per second
+    time_constant = 20.0         # optional first-order sensor time constant τ, in s (a
+                                 # thermowell's, from its data sheet or a step test)
     quality_column = "CP001_Q"   # wide layout only, optional: this signal's quality column
 
 ``noise``, ``resolution`` and ``max_rate`` are differences, so they convert without the unit's
@@ -76,7 +78,11 @@ _HISTORIAN_KEYS = (
 )
 _LONG_ONLY = ("tag_column", "value_column", "quality_column")
 _QUALITY_KEYS = (*QUALITY_CLASSES, "exclude")
-_SIGNAL_KEYS = ("column", "unit", "range", "noise", "resolution", "max_rate", "quality_column")
+_SIGNAL_KEYS = ("column", "unit", "range", "noise", "resolution", "max_rate", "time_constant",
+                "quality_column")
+#: Longest sensor time constant accepted (s): heavy thermowells in slow steam reach a few
+#: minutes (ASME PTC 19.3 TW-2016, response-time discussion); ten minutes is no sensor's.
+MAX_TIME_CONSTANT_S = 600.0
 _DELTA_KEYS = {  # tag-map key → (TagSpec field, what it is, unit suffix)
     "noise": ("noise_si", "instrument white-noise standard deviation", ""),
     "resolution": ("resolution_si", "historian quantum", ""),
@@ -98,8 +104,9 @@ class TagSpec:
     ``valid_range_si`` is the optional valid range converted to the signal's SI unit
     (e.g. Pa, K, kg/s, W). ``noise_si`` (instrument white-noise σ), ``resolution_si``
     (historian quantum) and ``max_rate_si`` (physical rate limit, per second) are optional
-    differences in the SI unit (K, Pa, ...; per second for the rate). ``quality_column`` is the
-    wide layout's column holding this signal's quality, if any.
+    differences in the SI unit (K, Pa, ...; per second for the rate). ``time_constant_s`` is
+    the sensor's first-order time constant (s), which the model's readings are lagged by.
+    ``quality_column`` is the wide layout's column holding this signal's quality, if any.
     """
 
     signal: str
@@ -109,6 +116,7 @@ class TagSpec:
     noise_si: float | None = None
     resolution_si: float | None = None
     max_rate_si: float | None = None
+    time_constant_s: float | None = None
     quality_column: str | None = None
 
 
@@ -189,6 +197,12 @@ class TagMap:
                 f"{self.source}: signal {signal!r} is not mapped "
                 f"(mapped: {', '.join(self.signals)})"
             ) from None
+
+    @property
+    def time_constants(self) -> dict[str, float]:
+        """Sensor time constants (s) the map gives: signal → τ."""
+        return {name: spec.time_constant_s for name, spec in self.signals.items()
+                if spec.time_constant_s is not None}
 
     @property
     def has_quality(self) -> bool:
@@ -329,6 +343,8 @@ def write_tag_map(tag_map: TagMap, path: str | Path) -> None:
             value = getattr(spec, attribute)
             if value is not None:
                 lines.append(f"{key} = {_toml_float(_delta(value, si_unit, spec.unit))}")
+        if spec.time_constant_s is not None:
+            lines.append(f"time_constant = {_toml_float(spec.time_constant_s)}")
         if spec.quality_column is not None:
             lines.append(f"quality_column = {_toml_string(spec.quality_column)}")
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
@@ -392,6 +408,15 @@ def _tag_spec(name: str, entry: Any, layout: str, source: str) -> TagSpec:
             raise TagMapError(f"{where}.{key} = {value!r}: out of the representable range once "
                               f"converted to {si_unit}{per}")
         deltas[attribute] = converted
+    time_constant = None
+    if "time_constant" in entry:
+        time_constant = entry["time_constant"]
+        if (not isinstance(time_constant, int | float) or isinstance(time_constant, bool)
+                or not 0.0 <= time_constant <= MAX_TIME_CONSTANT_S):
+            raise TagMapError(f"{where}.time_constant = {time_constant!r}: expected the sensor's "
+                              f"first-order time constant in s, a number in [0, "
+                              f"{MAX_TIME_CONSTANT_S:g}]")
+        time_constant = float(time_constant)
     quality_column = None
     if "quality_column" in entry:
         if layout != "wide":
@@ -401,7 +426,7 @@ def _tag_spec(name: str, entry: Any, layout: str, source: str) -> TagSpec:
             )
         quality_column = _text(entry, "quality_column", f"signals.{name}", source)
     return TagSpec(signal=name, column=column, unit=unit, valid_range_si=valid_range,
-                   quality_column=quality_column, **deltas)
+                   time_constant_s=time_constant, quality_column=quality_column, **deltas)
 
 
 def _delta(value: float, from_unit: str, to_unit: str) -> float:
