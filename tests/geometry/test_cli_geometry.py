@@ -63,14 +63,20 @@ def test_assemble_and_uncertainty(tmp_path) -> None:
     result = runner.invoke(geometry_app, ["assemble", "--rows", "hp1,zz9", "--out", str(out)])
     assert result.exit_code == 2 and "zz9" in result.output
     json_path = tmp_path / "u.json"
-    result = runner.invoke(geometry_app, ["uncertainty", "--samples", "2", "--out",
-                                          str(json_path)])
+    result = runner.invoke(geometry_app, ["uncertainty", "--row", "hp13", "--samples", "2",
+                                          "--out", str(json_path)])
     assert result.exit_code == 0, result.output
     document = json.loads(json_path.read_text())
     assert document["samples"] == 2
     assert "largest deviation" in result.output
     assert (0.5 * document["hp_exhaust_temperature_spread_K"] - 1e-12
             <= document["hp_exhaust_temperature_max_deviation_K"])
+    assert document["stage"] == 12 and "stage 12's flow capacity alone" in result.output
+    result = runner.invoke(geometry_app, ["uncertainty", "--samples", "2"])
+    assert result.exit_code == 0 and "not propagated: hp1 is the control-stage rotor" in (
+        result.output)
+    result = runner.invoke(geometry_app, ["uncertainty", "--row", "ip2", "--samples", "2"])
+    assert result.exit_code == 2 and "not in the HP model" in result.output
 
 
 def test_preprocess_refuses_a_truncated_view(tmp_path) -> None:

@@ -585,6 +585,10 @@ def reconstruction_fidelity(blade: Blade, vertices: np.ndarray, triangles: np.nd
         sections[name] = (radius, truth, measured)
     _, truth, measured = sections["mid"]
     report = FidelityReport(blade.row, deviation, truth, measured, dict(extra or {}))
+    report.extra["throat_area"] = row_throat_area(
+        blade, np.array([radius for radius, _, _ in sections.values()]),
+        np.array([t.throat for _, t, _ in sections.values()]),
+        np.array([m.throat for _, _, m in sections.values()]))
     report.extra["sections"] = [
         {"section": name, "radius_mm": radius * 1e3,
          "metrics": FidelityReport(blade.row, deviation, t, m, {}).metric_rows()}
@@ -592,9 +596,24 @@ def reconstruction_fidelity(blade: Blade, vertices: np.ndarray, triangles: np.nd
     return report
 
 
+def row_throat_area(blade: Blade, radii: np.ndarray, design: np.ndarray, measured: np.ndarray
+                    ) -> dict[str, float | list[float]]:
+    """The row's throat area N·∫o(r)dr of the design blade and of the measured one, from the
+    throats (m) at ``radii`` (m), and their ratio — the multiplier of the stage's flow capacity
+    (:func:`~steamtwin.geometry.uncertainty.throat_area`); report units mm²."""
+    from steamtwin.geometry.uncertainty import throat_area
+
+    design_area = throat_area(blade, radii, design)
+    measured_area = throat_area(blade, radii, measured)
+    return {"design_mm2": design_area * 1e6, "measured_mm2": measured_area * 1e6,
+            "ratio": measured_area / design_area,
+            "radii_mm": [float(r) * 1e3 for r in radii]}
+
+
 def write_reconstruction_report(report: FidelityReport, path: str | Path) -> tuple[Path, Path]:
     """:func:`~steamtwin.geometry.fidelity.write_report`, with the hub and tip metrics added to
-    the CSV as ``<metric>@hub`` / ``<metric>@tip`` rows."""
+    the CSV as ``<metric>@hub`` / ``<metric>@tip`` rows and, when the report has it, the row's
+    throat area (:func:`row_throat_area`) as a ``throat_area`` row in mm²."""
     import csv
 
     from steamtwin.geometry.fidelity import write_report
@@ -608,6 +627,11 @@ def write_reconstruction_report(report: FidelityReport, path: str | Path) -> tup
                 continue
             for row in section["metrics"]:
                 writer.writerow({**row, "metric": f"{row['metric']}@{section['section']}"})
+        if "throat_area" in report.extra:
+            area = report.extra["throat_area"]
+            writer.writerow({"metric": "throat_area", "unit": "mm2",
+                             "truth": area["design_mm2"], "measured": area["measured_mm2"],
+                             "error": area["measured_mm2"] - area["design_mm2"]})
     return json_path, csv_path
 
 
