@@ -1,12 +1,14 @@
-"""``steamtwin turbine show|check|derive|fit``: a turbine spec, the model's own design point and
-line, a spec derived from a heat balance and its part-load laws fitted to it.
+"""``steamtwin turbine show|check|derive|fit|update``: a turbine spec, the model's own design
+point and line, a spec derived from a heat balance, its part-load laws fitted to it and the
+throat areas of scanned rows taken into it.
 
 ``show`` and ``check`` run the full-order model on the spec (``model.design_check``): ``show``
 puts its design point beside the heat balance, ``check`` also refuses a spec that cannot pass
 its rated flow, runs the off-design line and, with ``--heat-balance``, puts the model beside
 every point of a thermal kit; ``derive`` writes a spec built from an OEM thermal kit
 (``spec.derive``); ``fit`` adjusts the spec's ``[part_load]`` laws to the kit
-(``model.design_fit``). Tables in engineering units (MPa, °C, t/h, MW, %).
+(``model.design_fit``); ``update`` scales the flow capacities of the stages whose rotor rows
+were reconstructed (``geometry.into_spec``). Tables in engineering units (MPa, °C, t/h, MW, %).
 """
 
 from __future__ import annotations
@@ -239,6 +241,43 @@ def derive(
                f"{spec.design.generator_power / 1e6:.0f} MW at "
                f"{spec.design.main_steam_flow * 3.6:.0f} t/h; check it with "
                f"'steamtwin turbine check {out}'")
+
+
+@turbine_app.command("update")
+def update(
+    turbine: str = typer.Argument(..., help="Spec TOML to update (or a built-in name)."),
+    scans: Path = typer.Option(..., "--scans", help="Folder of reconstruction reports "
+                               "('geometry reconstruct … --report BASE' writes BASE.json)."),
+    out: Path = typer.Option(..., "--out", help="Updated spec TOML to write."),
+) -> None:
+    """Take the throat areas of reconstructed rows into the spec: the measured / design
+    throat-area ratio of rotor row hpK scales stages[K−1].flow_capacity, each changed line
+    commented with the row, the report file and the ratio (docs/geometry.md).
+
+    hp1 (the control-stage rotor) sets no flow in the model and IP rows are not in it: they
+    are listed, not applied. Exit code 2, naming the file and row, for a ratio outside
+    0.8–1.2, a report of another design blade or without the throat area.
+
+    Example: steamtwin turbine update unit.toml --scans scans/ --out updated.toml
+    """
+    from steamtwin.geometry.into_spec import ScanUpdateError, update_spec_from_scans
+
+    prepare_output_file(out, "--out")
+    spec = _load(turbine)
+    try:
+        result = update_spec_from_scans(_spec_text(turbine), spec, scans, source=turbine)
+    except ScanUpdateError as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=2) from None
+    out.write_text(result.toml, encoding="utf-8")
+    for row, stage, path, ratio, old, new in result.applied:
+        typer.echo(f"{row}: stages[{stage}].flow_capacity {old:.6g} → {new:.6g} m² (throat-area "
+                   f"ratio {ratio:.5f}, {path})")
+    for row, reason in result.not_applied.items():
+        typer.echo(f"{row}: {reason}")
+    if result.missing:
+        typer.echo(f"no report for: {', '.join(result.missing)} (flow capacities unchanged)")
+    typer.echo(f"wrote {out}: {len(result.applied)} flow capacities from {scans}")
 
 
 _BAND = {"control_stage_pressure_pct": 0.5, "control_stage_temperature_k": 1.0,
