@@ -447,3 +447,13 @@ def test_mutated_example_is_valid_or_refused_naming_the_file(kinds, index, unit,
     else:
         assert len(kit.points) >= 1
         assert np.all(np.diff(kit.loads_w) < 0)
+
+
+def test_the_shipped_kit_loads_by_its_name():
+    from steamtwin.spec.heat_balance import BUILT_IN_KITS
+
+    assert BUILT_IN_KITS == ("example-600mw",)
+    by_name = load_heat_balance("example-600mw")
+    path = resources.files("steamtwin.spec") / "data" / "example-600mw-heat-balance.toml"
+    assert by_name.points == load_heat_balance(str(path)).points
+    assert by_name.source == "built-in 'example-600mw'"

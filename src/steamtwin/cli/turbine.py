@@ -113,8 +113,9 @@ def check(
         None, "--csv", help="Also write the design line to this CSV (engineering units, the "
                             "unit in each column name)."),
     heat_balance: Path | None = typer.Option(
-        None, "--heat-balance", help="Thermal kit (TOML, docs/heat-balance.md): also run the "
-        "model at every point's inputs and put it beside the kit's figures."),
+        None, "--heat-balance", help="Thermal kit (TOML, docs/heat-balance.md, or "
+        "'example-600mw'): also run the model at every point's inputs and put it beside the "
+        "kit's figures."),
 ) -> None:
     """Check that the model can pass the spec's rated flow, then print its design point beside
     the heat balance and its steady off-design line (MPa, °C, t/h, MW, %).
@@ -171,7 +172,8 @@ def fit(
     turbine: str = typer.Argument(..., help="'reference' or a path to a turbine spec TOML "
                                   "(e.g. from 'steamtwin turbine derive')."),
     heat_balance: Path = typer.Option(..., "--heat-balance", help="Thermal kit (TOML, "
-                                      "docs/heat-balance.md) whose points the model must meet."),
+                                      "docs/heat-balance.md, or 'example-600mw') whose points "
+                                      "the model must meet."),
     out: Path = typer.Option(..., "--out", help="Spec TOML to write: the input with its "
                              "[part_load] table replaced by the fitted laws."),
     parameters: str | None = typer.Option(
@@ -214,7 +216,8 @@ def fit(
 @turbine_app.command("derive")
 def derive(
     heat_balance: Path = typer.Argument(..., help="Heat-balance TOML (the OEM thermal kit, "
-                                        "see docs/heat-balance.md)."),
+                                        "see docs/heat-balance.md), or 'example-600mw' (the "
+                                        "shipped kit of an independent unit)."),
     out: Path = typer.Option(..., "--out", help="Spec TOML to write."),
     name: str | None = typer.Option(None, "--name", help="Name of the unit in the spec "
                                     "(default: the heat balance's name)."),

@@ -21,6 +21,7 @@ import math
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +34,7 @@ from steamtwin.textfile import read_utf8_text
 from steamtwin.units import UnitError, convert, parse_quantity
 
 __all__ = [
+    "BUILT_IN_KITS",
     "HEAT_BALANCE_KEYS",
     "HeatBalance",
     "HeatBalanceError",
@@ -250,12 +252,21 @@ class _Fields:
         return value
 
 
+BUILT_IN_KITS = ("example-600mw",)
+"""Thermal kits shipped with the package, by name: an independent 600 MW unit (not the
+reference unit), ``data/example-600mw-heat-balance.toml``."""
+
+
 def load_heat_balance(path: str | Path) -> HeatBalance:
-    """Read and validate a heat-balance TOML file (see ``docs/heat-balance.md``).
+    """Read and validate a heat-balance TOML file (see ``docs/heat-balance.md``), or the shipped
+    example kit by its name (:data:`BUILT_IN_KITS`).
 
     Raises :class:`HeatBalanceError` naming the file, the point and the field for anything
     unreadable, unknown, missing, out of range or inconsistent.
     """
+    if str(path) in BUILT_IN_KITS:
+        resource = resources.files("steamtwin.spec") / "data" / f"{path}-heat-balance.toml"
+        return parse_heat_balance(resource.read_text(encoding="utf-8"), f"built-in '{path}'")
     text = read_utf8_text(path, "heat balance", "TOML", HeatBalanceError)
     return parse_heat_balance(text, str(path))
 
