@@ -41,6 +41,15 @@ INPUT_RANGES = {
 # shaving stays above 25 %.
 MINIMUM_FLOW_FRACTION = 0.15
 
+# The design step sizes the nozzles of the valves open at design at the heat balance's
+# control-stage pressure, then once more at the model's own (``FullOrderModel.design_``). The
+# second sizing absorbs a small disagreement between the heat balance's control-stage pressure
+# and the stages' flow capacities (the reference unit's is −0.07 %, a derived spec's 0.00 %, a
+# 1 % error in the capacities gives ~1 %); a model pressure more than this share above the heat
+# balance's means the valves open at design cannot pass the rated flow where the stages put
+# the control stage, and the spec is refused instead of silently re-sized.
+DESIGN_PRESSURE_EXCESS = 0.05
+
 _STATUS_TEXT = {
     kernel.STATUS_OVER_CAPACITY: "main_steam_flow exceeds what the wide-open governing valves "
     "pass at this throttle pressure",
@@ -146,14 +155,26 @@ class FullOrderModel:
         """Kernel constants with the efficiency scale that meets the design exhaust temperature.
 
         The nozzle area is sized at the model's own design control-stage pressure (two passes),
-        so rated load sits exactly on the valve point the spec names.
+        so rated load sits exactly on the valve point the spec names. Raises
+        :class:`~steamtwin.spec.SpecError` when the first pass puts the control stage more than
+        :data:`DESIGN_PRESSURE_EXCESS` above the heat balance's pressure.
         """
-        control_stage_pressure = self.spec.design.control_stage_pressure
-        for _ in range(2):
+        given = self.spec.design.control_stage_pressure
+        control_stage_pressure = given
+        for design_pass in range(2):
             scale = self._solve_efficiency_scale(control_stage_pressure)
             constants = kernel_constants(self.spec, scale, control_stage_pressure)
             diagnostics = self._design_run(constants)
             control_stage_pressure = float(diagnostics["control_stage_pressure"].iloc[0])
+            if design_pass == 0 and control_stage_pressure > (1.0 + DESIGN_PRESSURE_EXCESS) * given:
+                raise SpecError(
+                    f"turbine {self.spec.name!r}: the design point cannot be solved with the "
+                    f"valves open at design: {_STATUS_TEXT[kernel.STATUS_OVER_CAPACITY]} (their "
+                    f"nozzles sized at design.control_stage_pressure {given / 1e6:.3f} MPa; the "
+                    f"pressure stages put the control stage at "
+                    f"{control_stage_pressure / 1e6:.3f} MPa, "
+                    f"{control_stage_pressure / given - 1.0:+.1%}, more than the "
+                    f"{DESIGN_PRESSURE_EXCESS:.0%} the design step re-sizes them for)")
         return DesignConstants(kernel=constants, efficiency_scale=scale)
 
     def _design_run(self, constants: kernel.KernelConstants) -> pd.DataFrame:

@@ -110,7 +110,10 @@ START_FLOOR = np.array([1e-11, 1e-5])
 # Relative flow residual at which the throttled nozzle group's pressure is accepted: the valve
 # outlet pressure then errs by ~1e-7 relative (F ∝ p/sqrt(p·v) when choked, steeper below), its
 # entropy by R·1e-7 ≈ 5e-5 J/(kg·K), the group's isentropic drop by T·Δs < 0.05 J/kg: far inside
-# ENTHALPY_TOLERANCE.
+# ENTHALPY_TOLERANCE. A sample swept to a tighter enthalpy tolerance (the steady start) scales
+# it down alike: where the answer lands inside this window depends on the warm start, and at a
+# valve point, where the last group alternates between wide open and throttled from sweep to
+# sweep, that noise (~1e-3 J/kg) otherwise kept the start's sweeps from converging.
 THROTTLE_TOLERANCE = 1e-7
 
 # Status codes per sample (0 = solved).
@@ -191,21 +194,22 @@ def _nozzle_group_flow(area, p1, pressure, specific_volume):
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
-def _throttled_pressure(flow, area, p1, p_valve, wide_open, h0, tables, guess, slope):
+def _throttled_pressure(flow, area, p1, p_valve, wide_open, h0, tables, guess, slope,
+                        tolerance=THROTTLE_TOLERANCE):
     """Pressure after a part-open valve whose nozzle group must pass ``flow`` (kg/s).
 
     ``wide_open`` is the group's flow at ``p_valve`` (kg/s). Starts from the previous answer
     ``guess`` (Pa) with a Newton step on the previous solve's ``slope`` (kg/s per Pa; ≤ 0: none
     yet), then secant steps, kept inside the bracket (p1, p_valve] by bisection: the flow
     function rises monotonically with the valve-outlet pressure. Returns the pressure and the
-    last secant slope, for the next sample's start.
+    last secant slope, for the next sample's start. ``tolerance``: relative flow residual.
     """
     low, high = p1, p_valve
     if wide_open <= flow:
         return high, slope
     x0 = min(max(guess, low + 1e-3 * (high - low)), high - 1e-3 * (high - low))
     f0 = _nozzle_group_flow(area, p1, x0, ph_property(tables, PH_V, x0, h0)) - flow
-    if abs(f0) <= THROTTLE_TOLERANCE * flow:
+    if abs(f0) <= tolerance * flow:
         return x0, slope
     if f0 > 0.0:
         high = x0
@@ -219,7 +223,7 @@ def _throttled_pressure(flow, area, p1, p_valve, wide_open, h0, tables, guess, s
         f1 = _nozzle_group_flow(area, p1, x1, ph_property(tables, PH_V, x1, h0)) - flow
         if f1 != f0:
             slope = (f1 - f0) / (x1 - x0)
-        if abs(f1) <= THROTTLE_TOLERANCE * flow:
+        if abs(f1) <= tolerance * flow:
             return x1, slope
         if f1 > 0.0:
             high = min(high, x1)
@@ -244,14 +248,16 @@ def _nozzle_group_expansion(cs, tables, cell_1, coordinate_1, h0, s_in, friction
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params, throttled,
-                   out):
+                   out, throttle_tolerance):
     """Expand the nozzle groups to ``p1``; returns the mixed outlet enthalpy (J/kg).
 
     The wide-open valves pass steam at ``p_valve`` (Pa) with entropy ``s_valve`` and p·v
     ``pv_valve`` (J/kg), set once per sample. ``out`` receives [status, power W, efficiency,
-    active arc]; ``throttled`` (2, levels) holds each level's valve-outlet pressure (Pa) and the
-    slope of its nozzle group's flow with that pressure (kg/s per Pa): warm start in, solution
-    out.
+    active arc]; status :data:`STATUS_OVER_CAPACITY` when the wide-open valves pass less than
+    ``flow`` at ``p1``, the outlet then being that of the flow they pass; ``throttled``
+    (2, levels) holds each level's valve-outlet pressure (Pa) and the slope of its nozzle
+    group's flow with that pressure (kg/s per Pa): warm start in, solution out, each pressure
+    passing its flow to the relative ``throttle_tolerance``.
     """
     flow_coefficient, friction_coefficient = params[0], params[1]
     cell_1, coordinate_1 = locate_pressure(tables, p1)
@@ -277,7 +283,7 @@ def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params,
             level_flow = remaining
             p_level, throttled[1, level] = _throttled_pressure(
                 remaining, area, p1, p_valve, wide_open, h0, tables, throttled[0, level],
-                throttled[1, level])
+                throttled[1, level], throttle_tolerance)
             h_level, drop = _nozzle_group_expansion(
                 cs, tables, cell_1, coordinate_1, h0, ph_property(tables, PH_S, p_level, h0),
                 friction_coefficient)
@@ -290,22 +296,25 @@ def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params,
         segments += cs.level_segments[level] * opening
         mixed += level_flow * h_level
         available += level_flow * drop
+    # over capacity: the outlet state is that of the wide-open valves' flow, so that an
+    # unconverged sweep can go on; the caller decides on the converged pressures
+    passed = flow
+    out[0] = STATUS_OK
     if remaining > 1e-9 * flow:
+        passed = flow - remaining
         out[0] = STATUS_OVER_CAPACITY
-        return h0
-    mean_drop = available / flow
+    mean_drop = available / passed
     x_a = cs.blade_speed / math.sqrt(2.0 * mean_drop)
     sector_end = (cs.admission_loss_multiplier * SECTOR_END_CONSTANT * segments
                   / (arc * cs.diameter) * x_a)
-    h_mix = mixed / flow
+    h_mix = mixed / passed
     density = 1.0 / ph_property_at(tables, PH_V, cell_1, coordinate_1, p1, h_mix)
     windage = cs.admission_loss_multiplier * windage_power(cs.windage_area, 1.0 - arc, density,
                                                            cs.blade_speed)
     disc = DISC_FRICTION_CONSTANT * density * cs.blade_speed**3 * cs.diameter**2
     loss_power = sector_end * available + friction_coefficient * (windage + disc)
-    h1 = h_mix + loss_power / flow
-    out[0] = STATUS_OK
-    out[1] = flow * (h0 - h1)
+    h1 = h_mix + loss_power / passed
+    out[1] = passed * (h0 - h1)
     out[2] = (h0 - h1) / mean_drop
     out[3] = arc
     return h1
@@ -369,6 +378,7 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
                       metal_constants.outer_conductance[chain],
                       metal_constants.ambient_temperature, inverse_dt, pivot, rhs)
     flow_coefficient = params[0]
+    throttle_tolerance = THROTTLE_TOLERANCE * min(tolerance[1] / ENTHALPY_TOLERANCE, 1.0)
     # the state after the wide-open valves depends on the inputs only
     p_valve = p0 * (1.0 - control.valve_pressure_drop)
     cell_v, coordinate_v = locate_pressure(tables, p_valve)
@@ -380,7 +390,7 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
         if not (pressures[0] < p_valve and pressure_in_range(tables, pressures[0])):
             break  # the sweeps below report it
         h1 = _control_stage(control, tables, flow, p_valve, s_valve, pv_valve, h0, pressures[0],
-                            params, throttled, cs_out)
+                            params, throttled, cs_out, throttle_tolerance)
         if cs_out[0] != STATUS_OK or not 0.0 <= ph_domain_position(tables, pressures[0],
                                                                    h1) <= 1.0:
             break
@@ -388,6 +398,7 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
                        pressures[0] * ph_property(tables, PH_V, pressures[0], h1))
     previous_p1 = pressures[0]
     stage_flow = power = heat_total = extraction_energy = 0.0  # of the last full sweep
+    over_capacity = False
     for iteration in range(max_iter + 1):
         # 1. backward Stodola sweep; from the second on it also probes the previous sweep's state
         accepted[:] = pressures
@@ -399,6 +410,8 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
         if iteration > 0 and change_p <= tolerance[0] and (
                 inlet_pv[n - 1] * change_max <= tolerance[1]):
             pressures[:] = accepted  # the state of the last full sweep
+            if over_capacity:
+                return STATUS_OVER_CAPACITY
             # superheat only falls along an HP expansion: checking the control-stage outlet and
             # the exhaust keeps every stage within the superheated tables
             for i in (0, n):
@@ -429,9 +442,10 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             return STATUS_OUT_OF_TABLES
         # 2. control stage
         h1 = _control_stage(control, tables, flow, p_valve, s_valve, pv_valve, h0, pressures[0],
-                            params, throttled, cs_out)
-        if cs_out[0] != STATUS_OK:
-            return int(cs_out[0])
+                            params, throttled, cs_out, throttle_tolerance)
+        # over capacity at an unconverged p1 says nothing: from a rough start the first sweeps
+        # probe a higher control-stage pressure than the converged one; decided at acceptance
+        over_capacity = cs_out[0] == STATUS_OVER_CAPACITY
         if not 0.0 <= ph_domain_position(tables, pressures[0], h1) <= 1.0:
             return STATUS_OUT_OF_TABLES
         heat_total = 0.0
