@@ -244,7 +244,10 @@ def test_a_design_point_on_a_valve_point_converges_after_a_tiny_change(kit):
     from steamtwin.model.fom import FullOrderModel
 
     spec, _ = kit
-    nudged = dataclasses.replace(spec, part_load=dataclasses.replace(
+    # without the kit's overlap, the design point sits exactly on the valve point
+    sequential = dataclasses.replace(spec, control_stage=dataclasses.replace(
+        spec.control_stage, valve_overlap=0.0))
+    nudged = dataclasses.replace(sequential, part_load=dataclasses.replace(
         spec.part_load, reynolds_exponent=5e-11, admission_loss_multiplier=1.00008))
     design = FullOrderModel(nudged).design_
     assert design.efficiency_scale == pytest.approx(1.0, abs=1e-3)
@@ -272,23 +275,25 @@ def test_a_small_control_stage_pressure_mismatch_is_resized_a_large_one_refused(
 
 
 def test_fit_on_the_derived_kit_runs_and_reduces_the_residuals(kit_fit):
-    """Measured (docs/benchmarks.md). The four laws cannot take the kit to 1 K: its valves
-    throttle the whole flow by 15–24 % at 30–75 % load, which the model's valve law (3 % drop,
-    one group throttled at a time) does not have; the fit pushes the Reynolds exponent and the
-    velocity-ratio factor to their bounds and trades the rated points' control-stage
-    temperature (+3.6 K) for the part-load points."""
+    """Measured (docs/benchmarks.md), with the kit's valve overlap (0.10, written by derive).
+    The four laws cannot take the kit to 1 K: its valves throttle the whole flow by 15–24 % at
+    30–75 % load (the kit holds the control stage at its THA pressure ratio, GV1–5 in service),
+    which neither the model's valve law (3 % drop, one group throttled at a time) nor the 10 %
+    overlap gives (at 30–50 % load the first group alone admits, below where the overlap
+    starts); the fit pushes the Reynolds exponent and the velocity-ratio factor to their bounds
+    and trades the rated points' control-stage temperature (+3.8 K) for the part-load points."""
     before, after = kit_fit.initial_residuals, kit_fit.residuals
     # before: part load far too cold and the control-stage pressure ~1 % low
-    assert before.loc["30 %", "hp_exhaust_temperature_k"] == pytest.approx(-13.05, abs=0.2)
-    assert before.loc["75 %", "control_stage_temperature_k"] == pytest.approx(-6.86, abs=0.2)
-    assert before["control_stage_pressure_pct"].abs().max() == pytest.approx(1.04, abs=0.03)
-    # after: every pressure within the 0.5 % band, temperatures within 2.8 / 4.0 K
-    assert after["control_stage_pressure_pct"].abs().max() < 0.40
+    assert before.loc["30 %", "hp_exhaust_temperature_k"] == pytest.approx(-13.45, abs=0.2)
+    assert before.loc["75 %", "control_stage_temperature_k"] == pytest.approx(-6.52, abs=0.2)
+    assert before["control_stage_pressure_pct"].abs().max() == pytest.approx(1.06, abs=0.03)
+    # after: every pressure within the 0.5 % band, temperatures within 2.8 / 4.1 K
+    assert after["control_stage_pressure_pct"].abs().max() < 0.45
     assert after["hp_exhaust_temperature_k"].abs().max() < 2.8
-    assert after["control_stage_temperature_k"].abs().max() < 4.0
+    assert after["control_stage_temperature_k"].abs().max() < 4.1
     part_load = after.loc[["50 %", "40 %", "30 %"]].abs()
-    assert part_load["control_stage_temperature_k"].max() < 1.8
-    assert part_load["hp_exhaust_temperature_k"].max() < 1.9
+    assert part_load["control_stage_temperature_k"].max() < 2.0
+    assert part_load["hp_exhaust_temperature_k"].max() < 2.3
     assert (after.to_numpy() ** 2).sum() < 0.08 * (before.to_numpy() ** 2).sum()
     assert kit_fit.part_load.reynolds_exponent == pytest.approx(0.5, abs=1e-6)  # its bound
     assert kit_fit.part_load.control_stage_velocity_ratio_factor == pytest.approx(1.25, abs=1e-6)

@@ -193,3 +193,15 @@ def test_derived_reference_figures_load(tmp_path):
     path = tmp_path / "unit.toml"
     path.write_text(derive_spec(parse_heat_balance(KIT)).toml, encoding="utf-8")
     assert load_spec(path).name == "Example 600 MW subcritical unit, thermal kit"
+
+
+def test_the_kits_valve_overlap_is_written_with_its_source(derived, derived_spec):
+    """machine.valve_overlap (0.10 in the kit) becomes control_stage.valve_overlap, commented;
+    a kit without it leaves the field out (strictly sequential opening)."""
+    line = next(line for line in derived[0].toml.splitlines()
+                if line.startswith("valve_overlap = "))
+    assert "machine.valve_overlap" in line and "90% lift" in line
+    assert derived_spec.control_stage.valve_overlap == pytest.approx(0.10)
+    no_overlap = re.sub(r"(?m)^valve_overlap = .*$", "", KIT)
+    spec = parse_spec(derive_spec(parse_heat_balance(no_overlap, "kit.toml")).toml, "d.toml")
+    assert spec.control_stage.valve_overlap == 0.0

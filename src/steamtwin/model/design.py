@@ -122,6 +122,7 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         windage_area=WINDAGE_CONSTANT * math.pi * math.sin(cs.blading.nozzle_exit_angle)
         * cs.blading.mean_diameter * cs.blading.blade_height / 2.0,
         admission_loss_multiplier=part_load.admission_loss_multiplier,
+        valve_overlap=cs.valve_overlap,
     )
     metal = MetalConstants(
         capacity=capacity,

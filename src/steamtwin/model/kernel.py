@@ -10,7 +10,8 @@ loop therefore solves, sample by sample, warm-started from the previous sample:
 1. a backward sweep of Stodola's law from the HP-exhaust pressure gives the stage pressures and
    the control-stage pressure (each stage's p·v from the previous sweep);
 2. the control stage distributes the flow over the nozzle groups in valve order, throttling the
-   group whose valve is part open, expands each group and mixes them (``steampath``);
+   group whose valve is part open (with a valve overlap, every group the overlapping lift
+   schedule leaves part open), expands each group and mixes them (``steampath``);
 3. a forward sweep expands the pressure stages; at the end of each stage group the steam gives
    heat to that group's casing and rotor (implicit-Euler conduction step, ``metal``), which is
    taken from the steam enthalpy there;
@@ -139,6 +140,7 @@ class ControlStageConstants(NamedTuple):
     diameter: float  # m
     windage_area: float  # m², B_e·π·sin α1·d·l/2 of the idle-arc windage power
     admission_loss_multiplier: float  # on windage and sector-end loss (spec part_load)
+    valve_overlap: float  # lift share by which a level opens before the previous is full open
 
 
 class MetalConstants(NamedTuple):
@@ -247,6 +249,40 @@ def _nozzle_group_expansion(cs, tables, cell_1, coordinate_1, h0, s_in, friction
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
+def _level_lift(overlap, level, demand):
+    """Lift (0…1) of opening level ``level`` (0-based) at valve demand ``demand``.
+
+    Each level's lift rises over one unit of demand and the next level starts ``overlap`` of a
+    lift before the previous is fully open [Cotton, *Evaluating and Improving Steam Turbine
+    Performance*, 1998, ch. 6: valve-point loops and overlap]. The flow characteristic is
+    linear: a level passes ``lift`` × its wide-open flow.
+    """
+    return min(max(demand - level * (1.0 - overlap), 0.0), 1.0)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
+def _valve_demand(cs, open_flux, flow):
+    """Valve demand at which the overlapping lift schedule passes ``flow`` (kg/s).
+
+    The scheduled flow Σ wide-open × lift is piecewise linear and non-decreasing in the demand,
+    so bisection on [0, full lift of the last level] finds it to round-off; a flow above what
+    every valve wide open passes gets the full demand (the caller reports over capacity).
+    """
+    overlap = cs.valve_overlap
+    low, high = 0.0, (cs.level_area.size - 1) * (1.0 - overlap) + 1.0
+    for _ in range(64):
+        middle = 0.5 * (low + high)
+        scheduled = 0.0
+        for level in range(cs.level_area.size):
+            scheduled += open_flux * cs.level_area[level] * _level_lift(overlap, level, middle)
+        if scheduled < flow:
+            low = middle
+        else:
+            high = middle
+    return high
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params, throttled,
                    out, throttle_tolerance):
     """Expand the nozzle groups to ``p1``; returns the mixed outlet enthalpy (J/kg).
@@ -271,18 +307,27 @@ def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params,
     available = 0.0
     arc = 0.0
     segments = 0.0
+    demand = _valve_demand(cs, open_flux, flow) if cs.valve_overlap > 0.0 else 0.0
     for level in range(cs.level_area.size):
         if remaining <= 0.0:
             throttled[0, level] = p1
             continue
         area = flow_coefficient * cs.nozzle_discharge_coefficient * cs.level_area[level]
         wide_open = open_flux * cs.level_area[level]
-        if wide_open <= remaining * (1.0 + 1e-12):
+        # the flow this level's valve is asked to pass: what is left (sequential opening), or
+        # its share of the overlapping lift schedule
+        target = remaining
+        if cs.valve_overlap > 0.0:
+            target = min(remaining, wide_open * _level_lift(cs.valve_overlap, level, demand))
+            if target <= 1e-12 * flow:  # shut, or round-off left by the demand's bisection
+                throttled[0, level] = p1
+                continue
+        if wide_open <= target * (1.0 + 1e-12):
             level_flow, p_level, h_level, drop = wide_open, p_valve, h_open, drop_open
         else:
-            level_flow = remaining
+            level_flow = target
             p_level, throttled[1, level] = _throttled_pressure(
-                remaining, area, p1, p_valve, wide_open, h0, tables, throttled[0, level],
+                target, area, p1, p_valve, wide_open, h0, tables, throttled[0, level],
                 throttled[1, level], throttle_tolerance)
             h_level, drop = _nozzle_group_expansion(
                 cs, tables, cell_1, coordinate_1, h0, ph_property(tables, PH_S, p_level, h0),

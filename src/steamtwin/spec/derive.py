@@ -621,6 +621,10 @@ def _control_block(w: _Writer, hb: HeatBalance, point: HeatBalancePoint, where: 
     w.value("nozzle_discharge_coefficient", "control_stage.nozzle_discharge_coefficient",
             NOZZLE_DISCHARGE_COEFFICIENT, f"{NOZZLE_DISCHARGE_COEFFICIENT:g}",
             "rule: 0.95-0.98 for steam nozzles [Cotton ch. 6]", "nozzle_discharge_coefficient")
+    if machine.valve_overlap is not None:
+        w.value("valve_overlap", "control_stage.valve_overlap", machine.valve_overlap,
+                f"{machine.valve_overlap:g}", "machine.valve_overlap: next group opens at "
+                f"{1.0 - machine.valve_overlap:.0%} lift", "machine: valve_overlap")
     w.raw()
     w.raw("# Governing valves from [machine]; open at design: all but the last opening group")
     w.raw("# (a nozzle-governed unit reaches rated load with its overload valve still shut).")

@@ -61,7 +61,7 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
                          "control_stage_pressure", "hp_exhaust_pressure",
                          "hp_exhaust_temperature", "hp_power", "generator_power",
                          "rotational_speed", "valve_pressure_drop"}),
-    "control_stage": _BLADING | {"nozzle_discharge_coefficient", "valves"},
+    "control_stage": _BLADING | {"nozzle_discharge_coefficient", "valves", "valve_overlap"},
     "control_stage.valves": frozenset({"name", "opening_order", "admission_arc",
                                        "open_at_design"}),
     "stages": _BLADING | {"flow_capacity"},
@@ -76,8 +76,9 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
     "part_load": _PART_LOAD,
 }
 #: Keys that may be left out, by their path: a unit without HP bleeds has no extractions; the
-#: part-load laws and each of their fields have defaults (:class:`PartLoad`).
-OPTIONAL_KEYS = frozenset({"extractions", "part_load",
+#: part-load laws and each of their fields have defaults (:class:`PartLoad`); valves without
+#: overlap open strictly one group after the other.
+OPTIONAL_KEYS = frozenset({"extractions", "part_load", "control_stage.valve_overlap",
                            *(f"part_load.{key}" for key in _PART_LOAD)})
 
 
@@ -308,6 +309,7 @@ def _control_stage(table: _Table) -> ControlStage:
         blading=_blading(table),
         nozzle_discharge_coefficient=table.quantity("nozzle_discharge_coefficient"),
         valves=valves,
+        valve_overlap=table.quantity("valve_overlap") if "valve_overlap" in table.data else 0.0,
     )
 
 

@@ -219,6 +219,14 @@ FIELDS: tuple[Field, ...] = (
           "Discharge coefficient of the governing-stage nozzles.",
           "OEM nozzle test data; 0.95-0.98 for steam nozzles [Cotton, ch. 6].",
           example=0.97, low=0.8, high=1.0),
+    Field("control_stage.valve_overlap", "number",
+          "Overlap of opening: the share of a valve's lift by which the next opening group "
+          "starts before the previous one is fully open, so that near a valve point two groups "
+          "throttle at once; each group's flow is taken linear in its lift.",
+          "OEM valve lift diagram or DEH valve-management curve (thermal kit "
+          "`machine.valve_overlap`); 0.05-0.15 usual [Cotton, ch. 6: valve-point loops; "
+          "Traupel, Bd. 2, nozzle governing].",
+          example=0.1, low=0.0, high=0.5, default="0: strictly sequential opening"),
     Field("control_stage.valves", "tables",
           "One table per governing valve and the nozzle group it feeds, at least one.",
           "DEH valve-management documentation and the nozzle-box drawing.", min_items=1),

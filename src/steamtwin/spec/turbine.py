@@ -66,11 +66,16 @@ class StageGeometry:
 
 @dataclass(frozen=True)
 class ControlStage:
-    """The governing (control) stage: an impulse stage with nozzle governing."""
+    """The governing (control) stage: an impulse stage with nozzle governing.
+
+    ``valve_overlap``: share of a valve's lift by which the next opening group starts before
+    the previous one is fully open (0: strictly sequential opening).
+    """
 
     blading: StageGeometry
     nozzle_discharge_coefficient: float
     valves: tuple[GoverningValve, ...]
+    valve_overlap: float = 0.0
 
 
 @dataclass(frozen=True)
