@@ -68,6 +68,9 @@ TTD, DCA, PIPE_LOSS = -1.7, 5.6, 0.03  # K, K, fraction (HEI closed-heater pract
 VALVE_ARCS = [0.16, 0.16, 0.16, 0.16, 0.13, 0.13]
 VALVE_OPENING_ORDER = [1, 1, 1, 1, 2, 3]
 VALVE_NAMES = ["GV1", "GV2", "GV3", "GV4", "GV5", "GV6"]
+# The valve lift diagram's overlap, written into [machine] as design data. This script's own
+# part-load throttling does not use it: below THA it keeps GV1-5 in service and throttles them
+# alike, p_valve = min(0.97 p0, p_cs / (p_cs/p_valve at THA)).
 VALVE_OVERLAP = 0.10
 
 WIDE_OPEN_DROP, THA_DROP = 0.03, 0.04  # governing-valve pressure drop, fraction of p0

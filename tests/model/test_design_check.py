@@ -78,6 +78,24 @@ def test_valve_openings_fill_the_levels_in_opening_order(reference_spec, fractio
             assert openings[earlier.name] == 1.0
 
 
+@given(fraction=st.floats(0.0, 1.0), overlap=st.floats(0.0, 0.5))
+def test_valve_openings_follow_the_overlap_of_opening(reference_spec, fraction, overlap):
+    spec = dataclasses.replace(reference_spec, control_stage=dataclasses.replace(
+        reference_spec.control_stage, valve_overlap=overlap))
+    valves = spec.control_stage.valves
+    arc = fraction * sum(valve.admission_arc for valve in valves)
+    openings = valve_openings(spec, arc)
+    assert sum(openings[v.name] * v.admission_arc for v in valves) == pytest.approx(arc,
+                                                                                   abs=1e-12)
+    by_order = sorted(valves, key=lambda valve: valve.opening_order)
+    for earlier, later in itertools.pairwise(by_order):
+        if openings[later.name] > 0.0 and later.opening_order != earlier.opening_order:
+            # the later level starts once the earlier is within the overlap of its full lift
+            assert openings[earlier.name] >= 1.0 - overlap - 1e-9
+            assert openings[earlier.name] - openings[later.name] == pytest.approx(
+                1.0 - overlap, abs=1e-9) or openings[earlier.name] == 1.0
+
+
 def test_reference_spec_is_consistent(reference_spec, reference_model):
     assert consistency_problems(reference_spec, reference_model) == []
 

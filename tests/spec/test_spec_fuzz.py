@@ -145,6 +145,7 @@ def test_reference_uses_every_known_key_and_no_other():
     # the optional [part_load] table is the design fit's: the reference unit keeps its defaults
     expected = {schema: set(keys) for schema, keys in SPEC_KEYS.items() if schema != "part_load"}
     expected[""] -= {"part_load"}
+    expected["control_stage"] -= {"valve_overlap"}  # the reference unit opens strictly in sequence
     assert used == expected
     assert parse_spec(_toml(REFERENCE), SOURCE) == load_spec("reference")
 

@@ -33,6 +33,7 @@ RATED_PRESSURE_TOLERANCE = 0.005
 
 # Admitting arc (share of the circumference) below which a valve level counts as shut: the
 # round-off of summing the arcs of the levels before it.
+_OPENING_BISECTIONS = 60  # demand resolution 2⁻⁶⁰ of the levels: far below round-off
 _ARC_ROUND_OFF = 1e-12
 
 # The spec fields behind each way the model's design step can fail, matched on the model's own
@@ -160,22 +161,34 @@ def valve_openings(spec: TurbineSpec, admission_arc: float) -> dict[str, float]:
     circumference).
 
     The model opens the valves level by level in ``opening_order`` and counts a part-open
-    level's arc in proportion to its flow (``model.kernel``); so the levels before the last
-    admitting one are wide open (1), that one admits ``remaining arc / level arc`` and the rest
-    are shut (0). The opening is the nozzle group's flow as a share of its wide-open flow at the
-    same pressures, not a mechanical lift.
+    level's arc in proportion to its flow (``model.kernel``). With a valve overlap v
+    (``control_stage.valve_overlap``) level k's opening is clamp(x − k·(1 − v), 0, 1) of one
+    common demand x — the next level starts ``v`` of a lift before the previous one is wide
+    open; v = 0 is strictly sequential opening — and x is the demand whose levels admit
+    ``admission_arc`` (bisection; the admitted arc rises monotonically with x). The opening is
+    the nozzle group's flow as a share of its wide-open flow at the same pressures, not a
+    mechanical lift.
     """
     valves = spec.control_stage.valves
-    remaining = admission_arc
-    openings: dict[str, float] = {}
-    for order in sorted({valve.opening_order for valve in valves}):
-        level = [valve for valve in valves if valve.opening_order == order]
-        level_arc = sum(valve.admission_arc for valve in level)
-        # what the earlier levels leave may be round-off of their arcs' sum: counted as shut
-        opening = min(remaining / level_arc, 1.0) if remaining > _ARC_ROUND_OFF else 0.0
-        remaining -= opening * level_arc
-        openings.update({valve.name: opening for valve in level})
-    return {valve.name: openings[valve.name] for valve in valves}
+    orders = sorted({valve.opening_order for valve in valves})
+    level_arcs = np.array([sum(valve.admission_arc for valve in valves
+                               if valve.opening_order == order) for order in orders])
+    starts = np.arange(len(orders)) * (1.0 - spec.control_stage.valve_overlap)
+
+    def openings_at(demand: float) -> np.ndarray:
+        return np.clip(demand - starts, 0.0, 1.0)
+
+    low, high = 0.0, float(starts[-1]) + 1.0
+    if admission_arc <= _ARC_ROUND_OFF:
+        high = 0.0
+    for _ in range(_OPENING_BISECTIONS):
+        middle = 0.5 * (low + high)
+        if float(level_arcs @ openings_at(middle)) < admission_arc:
+            low = middle
+        else:
+            high = middle
+    by_order = dict(zip(orders, openings_at(high), strict=True))
+    return {valve.name: float(by_order[valve.opening_order]) for valve in valves}
 
 
 def _all_valves_open_problem(spec: TurbineSpec) -> str:
