@@ -9,7 +9,6 @@ only a valid result or such an error.
 from __future__ import annotations
 
 import copy
-import json
 import re
 import runpy
 import tomllib
@@ -22,6 +21,7 @@ import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from toml_documents import KeyPath, key_paths, toml_text
 
 from steamtwin.spec import (
     HeatBalanceError,
@@ -60,27 +60,10 @@ hp_exhaust_temperature = "322.8 degC"
 '''
 
 
-def _toml_value(value: Any) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return json.dumps(value)  # JSON string escapes are valid TOML basic-string escapes
-    if isinstance(value, int | float):
-        return repr(value)
-    if isinstance(value, list):
-        return "[" + ", ".join(map(_toml_value, value)) + "]"
-    return "{" + ", ".join(f"{json.dumps(k)} = {_toml_value(v)}" for k, v in value.items()) + "}"
-
-
-def _dump(document: dict[str, Any]) -> str:
-    """``document`` as TOML (tables inline)."""
-    return "\n".join(f"{json.dumps(k)} = {_toml_value(v)}" for k, v in document.items()) + "\n"
-
-
 def _parse(edit: Callable[[dict[str, Any]], Any]) -> Any:
     document = copy.deepcopy(EXAMPLE)
     edit(document)
-    return parse_heat_balance(_dump(document), SOURCE)
+    return parse_heat_balance(toml_text(document), SOURCE)
 
 
 def _point(document: dict[str, Any], number: int) -> dict[str, Any]:
@@ -374,22 +357,7 @@ def test_files_that_are_not_heat_balances(tmp_path):
 # Random mutations: a valid result or a HeatBalanceError naming the file, never a crash
 # --------------------------------------------------------------------------------------------
 
-KeyPath = tuple[str | int, ...]
-
-
-def _key_paths(node: Any, prefix: KeyPath = ()) -> list[KeyPath]:
-    paths: list[KeyPath] = []
-    if isinstance(node, dict):
-        for key, value in node.items():
-            paths.append((*prefix, key))
-            paths += _key_paths(value, (*prefix, key))
-    elif isinstance(node, list):
-        for index, item in enumerate(node):
-            paths += _key_paths(item, (*prefix, index))
-    return paths
-
-
-KEY_PATHS = _key_paths(EXAMPLE)
+KEY_PATHS = key_paths(EXAMPLE)
 
 
 def _parent(document: Any, path: KeyPath) -> Any:
@@ -441,7 +409,7 @@ def test_mutated_example_is_valid_or_refused_naming_the_file(kinds, index, unit,
     for step, kind in enumerate(kinds):
         _mutate(document, kind, index + 7 * step, unit, char)
     try:
-        kit = parse_heat_balance(_dump(document), SOURCE)
+        kit = parse_heat_balance(toml_text(document), SOURCE)
     except HeatBalanceError as error:
         assert str(error).startswith(f"{SOURCE}: ")
     else:

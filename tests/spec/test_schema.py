@@ -15,6 +15,7 @@ from typing import Any
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from toml_documents import toml_text
 
 from steamtwin.spec import SpecError, load_spec, parse_spec
 from steamtwin.spec.loader import OPTIONAL_KEYS, SPEC_KEYS
@@ -39,22 +40,6 @@ DOCS = Path(__file__).resolve().parents[2] / "docs"
 #: second valve and metal group, the only bleed — so messages must count from 1.
 POSITIONS = {"stages": 2, "control_stage.valves": 1, "metal.groups": 1, "extractions": 0}
 NUMERIC = ("quantity", "number", "integer")
-
-
-def _toml_value(value: Any) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return json.dumps(value)
-    if isinstance(value, int | float):
-        return repr(value)
-    if isinstance(value, list):
-        return "[" + ", ".join(map(_toml_value, value)) + "]"
-    return "{" + ", ".join(f"{json.dumps(k)} = {_toml_value(v)}" for k, v in value.items()) + "}"
-
-
-def _toml(document: dict[str, Any]) -> str:
-    return "\n".join(f"{json.dumps(k)} = {_toml_value(v)}" for k, v in document.items()) + "\n"
 
 
 def _located(field: Field) -> tuple[list[str | int], str, str]:
@@ -162,7 +147,7 @@ def test_the_reference_spec_passes_also_as_written_by_these_tests(reference_spec
     """The reference loads; rewritten by :func:`_toml` it gives the same spec, so a refusal
     below is the changed value's doing."""
     assert load_spec("reference") == reference_spec
-    assert parse_spec(_toml(REFERENCE), "unit.toml") == reference_spec
+    assert parse_spec(toml_text(REFERENCE), "unit.toml") == reference_spec
 
 
 @pytest.mark.parametrize(("field", "side", "value"), OUT_OF_RANGE,
@@ -171,7 +156,7 @@ def test_a_value_beyond_the_schema_range_is_refused_naming_its_toml_path(field, 
     keys, toml_path, context = _located(field)
     if field.kind == "array":  # change the second entry of the array
         keys, toml_path = [*keys, 1], f"{toml_path}[2]"
-    text = _toml(_with(REFERENCE, keys, _written(field, value)))
+    text = toml_text(_with(REFERENCE, keys, _written(field, value)))
     with pytest.raises(SpecError) as error:
         parse_spec(text, "unit.toml")
     message = str(error.value)
@@ -287,7 +272,7 @@ def test_the_reference_validates_against_the_json_schema():
 def test_the_json_schema_flags_what_the_loader_refuses(keys, value):
     document = _with(REFERENCE, keys, value)
     with pytest.raises(SpecError):
-        parse_spec(_toml(document), "unit.toml")
+        parse_spec(toml_text(document), "unit.toml")
     assert list(_validator().iter_errors(document))
 
 

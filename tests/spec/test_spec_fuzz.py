@@ -21,6 +21,7 @@ from typing import Any
 import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
+from toml_documents import KeyPath, key_paths, toml_text
 
 from steamtwin.model.parameters import (
     METADATA_KEYS,
@@ -36,41 +37,6 @@ REFERENCE_TEXT = (resources.files("steamtwin.spec") / "data" / "reference.toml")
 REFERENCE = tomllib.loads(REFERENCE_TEXT)
 SOURCE = "fuzz-unit.toml"
 FUZZ = settings(max_examples=60, deadline=None)
-
-KeyPath = tuple[str | int, ...]
-
-
-def _toml_value(value: Any) -> str:
-    """``value`` as TOML (tables inline), enough for the types a parsed spec holds."""
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return json.dumps(value)  # JSON string escapes are valid TOML basic-string escapes
-    if isinstance(value, int | float):
-        return repr(value)
-    if isinstance(value, datetime.date):
-        return value.isoformat()
-    if isinstance(value, list):
-        return "[" + ", ".join(map(_toml_value, value)) + "]"
-    return "{" + ", ".join(f"{json.dumps(k)} = {_toml_value(v)}" for k, v in value.items()) + "}"
-
-
-def _toml(document: dict[str, Any]) -> str:
-    return "\n".join(f"{json.dumps(k)} = {_toml_value(v)}" for k, v in document.items()) + "\n"
-
-
-def _key_paths(node: Any, prefix: KeyPath = ()) -> list[KeyPath]:
-    """Every key of every table under ``node``, as a path of keys and list positions."""
-    paths: list[KeyPath] = []
-    if isinstance(node, dict):
-        for key, value in node.items():
-            paths.append((*prefix, key))
-            paths += _key_paths(value, (*prefix, key))
-    elif isinstance(node, list):
-        for index, item in enumerate(node):
-            paths += _key_paths(item, (*prefix, index))
-    return paths
-
 
 def _table_paths(node: Any, prefix: KeyPath = ()) -> list[KeyPath]:
     """The path of every table under ``node`` (``()`` is the document)."""
@@ -107,7 +73,7 @@ def _kind(value: Any) -> str:
 
 
 REPLACEMENTS = ["text", 7, 2.5, True, [], [1, 2], {}, {"a": 1}, datetime.date(1979, 5, 27)]
-SPEC_KEY_PATHS = _key_paths(REFERENCE)
+SPEC_KEY_PATHS = key_paths(REFERENCE)
 
 
 @st.composite
@@ -147,7 +113,7 @@ def test_reference_uses_every_known_key_and_no_other():
     expected[""] -= {"part_load"}
     expected["control_stage"] -= {"valve_overlap"}  # the reference unit opens strictly in sequence
     assert used == expected
-    assert parse_spec(_toml(REFERENCE), SOURCE) == load_spec("reference")
+    assert parse_spec(toml_text(REFERENCE), SOURCE) == load_spec("reference")
 
 
 def test_every_key_but_the_optional_ones_is_required():
@@ -155,10 +121,10 @@ def test_every_key_but_the_optional_ones_is_required():
         mutated = copy.deepcopy(REFERENCE)
         del _get(mutated, path[:-1])[path[-1]]
         if len(path) == 1 and path[0] in OPTIONAL_KEYS:
-            assert parse_spec(_toml(mutated), SOURCE).extractions == ()
+            assert parse_spec(toml_text(mutated), SOURCE).extractions == ()
             continue
         with pytest.raises(SpecError, match=r"fuzz-unit\.toml: ") as error:
-            parse_spec(_toml(mutated), SOURCE)
+            parse_spec(toml_text(mutated), SOURCE)
         assert f"{_render(path)} is missing" in str(error.value), path
 
 
@@ -167,7 +133,7 @@ def test_an_unknown_key_in_any_table_is_refused():
         mutated = copy.deepcopy(REFERENCE)
         _get(mutated, path)["unexpected"] = 1
         with pytest.raises(SpecError, match=r"fuzz-unit\.toml: ") as error:
-            parse_spec(_toml(mutated), SOURCE)
+            parse_spec(toml_text(mutated), SOURCE)
         field = _render((*path, "unexpected"))
         assert f"{field} is not a turbine spec field" in str(error.value), path
 
@@ -182,7 +148,7 @@ def test_spec_with_a_key_renamed_to_a_near_miss_is_refused(data):
     new_key = data.draw(near_misses(path[-1]))
     assume(new_key and new_key not in _get(REFERENCE, path[:-1]))
     with pytest.raises(SpecError, match=r"fuzz-unit\.toml: ") as error:
-        parse_spec(_toml(_renamed(REFERENCE, path, new_key)), SOURCE)
+        parse_spec(toml_text(_renamed(REFERENCE, path, new_key)), SOURCE)
     assert f"{_render((*path[:-1], new_key))} is not a turbine spec field" in str(error.value)
 
 
@@ -193,7 +159,7 @@ def test_spec_with_a_value_of_another_type_is_refused(path, replacement):
     mutated = copy.deepcopy(REFERENCE)
     _get(mutated, path[:-1])[path[-1]] = replacement
     with pytest.raises(SpecError, match=r"fuzz-unit\.toml: "):
-        parse_spec(_toml(mutated), SOURCE)
+        parse_spec(toml_text(mutated), SOURCE)
 
 
 def _load_spec_bytes(folder, content: bytes) -> None:
@@ -206,7 +172,7 @@ def _load_spec_bytes(folder, content: bytes) -> None:
         assert str(error).startswith(f"{path}: "), error
         return
     kept = tomllib.loads(content.decode("utf-8-sig"))
-    assert _key_paths(kept) == SPEC_KEY_PATHS
+    assert key_paths(kept) == SPEC_KEY_PATHS
 
 
 REFERENCE_BYTES = REFERENCE_TEXT.encode("utf-8")
@@ -278,7 +244,7 @@ def _load_parameters(folder, content: bytes) -> ModelParameters | None:
 @given(st.data())
 def test_parameter_file_with_a_key_deleted(tmp_path_factory, data):
     document = data.draw(st.sampled_from(list(PARAMETER_DOCUMENTS.values())))
-    path = data.draw(st.sampled_from(_key_paths(document)))
+    path = data.draw(st.sampled_from(key_paths(document)))
     mutated = copy.deepcopy(document)
     del _get(mutated, path[:-1])[path[-1]]
     loaded = _load_parameters(tmp_path_factory.mktemp("params"), json.dumps(mutated).encode())
@@ -289,7 +255,7 @@ def test_parameter_file_with_a_key_deleted(tmp_path_factory, data):
 @given(st.data())
 def test_parameter_file_with_a_key_renamed_to_a_near_miss(tmp_path_factory, data):
     document = data.draw(st.sampled_from(list(PARAMETER_DOCUMENTS.values())))
-    path = data.draw(st.sampled_from(_key_paths(document)))
+    path = data.draw(st.sampled_from(key_paths(document)))
     new_key = data.draw(near_misses(path[-1]))
     assume(new_key and new_key not in _get(document, path[:-1]))
     content = json.dumps(_renamed(document, path, new_key)).encode()
@@ -301,7 +267,7 @@ def test_parameter_file_with_a_key_renamed_to_a_near_miss(tmp_path_factory, data
 @given(st.data(), st.sampled_from([*REPLACEMENTS[:-1], float("nan"), float("inf"), None]))
 def test_parameter_file_with_a_value_of_another_type(tmp_path_factory, data, replacement):
     document = data.draw(st.sampled_from(list(PARAMETER_DOCUMENTS.values())))
-    path = data.draw(st.sampled_from(_key_paths(document)))
+    path = data.draw(st.sampled_from(key_paths(document)))
     original = _get(document, path)
     non_finite = isinstance(replacement, float) and not math.isfinite(replacement)
     assume(_kind(replacement) != _kind(original) or non_finite)
@@ -316,8 +282,8 @@ def _refused_or_intact(folder, content: bytes, document: dict[str, Any]) -> None
     loaded = _load_parameters(folder, content)
     if loaded is not None:
         kept = json.loads(content.decode("utf-8-sig"))
-        schema_keys = [path for path in _key_paths(kept) if not _informational(path)]
-        assert schema_keys == [path for path in _key_paths(document) if not _informational(path)]
+        schema_keys = [path for path in key_paths(kept) if not _informational(path)]
+        assert schema_keys == [path for path in key_paths(document) if not _informational(path)]
         assert loaded == ModelParameters(**kept.get("parameters", kept))
 
 
