@@ -66,12 +66,10 @@ FEEDWATER_PRESSURE_RISE = 3.0e6  # Pa, feedwater pressure above the throttle pre
 TTD, DCA, PIPE_LOSS = -1.7, 5.6, 0.03  # K, K, fraction (HEI closed-heater practice)
 
 VALVE_ARCS = [0.16, 0.16, 0.16, 0.16, 0.13, 0.13]
-VALVE_OPENING_ORDER = [1, 1, 1, 1, 2, 3]
+# The unit's valve management: GV1-5 open together (below THA they throttle alike, p_valve =
+# min(0.97 p0, p_cs / (p_cs/p_valve at THA))), GV6 is the overload valve, open only towards VWO.
+VALVE_OPENING_ORDER = [1, 1, 1, 1, 1, 2]
 VALVE_NAMES = ["GV1", "GV2", "GV3", "GV4", "GV5", "GV6"]
-# The valve lift diagram's overlap, written into [machine] as design data. This script's own
-# part-load throttling does not use it: below THA it keeps GV1-5 in service and throttles them
-# alike, p_valve = min(0.97 p0, p_cs / (p_cs/p_valve at THA)).
-VALVE_OVERLAP = 0.10
 
 WIDE_OPEN_DROP, THA_DROP = 0.03, 0.04  # governing-valve pressure drop, fraction of p0
 
@@ -210,6 +208,8 @@ def print_point(label: str, row: dict[str, float], t_rh_c: float, eta_cs: float,
         ("control_stage_pressure", f'"{row["p_cs"] / 1e6:.3f} MPa"',
          f"cone law, stages 1-{BLEED_AFTER_STAGE}"),
         ("control_stage_temperature", f'"{row["t_cs"] - 273.15:.1f} degC"', ""),
+        ("valve_outlet_pressure", f'"{row["p_valve"] / 1e6:.3f} MPa"',
+         "after the governing valves (nozzle chest)"),
         ("hp_exhaust_pressure", f'"{row["p_exh"] / 1e6:.3f} MPa"', "proportional to flow"),
         ("hp_exhaust_temperature", f'"{row["t_exh"] - 273.15:.1f} degC"', ""),
         ("hp_exhaust_flow", f'"{row["exh_flow"] * 3.6:.1f} t/h"',
@@ -247,9 +247,8 @@ def main() -> None:
          f"u = {SPEED * CONTROL_DIAMETER / 2:.1f} m/s"),
         ("valve_arcs", f"[{', '.join(f'{a:.2f}' for a in VALVE_ARCS)}]", "90 % of the circle"),
         ("valve_opening_order", f"[{', '.join(map(str, VALVE_OPENING_ORDER))}]",
-         "GV1-4 together, then GV5, GV6"),
+         "GV1-5 together, then GV6"),
         ("valve_names", f"[{', '.join(map(quoted, VALVE_NAMES))}]", ""),
-        ("valve_overlap", f"{VALVE_OVERLAP:.2f}", "next group opens at 90 % lift"),
         ("rated_load", f'"{RATED_LOAD / 1e6:.0f} MW"', "THA rating"),
     ]
     print("[machine]\n" + "\n".join(line(*entry) for entry in machine))

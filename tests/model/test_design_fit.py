@@ -217,7 +217,7 @@ def _kit_frame(point: HeatBalancePoint, flow_factor: float = 1.0) -> pd.DataFram
 
 
 def test_the_kits_vwo_point_runs_from_the_rough_start(kit):
-    """VWO (1838 t/h, GV6 ~91 % open) has little valve reserve: from the rough start the first
+    """VWO (1838 t/h, GV6 ~73 % open) has little valve reserve: from the rough start the first
     sweep probes a higher control-stage pressure than the converged one, where the valves fall
     short; over-capacity is decided on the converged pressures only. A flow the valves really
     cannot pass is still refused."""
@@ -229,7 +229,7 @@ def test_the_kits_vwo_point_runs_from_the_rough_start(kit):
     model = FullOrderModel(spec)
     state = model.simulate_detailed(_kit_frame(vwo), stages=False).diagnostics.iloc[0]
     assert state["control_stage_pressure"] == pytest.approx(13.709e6, rel=2e-4)
-    assert 0.87 < state["active_admission_arc"] < 0.90  # of 0.90: GV6 part open
+    assert 0.85 < state["active_admission_arc"] < 0.88  # of 0.90: GV6 part open
     with pytest.raises(InputError, match="exceeds what the wide-open governing valves pass"):
         model.simulate(_kit_frame(vwo, 1.1))
     residuals = point_residuals(spec, heat_balance)
@@ -274,28 +274,20 @@ def test_a_small_control_stage_pressure_mismatch_is_resized_a_large_one_refused(
         _ = FullOrderModel(scaled(0.9)).design_
 
 
-def test_fit_on_the_derived_kit_runs_and_reduces_the_residuals(kit_fit):
-    """Measured (docs/benchmarks.md), with the kit's valve overlap (0.10, written by derive).
-    The four laws cannot take the kit to 1 K: its valves throttle the whole flow by 15–24 % at
-    30–75 % load (the kit holds the control stage at its THA pressure ratio, GV1–5 in service),
-    which neither the model's valve law (3 % drop, one group throttled at a time) nor the 10 %
-    overlap gives (at 30–50 % load the first group alone admits, below where the overlap
-    starts); the fit pushes the Reynolds exponent and the velocity-ratio factor to their bounds
-    and trades the rated points' control-stage temperature (+3.8 K) for the part-load points."""
+def test_fit_on_the_derived_kit_meets_every_point_within_the_band(kit_fit):
+    """Issue 17's acceptance on the independent kit: after derive + fit, every point from VWO to
+    30 % within 0.5 % in control-stage pressure and 1.0 K in control-stage and HP-exhaust
+    temperature (measured in docs/benchmarks.md, "Design fit"). The kit's valves (GV1–5 one
+    opening group, throttled alike below THA; the rated point between valve points) are in
+    the derived spec; the part-load laws take the rest: the pressure stages' Reynolds loss and
+    the control stage's velocity-ratio optimum."""
     before, after = kit_fit.initial_residuals, kit_fit.residuals
-    # before: part load far too cold and the control-stage pressure ~1 % low
-    assert before.loc["30 %", "hp_exhaust_temperature_k"] == pytest.approx(-13.45, abs=0.2)
-    assert before.loc["75 %", "control_stage_temperature_k"] == pytest.approx(-6.52, abs=0.2)
-    assert before["control_stage_pressure_pct"].abs().max() == pytest.approx(1.06, abs=0.03)
-    # after: every pressure within the 0.5 % band, temperatures within 2.8 / 4.1 K
-    assert after["control_stage_pressure_pct"].abs().max() < 0.45
-    assert after["hp_exhaust_temperature_k"].abs().max() < 2.8
-    assert after["control_stage_temperature_k"].abs().max() < 4.1
-    part_load = after.loc[["50 %", "40 %", "30 %"]].abs()
-    assert part_load["control_stage_temperature_k"].max() < 2.0
-    assert part_load["hp_exhaust_temperature_k"].max() < 2.3
-    assert (after.to_numpy() ** 2).sum() < 0.08 * (before.to_numpy() ** 2).sum()
-    assert kit_fit.part_load.reynolds_exponent == pytest.approx(0.5, abs=1e-6)  # its bound
-    assert kit_fit.part_load.control_stage_velocity_ratio_factor == pytest.approx(1.25, abs=1e-6)
-    assert kit_fit.rank == 4 and kit_fit.condition_number < 300.0
-    assert kit_fit.wall_time_s < 30.0  # measured ~5 s alone
+    # before: the pressure stages too efficient at part load (the kit's fall 0.900 -> 0.865)
+    assert before.loc["30 %", "hp_exhaust_temperature_k"] == pytest.approx(-7.7, abs=0.3)
+    assert after["control_stage_pressure_pct"].abs().max() < 0.5
+    assert after["control_stage_temperature_k"].abs().max() < 1.0
+    assert after["hp_exhaust_temperature_k"].abs().max() < 1.0
+    assert (after.to_numpy() ** 2).sum() < 0.05 * (before.to_numpy() ** 2).sum()
+    assert 0.2 < kit_fit.part_load.reynolds_exponent < 0.4
+    assert kit_fit.part_load.control_stage_velocity_ratio_factor > 1.1
+    assert kit_fit.wall_time_s < 60.0  # measured ~5 s alone

@@ -144,8 +144,8 @@ def test_control_stage_temperature_too_low_names_the_point():
 
 
 def test_single_valve_group_is_refused():
-    text = _kit_with("valve_opening_order = [1, 1, 1, 1, 2, 3]",
-                     "valve_opening_order = [1, 1, 1, 1, 1, 1]").replace("valve_overlap", "#")
+    text = _kit_with("valve_opening_order = [1, 1, 1, 1, 1, 2]",
+                     "valve_opening_order = [1, 1, 1, 1, 1, 1]")
     with pytest.raises(DeriveError, match="valve_opening_order"):
         derive_spec(parse_heat_balance(text, "bad.toml"))
 
@@ -195,13 +195,43 @@ def test_derived_reference_figures_load(tmp_path):
     assert load_spec(path).name == "Example 600 MW subcritical unit, thermal kit"
 
 
-def test_the_kits_valve_overlap_is_written_with_its_source(derived, derived_spec):
-    """machine.valve_overlap (0.10 in the kit) becomes control_stage.valve_overlap, commented;
-    a kit without it leaves the field out (strictly sequential opening)."""
-    line = next(line for line in derived[0].toml.splitlines()
-                if line.startswith("valve_overlap = "))
+def test_a_kits_valve_overlap_is_written_with_its_source(derived_spec):
+    """machine.valve_overlap becomes control_stage.valve_overlap, commented; the shipped kit
+    has none (GV1–5 open together, GV6 after them), so its spec opens strictly in sequence."""
+    assert derived_spec.control_stage.valve_overlap == 0.0
+    text = _kit_with("valve_names = ", "valve_overlap = 0.10\nvalve_names = ")
+    toml = derive_spec(parse_heat_balance(text, "kit.toml")).toml
+    line = next(line for line in toml.splitlines() if line.startswith("valve_overlap = "))
     assert "machine.valve_overlap" in line and "90% lift" in line
-    assert derived_spec.control_stage.valve_overlap == pytest.approx(0.10)
-    no_overlap = re.sub(r"(?m)^valve_overlap = .*$", "", KIT)
-    spec = parse_spec(derive_spec(parse_heat_balance(no_overlap, "kit.toml")).toml, "d.toml")
-    assert spec.control_stage.valve_overlap == 0.0
+    assert parse_spec(toml, "d.toml").control_stage.valve_overlap == pytest.approx(0.10)
+
+
+def test_valve_drops_come_from_the_kit(derived, derived_spec):
+    """The wide-open drop from the VWO point's valve outlet (16.170 of 16.670 MPa), the rated
+    point between valve points from THA's (16.003 MPa: GV1–5 throttled below wide open)."""
+    assert derived_spec.design.valve_pressure_drop == pytest.approx(1 - 16.170 / 16.670,
+                                                                    rel=1e-3)
+    assert derived_spec.design.valve_outlet_pressure == pytest.approx(16.003e6)
+    toml = derived[0].toml
+    assert re.search(r"(?m)^valve_pressure_drop = .*# VWO: 1 - valve_outlet_pressure", toml)
+    assert re.search(r"(?m)^valve_outlet_pressure = .*# THA: valve_outlet_pressure", toml)
+    # machine data win over the VWO point; without either, the 3 % rule
+    stated = parse_spec(derive_spec(parse_heat_balance(
+        _kit_with("valve_names = ", "valve_pressure_drop = 0.035\nvalve_names = "))).toml)
+    assert stated.design.valve_pressure_drop == pytest.approx(0.035)
+    plain = re.sub(r"(?m)^valve_outlet_pressure = .*$", "", KIT)
+    spec = parse_spec(derive_spec(parse_heat_balance(plain)).toml)
+    assert spec.design.valve_pressure_drop == 0.03 and spec.design.valve_outlet_pressure is None
+    # a rated point at the wide-open valve outlet is a valve point: no outlet pressure written
+    at_valve_point = _kit_with('valve_outlet_pressure = "16.003 MPa"',
+                               'valve_outlet_pressure = "16.170 MPa"')
+    assert parse_spec(derive_spec(parse_heat_balance(at_valve_point)).toml
+                      ).design.valve_outlet_pressure is None
+
+
+def test_a_valve_outlet_above_the_wide_open_one_is_refused():
+    text = _kit_with('valve_outlet_pressure = "16.003 MPa"', 'valve_outlet_pressure = "16.6 MPa"')
+    with pytest.raises(DeriveError, match=r"^bad.toml: points\[2\] \('THA'\): "
+                                          r"valve_outlet_pressure = 16\.6 MPa is above the "
+                                          r"wide-open valve outlet 16\.17 MPa"):
+        derive_spec(parse_heat_balance(text, "bad.toml"))

@@ -93,9 +93,9 @@ def test_example_loads_in_si_units():
     assert machine.rotational_speed_rad_s == pytest.approx(100 * np.pi)
     assert machine.control_stage_mean_diameter_m == pytest.approx(1.05)
     assert machine.valve_arcs == (0.16, 0.16, 0.16, 0.16, 0.13, 0.13)
-    assert machine.valve_opening_order == (1, 1, 1, 1, 2, 3)
+    assert machine.valve_opening_order == (1, 1, 1, 1, 1, 2)
     assert machine.valve_names == ("GV1", "GV2", "GV3", "GV4", "GV5", "GV6")
-    assert machine.valve_overlap == pytest.approx(0.10)
+    assert machine.valve_overlap is None and machine.valve_pressure_drop is None
     assert machine.rated_load_w == pytest.approx(600e6)
     assert [p.label for p in kit.points] == ["VWO", "THA", "75 %", "50 %", "40 %", "30 %"]
     np.testing.assert_allclose(kit.loads_w, [627.7e6, 600e6, 450e6, 300e6, 240e6, 180e6])
@@ -105,6 +105,7 @@ def test_example_loads_in_si_units():
     assert tha.main_steam_flow_kg_s == pytest.approx(1750 / 3.6)
     assert tha.control_stage_pressure_pa == pytest.approx(13.009e6)
     assert tha.control_stage_temperature_k == pytest.approx(503.9 + 273.15)
+    assert tha.valve_outlet_pressure_pa == pytest.approx(16.003e6)
     assert tha.hp_exhaust_pressure_pa == pytest.approx(3.62e6)
     assert tha.hp_exhaust_temperature_k == pytest.approx(318.5 + 273.15)
     assert tha.hp_exhaust_flow_kg_s == pytest.approx(1609.2 / 3.6)
@@ -250,6 +251,10 @@ BAD_POINTS = [
      P2 + r"hp_exhaust_temperature = .* efficiency of 0\.9[6-9].*expected \[0.5, 0.95\]"),
     # optional figures
     (_set(2, "hp_exhaust_flow", "1700 t/h"), P2 + "hp_exhaust_flow = 1700 t/h: expected between"),
+    (_set(2, "valve_outlet_pressure", "17 MPa"),
+     P2 + r"valve_outlet_pressure = 17 MPa is not between control_stage_pressure \(13\.01 MPa\)"
+          r" and main_steam_pressure \(16\.67 MPa\): the governing valves only throttle"),
+    (_set(2, "valve_outlet_pressure", "13 MPa"), P2 + "valve_outlet_pressure = 13 MPa is not"),
     (_set(2, "hp_exhaust_flow", "800 t/h"), P2 + "hp_exhaust_flow = 800 t/h: expected between"),
     (_set(2, "hp_power", "220 MW"), P2 + "hp_power = 220 MW does not match the expansion"),
     (_set(2, "hp_power", "140 MW"), P2 + "hp_power = 140 MW does not match the expansion"),
@@ -311,7 +316,11 @@ BAD_MACHINE = [
     (_machine("valve_names", ["GV1", "GV1", "GV3", "GV4", "GV5", "GV6"]), "valve_names"),
     (_machine("valve_overlap", 0.6), r"valve_overlap = 0.6: expected a plain number in \[0, 0.5\)"),
     (_machine("valve_overlap", "10 %"), "valve_overlap = '10 %': expected a plain number"),
-    (_machine("valve_opening_order", [1] * 6), "valve_overlap: every valve opens at step 1"),
+    (_both(_machine("valve_opening_order", [1] * 6), _machine("valve_overlap", 0.1)),
+     "valve_overlap: every valve opens at step 1"),
+    (_machine("valve_pressure_drop", 0.3), r"valve_pressure_drop = 0.3: expected a plain number "
+                                           r"in \[0, 0.2\]"),
+    (_machine("valve_pressure_drop", "3 %"), "valve_pressure_drop = '3 %': expected a plain"),
     (_machine("rated_load", "6000 MW"), "rated_load = '6000 MW' is outside the plausible range"),
     (_machine("pressure_stage", 11), r"pressure_stage is not a heat balance field \(did you "
                                       r"mean 'pressure_stages'\?\)"),

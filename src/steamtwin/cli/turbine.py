@@ -455,7 +455,8 @@ def _line_in_engineering_units(spec: TurbineSpec, line: pd.DataFrame) -> pd.Data
 
 def _line_table(spec: TurbineSpec, line: pd.DataFrame) -> Table:
     table = Table(title="The model's steady off-design line (sliding pressure); a valve's "
-                        "opening is its nozzle group's flow as a share of its wide-open flow")
+                        "opening is its lift, % of full lift (control_stage.valve_characteristic "
+                        "gives its flow)")
     shown = _line_in_engineering_units(spec, line)
     table.add_column("load")
     for load in shown.index:

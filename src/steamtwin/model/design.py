@@ -3,8 +3,9 @@
 Following the TESPy habit (a plant described once at its design point), the spec's geometry and
 design heat balance give every constant the kernel needs:
 
-* the control stage's nozzle throat area, from the design flow through the valves open at design
-  at the design control-stage pressure (Saint-Venant nozzle flow);
+* the control stage's nozzle throat areas, given by the spec or sized so that the design flow
+  passes the valves open at design at the design control-stage pressure, the last of them
+  throttled when the rated point lies between valve points (Saint-Venant nozzle flow);
 * blade speeds, optimum velocity ratios, extraction fractions and stage-group flow geometry;
 * the metal conduction chains of casing and rotor per stage group;
 * one efficiency scale on all stages so the design HP-exhaust temperature of the heat balance is
@@ -69,8 +70,8 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
     level_segments = np.array(
         [float(sum(1 for v in cs.valves if v.opening_order == o)) for o in orders]
     )
-    area_per_arc = _nozzle_area_per_arc(
-        spec, control_stage_pressure or design.control_stage_pressure)
+    level_area = _level_throat_areas(spec, orders, level_arc,
+                                     control_stage_pressure or design.control_stage_pressure)
     n = len(spec.stages)
     extraction_fraction = np.zeros(n)
     for extraction in spec.extractions:
@@ -110,7 +111,7 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
     control = ControlStageConstants(
         valve_pressure_drop=design.valve_pressure_drop,
         nozzle_discharge_coefficient=cs.nozzle_discharge_coefficient,
-        level_area=level_arc * area_per_arc,
+        level_area=level_area,
         level_arc=level_arc,
         level_segments=level_segments,
         blade_speed=omega * cs.blading.mean_diameter / 2.0,
@@ -123,6 +124,8 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         * cs.blading.mean_diameter * cs.blading.blade_height / 2.0,
         admission_loss_multiplier=part_load.admission_loss_multiplier,
         valve_overlap=cs.valve_overlap,
+        characteristic_lift=np.array(cs.valve_characteristic[0]),
+        characteristic_flow=np.array(cs.valve_characteristic[1]),
     )
     metal = MetalConstants(
         capacity=capacity,
@@ -161,21 +164,44 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
     )
 
 
-def _nozzle_area_per_arc(spec: TurbineSpec, control_stage_pressure: float) -> float:
-    """Throat area per unit admission arc (m²) passing the design flow through the open valves."""
+def _level_throat_areas(spec: TurbineSpec, orders: list[int], level_arc: np.ndarray,
+                        control_stage_pressure: float) -> np.ndarray:
+    """Nozzle throat area (m²) of each opening level: the spec's throat areas, or sized.
+
+    Sized, the area is in proportion to admission arc and passes the design flow through the
+    valves open at design at ``control_stage_pressure`` (Pa): the levels before the last open
+    one wide open at p0·(1 − valve drop), the last one at ``design.valve_outlet_pressure`` when
+    the rated point lies between valve points. Saint-Venant nozzle flow through each group,
+    throttling isenthalpic (h0 kept).
+    """
     design = spec.design
     cs = spec.control_stage
-    p_valve = design.main_steam_pressure * (1.0 - design.valve_pressure_drop)
+    if all(valve.throat_area is not None for valve in cs.valves):
+        return np.array([sum(v.throat_area for v in cs.valves if v.opening_order == order)
+                         for order in orders])
     h0 = float(if97.enthalpy_pt(design.main_steam_pressure, design.main_steam_temperature))
-    v_valve = float(if97.specific_volume_ph(p_valve, h0))
-    psi = nozzle_flow_function(control_stage_pressure / p_valve, KAPPA_SUPERHEATED)
-    open_arc = sum(v.admission_arc for v in cs.valves if v.open_at_design)
-    if psi <= 0.0:
-        raise SpecError("design control-stage pressure is not below the valve outlet pressure")
-    area = design.main_steam_flow / (
-        cs.nozzle_discharge_coefficient * psi * math.sqrt(p_valve / v_valve)
-    )
-    return area / open_arc
+
+    def flux(p_valve: float) -> float:
+        """Flow per unit throat area (kg/(s·m²)) fed at ``p_valve`` (Pa)."""
+        psi = nozzle_flow_function(control_stage_pressure / p_valve, KAPPA_SUPERHEATED)
+        if psi <= 0.0:
+            raise SpecError("design control-stage pressure is not below the valve outlet "
+                            "pressure")
+        v_valve = float(if97.specific_volume_ph(p_valve, h0))
+        return cs.nozzle_discharge_coefficient * psi * math.sqrt(p_valve / v_valve)
+
+    wide_open = design.main_steam_pressure * (1.0 - design.valve_pressure_drop)
+    open_levels = [level for level, order in enumerate(orders)
+                   if any(v.open_at_design for v in cs.valves if v.opening_order == order)]
+    if design.valve_outlet_pressure is None:
+        open_arc = sum(v.admission_arc for v in cs.valves if v.open_at_design)
+        area_per_arc = design.main_steam_flow / flux(wide_open) / open_arc
+    else:
+        last = open_levels[-1]
+        passed_per_arc = (sum(level_arc[level] for level in open_levels[:-1]) * flux(wide_open)
+                          + level_arc[last] * flux(design.valve_outlet_pressure))
+        area_per_arc = design.main_steam_flow / passed_per_arc
+    return level_arc * area_per_arc
 
 
 def _thermocouple_position(wall_depth: float, nodes: int) -> tuple[int, float]:

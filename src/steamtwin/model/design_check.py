@@ -83,7 +83,10 @@ def consistency_problems(spec: TurbineSpec, model: FullOrderModel | None = None)
     kernel, ~20 s).
     """
     problems = _sliding_line_problems(spec)
-    if all(valve.open_at_design for valve in spec.control_stage.valves):
+    valves = spec.control_stage.valves
+    if (all(valve.open_at_design for valve in valves)
+            and spec.design.valve_outlet_pressure is None
+            and any(valve.throat_area is None for valve in valves)):
         # the model's design step would only fail with a less telling reason
         return [_all_valves_open_problem(spec), *problems]
     model = _model_of(spec, model)
@@ -157,25 +160,27 @@ def design_line(spec: TurbineSpec, loads: Sequence[float] = DEFAULT_LOADS,
 
 
 def valve_openings(spec: TurbineSpec, admission_arc: float) -> dict[str, float]:
-    """Each governing valve's opening (0–1) for the model's admitting arc (share of the
-    circumference).
+    """Each governing valve's lift (0–1 of full lift) for the model's admitting arc (share of
+    the circumference).
 
     The model opens the valves level by level in ``opening_order`` and counts a part-open
     level's arc in proportion to its flow (``model.kernel``). With a valve overlap v
-    (``control_stage.valve_overlap``) level k's opening is clamp(x − k·(1 − v), 0, 1) of one
+    (``control_stage.valve_overlap``) level k's lift is clamp(x − k·(1 − v), 0, 1) of one
     common demand x — the next level starts ``v`` of a lift before the previous one is wide
     open; v = 0 is strictly sequential opening — and x is the demand whose levels admit
-    ``admission_arc`` (bisection; the admitted arc rises monotonically with x). The opening is
-    the nozzle group's flow as a share of its wide-open flow at the same pressures, not a
-    mechanical lift.
+    ``admission_arc`` (bisection; the admitted arc rises monotonically with x). A level's
+    flow, as a share of its wide-open flow at the same pressures, is the valves' flow
+    characteristic (``control_stage.valve_characteristic``, linear by default) at its lift.
     """
-    valves = spec.control_stage.valves
+    cs = spec.control_stage
+    valves = cs.valves
     orders = sorted({valve.opening_order for valve in valves})
     level_arcs = np.array([sum(valve.admission_arc for valve in valves
                                if valve.opening_order == order) for order in orders])
-    starts = np.arange(len(orders)) * (1.0 - spec.control_stage.valve_overlap)
+    starts = np.arange(len(orders)) * (1.0 - cs.valve_overlap)
+    characteristic_lift, characteristic_flow = cs.valve_characteristic
 
-    def openings_at(demand: float) -> np.ndarray:
+    def lifts_at(demand: float) -> np.ndarray:
         return np.clip(demand - starts, 0.0, 1.0)
 
     low, high = 0.0, float(starts[-1]) + 1.0
@@ -183,11 +188,12 @@ def valve_openings(spec: TurbineSpec, admission_arc: float) -> dict[str, float]:
         high = 0.0
     for _ in range(_OPENING_BISECTIONS):
         middle = 0.5 * (low + high)
-        if float(level_arcs @ openings_at(middle)) < admission_arc:
+        shares = np.interp(lifts_at(middle), characteristic_lift, characteristic_flow)
+        if float(level_arcs @ shares) < admission_arc:
             low = middle
         else:
             high = middle
-    by_order = dict(zip(orders, openings_at(high), strict=True))
+    by_order = dict(zip(orders, lifts_at(high), strict=True))
     return {valve.name: float(by_order[valve.opening_order]) for valve in valves}
 
 

@@ -141,6 +141,8 @@ class ControlStageConstants(NamedTuple):
     windage_area: float  # m², B_e·π·sin α1·d·l/2 of the idle-arc windage power
     admission_loss_multiplier: float  # on windage and sector-end loss (spec part_load)
     valve_overlap: float  # lift share by which a level opens before the previous is full open
+    characteristic_lift: np.ndarray  # valve lift points (0…1) of the flow characteristic
+    characteristic_flow: np.ndarray  # share of the wide-open flow at each lift point
 
 
 class MetalConstants(NamedTuple):
@@ -254,19 +256,28 @@ def _level_lift(overlap, level, demand):
 
     Each level's lift rises over one unit of demand and the next level starts ``overlap`` of a
     lift before the previous is fully open [Cotton, *Evaluating and Improving Steam Turbine
-    Performance*, 1998, ch. 6: valve-point loops and overlap]. The flow characteristic is
-    linear: a level passes ``lift`` × its wide-open flow.
+    Performance*, 1998, ch. 6: valve-point loops and overlap].
     """
     return min(max(demand - level * (1.0 - overlap), 0.0), 1.0)
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
+def _level_share(cs, level, demand):
+    """Share (0…1) of its wide-open flow that level ``level`` passes at valve demand ``demand``:
+    the valves' flow characteristic (flow share against lift, piecewise linear) at the level's
+    scheduled lift."""
+    return np.interp(_level_lift(cs.valve_overlap, level, demand), cs.characteristic_lift,
+                     cs.characteristic_flow)
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _valve_demand(cs, open_flux, flow):
     """Valve demand at which the overlapping lift schedule passes ``flow`` (kg/s).
 
-    The scheduled flow Σ wide-open × lift is piecewise linear and non-decreasing in the demand,
-    so bisection on [0, full lift of the last level] finds it to round-off; a flow above what
-    every valve wide open passes gets the full demand (the caller reports over capacity).
+    The scheduled flow Σ wide-open × share(lift) is piecewise linear and non-decreasing in the
+    demand, so bisection on [0, full lift of the last level] finds it to round-off; a flow
+    above what every valve wide open passes gets the full demand (the caller reports over
+    capacity).
     """
     overlap = cs.valve_overlap
     low, high = 0.0, (cs.level_area.size - 1) * (1.0 - overlap) + 1.0
@@ -274,7 +285,7 @@ def _valve_demand(cs, open_flux, flow):
         middle = 0.5 * (low + high)
         scheduled = 0.0
         for level in range(cs.level_area.size):
-            scheduled += open_flux * cs.level_area[level] * _level_lift(overlap, level, middle)
+            scheduled += open_flux * cs.level_area[level] * _level_share(cs, level, middle)
         if scheduled < flow:
             low = middle
         else:
@@ -318,7 +329,7 @@ def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params,
         # its share of the overlapping lift schedule
         target = remaining
         if cs.valve_overlap > 0.0:
-            target = min(remaining, wide_open * _level_lift(cs.valve_overlap, level, demand))
+            target = min(remaining, wide_open * _level_share(cs, level, demand))
             if target <= 1e-12 * flow:  # shut, or round-off left by the demand's bisection
                 throttled[0, level] = p1
                 continue

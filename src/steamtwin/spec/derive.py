@@ -43,8 +43,13 @@ __all__ = ["DeriveError", "DerivedSpec", "StageRow", "derive_spec", "design_poin
 
 # --- rules and their sources -------------------------------------------------------------------
 #: Stop- plus governing-valve loss when wide open, share of the throttle pressure: 2-4 % [Cotton,
-#: Evaluating and Improving Steam Turbine Performance, 1998, ch. 6]; a kit does not give it.
+#: Evaluating and Improving Steam Turbine Performance, 1998, ch. 6]; taken when the kit gives
+#: neither machine.valve_pressure_drop nor a VWO point's valve_outlet_pressure.
 VALVE_PRESSURE_DROP = 0.03
+#: A design point's valve outlet pressure this far (share of the main-steam pressure) below the
+#: wide-open valve outlet makes the rated point one between valve points; closer, it is taken
+#: as the valve point itself (the kit's rounding).
+VALVE_POINT_TOLERANCE = 1e-3
 #: Control stage: impulse blading with slight reaction, 13 deg nozzles (11-15 deg usual), friction
 #: share 0.03, nozzle discharge coefficient 0.97 (0.95-0.98) [Traupel, Thermische
 #: Turbomaschinen, 2001, §8; Cotton ch. 6] — the reference unit's figures.
@@ -220,6 +225,48 @@ def design_point_of(heat_balance: HeatBalance) -> tuple[int, str]:
     return 0, "the highest load (no THA label, no machine.rated_load point)"
 
 
+@dataclass(frozen=True)
+class _Valves:
+    """The governing valves' pressure drops at the design point (SI)."""
+
+    drop: float  # wide-open stop + governing valve loss, share of the main-steam pressure
+    drop_how: str  # where the drop comes from, for the spec's comment
+    drop_origin: str  # the heat-balance field responsible, for errors
+    design_outlet: float | None  # nozzle-chest pressure at design between valve points, Pa
+
+    def outlet(self, point: HeatBalancePoint) -> float:
+        """Pressure (Pa) after the valves open at design, at the design point."""
+        return (self.design_outlet if self.design_outlet is not None
+                else point.main_steam_pressure_pa * (1.0 - self.drop))
+
+
+def _valves(hb: HeatBalance, point: HeatBalancePoint, where: str) -> _Valves:
+    """The wide-open valve drop (machine data, a VWO point, or the rule) and whether the rated
+    point lies between valve points (its valve outlet below the wide-open one)."""
+    drop, how, origin = (VALVE_PRESSURE_DROP, "rule: wide-open stop + governing valve loss, "
+                         "2-4 % [Cotton ch. 6]; the kit does not give it", "valve_pressure_drop")
+    vwo = next((number for number, candidate in enumerate(hb.points, start=1)
+                if candidate.label.strip().upper() == "VWO"
+                and candidate.valve_outlet_pressure_pa is not None), None)
+    if hb.machine.valve_pressure_drop is not None:
+        drop, how = hb.machine.valve_pressure_drop, "machine.valve_pressure_drop"
+        origin = "machine: valve_pressure_drop"
+    elif vwo is not None:
+        wide = hb.points[vwo - 1]
+        drop = 1.0 - wide.valve_outlet_pressure_pa / wide.main_steam_pressure_pa
+        how = "VWO: 1 - valve_outlet_pressure / main_steam_pressure (valves wide open)"
+        origin = f"points[{vwo}] ('VWO'): valve_outlet_pressure"
+    outlet = point.valve_outlet_pressure_pa
+    p0 = point.main_steam_pressure_pa
+    if outlet is not None and outlet > p0 * (1.0 - drop) * (1.0 + VALVE_POINT_TOLERANCE):
+        raise DeriveError(
+            f"{where}: valve_outlet_pressure = {outlet / 1e6:.4g} MPa is above the wide-open "
+            f"valve outlet {p0 * (1.0 - drop) / 1e6:.4g} MPa ({how} = {drop:.4g}): check the "
+            "point's valve outlet pressure or the valve pressure drop")
+    throttled = outlet is not None and outlet < p0 * (1.0 - drop - VALVE_POINT_TOLERANCE)
+    return _Valves(drop, how, origin, outlet if throttled else None)
+
+
 # --- formatting --------------------------------------------------------------------------------
 
 def _mpa(value: float) -> str:
@@ -295,18 +342,18 @@ class _ControlStage:
     origin: str
 
 
-def _control_stage(hb: HeatBalance, point: HeatBalancePoint, where: str,
+def _control_stage(hb: HeatBalance, point: HeatBalancePoint, where: str, valves: _Valves,
                    open_valves: int, open_arc: float, notes: list[str]) -> _ControlStage:
     machine = hb.machine
     p0, t0, flow = (point.main_steam_pressure_pa, point.main_steam_temperature_k,
                     point.main_steam_flow_kg_s)
     h0 = _f(if97.enthalpy_pt(p0, t0))
-    p_valve = p0 * (1.0 - VALVE_PRESSURE_DROP)
+    p_valve = valves.outlet(point)
     p_cs = point.control_stage_pressure_pa
     if not p_cs < p_valve:
         raise DeriveError(
             f"{where}: control_stage_pressure = {p_cs / 1e6:.4g} MPa is not below the pressure "
-            f"after the wide-open valves ({p_valve / 1e6:.4g} MPa, a {VALVE_PRESSURE_DROP:.0%} "
+            f"after the wide-open valves ({p_valve / 1e6:.4g} MPa, a {valves.drop:.1%} "
             "valve drop from main_steam_pressure)")
     drop = h0 - _f(if97.enthalpy_ps(p_cs, if97.entropy_ph(p_valve, h0)))
     speed = machine.rotational_speed_rad_s * machine.control_stage_mean_diameter_m / 2.0
@@ -482,7 +529,8 @@ def derive_spec(heat_balance: HeatBalance, *, name: str | None = None) -> Derive
     open_arc = sum(a for a, o in zip(machine.valve_arcs, open_flags, strict=True) if o)
     open_count = sum(open_flags)
 
-    cs = _control_stage(hb, point, where, open_count, open_arc, notes)
+    valves = _valves(hb, point, where)
+    cs = _control_stage(hb, point, where, valves, open_count, open_arc, notes)
     p_exh = point.hp_exhaust_pressure_pa
     hp_bleeds, cold = [], []
     for bleed in point.extractions:
@@ -509,7 +557,7 @@ def derive_spec(heat_balance: HeatBalance, *, name: str | None = None) -> Derive
 
     w = _Writer(hb.source)
     _header(w, hb, point, rule, name)
-    _design_block(w, point, where, rule, machine.rotational_speed_rad_s, expansion_power)
+    _design_block(w, point, where, rule, machine.rotational_speed_rad_s, expansion_power, valves)
     _control_block(w, hb, point, where, cs, open_flags)
     _stage_blocks(w, point, where, expansion)
     _extraction_blocks(w, point, where, hp_bleeds, expansion)
@@ -548,7 +596,7 @@ def _toml_string(text: str) -> str:
 
 
 def _design_block(w: _Writer, point: HeatBalancePoint, where: str, rule: str,
-                  hb_speed_rad_s: float, expansion_power: float) -> None:
+                  hb_speed_rad_s: float, expansion_power: float, valves: _Valves) -> None:
     w.raw()
     w.raw("[design]")
     w.raw(f"# Rated point: {point.label!r} ({rule}).")
@@ -583,9 +631,13 @@ def _design_block(w: _Writer, point: HeatBalancePoint, where: str, rule: str,
     w.value("rotational_speed", "design.rotational_speed", speed,
             f'"{speed * 30.0 / math.pi:.6g} rpm"', "machine.rotational_speed",
             "machine: rotational_speed")
-    w.value("valve_pressure_drop", "design.valve_pressure_drop", VALVE_PRESSURE_DROP,
-            f"{VALVE_PRESSURE_DROP:g}", "rule: wide-open stop + governing valve loss, 2-4 % "
-            "[Cotton ch. 6]; a kit does not give it", "valve_pressure_drop")
+    w.value("valve_pressure_drop", "design.valve_pressure_drop", valves.drop,
+            f"{valves.drop:.4g}", valves.drop_how, valves.drop_origin)
+    if valves.design_outlet is not None:
+        w.value("valve_outlet_pressure", "design.valve_outlet_pressure", valves.design_outlet,
+                _mpa(valves.design_outlet), f"{label}: valve_outlet_pressure (between valve "
+                "points: the last group open at design throttles)",
+                f"{where}: valve_outlet_pressure")
 
 
 

@@ -54,8 +54,10 @@ _POINT_REQUIRED = ("label", "load", "main_steam_pressure", "main_steam_temperatu
 #: The keys each table may hold, by its path without array positions ("" is the top level).
 HEAT_BALANCE_KEYS: Mapping[str, frozenset[str]] = {
     "": frozenset({"name", "description", "machine", "points"}),
-    "machine": frozenset({*_MACHINE_REQUIRED, "valve_names", "valve_overlap", "rated_load"}),
+    "machine": frozenset({*_MACHINE_REQUIRED, "valve_names", "valve_overlap", "rated_load",
+                          "valve_pressure_drop"}),
     "points": frozenset({*_POINT_REQUIRED, "control_stage_temperature", "hp_exhaust_flow",
+                         "valve_outlet_pressure",
                          "hp_power", "reheat_temperature", "feedwater_temperature",
                          "extractions"}),
     "points.extractions": frozenset({"name", "flow", "pressure"}),
@@ -68,6 +70,7 @@ _RANGES: Mapping[str, tuple[str, float, float, str]] = {
     "main_steam_temperature": ("K", 373.15, 923.15, "degC"),
     "main_steam_flow": ("kg/s", 1 / 3.6, 5000 / 3.6, "t/h"),
     "control_stage_pressure": ("Pa", 0.05e6, 35e6, "MPa"),
+    "valve_outlet_pressure": ("Pa", 0.05e6, 35e6, "MPa"),
     "control_stage_temperature": ("K", 373.15, 923.15, "degC"),
     "hp_exhaust_pressure": ("Pa", 0.01e6, 35e6, "MPa"),
     "hp_exhaust_temperature": ("K", 323.15, 923.15, "degC"),
@@ -86,6 +89,9 @@ _RANGES: Mapping[str, tuple[str, float, float, str]] = {
 #: HP sections of large units reach 0.85-0.90 at rated load [Cotton, Evaluating and Improving
 #: Steam Turbine Performance, 1998, ch. 2]; below 0.5 or above 0.95 the data are inconsistent.
 HP_EFFICIENCY_BAND = (0.5, 0.95)
+#: Largest wide-open stop + governing valve pressure loss accepted, fraction of the main-steam
+#: pressure (the spec's design.valve_pressure_drop bound; 2-4 % usual [Cotton, ch. 6]).
+MAX_VALVE_PRESSURE_DROP = 0.2
 #: Mean blade speed limit of the control stage, m/s (forged HP discs stay well below it).
 MAX_BLADE_SPEED = 400.0
 #: A heater with a desuperheating zone heats the feedwater at most a few kelvin above the bleed's
@@ -126,6 +132,7 @@ class HeatBalancePoint:
     hp_exhaust_pressure_pa: float  #: HP exhaust (cold reheat), Pa
     hp_exhaust_temperature_k: float  #: HP exhaust (cold reheat), K
     hp_isentropic_efficiency: float  #: computed: (h0 − h_exh)/(h0 − h_exh,s), IAPWS-IF97
+    valve_outlet_pressure_pa: float | None = None  #: after the governing valves (nozzle chest), Pa
     hp_exhaust_flow_kg_s: float | None = None  #: leaving the HP blading, kg/s
     hp_power_w: float | None = None  #: HP blading (internal) power, W
     reheat_temperature_k: float | None = None  #: hot reheat at the IP inlet, K
@@ -145,6 +152,7 @@ class MachineDescription:
     valve_names: tuple[str, ...]  #: "GV1", "GV2", ... unless the file names them
     valve_overlap: float | None = None  #: lift fraction left when the next group opens
     rated_load_w: float | None = None  #: nameplate (THA) rating, W
+    valve_pressure_drop: float | None = None  #: wide-open stop + governing valve loss, of p0
 
 
 @dataclass(frozen=True)
@@ -358,11 +366,21 @@ def _machine(table: _Fields) -> MachineDescription:
                                    "1, so there is no next group to overlap with")
         overlap = float(overlap)
     rated = table.quantity("rated_load") if table.has("rated_load") else None
+    drop = None
+    if table.has("valve_pressure_drop"):
+        drop = table.raw("valve_pressure_drop")
+        if (isinstance(drop, bool) or not isinstance(drop, int | float)
+                or not 0.0 <= drop <= MAX_VALVE_PRESSURE_DROP):
+            raise HeatBalanceError(f"{table.where('valve_pressure_drop')} = {drop!r}: expected "
+                                   f"a plain number in [0, {MAX_VALVE_PRESSURE_DROP}], the "
+                                   "fraction of the main-steam pressure lost across the "
+                                   "wide-open stop and governing valves (0.02-0.04 usual)")
+        drop = float(drop)
     return MachineDescription(
         pressure_stages=stages, rotational_speed_rad_s=speed,
         control_stage_mean_diameter_m=diameter, valve_arcs=tuple(float(a) for a in arcs),
         valve_opening_order=tuple(order), valve_names=names, valve_overlap=overlap,
-        rated_load_w=rated)
+        rated_load_w=rated, valve_pressure_drop=drop)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -418,6 +436,14 @@ def _point(entry: Any, number: int, source: str) -> HeatBalancePoint:
             f"{table.where('hp_exhaust_pressure')} = {_show(p_exh, 'MPa')} is not below "
             f"control_stage_pressure ({_show(p_cs, 'MPa')}): pressures must fall through the HP")
     _superheated(table, "main_steam_temperature", t0, p0)
+    p_valve = None
+    if table.has("valve_outlet_pressure"):
+        p_valve = table.quantity("valve_outlet_pressure")
+        if not p_cs < p_valve <= p0:
+            raise HeatBalanceError(
+                f"{table.where('valve_outlet_pressure')} = {_show(p_valve, 'MPa')} is not "
+                f"between control_stage_pressure ({_show(p_cs, 'MPa')}) and "
+                f"main_steam_pressure ({_show(p0, 'MPa')}): the governing valves only throttle")
     if t_exh >= t0:
         raise HeatBalanceError(
             f"{table.where('hp_exhaust_temperature')} = {_show(t_exh, 'degC')} is not below "
@@ -450,6 +476,7 @@ def _point(entry: Any, number: int, source: str) -> HeatBalancePoint:
         main_steam_flow_kg_s=flow, control_stage_pressure_pa=p_cs,
         control_stage_temperature_k=t_cs, hp_exhaust_pressure_pa=p_exh,
         hp_exhaust_temperature_k=t_exh, hp_isentropic_efficiency=efficiency,
+        valve_outlet_pressure_pa=p_valve,
         hp_exhaust_flow_kg_s=_exhaust_flow(table, flow, p_exh, extractions),
         hp_power_w=_hp_power(table, flow * (h0 - h_exh)),
         reheat_temperature_k=_reheat_temperature(table, t_exh),

@@ -60,10 +60,12 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
     "design": frozenset({"main_steam_pressure", "main_steam_temperature", "main_steam_flow",
                          "control_stage_pressure", "hp_exhaust_pressure",
                          "hp_exhaust_temperature", "hp_power", "generator_power",
-                         "rotational_speed", "valve_pressure_drop"}),
-    "control_stage": _BLADING | {"nozzle_discharge_coefficient", "valves", "valve_overlap"},
+                         "rotational_speed", "valve_pressure_drop", "valve_outlet_pressure"}),
+    "control_stage": _BLADING | {"nozzle_discharge_coefficient", "valves", "valve_overlap",
+                                 "valve_characteristic"},
+    "control_stage.valve_characteristic": frozenset({"lift", "flow"}),
     "control_stage.valves": frozenset({"name", "opening_order", "admission_arc",
-                                       "open_at_design"}),
+                                       "open_at_design", "throat_area"}),
     "stages": _BLADING | {"flow_capacity"},
     "extractions": frozenset({"name", "after_stage", "design_flow", "design_pressure"}),
     "metal": frozenset({"casing_sensor_group", "ambient_temperature", "casing_material",
@@ -77,8 +79,12 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
 }
 #: Keys that may be left out, by their path: a unit without HP bleeds has no extractions; the
 #: part-load laws and each of their fields have defaults (:class:`PartLoad`); valves without
-#: overlap open strictly one group after the other.
+#: overlap open strictly one group after the other, with a linear flow characteristic; the
+#: rated point is a valve point unless its valve outlet pressure is given; the model sizes the
+#: nozzle throat areas unless they are given.
 OPTIONAL_KEYS = frozenset({"extractions", "part_load", "control_stage.valve_overlap",
+                           "control_stage.valve_characteristic", "design.valve_outlet_pressure",
+                           "control_stage.valves.throat_area",
                            *(f"part_load.{key}" for key in _PART_LOAD)})
 
 
@@ -268,6 +274,8 @@ def _design(table: _Table) -> DesignPoint:
         generator_power=table.quantity("generator_power"),
         rotational_speed=table.quantity("rotational_speed"),
         valve_pressure_drop=table.quantity("valve_pressure_drop"),
+        valve_outlet_pressure=table.quantity("valve_outlet_pressure")
+        if "valve_outlet_pressure" in table.data else None,
     )
 
 
@@ -290,9 +298,16 @@ def _control_stage(table: _Table) -> ControlStage:
             opening_order=valve.integer("opening_order"),
             admission_arc=valve.quantity("admission_arc"),
             open_at_design=valve.flag("open_at_design"),
+            throat_area=valve.quantity("throat_area") if "throat_area" in valve.data else None,
         )
         for valve in table.tables("valves")
     )
+    given = [valve.throat_area is not None for valve in valves]
+    if any(given) and not all(given):
+        missing = [valve.name for valve in valves if valve.throat_area is None]
+        raise SpecError(f"{table.source}: control_stage.valves[].throat_area is given for some "
+                        f"valves but not for {', '.join(missing)}: give it for every valve or "
+                        "for none (the model then sizes the throats)")
     total_arc = sum(valve.admission_arc for valve in valves)
     if total_arc > 1.0 + 1e-9:
         raise SpecError(
@@ -310,7 +325,30 @@ def _control_stage(table: _Table) -> ControlStage:
         nozzle_discharge_coefficient=table.quantity("nozzle_discharge_coefficient"),
         valves=valves,
         valve_overlap=table.quantity("valve_overlap") if "valve_overlap" in table.data else 0.0,
+        valve_characteristic=_valve_characteristic(table.table("valve_characteristic"))
+        if "valve_characteristic" in table.data else ControlStage.valve_characteristic,
     )
+
+
+def _valve_characteristic(table: _Table) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """(lift, flow share) of the valve characteristic: both 0…1, lift strictly increasing from
+    0 to 1, flow share rising (non-decreasing) from 0 to 1."""
+    where = f"{table.source}: {table.path}"
+    columns = []
+    for key in ("lift", "flow"):
+        field, values = table.field(key), table.raw(key)
+        if not isinstance(values, list) or len(values) < field.min_items:
+            raise SpecError(f"{where}.{key} must be an array of ≥ {field.min_items} numbers")
+        columns.append(tuple(_checked_quantity(value, field, f"{where}.{key}[{number}]")
+                             for number, value in enumerate(values, start=1)))
+    lift, flow = columns
+    if len(lift) != len(flow):
+        raise SpecError(f"{where}: lift has {len(lift)} values but flow has {len(flow)}")
+    if lift[0] != 0.0 or lift[-1] != 1.0 or any(b <= a for a, b in itertools.pairwise(lift)):
+        raise SpecError(f"{where}.lift must rise strictly from 0 to 1, got {list(lift)}")
+    if flow[0] != 0.0 or flow[-1] != 1.0 or any(b < a for a, b in itertools.pairwise(flow)):
+        raise SpecError(f"{where}.flow must rise from 0 to 1 (never fall), got {list(flow)}")
+    return lift, flow
 
 
 def _check_valve_sequence(valves: tuple[GoverningValve, ...], source: str) -> None:
@@ -438,6 +476,15 @@ def _check_consistency(spec: TurbineSpec, source: str) -> None:
         )
     if design.hp_power >= design.generator_power:
         raise SpecError(f"{source}: design.hp_power must be below design.generator_power")
+    wide_open = design.main_steam_pressure * (1.0 - design.valve_pressure_drop)
+    if design.valve_outlet_pressure is not None and not (
+            wide_open >= design.valve_outlet_pressure > design.control_stage_pressure):
+        raise SpecError(
+            f"{source}: design.valve_outlet_pressure {design.valve_outlet_pressure / 1e6:g} MPa "
+            f"must lie above design.control_stage_pressure "
+            f"{design.control_stage_pressure / 1e6:g} MPa and not above the wide-open valve "
+            f"outlet, design.main_steam_pressure × (1 − design.valve_pressure_drop) = "
+            f"{wide_open / 1e6:g} MPa")
     for number, extraction in enumerate(spec.extractions, start=1):
         upstream, downstream = design.control_stage_pressure, design.hp_exhaust_pressure
         if not upstream > extraction.design_pressure > downstream:

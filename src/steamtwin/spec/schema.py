@@ -211,6 +211,16 @@ FIELDS: tuple[Field, ...] = (
           "Fractional pressure loss across a wide-open stop plus governing valve pair.",
           "Thermal kit or OEM valve data; 0.02-0.04 typical [Cotton, ch. 6].",
           example=0.03, low=0.0, high=0.2),
+    Field("design.valve_outlet_pressure", "quantity",
+          "Nozzle-chest pressure after the governing valves of the last opening group open at "
+          "rated load: below the wide-open valve outlet p0·(1 − valve_pressure_drop) when the "
+          "rated point lies between valve points (that group part-open), above the "
+          "control-stage pressure. The throat areas are then sized for that group throttled "
+          "to it.",
+          "Thermal kit: pressure after the governing valves (nozzle chest) on the rated-load "
+          "heat balance, or the DEH valve-point table [Cotton, ch. 6: valve points].",
+          "Pa", "15.9 MPa", 0.1e6, 25e6,
+          default="p0·(1 − valve_pressure_drop): the rated point is a valve point"),
     Field("control_stage", "table",
           "The governing (control) stage: impulse blading with nozzle governing.",
           "OEM flow-path drawing and nozzle-box drawing."),
@@ -227,6 +237,21 @@ FIELDS: tuple[Field, ...] = (
           "`machine.valve_overlap`); 0.05-0.15 usual [Cotton, ch. 6: valve-point loops; "
           "Traupel, Bd. 2, nozzle governing].",
           example=0.1, low=0.0, high=0.5, default="0: strictly sequential opening"),
+    Field("control_stage.valve_characteristic", "table",
+          "Flow characteristic of the governing valves (all alike): the share of its wide-open "
+          "flow a valve passes against its lift, linearly interpolated; used where the lift "
+          "schedule (valve_overlap) sets several lifts at once, and to report lifts.",
+          "OEM valve test or the DEH valve flow-characteristic curve; poppet valves pass "
+          "most of their flow in the first third of their lift [Cotton, ch. 6].",
+          default="linear: flow share = lift"),
+    Field("control_stage.valve_characteristic.lift", "array",
+          "Valve lift as a share of full lift, strictly increasing from 0 to 1.",
+          "Valve characteristic curve, lift axis.", items="number", low=0.0, high=1.0,
+          min_items=2, example=0.3),
+    Field("control_stage.valve_characteristic.flow", "array",
+          "Share of the wide-open flow at each lift (same length), rising from 0 to 1.",
+          "Valve characteristic curve, flow axis.", items="number", low=0.0, high=1.0,
+          min_items=2, example=0.8),
     Field("control_stage.valves", "tables",
           "One table per governing valve and the nozzle group it feeds, at least one.",
           "DEH valve-management documentation and the nozzle-box drawing.", min_items=1),
@@ -240,8 +265,16 @@ FIELDS: tuple[Field, ...] = (
           "Nozzle-box drawing: nozzles in the group divided by nozzle pitches on the full circle.",
           example=0.25, low=1e-3, high=1.0),
     Field("control_stage.valves[].open_at_design", "boolean",
-          "Whether the valve is wide open at rated load (the valves of the first opening orders).",
+          "Whether the valve admits steam at rated load (the valves of the first opening "
+          "orders): wide open, the last of these orders throttled to design.valve_outlet_pressure "
+          "when that is given.",
           "DEH valve-point table or the thermal kit's valve point at THA.", example=True),
+    Field("control_stage.valves[].throat_area", "quantity",
+          "Total throat area of the valve's nozzle group; give it for every valve or for none.",
+          "Nozzle-box drawing: nozzles in the group times throat width times height.",
+          "m^2", "0.0085 m^2", 1e-5, 1.0,
+          default="sized: the design flow passes the valves open at design at the design "
+                  "control-stage pressure, area in proportion to admission arc"),
     Field("stages", "tables",
           "The pressure stages after the control stage, in steam-flow order, at least one; "
           "the k-th table is stage k (stage 0 is the control stage).",

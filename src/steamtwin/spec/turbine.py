@@ -17,7 +17,9 @@ class DesignPoint:
 
     Pressures in Pa, temperatures in K, flow in kg/s, powers in W, ``rotational_speed`` in rad/s.
     ``valve_pressure_drop`` is the fractional pressure loss across a fully open stop + governing
-    valve pair (dimensionless).
+    valve pair (dimensionless). ``valve_outlet_pressure`` (Pa) is the nozzle-chest pressure after
+    the last opening group open at rated load when the rated point lies between valve points
+    (that group part-open); None: the rated point is a valve point.
     """
 
     main_steam_pressure: float
@@ -30,6 +32,7 @@ class DesignPoint:
     generator_power: float
     rotational_speed: float
     valve_pressure_drop: float
+    valve_outlet_pressure: float | None = None
 
 
 @dataclass(frozen=True)
@@ -37,13 +40,15 @@ class GoverningValve:
     """A governing valve and the nozzle group it feeds.
 
     ``admission_arc`` is the group's share of the circumference (0–1); valves with the same
-    ``opening_order`` open together; ``open_at_design`` marks the valves fully open at rated load.
+    ``opening_order`` open together; ``open_at_design`` marks the valves admitting steam at rated
+    load. ``throat_area`` (m²) is the nozzle group's throat area, None when the model sizes it.
     """
 
     name: str
     opening_order: int
     admission_arc: float
     open_at_design: bool
+    throat_area: float | None = None
 
 
 @dataclass(frozen=True)
@@ -69,13 +74,16 @@ class ControlStage:
     """The governing (control) stage: an impulse stage with nozzle governing.
 
     ``valve_overlap``: share of a valve's lift by which the next opening group starts before
-    the previous one is fully open (0: strictly sequential opening).
+    the previous one is fully open (0: strictly sequential opening). ``valve_characteristic``:
+    (lift, flow share) points of the valves' flow characteristic, both 0…1, linearly
+    interpolated (default linear).
     """
 
     blading: StageGeometry
     nozzle_discharge_coefficient: float
     valves: tuple[GoverningValve, ...]
     valve_overlap: float = 0.0
+    valve_characteristic: tuple[tuple[float, ...], tuple[float, ...]] = ((0.0, 1.0), (0.0, 1.0))
 
 
 @dataclass(frozen=True)
