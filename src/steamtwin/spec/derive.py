@@ -813,8 +813,11 @@ def _sliding_block(w: _Writer, hb: HeatBalance, point: HeatBalancePoint, where: 
 def _temperature_block(w: _Writer, hb: HeatBalance, point: HeatBalancePoint,
                        notes: list[str]) -> None:
     """``[temperature_schedule]``: every point's main-steam (and hot-reheat) temperature against
-    load / design load, ascending; the reheat axis only if every point gives it."""
+    load / design load, ascending; the reheat axis only if every point gives it. A kit of one
+    point (the design point) has no schedule: the design temperature at every load."""
     points = list(reversed(hb.points))  # the kit lists them by decreasing load
+    if len(points) < 2:
+        return
     fractions = [p.load_w / point.load_w for p in points]
     first = len(points)  # 1-based position in the kit of points[0]
     for axis, key in (("main_steam_temperature", "main_steam_temperature_k"),
@@ -831,13 +834,17 @@ def _temperature_block(w: _Writer, hb: HeatBalance, point: HeatBalancePoint,
     w.raw("[temperature_schedule]")
     w.raw("# Every heat-balance point: load / design load vs its main-steam (and hot-reheat)")
     w.raw("# temperature, the boiler's steam-temperature schedule; held flat beyond the points.")
-    w.raw("load_fraction = [" + ", ".join(f"{f:.6g}" for f in fractions) + "]")
+    labels = ", ".join(p.label for p in points)
+    w.raw("load_fraction = [" + ", ".join(f"{f:.6g}" for f in fractions)
+          + f"]  # {labels}: load / {point.label} load")
     w.raw("main_steam_temperature = ["
-          + ", ".join(_degc(p.main_steam_temperature_k) for p in points) + "]")
+          + ", ".join(_degc(p.main_steam_temperature_k) for p in points)
+          + "]  # the same points: main_steam_temperature")
     reheats = [p.reheat_temperature_k for p in points if p.reheat_temperature_k is not None]
     missing = [p.label for p in points if p.reheat_temperature_k is None]
     if not missing:
-        w.raw("reheat_temperature = [" + ", ".join(_degc(t) for t in reheats) + "]")
+        w.raw("reheat_temperature = [" + ", ".join(_degc(t) for t in reheats)
+              + "]  # the same points: reheat_temperature")
     elif reheats:
         notes.append(f"temperature schedule: no reheat_temperature at {', '.join(missing)}, so "
                      "the reheat axis is left out (the HP-exhaust pressure follows the flow alone)")
