@@ -20,7 +20,7 @@ from steamtwin.model.design_check import (
     valve_openings,
 )
 from steamtwin.model.fom import FullOrderModel
-from steamtwin.spec import TurbineSpec
+from steamtwin.spec import TemperatureSchedule, TurbineSpec
 
 
 def _all_valves_open(spec: TurbineSpec) -> TurbineSpec:
@@ -176,3 +176,16 @@ def test_a_fresh_model_gives_the_same_line(reference_spec, reference_model):
     shared = design_line(reference_spec, loads=(0.5,), model=reference_model)
     fresh = design_line(reference_spec, loads=(0.5,), model=FullOrderModel(reference_spec))
     np.testing.assert_allclose(fresh.to_numpy(), shared.to_numpy(), rtol=1e-12)
+
+
+@pytest.mark.parametrize(("rated_c", "problems"), [(538.9, 0), (541.0, 1)])
+def test_a_temperature_schedule_missing_the_design_temperature_is_a_problem(reference_spec,
+                                                                            rated_c, problems):
+    """The schedule at rated load must be design.main_steam_temperature (538 °C) within 1 K."""
+    schedule = TemperatureSchedule((0.3, 1.0), (520.0 + 273.15, rated_c + 273.15))
+    found = consistency_problems(dataclasses.replace(reference_spec,
+                                                     temperature_schedule=schedule))
+    assert len(found) == problems
+    if problems:
+        assert "temperature_schedule gives 541.0 °C at rated load" in found[0]
+        assert "design.main_steam_temperature is 538.0 °C" in found[0]

@@ -12,6 +12,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from steamtwin.model.design_check import design_point
+from steamtwin.model.operating import operating_point
 from steamtwin.spec import (
     DeriveError,
     HeatBalanceError,
@@ -235,3 +236,39 @@ def test_a_valve_outlet_above_the_wide_open_one_is_refused():
                                           r"valve_outlet_pressure = 16\.6 MPa is above the "
                                           r"wide-open valve outlet 16\.17 MPa"):
         derive_spec(parse_heat_balance(text, "bad.toml"))
+
+
+def test_the_kits_steam_temperatures_become_the_temperature_schedule(derived_spec):
+    """Every kit point's main-steam and hot-reheat temperature against load / THA load,
+    ascending; the operating line at 30 % then runs the kit's 532 °C, not the design 537 °C."""
+    kit = parse_heat_balance(KIT, "kit.toml")
+    points = list(reversed(kit.points))
+    schedule = derived_spec.temperature_schedule
+    assert schedule is not None
+    assert schedule.load_fraction == pytest.approx([p.load_w / 600e6 for p in points], rel=1e-5)
+    assert schedule.load_fraction[0] == pytest.approx(0.3)
+    assert schedule.main_steam_temperature == pytest.approx(
+        [p.main_steam_temperature_k for p in points], abs=0.005)
+    assert schedule.reheat_temperature == pytest.approx(
+        [p.reheat_temperature_k for p in points], abs=0.005)
+    point = operating_point(derived_spec, 0.3)
+    assert float(point["main_steam_temperature"]) == pytest.approx(532.0 + 273.15, abs=0.005)
+    # the IP section's cone law at the kit's 515 °C hot reheat (537 °C at rated)
+    ratio = float(point["hp_exhaust_pressure"] / point["main_steam_flow"])
+    design = derived_spec.design
+    assert ratio == pytest.approx(design.hp_exhaust_pressure / design.main_steam_flow
+                                  * math.sqrt((515.0 + 273.15) / (537.0 + 273.15)), rel=1e-9)
+    assert design.main_steam_temperature == pytest.approx(537.0 + 273.15)
+
+
+def test_a_kit_without_every_reheat_temperature_schedules_main_steam_only():
+    one_missing = re.sub(r'(?m)^reheat_temperature = "515\.0 degC".*$', "", KIT)
+    result = derive_spec(parse_heat_balance(one_missing, "kit.toml"))
+    schedule = parse_spec(result.toml, "d.toml").temperature_schedule
+    assert schedule is not None and schedule.reheat_temperature is None
+    assert schedule.main_steam_temperature[0] == pytest.approx(532.0 + 273.15, abs=0.005)
+    assert any("no reheat_temperature at 30 %" in note for note in result.notes)
+    none_given = re.sub(r"(?m)^reheat_temperature = .*$", "", KIT)
+    result = derive_spec(parse_heat_balance(none_given, "kit.toml"))
+    assert parse_spec(result.toml, "d.toml").temperature_schedule.reheat_temperature is None
+    assert not any("reheat_temperature" in note for note in result.notes)

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from steamtwin.spec import SpecError, load_spec, parse_spec
-from steamtwin.spec.turbine import PartLoad
+from steamtwin.spec.turbine import PartLoad, TemperatureSchedule
 
 REFERENCE_TEXT = (resources.files("steamtwin.spec") / "data" / "reference.toml").read_text()
 
@@ -201,3 +201,53 @@ def test_part_load_table_is_optional_and_each_field_defaults(reference_spec):
     with pytest.raises(SpecError, match=r"unit\.toml: part_load\.flow_capacity_multiplier = 2\.0 "
                                         r"is outside the valid range \[0\.8, 1\.25\]"):
         parse_spec(text + "\n[part_load]\nflow_capacity_multiplier = 2.0\n", "unit.toml")
+
+
+def _with_schedule(body: str) -> str:
+    return REFERENCE_TEXT + "\n[temperature_schedule]\n" + body + "\n"
+
+
+def test_temperature_schedule_is_optional_and_read_in_kelvin(reference_spec):
+    assert reference_spec.temperature_schedule is None
+    spec = parse_spec(_with_schedule(
+        'load_fraction = [0.3, 0.5, 1.0]\n'
+        'main_steam_temperature = ["520 degC", "530 degC", "538 degC"]\n'
+        'reheat_temperature = ["500 degC", "520 degC", "811.15 K"]'), "unit.toml")
+    assert spec.temperature_schedule == TemperatureSchedule(
+        (0.3, 0.5, 1.0), pytest.approx((793.15, 803.15, 811.15)),
+        pytest.approx((773.15, 793.15, 811.15)))
+    no_reheat = parse_spec(_with_schedule(
+        'load_fraction = [0.3, 1.0]\nmain_steam_temperature = ["520 degC", "538 degC"]'), "u")
+    assert no_reheat.temperature_schedule is not None
+    assert no_reheat.temperature_schedule.reheat_temperature is None
+
+
+@pytest.mark.parametrize(("body", "message"), [
+    ('load_fraction = [0.3, 0.5, 0.5]\nmain_steam_temperature = ["520 degC", "530 degC", '
+     '"538 degC"]',
+     r"temperature_schedule\.load_fraction\[3\] = 0\.5 is not above load_fraction\[2\] = 0\.5"),
+    ('load_fraction = [0.3, 1.3]\nmain_steam_temperature = ["520 degC", "538 degC"]',
+     r"temperature_schedule\.load_fraction\[2\] = 1\.3 is outside the valid range \[0, 1\.2\]"),
+    ('load_fraction = [0.3, 1.0]\nmain_steam_temperature = ["520 degC", "680 degC"]',
+     r"temperature_schedule\.main_steam_temperature\[2\] = '680 degC' is outside the valid range "
+     r"\[573\.15, 923\.15\] K = \[300, 650\] degC"),
+    ('load_fraction = [0.3, 1.0]\nmain_steam_temperature = ["520 degC", "538 degC"]\n'
+     'reheat_temperature = ["515 degC", 538]',
+     r"temperature_schedule\.reheat_temperature\[2\]: 538 has no unit"),
+    ('load_fraction = [0.3, 1.0]\nmain_steam_temperature = ["520 degC", "530 degC", "538 degC"]',
+     r"temperature_schedule\.main_steam_temperature has 3 values but load_fraction has 2"),
+    ('load_fraction = [0.3, 1.0]\nmain_steam_temperature = ["520 degC", "538 degC"]\n'
+     'reheat_temperature = ["515 degC"]',
+     r"temperature_schedule\.reheat_temperature has 1 value: expected an array of ≥ 2 values"),
+    ('load_fraction = 0.3\nmain_steam_temperature = ["520 degC", "538 degC"]',
+     r"temperature_schedule\.load_fraction is a float: expected an array of ≥ 2 values"),
+    ('load_fraction = [0.3, 1.0]',
+     r"temperature_schedule\.main_steam_temperature is missing"),
+    ('load_fraction = [0.3, 1.0]\nmain_steam_temperatures = ["520 degC", "538 degC"]',
+     r"temperature_schedule\.main_steam_temperatures is not a turbine spec field \(did you mean "
+     r"'main_steam_temperature'\?\)"),
+], ids=["not-increasing", "load-range", "temperature-range", "no-unit", "length", "too-short",
+        "not-an-array", "missing", "misspelled"])
+def test_a_bad_temperature_schedule_names_the_entry(body, message):
+    with pytest.raises(SpecError, match=rf"^unit\.toml: {message}"):
+        parse_spec(_with_schedule(body), "unit.toml")

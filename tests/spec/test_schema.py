@@ -40,6 +40,13 @@ DOCS = Path(__file__).resolve().parents[2] / "docs"
 #: second valve and metal group, the only bleed — so messages must count from 1.
 POSITIONS = {"stages": 2, "control_stage.valves": 1, "metal.groups": 1, "extractions": 0}
 NUMERIC = ("quantity", "number", "integer")
+#: Valid contents of the optional tables whose arrays the reference leaves out: a test changing
+#: one of their entries starts from them.
+OPTIONAL_TABLES: dict[str, dict[str, Any]] = {
+    "temperature_schedule": {"load_fraction": [0.3, 0.5, 1.0],
+                             "main_steam_temperature": ["520 degC", "530 degC", "538 degC"],
+                             "reheat_temperature": ["510 degC", "525 degC", "538 degC"]},
+}
 
 
 def _located(field: Field) -> tuple[list[str | int], str, str]:
@@ -62,6 +69,8 @@ def _located(field: Field) -> tuple[list[str | int], str, str]:
 
 def _with(document: dict[str, Any], keys: list[str | int], value: Any) -> dict[str, Any]:
     changed = copy.deepcopy(document)
+    if keys[0] in OPTIONAL_TABLES and keys[0] not in changed:
+        changed[keys[0]] = copy.deepcopy(OPTIONAL_TABLES[keys[0]])
     node: Any = changed
     for key in keys[:-1]:  # an optional table the reference leaves out is added
         node = node.setdefault(key, {}) if isinstance(key, str) else node[key]

@@ -30,6 +30,9 @@ DEFAULT_LOADS = (1.0, 0.75, 0.5, 0.4, 0.3)
 # the acceptance band of issue 17 for pressures (0.5 %): otherwise the off-design line's 100 %
 # point is not the design point the model was sized at.
 RATED_PRESSURE_TOLERANCE = 0.005
+# Likewise the temperature schedule at 100 % load and the design main-steam temperature, within
+# the band of issue 17 for temperatures (1.0 K).
+RATED_TEMPERATURE_TOLERANCE = 1.0
 
 # Admitting arc (share of the circumference) below which a valve level counts as shut: the
 # round-off of summing the arcs of the levels before it.
@@ -77,12 +80,13 @@ def consistency_problems(spec: TurbineSpec, model: FullOrderModel | None = None)
     """Why ``spec`` cannot pass its own rated flow in the model (empty list: it can).
 
     Checks, in plant terms: a governing valve left closed at rated load; the sliding-pressure
-    line reaching rated load at the design main-steam pressure; the model's design step (nozzle
+    line reaching rated load at the design main-steam pressure, and a temperature schedule at
+    the design main-steam temperature; the model's design step (nozzle
     sizing, efficiency scale, rated flow through the valves open at design). ``model`` (of this
     spec) reuses a model already designed; otherwise one is built (the first run compiles the
     kernel, ~20 s).
     """
-    problems = _sliding_line_problems(spec)
+    problems = [*_sliding_line_problems(spec), *_temperature_schedule_problems(spec)]
     valves = spec.control_stage.valves
     if (all(valve.open_at_design for valve in valves)
             and spec.design.valve_outlet_pressure is None
@@ -235,6 +239,21 @@ def _sliding_line_problems(spec: TurbineSpec) -> list[str]:
                 f"(more than {RATED_PRESSURE_TOLERANCE:.1%} apart): the operating line misses "
                 f"the design point")
     return problems
+
+
+def _temperature_schedule_problems(spec: TurbineSpec) -> list[str]:
+    """A temperature schedule must give the design main-steam temperature at rated load."""
+    schedule = spec.temperature_schedule
+    if schedule is None:
+        return []
+    rated = float(np.interp(1.0, schedule.load_fraction, schedule.main_steam_temperature))
+    design_temperature = spec.design.main_steam_temperature
+    if abs(rated - design_temperature) <= RATED_TEMPERATURE_TOLERANCE:
+        return []
+    return [f"turbine {spec.name!r}: temperature_schedule gives {rated - 273.15:.1f} °C at rated "
+            f"load but design.main_steam_temperature is {design_temperature - 273.15:.1f} °C "
+            f"(more than {RATED_TEMPERATURE_TOLERANCE:g} K apart): the operating line misses "
+            "the design point"]
 
 
 def _model_of(spec: TurbineSpec, model: FullOrderModel | None) -> FullOrderModel:

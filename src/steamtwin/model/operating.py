@@ -3,12 +3,19 @@
 At a load fraction L of the rated point:
 
 * main-steam pressure from the spec's sliding-pressure line (linear between its points);
-* main-steam temperature at its design value (the boiler holds 538 °C down to deep part load);
+* main-steam temperature from the spec's ``[temperature_schedule]`` (linear between its points,
+  held flat outside them), else at its design value. The boiler's superheat and reheat
+  temperature controls (spray attemperation, burner tilt, gas recirculation) hold rated steam
+  temperatures down to a control point, below which they fall with load; the DEH/CCS
+  steam-temperature setpoint follows that schedule (Cotton, *Evaluating and Improving Steam
+  Turbine Performance*, 1998, ch. 2 on part-load steam temperatures);
 * main-steam flow m = L·m_design — steam rate taken constant (within ~3 % over 30–100 % load for
   reheat units, Cotton 1998 ch. 2);
-* HP-exhaust pressure p = p_design·m/m_design: the reheater, IP and LP sections downstream
-  swallow steam by Stodola's cone law with a large pressure ratio, so their inlet pressure is
-  proportional to flow at constant reheat temperature (Stodola 1927; Cooke 1985).
+* HP-exhaust pressure p = p_design·(m/m_design)·sqrt(T_rh/T_rh,rated): the reheater, IP and LP
+  sections downstream swallow steam by Stodola's cone law with a large pressure ratio,
+  m·sqrt(T)/p = const at their inlet (Stodola 1927; Cooke 1985), so their inlet pressure is
+  proportional to flow times the square root of the hot-reheat temperature; without a scheduled
+  reheat temperature it is held at its rated value and p ∝ m.
 """
 
 from __future__ import annotations
@@ -32,14 +39,41 @@ def operating_point(spec: TurbineSpec, load_fraction: float | np.ndarray) -> dic
         raise ValueError(
             f"load_fraction must lie within 0.2…{line.load_fraction[-1]} (got {load_fraction!r})"
         )
-    design = spec.design
-    flow = load * design.main_steam_flow
+    flow = load * spec.design.main_steam_flow
     return {
         "main_steam_pressure": np.interp(load, line.load_fraction, line.pressure),
-        "main_steam_temperature": np.full_like(load, design.main_steam_temperature),
+        "main_steam_temperature": main_steam_temperature(spec, load),
         "main_steam_flow": flow,
-        "hp_exhaust_pressure": design.hp_exhaust_pressure * flow / design.main_steam_flow,
+        "hp_exhaust_pressure": hp_exhaust_pressure(spec, flow, load),
     }
+
+
+def main_steam_temperature(spec: TurbineSpec, load_fraction: float | np.ndarray) -> np.ndarray:
+    """Main-steam temperature (K) at ``load_fraction`` of rated load: the spec's temperature
+    schedule, linear between its points and flat outside them; without one, the design value."""
+    load = np.asarray(load_fraction, dtype=float)
+    schedule = spec.temperature_schedule
+    if schedule is None:
+        return np.full_like(load, spec.design.main_steam_temperature)
+    return np.interp(load, schedule.load_fraction, schedule.main_steam_temperature)
+
+
+def hp_exhaust_pressure(spec: TurbineSpec, flow: float | np.ndarray,
+                        load_fraction: float | np.ndarray) -> np.ndarray:
+    """HP-exhaust pressure (Pa) at main-steam ``flow`` (kg/s) and ``load_fraction``.
+
+    p = p_design·(m/m_design)·sqrt(T_rh(L)/T_rh(1)) with the schedule's hot-reheat temperature
+    T_rh (cone law of the IP section, Stodola 1927; Cooke 1985); p ∝ m when it is not scheduled.
+    """
+    design = spec.design
+    pressure = design.hp_exhaust_pressure * np.asarray(flow, dtype=float) / design.main_steam_flow
+    schedule = spec.temperature_schedule
+    if schedule is None or schedule.reheat_temperature is None:
+        return pressure
+    reheat = np.interp(np.asarray(load_fraction, dtype=float), schedule.load_fraction,
+                       schedule.reheat_temperature)
+    rated = np.interp(1.0, schedule.load_fraction, schedule.reheat_temperature)
+    return pressure * np.sqrt(reheat / rated)
 
 
 def load_profile_inputs(spec: TurbineSpec, load_fraction: np.ndarray, step_seconds: float = 1.0,

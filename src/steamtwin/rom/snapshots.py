@@ -1,10 +1,11 @@
 """Snapshots of the blade temperature field over a design of experiments, run in parallel.
 
-**Design.** Around each load level (30, 50, 75, 100 % by default) on the sliding-pressure line
-(:func:`steamtwin.model.operating.operating_point`) the main-steam pressure, temperature and flow
-vary: ±5 % pressure (sliding-pressure control band), ±10 K temperature (boiler attemperation
-band) and ±4 % flow. The flow stands for the control-stage pressure, which the FOM computes from
-it (Stodola: p1 ∝ flow); the snapshot stores the FOM's p1, so the ROM's inputs are the DCS
+**Design.** Around each load level (30, 50, 75, 100 % by default) on the operating line
+(:func:`steamtwin.model.operating.operating_point`: the sliding-pressure line and the spec's
+steam-temperature schedule) the main-steam pressure, temperature and flow vary: ±5 % pressure
+(sliding-pressure control band), ±10 K temperature (boiler attemperation band) and ±4 % flow.
+The flow stands for the control-stage pressure, which the FOM computes from it (Stodola:
+p1 ∝ flow); the snapshot stores the FOM's p1, so the ROM's inputs are the DCS
 signals main-steam pressure, temperature and control-stage pressure. The points in each level's
 box are a Latin hypercube (McKay, Beckman & Conover, Technometrics 21 (1979) 239) optimised for
 centred discrepancy (scipy ``qmc.LatinHypercube(optimization="random-cd")``), seeded: every input
@@ -38,7 +39,7 @@ from steamtwin.blade.conduction import BladeConduction
 from steamtwin.blade.mesh import SolidMesh, checked_mesh
 from steamtwin.blade.steam import ControlStageState, SteamBoundary, control_stage_states
 from steamtwin.model.fom import FullOrderModel
-from steamtwin.model.operating import operating_point
+from steamtwin.model.operating import hp_exhaust_pressure, operating_point
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import TurbineSpec
@@ -122,15 +123,15 @@ def design_conditions(spec: TurbineSpec, n_snapshots: int = 32,
 
 def _design_row(spec: TurbineSpec, level: float, load: float, pressure: float,
                 temperature: float, flow: float) -> dict[str, float]:
-    """One design condition; HP-exhaust pressure ∝ flow (``steamtwin.model.operating``)."""
+    """One design condition; HP-exhaust pressure ∝ flow (times the cone law's sqrt(T_rh) of a
+    scheduled reheat temperature at ``load``, ``steamtwin.model.operating``)."""
     return {
         "load_level": float(level),
         "load_fraction": float(load),
         "main_steam_pressure": pressure,
         "main_steam_temperature": temperature,
         "main_steam_flow": flow,
-        "hp_exhaust_pressure": spec.design.hp_exhaust_pressure * flow
-        / spec.design.main_steam_flow,
+        "hp_exhaust_pressure": float(hp_exhaust_pressure(spec, flow, load)),
     }
 
 

@@ -22,6 +22,7 @@ from steamtwin.spec.turbine import (
     PressureStage,
     SlidingPressureLine,
     StageGeometry,
+    TemperatureSchedule,
     TurbineSpec,
 )
 
@@ -45,6 +46,7 @@ __all__ = [
     "SlidingPressureLine",
     "SpecError",
     "StageGeometry",
+    "TemperatureSchedule",
     "TurbineSpec",
     "derive_spec",
     "load_heat_balance",

@@ -17,6 +17,8 @@ in ``docs/heat-balance.md`` ("Deriving a spec from a heat balance"); in short:
   root diameter (:func:`expand_pressure_stages`); the root diameter and the common stage
   efficiency are solved together so that the expansion ends at the point's HP-exhaust pressure
   and temperature; Stodola flow capacities, mean diameters and blade heights (continuity) follow.
+* **Steam-temperature schedule**: every point's main-steam temperature and, if every point
+  gives one, hot-reheat temperature against its load / design load (``[temperature_schedule]``).
 * **Metal**: the rotor a solid drum of the blading's root radius, the inner casing a wall whose
   depth is the thin-wall hoop-stress thickness at an allowable stress of a Cr-Mo steel.
 
@@ -563,6 +565,7 @@ def derive_spec(heat_balance: HeatBalance, *, name: str | None = None) -> Derive
     _extraction_blocks(w, point, where, hp_bleeds, expansion)
     _metal_block(w, hb, point, where, cs, expansion)
     _sliding_block(w, hb, point, where)
+    _temperature_block(w, hb, point, notes)
     notes.append(
         f"pressure stages: efficiency {expansion.efficiency:.4f} at u/c0 = "
         f"{STAGE_VELOCITY_RATIO} and root diameter {expansion.root_diameter:.4f} m reach "
@@ -857,3 +860,43 @@ def _sliding_block(w: _Writer, hb: HeatBalance, point: HeatBalancePoint, where: 
                               "the sliding-pressure line's range")
     w.raw("load_fraction = [" + ", ".join(f"{f:.6g}" for f in fractions) + "]")
     w.raw("pressure = [" + ", ".join(_mpa(p) for p in pressures) + "]")
+
+
+def _temperature_block(w: _Writer, hb: HeatBalance, point: HeatBalancePoint,
+                       notes: list[str]) -> None:
+    """``[temperature_schedule]``: every point's main-steam (and hot-reheat) temperature against
+    load / design load, ascending; the reheat axis only if every point gives it. A kit of one
+    point (the design point) has no schedule: the design temperature at every load."""
+    points = list(reversed(hb.points))  # the kit lists them by decreasing load
+    if len(points) < 2:
+        return
+    fractions = [p.load_w / point.load_w for p in points]
+    first = len(points)  # 1-based position in the kit of points[0]
+    for axis, key in (("main_steam_temperature", "main_steam_temperature_k"),
+                      ("reheat_temperature", "reheat_temperature_k")):
+        spec_field = FIELD_BY_KEY[f"temperature_schedule.{axis}"]
+        for offset, p in enumerate(points):
+            value = getattr(p, key)
+            if value is not None and not spec_field.contains(value):
+                raise DeriveError(
+                    f"{hb.source}: points[{first - offset}] ({p.label!r}): {axis} "
+                    f"{value - 273.15:.1f} °C is outside the temperature schedule's range "
+                    f"{spec_field.range_text(display=True)}")
+    w.raw()
+    w.raw("[temperature_schedule]")
+    w.raw("# Every heat-balance point: load / design load vs its main-steam (and hot-reheat)")
+    w.raw("# temperature, the boiler's steam-temperature schedule; held flat beyond the points.")
+    labels = ", ".join(p.label for p in points)
+    w.raw("load_fraction = [" + ", ".join(f"{f:.6g}" for f in fractions)
+          + f"]  # {labels}: load / {point.label} load")
+    w.raw("main_steam_temperature = ["
+          + ", ".join(_degc(p.main_steam_temperature_k) for p in points)
+          + "]  # the same points: main_steam_temperature")
+    reheats = [p.reheat_temperature_k for p in points if p.reheat_temperature_k is not None]
+    missing = [p.label for p in points if p.reheat_temperature_k is None]
+    if not missing:
+        w.raw("reheat_temperature = [" + ", ".join(_degc(t) for t in reheats)
+              + "]  # the same points: reheat_temperature")
+    elif reheats:
+        notes.append(f"temperature schedule: no reheat_temperature at {', '.join(missing)}, so "
+                     "the reheat axis is left out (the HP-exhaust pressure follows the flow alone)")

@@ -36,6 +36,7 @@ from steamtwin.spec.turbine import (
     PressureStage,
     SlidingPressureLine,
     StageGeometry,
+    TemperatureSchedule,
     TurbineSpec,
 )
 from steamtwin.steam.tables import lower_boundary_temperature
@@ -56,7 +57,7 @@ _PART_LOAD = frozenset(field.name for field in fields(PartLoad))
 SPEC_KEYS: Mapping[str, frozenset[str]] = {
     "": frozenset({"format_version", "name", "description", "sensors", "design",
                    "control_stage", "stages", "extractions", "metal", "sliding_pressure",
-                   "part_load"}),
+                   "part_load", "temperature_schedule"}),
     "design": frozenset({"main_steam_pressure", "main_steam_temperature", "main_steam_flow",
                          "control_stage_pressure", "hp_exhaust_pressure",
                          "hp_exhaust_temperature", "hp_power", "generator_power",
@@ -76,16 +77,20 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
                                "rotor_area", "insulation_conductance"}),
     "sliding_pressure": frozenset({"load_fraction", "pressure"}),
     "part_load": _PART_LOAD,
+    "temperature_schedule": frozenset({"load_fraction", "main_steam_temperature",
+                                       "reheat_temperature"}),
 }
 #: Keys that may be left out, by their path: a unit without HP bleeds has no extractions; the
 #: part-load laws and each of their fields have defaults (:class:`PartLoad`); valves without
 #: overlap open strictly one group after the other, with a linear flow characteristic; the
 #: rated point is a valve point unless its valve outlet pressure is given; the model sizes the
-#: nozzle throat areas unless they are given.
+#: nozzle throat areas unless they are given; without a temperature schedule the boiler holds
+#: the design main-steam temperature at every load.
 OPTIONAL_KEYS = frozenset({"extractions", "part_load", "control_stage.valve_overlap",
                            "control_stage.valve_characteristic", "design.valve_outlet_pressure",
                            "control_stage.valves.throat_area",
-                           *(f"part_load.{key}" for key in _PART_LOAD)})
+                           *(f"part_load.{key}" for key in _PART_LOAD),
+                           "temperature_schedule", "temperature_schedule.reheat_temperature"})
 
 
 class SpecError(ValueError):
@@ -257,6 +262,8 @@ def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
         sensors=_sensors(document),
         part_load=_part_load(document.table("part_load")) if "part_load" in document.data
         else PartLoad(),
+        temperature_schedule=_temperature_schedule(document.table("temperature_schedule"))
+        if "temperature_schedule" in document.data else None,
     )
     _check_consistency(spec, source)
     return spec
@@ -440,6 +447,38 @@ def _sliding_pressure(table: _Table) -> SlidingPressureLine:
         for number, value in enumerate(pressures, start=1)
     )
     return SlidingPressureLine(load_values, pressure_values)
+
+
+def _quantity_array(table: _Table, key: str, count: int | None = None) -> tuple[float, ...]:
+    """The array ``key`` of ``table``, each entry in the schema's unit and range; ``count``: the
+    length it must have (that of the table's load axis)."""
+    field, where = table.field(key), table._where(key)
+    values = table.raw(key)
+    if not isinstance(values, list) or len(values) < field.min_items:
+        given = (f"has {len(values)} value{'s' * (len(values) != 1)}"
+                 if isinstance(values, list) else f"is {_type_name(values)}")
+        raise SpecError(f"{where} {given}: expected an array of ≥ {field.min_items} values")
+    if count is not None and len(values) != count:
+        raise SpecError(f"{where} has {len(values)} values but load_fraction has {count}")
+    return tuple(_checked_quantity(value, field, f"{where}[{number}]")
+                 for number, value in enumerate(values, start=1))
+
+
+def _temperature_schedule(table: _Table) -> TemperatureSchedule:
+    """The steam-temperature schedule: a strictly increasing load axis and, at each load, the
+    main-steam and (if given) hot-reheat temperature."""
+    loads = _quantity_array(table, "load_fraction")
+    for number, (low, high) in enumerate(itertools.pairwise(loads), start=2):
+        if high <= low:
+            raise SpecError(
+                f"{table._where('load_fraction')}[{number}] = {high:g} is not above "
+                f"load_fraction[{number - 1}] = {low:g}: the load axis must increase strictly")
+    return TemperatureSchedule(
+        load_fraction=loads,
+        main_steam_temperature=_quantity_array(table, "main_steam_temperature", len(loads)),
+        reheat_temperature=_quantity_array(table, "reheat_temperature", len(loads))
+        if "reheat_temperature" in table.data else None,
+    )
 
 
 def _part_load(table: _Table) -> PartLoad:

@@ -352,6 +352,27 @@ FIELDS: tuple[Field, ...] = (
           "Main-steam pressure at each load_fraction (same length).",
           "Sliding-pressure curve, pressure axis.", "Pa", "16.7 MPa", 1e5, 25e6,
           items="quantity", min_items=2),
+    Field("temperature_schedule", "table",
+          "Main-steam and hot-reheat temperature against load (the boiler's steam-temperature "
+          "schedule), linearly interpolated between its points and held flat outside them.",
+          "DEH / coordinated-control steam-temperature setpoint curve; the thermal kit's "
+          "part-load heat balances (`steamtwin turbine derive` writes it from them).",
+          default="design.main_steam_temperature at every load"),
+    Field("temperature_schedule.load_fraction", "array",
+          "Load as a fraction of rated output, strictly increasing.",
+          "Steam-temperature schedule, load axis.", items="number", low=0.0, high=1.2,
+          min_items=2, example=0.3),
+    Field("temperature_schedule.main_steam_temperature", "array",
+          "Main-steam (throttle) temperature at each load_fraction (same length).",
+          "Steam-temperature schedule, main-steam axis; part-load heat balances, turbine inlet.",
+          "K", "532 degC", 573.15, 923.15, items="quantity", min_items=2),
+    Field("temperature_schedule.reheat_temperature", "array",
+          "Hot-reheat temperature at each load_fraction (same length); the HP-exhaust "
+          "pressure of the operating line follows √T_rh (Stodola's cone law of the IP "
+          "section).",
+          "Steam-temperature schedule, reheat axis; part-load heat balances, IP inlet.",
+          "K", "515 degC", 573.15, 923.15, items="quantity", min_items=2,
+          default="not scheduled: the HP-exhaust pressure follows the flow alone"),
     Field("part_load", "table",
           "Design-level part-load laws the off-design points of a thermal kit identify; every "
           "field optional, the defaults leave the blading laws alone.",

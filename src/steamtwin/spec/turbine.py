@@ -2,7 +2,8 @@
 
 A :class:`TurbineSpec` holds the design heat balance at rated load, the control stage with its
 governing valves, the pressure stages, extractions, the metal of rotor and inner casing per stage
-group, the sliding-pressure line and the DCS sensors the unit has. It is built from TOML by
+group, the sliding-pressure line, the DCS sensors the unit has and, optionally, the boiler's
+steam-temperature schedule against load. It is built from TOML by
 :func:`steamtwin.spec.load_spec`; all values are SI (Pa, K, kg/s, W, m, m², kg, rad, rad/s).
 """
 
@@ -144,6 +145,19 @@ class SlidingPressureLine:
 
 
 @dataclass(frozen=True)
+class TemperatureSchedule:
+    """Main-steam and, optionally, hot-reheat temperature (K) against load fraction (0–1).
+
+    Linearly interpolated between its points and held flat outside them; ``reheat_temperature``
+    None: the unit's hot-reheat temperature is not scheduled (held at its rated value).
+    """
+
+    load_fraction: tuple[float, ...]
+    main_steam_temperature: tuple[float, ...]
+    reheat_temperature: tuple[float, ...] | None = None
+
+
+@dataclass(frozen=True)
 class PartLoad:
     """Design-level part-load laws that a thermal kit's off-design points identify.
 
@@ -181,3 +195,4 @@ class TurbineSpec:
     sliding_pressure: SlidingPressureLine
     sensors: tuple[str, ...]
     part_load: PartLoad = PartLoad()
+    temperature_schedule: TemperatureSchedule | None = None
