@@ -38,7 +38,12 @@ REFERENCE = tomllib.loads(REFERENCE_TEXT)
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 #: Which entry of each array of tables the range tests change (0-based): the third stage, the
 #: second valve and metal group, the only bleed — so messages must count from 1.
-POSITIONS = {"stages": 2, "control_stage.valves": 1, "metal.groups": 1, "extractions": 0}
+POSITIONS = {"stages": 2, "control_stage.valves": 1, "metal.groups": 1, "extractions": 0,
+             "leakages": 0}
+#: The reference plus one leakage to the outside, so that every leakage field has a value.
+WITH_LEAKAGE = {**REFERENCE, "leakages": [{"name": "HP-IP gland", "from_stage": 0,
+                                            "to": "outside", "design_flow": "18 t/h",
+                                            "sink_pressure": "3.5 MPa"}]}
 NUMERIC = ("quantity", "number", "integer")
 
 
@@ -156,7 +161,7 @@ def test_a_value_beyond_the_schema_range_is_refused_naming_its_toml_path(field, 
     keys, toml_path, context = _located(field)
     if field.kind == "array":  # change the second entry of the array
         keys, toml_path = [*keys, 1], f"{toml_path}[2]"
-    text = toml_text(_with(REFERENCE, keys, _written(field, value)))
+    text = toml_text(_with(WITH_LEAKAGE, keys, _written(field, value)))
     with pytest.raises(SpecError) as error:
         parse_spec(text, "unit.toml")
     message = str(error.value)

@@ -109,9 +109,11 @@ def test_reference_uses_every_known_key_and_no_other():
         schema = ".".join(part for part in path if isinstance(part, str))
         used.setdefault(schema, set()).update(_get(REFERENCE, path))
     # the optional [part_load] table is the design fit's: the reference unit keeps its defaults
-    expected = {schema: set(keys) for schema, keys in SPEC_KEYS.items() if schema != "part_load"}
-    expected[""] -= {"part_load"}
+    expected = {schema: set(keys) for schema, keys in SPEC_KEYS.items()
+                if schema not in ("part_load", "leakages")}
+    expected[""] -= {"part_load", "leakages"}  # the reference unit states no leakages
     expected["control_stage"] -= {"valve_overlap"}  # the reference unit opens strictly in sequence
+    expected["stages"] -= {"tip_leakage"}
     assert used == expected
     assert parse_spec(toml_text(REFERENCE), SOURCE) == load_spec("reference")
 
