@@ -38,7 +38,12 @@ REFERENCE = tomllib.loads(REFERENCE_TEXT)
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 #: Which entry of each array of tables the range tests change (0-based): the third stage, the
 #: second valve and metal group, the only bleed — so messages must count from 1.
-POSITIONS = {"stages": 2, "control_stage.valves": 1, "metal.groups": 1, "extractions": 0}
+POSITIONS = {"stages": 2, "control_stage.valves": 1, "metal.groups": 1, "extractions": 0,
+             "leakages": 0}
+#: The reference plus one leakage to the outside, so that every leakage field has a value.
+WITH_LEAKAGE = {**REFERENCE, "leakages": [{"name": "HP-IP gland", "from_stage": 0,
+                                            "to": "outside", "design_flow": "18 t/h",
+                                            "sink_pressure": "3.5 MPa"}]}
 NUMERIC = ("quantity", "number", "integer")
 #: Valid contents of the optional tables whose arrays the reference leaves out: a test changing
 #: one of their entries starts from them.
@@ -163,11 +168,11 @@ def test_the_reference_spec_passes_also_as_written_by_these_tests(reference_spec
                          ids=[f"{case[0].path}-{case[1]}" for case in OUT_OF_RANGE])
 def test_a_value_beyond_the_schema_range_is_refused_naming_its_toml_path(field, side, value):
     keys, toml_path, context = _located(field)
-    document = REFERENCE
+    document = WITH_LEAKAGE
     if field.kind == "array":  # change the second entry of the array
         keys, toml_path = [*keys, 1], f"{toml_path}[2]"
         if field.parent == "control_stage.valve_characteristic":  # not in the reference: add one
-            document = _with(REFERENCE, ["control_stage", "valve_characteristic"],
+            document = _with(WITH_LEAKAGE, ["control_stage", "valve_characteristic"],
                              {"lift": [0.0, 0.5, 1.0], "flow": [0.0, 0.5, 1.0]})
     text = toml_text(_with(document, keys, _written(field, value)))
     with pytest.raises(SpecError) as error:

@@ -9,7 +9,9 @@ design heat balance give every constant the kernel needs:
 * blade speeds, optimum velocity ratios, extraction fractions and stage-group flow geometry;
 * the metal conduction chains of casing and rotor per stage group;
 * one efficiency scale on all stages so the design HP-exhaust temperature of the heat balance is
-  met with the empirical parameter values — the single design "tuning" (reported, bounded).
+  met with the empirical parameter values — the single design "tuning" (reported, bounded);
+* each leakage's labyrinth constant, so that its seal passes the spec's design flow at the
+  model's design state where it leaves (``FullOrderModel.design_`` iterates that state).
 
 The design control-stage pressure and HP power are *not* imposed: the tests check that the model
 reproduces them from the spec's flow capacities and efficiencies.
@@ -29,7 +31,7 @@ from steamtwin.model.steampath import (
     nozzle_flow_function,
     optimum_velocity_ratio,
 )
-from steamtwin.spec import SpecError, TurbineSpec
+from steamtwin.spec import Leakage, SpecError, TurbineSpec
 from steamtwin.steam import if97
 
 METAL_NODES = 8
@@ -52,12 +54,15 @@ class DesignConstants:
 
 def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
                      control_stage_pressure: float | None = None,
-                     metal_nodes: int = METAL_NODES) -> KernelConstants:
+                     metal_nodes: int = METAL_NODES,
+                     leakage_capacity: np.ndarray | None = None) -> KernelConstants:
     """Constants for the kernel at a given efficiency scale (the scale is solved elsewhere).
 
     The nozzle throat area passes the design flow through the valves open at design at
     ``control_stage_pressure`` (Pa; default: the heat balance's), so the design point is the
-    valve point the spec names.
+    valve point the spec names. ``leakage_capacity`` (m², one per :func:`active_leakages`):
+    the seals' labyrinth constants; default: :func:`leakage_capacities` at the states
+    :func:`estimated_leakage_origins` gives.
     """
     design = spec.design
     omega = design.rotational_speed
@@ -138,6 +143,9 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         rotor_speed=rotor_speed,
         ambient_temperature=spec.ambient_temperature,
     )
+    leakages = active_leakages(spec)
+    if leakage_capacity is None:
+        leakage_capacity = leakage_capacities(spec, *estimated_leakage_origins(spec))
     return KernelConstants(
         control=control,
         metal=metal,
@@ -161,7 +169,80 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         sensor_group=sensor_group,
         sensor_node=sensor_node,
         sensor_weight=sensor_weight,
+        stage_tip_passing=np.array([1.0 - s.tip_leakage for s in spec.stages]),
+        leak_origin=np.array([leak.from_stage for leak in leakages], dtype=np.int64),
+        leak_capacity=np.asarray(leakage_capacity, dtype=float).reshape(len(leakages)),
+        leak_sink_ratio=np.array([leakage_sink_ratio(spec, leak) for leak in leakages]),
+        leak_rejoins=np.array([leak.to == "hp_exhaust" for leak in leakages], dtype=np.int64),
     )
+
+
+def active_leakages(spec: TurbineSpec) -> tuple[Leakage, ...]:
+    """The spec's leakages with a design flow: one of zero flow is no leakage at all."""
+    return tuple(leak for leak in spec.leakages if leak.design_flow > 0.0)
+
+
+def leakage_sink_ratio(spec: TurbineSpec, leakage: Leakage) -> float:
+    """A leakage's downstream pressure over the HP-exhaust pressure (dimensionless).
+
+    A leakage to the HP exhaust discharges at its pressure (1). One to the outside discharges
+    into the IP inlet or a leak-off line downstream of the HP; their pressures move in
+    proportion with the HP-exhaust pressure, as Stodola's law of the sections downstream
+    makes their inlet pressures proportional to flow at large pressure ratios (Stodola 1927;
+    Cooke, J. Eng. Gas Turbines Power 107 (1985) 596–606). For a sink far below the upstream
+    pressure the seal's flow barely depends on it (Egli 1935).
+    """
+    if leakage.sink_pressure is None:
+        return 1.0
+    return leakage.sink_pressure / spec.design.hp_exhaust_pressure
+
+
+def leakage_capacities(spec: TurbineSpec, origin_pressure: np.ndarray,
+                       origin_pv: np.ndarray) -> np.ndarray:
+    """Labyrinth constants (m²) passing each active leakage's design flow at design.
+
+    ``origin_pressure`` (Pa) and ``origin_pv`` (p·v, J/kg): the design state where each leaves.
+    C = m / sqrt((p_up² − p_down²)/(p_up·v_up)) (Martin 1908; Egli 1935; ``kernel``).
+    """
+    leakages = active_leakages(spec)
+    capacity = np.zeros(len(leakages))
+    for j, leak in enumerate(leakages):
+        sink = leakage_sink_ratio(spec, leak) * spec.design.hp_exhaust_pressure
+        head = origin_pressure[j] ** 2 - sink**2
+        if not head > 0.0:
+            raise SpecError(
+                f"turbine {spec.name!r}: leakage {leak.name!r} discharges at "
+                f"{sink / 1e6:.3f} MPa, not below the design pressure where it leaves "
+                f"({origin_pressure[j] / 1e6:.3f} MPa after stage {leak.from_stage})")
+        capacity[j] = leak.design_flow / math.sqrt(head / origin_pv[j])
+    return capacity
+
+
+def estimated_leakage_origins(spec: TurbineSpec) -> tuple[np.ndarray, np.ndarray]:
+    """Design pressure (Pa) and p·v (J/kg) where each active leakage leaves, estimated.
+
+    A backward Stodola sweep of the spec's flow capacities from the design HP exhaust with the
+    design flows (bleeds and leakages off), p·v held at the exhaust's (IAPWS-IF97): a start
+    that the design step replaces by the model's own design state.
+    """
+    leakages = active_leakages(spec)
+    design = spec.design
+    h_exhaust = float(if97.enthalpy_pt(design.hp_exhaust_pressure, design.hp_exhaust_temperature))
+    pv = design.hp_exhaust_pressure * float(if97.specific_volume_ph(design.hp_exhaust_pressure,
+                                                                       h_exhaust))
+    n = len(spec.stages)
+    bled = np.zeros(n)
+    for extraction in spec.extractions:
+        bled[extraction.after_stage - 1] += extraction.design_flow
+    pressures = np.empty(n + 1)
+    pressures[n] = design.hp_exhaust_pressure
+    for i in range(n - 1, -1, -1):  # stage i + 1 (pressures[i] is its inlet)
+        flow = design.main_steam_flow - bled[:i].sum() - sum(
+            leak.design_flow for leak in leakages if leak.from_stage <= i)
+        capacity = spec.part_load.flow_capacity_multiplier * spec.stages[i].flow_capacity
+        pressures[i] = math.sqrt(pressures[i + 1] ** 2 + (flow / capacity) ** 2 * pv)
+    origin = np.array([pressures[leak.from_stage] for leak in leakages])
+    return origin, np.full(len(leakages), pv)
 
 
 def _level_throat_areas(spec: TurbineSpec, orders: list[int], level_arc: np.ndarray,

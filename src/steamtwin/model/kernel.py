@@ -14,7 +14,10 @@ loop therefore solves, sample by sample, warm-started from the previous sample:
    schedule leaves part open), expands each group and mixes them (``steampath``);
 3. a forward sweep expands the pressure stages; at the end of each stage group the steam gives
    heat to that group's casing and rotor (implicit-Euler conduction step, ``metal``), which is
-   taken from the steam enthalpy there;
+   taken from the steam enthalpy there; a leakage (spec ``[[leakages]]``) leaves the stage flow
+   where it starts, with the enthalpy there and the flow its seal's labyrinth law gives at this
+   sweep's pressures, and either mixes into the HP exhaust or leaves the section (the backward
+   sweep of step 1 takes the stage flows less the leakages of the previous forward sweep);
 4. 1–3 repeat until the estimated error left in the control-stage pressure and the exhaust
    enthalpy is below the tolerances below; then the metal state is committed.
 
@@ -85,6 +88,8 @@ RESULT_COLUMNS = (
     "iterations",  # -
     "metal_heat_content",  # J, Σ capacity·temperature over all metal (from 0 K)
     "lagging_loss",  # W, from the casings through the insulation
+    "leakage_energy_flow",  # W, m_leak·h_leak of the leakages that leave the HP section
+    "leakage_flow",  # kg/s, all leakages past the pressure stages
 )
 N_RESULTS = len(RESULT_COLUMNS)
 
@@ -184,6 +189,11 @@ class KernelConstants(NamedTuple):
     sensor_group: int
     sensor_node: int  # the thermocouple lies between node sensor_node and the next (-1: wall)
     sensor_weight: float  # linear weight of the deeper of the two
+    stage_tip_passing: np.ndarray  # 1 − tip-leakage share of each stage's flow
+    leak_origin: np.ndarray  # int, per leakage: it leaves at pressures[origin] (0 = chamber)
+    leak_capacity: np.ndarray  # m², labyrinth constant of each leakage's seal
+    leak_sink_ratio: np.ndarray  # its downstream pressure over the HP-exhaust pressure
+    leak_rejoins: np.ndarray  # int, 1: rejoins before the HP exhaust, 0: leaves the HP section
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -419,13 +429,15 @@ def _group_heat(group, temperature, surface):
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressures,
                   enthalpies, inlet_pv, throttled, metal, pivot, rhs, surface, group_temperature,
-                  cs_out, properties, tolerance, result, max_iter, accepted, predict):
+                  cs_out, properties, tolerance, result, max_iter, accepted, predict,
+                  leak_flow):
     """Solve one sample and advance ``metal`` (K) in place; returns a status code.
 
     ``pivot`` holds the metal chains factored for this step (:func:`factor_chain`);
     ``tolerance`` = (relative pressure, enthalpy in J/kg) bounds of the estimated error left;
     ``predict``: carry the previous sample's p·v to these inputs first (step 0; pointless when
-    the inputs did not change).
+    the inputs did not change). ``leak_flow`` (kg/s per leakage): the last forward sweep's
+    leakage flows, warm start in, solution out.
     """
     n = c.stage_capacity.size
     control, metal_constants = c.control, c.metal
@@ -442,7 +454,7 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
     # 0. carry the previous sample's p·v to this sample's inputs
     for _ in range(PREDICTOR_PASSES if predict else 0):
         accepted[:] = pressures  # the pressures inlet_pv belongs to
-        _backward_sweep(c, flow, flow_coefficient, p_exhaust, inlet_pv, pressures)
+        _backward_sweep(c, flow, flow_coefficient, p_exhaust, inlet_pv, pressures, leak_flow)
         if not (pressures[0] < p_valve and pressure_in_range(tables, pressures[0])):
             break  # the sweeps below report it
         h1 = _control_stage(control, tables, flow, p_valve, s_valve, pv_valve, h0, pressures[0],
@@ -454,11 +466,13 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
                        pressures[0] * ph_property(tables, PH_V, pressures[0], h1))
     previous_p1 = pressures[0]
     stage_flow = power = heat_total = extraction_energy = 0.0  # of the last full sweep
+    rejoin_flow = rejoin_energy = outside_energy = 0.0  # leakages, of the last full sweep
+    leaks = c.leak_origin.size
     over_capacity = False
     for iteration in range(max_iter + 1):
         # 1. backward Stodola sweep; from the second on it also probes the previous sweep's state
         accepted[:] = pressures
-        _backward_sweep(c, flow, flow_coefficient, p_exhaust, inlet_pv, pressures)
+        _backward_sweep(c, flow, flow_coefficient, p_exhaust, inlet_pv, pressures, leak_flow)
         change_p = abs(pressures[0] - previous_p1) / pressures[0]
         change_max = 0.0
         for i in range(n):
@@ -475,19 +489,28 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
                     return STATUS_OUT_OF_TABLES
             result[0] = pressures[0]
             result[1] = ph_property(tables, PH_T, pressures[0], enthalpies[0])
-            result[2] = ph_property(tables, PH_T, p_exhaust, enthalpies[n])
+            if rejoin_flow > 0.0:  # the exhaust mixes the blading's outlet and the leakages
+                h_exhaust = (stage_flow * enthalpies[n] + rejoin_energy) / (stage_flow
+                                                                           + rejoin_flow)
+                result[2] = ph_property(tables, PH_T, p_exhaust, h_exhaust)
+            else:
+                result[2] = ph_property(tables, PH_T, p_exhaust, enthalpies[n])
             _commit_metal(metal_constants.conductance, pivot, rhs, surface, group_temperature,
                           metal)
             result[3] = _casing_thermocouple(c, metal, surface, group_temperature)
             result[4] = power
             result[5] = heat_total
             result[6] = extraction_energy
-            result[7] = stage_flow * enthalpies[n]
+            result[7] = stage_flow * enthalpies[n] + rejoin_energy
             result[8] = flow * h0
             result[9] = cs_out[2]
             result[10] = cs_out[3]
             result[11] = iteration
             result[12], result[13] = _metal_energy(c, metal)
+            result[14] = outside_energy
+            result[15] = 0.0
+            for j in range(leaks):
+                result[15] += leak_flow[j]
             return STATUS_OK
         if iteration == max_iter:
             break
@@ -523,9 +546,21 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
         reynolds_excess = (flow / c.design_flow) ** -c.reynolds_exponent - 1.0
         stage_flow = flow
         extraction_energy = 0.0
+        rejoin_flow = rejoin_energy = outside_energy = 0.0
         cell_in, coordinate_in = locate_pressure(tables, pressures[0])
         for i in range(n):
             s_in, inlet_pv[i] = entropy_and_pv_at(tables, cell_in, coordinate_in, enthalpies[i])
+            for j in range(leaks):  # leakages leaving here, at this sweep's state
+                if c.leak_origin[j] == i:
+                    leak = labyrinth_flow(c.leak_capacity[j], pressures[i], inlet_pv[i],
+                                          c.leak_sink_ratio[j] * p_exhaust)
+                    leak_flow[j] = leak
+                    stage_flow -= leak
+                    if c.leak_rejoins[j]:
+                        rejoin_flow += leak
+                        rejoin_energy += leak * enthalpies[i]
+                    else:
+                        outside_energy += leak * enthalpies[i]
             cell_in, coordinate_in = locate_pressure(tables, pressures[i + 1])
             drop = enthalpies[i] - enthalpy_ps_at(tables, cell_in, coordinate_in, s_in)
             velocity_ratio = c.stage_blade_speed[i] / math.sqrt(2.0 * drop)
@@ -533,6 +568,9 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
                                           c.stage_peak_efficiency[i],
                                           params[1] * c.stage_friction_loss[i])
             efficiency = max(efficiency - (1.0 - efficiency) * reynolds_excess, 0.0)
+            # tip leakage bypasses the blading and mixes back after it (Traupel, Bd. 1, §8)
+            if c.stage_tip_passing[i] != 1.0:
+                efficiency *= c.stage_tip_passing[i]
             h_out = enthalpies[i] - efficiency * drop
             power += stage_flow * efficiency * drop
             g = c.group_ending_at_stage[i + 1]
@@ -559,16 +597,39 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
-def _backward_sweep(c, flow, flow_coefficient, p_exhaust, inlet_pv, pressures):
-    """Stage inlet pressures (Pa) by Stodola's law from the exhaust, with inlet p·v (J/kg)."""
+def _backward_sweep(c, flow, flow_coefficient, p_exhaust, inlet_pv, pressures, leak_flow):
+    """Stage inlet pressures (Pa) by Stodola's law from the exhaust, with inlet p·v (J/kg).
+
+    ``leak_flow`` (kg/s per leakage) is taken off every stage after the leakage's origin.
+    """
     n = c.stage_capacity.size
     pressures[n] = p_exhaust
     flow_fraction = 1.0 - c.extraction_fraction.sum()
+    leaks = c.leak_origin.size
     for i in range(n - 1, -1, -1):
         flow_fraction += c.extraction_fraction[i]  # stage i carries what is bled after it
-        pressures[i] = stodola_inlet_pressure(flow * flow_fraction,
+        stage_flow = flow * flow_fraction
+        for j in range(leaks):
+            if c.leak_origin[j] <= i:
+                stage_flow -= leak_flow[j]
+        pressures[i] = stodola_inlet_pressure(stage_flow,
                                               flow_coefficient * c.stage_capacity[i],
                                               pressures[i + 1], inlet_pv[i])
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
+def labyrinth_flow(capacity: float, upstream_pressure: float, upstream_pv: float,
+                   downstream_pressure: float) -> float:
+    """Flow (kg/s) through a labyrinth seal of fixed geometry, ``capacity`` in m².
+
+    m = C·sqrt((p_up² − p_down²)/(p_up·v_up)): the many-throttle limit of Martin's labyrinth
+    formula (Martin, Engineering 85 (1908); Egli, Trans. ASME 57 (1935) 115–122; Traupel,
+    *Thermische Turbomaschinen* Bd. 1, labyrinth seals), the same form as Stodola's cone law;
+    C (flow coefficient × gap area / sqrt(teeth)) is fixed by the seal's geometry. No flow
+    when the downstream pressure is the higher.
+    """
+    head = upstream_pressure * upstream_pressure - downstream_pressure * downstream_pressure
+    return capacity * math.sqrt(head / upstream_pv) if head > 0.0 else 0.0
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -657,6 +718,7 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
     properties = np.empty(6)
     detail = stage_pressures.shape[0] == n_samples
     inlet_pv = np.empty(pressures.size - 1)
+    leak_flow = np.zeros(c.leak_origin.size)
     for i in range(inlet_pv.size):
         inlet_pv[i] = pressures[i] * ph_property(tables, PH_V, pressures[i], enthalpies[i])
     current = params[0].copy()
@@ -690,7 +752,8 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                 code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], current, 0.0,
                                      pressures, enthalpies, inlet_pv, throttled, metal, pivot,
                                      rhs, surface, group_temperature, cs_out, properties,
-                                     start_tolerance, results[k], 200, accepted, True)
+                                     start_tolerance, results[k], 200, accepted, True,
+                                     leak_flow)
                 if code != STATUS_OK or np.abs(metal - before).max() < 1e-9:
                     break
         else:
@@ -699,7 +762,7 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
             code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], current, inverse_dt,
                                  pressures, enthalpies, inlet_pv, throttled, metal, pivot, rhs,
                                  surface, group_temperature, cs_out, properties, tolerance,
-                                 results[k], 200, accepted, changed)
+                                 results[k], 200, accepted, changed, leak_flow)
         status[k] = code
         if code != STATUS_OK:
             return k

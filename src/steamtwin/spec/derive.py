@@ -108,6 +108,11 @@ SENSORS = ("main_steam_pressure", "main_steam_temperature", "main_steam_flow",
            "hp_exhaust_temperature", "hp_inner_casing_temperature", "load")
 #: A bleed within this share of the HP-exhaust pressure is taken from cold reheat (after the HP).
 COLD_REHEAT_TOLERANCE = 0.01
+#: Pressure the HP–IP gland discharges into (the IP inlet), as a share of the HP-exhaust
+#: pressure: the reheater and its piping lose ~10 % of the cold-reheat pressure, the usual
+#: heat-balance allowance (an engineering assumption to review against the kit; below ~0.3 of
+#: the control-stage pressure the seal's flow barely depends on it [Egli 1935]).
+GLAND_SINK_RATIO = 0.9
 #: Isentropic exponent of superheated steam, for the first guess of a stage's outlet pressure.
 _KAPPA = 1.3
 
@@ -426,7 +431,8 @@ def _stage_flows(flow: float, count: int, bleeds: Sequence[float], after: Sequen
 
 
 def _solve_expansion(hb: HeatBalance, point: HeatBalancePoint, where: str, h_cs: float,
-                     bleeds: Sequence[tuple[str, float, float]]) -> _Expansion:
+                     bleeds: Sequence[tuple[str, float, float]], leak: float = 0.0
+                     ) -> _Expansion:
     """Root diameter and stage efficiency putting the expansion's end on the point's HP-exhaust
     pressure and temperature (2×2 Newton with finite differences), bleeds re-placed until they
     sit after the stage whose outlet pressure is nearest theirs."""
@@ -445,7 +451,7 @@ def _solve_expansion(hb: HeatBalance, point: HeatBalancePoint, where: str, h_cs:
             "HP exhaust; expected between 0.3 and 1")
     mean = 2.0 * STAGE_VELOCITY_RATIO / omega * math.sqrt(2.0 * total_drop / count)
     root = mean - 0.1
-    flow = point.main_steam_flow_kg_s
+    flow = point.main_steam_flow_kg_s - leak  # the leakage leaves the control-stage chamber
     log_span = math.log(p_cs / p_exh)
     after = [min(max(round(count * math.log(p_cs / p) / log_span), 1), count - 1)
              for _, _, p in bleeds]
@@ -543,19 +549,23 @@ def derive_spec(heat_balance: HeatBalance, *, name: str | None = None) -> Derive
     if cold:
         notes.append(f"bleeds at the HP-exhaust pressure ({', '.join(cold)}) are taken from cold "
                      "reheat, after the HP blading: not HP extractions of the spec")
-    expansion = _solve_expansion(hb, point, where, cs.h_out, hp_bleeds)
-    rows = expansion.rows
     flow = point.main_steam_flow_kg_s
-    h0 = _f(if97.enthalpy_pt(point.main_steam_pressure_pa, point.main_steam_temperature_k))
-    expansion_power = flow * (h0 - cs.h_out) + sum(
-        row.flow_kg_s * (row.inlet_enthalpy_j_kg - row.outlet_enthalpy_j_kg) for row in rows)
+    leak = 0.0
     if point.hp_exhaust_flow_kg_s is not None:
         leak = flow - point.hp_exhaust_flow_kg_s - sum(b[1] for b in hp_bleeds)
         if leak > 1e-3 * flow:
             notes.append(
                 f"{point.label}: hp_exhaust_flow implies {leak * 3.6:.1f} t/h "
-                f"({leak / flow:.1%}) of leakage past the pressure stages; the spec has no "
-                "leakage field, so the derived stages pass it (flow capacities sized for it)")
+                f"({leak / flow:.1%}) of leakage past the pressure stages; written as a "
+                "[[leakages]] entry from the control-stage chamber to the IP (HP–IP gland), "
+                "the pressure stages sized for the flow without it")
+        else:
+            leak = 0.0
+    expansion = _solve_expansion(hb, point, where, cs.h_out, hp_bleeds, leak)
+    rows = expansion.rows
+    h0 = _f(if97.enthalpy_pt(point.main_steam_pressure_pa, point.main_steam_temperature_k))
+    expansion_power = flow * (h0 - cs.h_out) + sum(
+        row.flow_kg_s * (row.inlet_enthalpy_j_kg - row.outlet_enthalpy_j_kg) for row in rows)
 
     w = _Writer(hb.source)
     _header(w, hb, point, rule, name)
@@ -563,6 +573,8 @@ def derive_spec(heat_balance: HeatBalance, *, name: str | None = None) -> Derive
     _control_block(w, hb, point, where, cs, open_flags)
     _stage_blocks(w, point, where, expansion)
     _extraction_blocks(w, point, where, hp_bleeds, expansion)
+    if leak > 0.0:
+        _leakage_block(w, point, where, leak)
     _metal_block(w, hb, point, where, cs, expansion)
     _sliding_block(w, hb, point, where)
     _temperature_block(w, hb, point, notes)
@@ -751,6 +763,24 @@ def _extraction_blocks(w: _Writer, point: HeatBalancePoint, where: str,
         w.value("design_pressure", "extractions.design_pressure", pressure, _mpa(pressure),
                 f"{point.label}: extractions.pressure", origin)
         w.raw()
+
+
+def _leakage_block(w: _Writer, point: HeatBalancePoint, where: str, leak: float) -> None:
+    """The leakage the kit's flow balance implies: throttle flow less HP-exhaust flow and HP
+    bleeds, taken as the HP–IP gland (balance piston) from the control-stage chamber."""
+    origin = f"{where}: main_steam_flow, hp_exhaust_flow, extractions"
+    sink = GLAND_SINK_RATIO * point.hp_exhaust_pressure_pa
+    w.raw("[[leakages]]")
+    w.raw('name = "HP-IP gland"')
+    w.raw("from_stage = 0  # rule: the balance piston / HP-IP gland sits at the control-stage "
+          "chamber")
+    w.raw('to = "outside"  # to the IP inlet: it does not reach the HP exhaust')
+    w.value("design_flow", "leakages.design_flow", leak, _t_h(leak),
+            f"{point.label}: main_steam_flow - hp_exhaust_flow - HP bleeds", origin)
+    w.value("sink_pressure", "leakages.sink_pressure", sink, _mpa(sink),
+            f"rule: IP inlet, {GLAND_SINK_RATIO:g} x hp_exhaust_pressure (reheater loss)",
+            f"{where}: hp_exhaust_pressure")
+    w.raw()
 
 
 def _metal_groups(count: int) -> list[list[int]]:

@@ -30,6 +30,7 @@ from steamtwin.spec.turbine import (
     DesignPoint,
     Extraction,
     GoverningValve,
+    Leakage,
     Material,
     MetalGroup,
     PartLoad,
@@ -57,7 +58,7 @@ _PART_LOAD = frozenset(field.name for field in fields(PartLoad))
 SPEC_KEYS: Mapping[str, frozenset[str]] = {
     "": frozenset({"format_version", "name", "description", "sensors", "design",
                    "control_stage", "stages", "extractions", "metal", "sliding_pressure",
-                   "part_load", "temperature_schedule"}),
+                   "part_load", "temperature_schedule", "leakages"}),
     "design": frozenset({"main_steam_pressure", "main_steam_temperature", "main_steam_flow",
                          "control_stage_pressure", "hp_exhaust_pressure",
                          "hp_exhaust_temperature", "hp_power", "generator_power",
@@ -67,8 +68,9 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
     "control_stage.valve_characteristic": frozenset({"lift", "flow"}),
     "control_stage.valves": frozenset({"name", "opening_order", "admission_arc",
                                        "open_at_design", "throat_area"}),
-    "stages": _BLADING | {"flow_capacity"},
+    "stages": _BLADING | {"flow_capacity", "tip_leakage"},
     "extractions": frozenset({"name", "after_stage", "design_flow", "design_pressure"}),
+    "leakages": frozenset({"name", "from_stage", "to", "design_flow", "sink_pressure"}),
     "metal": frozenset({"casing_sensor_group", "ambient_temperature", "casing_material",
                         "rotor_material", "groups"}),
     "metal.casing_material": _MATERIAL,
@@ -85,12 +87,14 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
 #: overlap open strictly one group after the other, with a linear flow characteristic; the
 #: rated point is a valve point unless its valve outlet pressure is given; the model sizes the
 #: nozzle throat areas unless they are given; without a temperature schedule the boiler holds
-#: the design main-steam temperature at every load.
+#: the design main-steam temperature at every load; a unit may state no leakages and no tip
+#: leakage, and only a leakage to the outside has a sink pressure.
 OPTIONAL_KEYS = frozenset({"extractions", "part_load", "control_stage.valve_overlap",
                            "control_stage.valve_characteristic", "design.valve_outlet_pressure",
                            "control_stage.valves.throat_area",
                            *(f"part_load.{key}" for key in _PART_LOAD),
-                           "temperature_schedule", "temperature_schedule.reheat_temperature"})
+                           "temperature_schedule", "temperature_schedule.reheat_temperature",
+                           "leakages", "leakages.sink_pressure", "stages.tip_leakage"})
 
 
 class SpecError(ValueError):
@@ -264,6 +268,9 @@ def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
         else PartLoad(),
         temperature_schedule=_temperature_schedule(document.table("temperature_schedule"))
         if "temperature_schedule" in document.data else None,
+        leakages=tuple(_leakage(table, len(stages), design)
+                       for table in (document.tables("leakages")
+                                     if "leakages" in document.data else [])),
     )
     _check_consistency(spec, source)
     return spec
@@ -378,7 +385,8 @@ def _check_valve_sequence(valves: tuple[GoverningValve, ...], source: str) -> No
 
 def _pressure_stage(table: _Table) -> PressureStage:
     return PressureStage(
-        blading=_blading(table), flow_capacity=table.quantity("flow_capacity")
+        blading=_blading(table), flow_capacity=table.quantity("flow_capacity"),
+        tip_leakage=table.quantity("tip_leakage") if "tip_leakage" in table.data else 0.0,
     )
 
 
@@ -388,6 +396,33 @@ def _extraction(table: _Table, stage_count: int) -> Extraction:
         after_stage=table.integer("after_stage", high=stage_count - 1),
         design_flow=table.quantity("design_flow"),
         design_pressure=table.quantity("design_pressure"),
+    )
+
+
+def _leakage(table: _Table, stage_count: int, design: DesignPoint) -> Leakage:
+    """A leakage; its sink pressure is given exactly when it leaves the HP section."""
+    to = table.text("to")
+    choices = table.field("to").choices
+    if to not in choices:
+        raise SpecError(f"{table._where('to')} = {to!r}: expected one of {list(choices)}")
+    given = "sink_pressure" in table.data
+    if to == "outside" and not given:
+        raise SpecError(f"{table._where('sink_pressure')} is missing: a leakage to the outside "
+                        "needs the pressure it discharges into at rated load (Pa)")
+    if to == "hp_exhaust" and given:
+        raise SpecError(f"{table._where('sink_pressure')}: a leakage to the hp_exhaust "
+                        "discharges at the HP-exhaust pressure; leave sink_pressure out")
+    sink = table.quantity("sink_pressure") if given else None
+    if sink is not None and sink >= design.control_stage_pressure:
+        raise SpecError(
+            f"{table._where('sink_pressure')} = {sink / 1e6:g} MPa must lie below "
+            f"design.control_stage_pressure ({design.control_stage_pressure / 1e6:g} MPa)")
+    return Leakage(
+        name=table.text("name"),
+        from_stage=table.integer("from_stage", high=stage_count - 1),
+        to=to,
+        design_flow=table.quantity("design_flow"),
+        sink_pressure=sink,
     )
 
 
@@ -537,6 +572,15 @@ def _check_consistency(spec: TurbineSpec, source: str) -> None:
         raise SpecError(
             f"{source}: extractions bleed {bled:.1f} kg/s in all, not less than the main-steam "
             f"flow {design.main_steam_flow:.1f} kg/s"
+        )
+    leakage_names = [leakage.name for leakage in spec.leakages]
+    if len(set(leakage_names)) != len(leakage_names):
+        raise SpecError(f"{source}: leakages names repeat: {leakage_names}")
+    leaked = sum(leakage.design_flow for leakage in spec.leakages)
+    if leaked and bled + leaked >= design.main_steam_flow:
+        raise SpecError(
+            f"{source}: leakages ({leaked:.1f} kg/s) and extractions ({bled:.1f} kg/s) take "
+            f"together not less than the main-steam flow {design.main_steam_flow:.1f} kg/s"
         )
     exhaust_boundary = float(lower_boundary_temperature(design.hp_exhaust_pressure))
     if design.hp_exhaust_temperature <= exhaust_boundary:

@@ -286,6 +286,13 @@ FIELDS: tuple[Field, ...] = (
           "From the stage pressures of the thermal kit's design expansion (see "
           "tools/derive_reference_spec.py), or the stator throat area.",
           "m^2", "0.05533 m^2", 1e-5, 10.0),
+    Field("stages[].tip_leakage", "number",
+          "Share of the stage's flow that leaks over the blade tips (or shroud seals), bypassing "
+          "the blading and rejoining after the stage: the stage's efficiency is taken times "
+          "(1 − tip_leakage).",
+          "Tip-leakage loss correlations [Traupel, Bd. 1, §8: clearance-gap flow share; "
+          "Dixon & Hall, ch. 4]; 0.005-0.02 for shrouded HP blading.",
+          example=0.01, low=0.0, high=0.2, default="0: no tip leakage"),
     Field("extractions", "tables", "HP bleeds (heater extractions), one table each.",
           "Heat-balance diagram: extraction lines to the HP heaters.",
           min_items=1, default="none: the unit has no HP bleed"),
@@ -302,6 +309,40 @@ FIELDS: tuple[Field, ...] = (
           "HP-exhaust pressures.",
           HBD + ", extraction line (at the turbine, before the line loss).",
           "Pa", "6.17 MPa", 0.05e6, 25e6),
+    Field("leakages", "tables",
+          "Leakages past the pressure stages (balance piston, HP–IP gland, front shaft seal), "
+          "one table each, as design data at rated load. Off design each follows the labyrinth "
+          "law of its fixed seal, m ∝ sqrt((p_up² − p_down²)/(p_up·v_up)), its constant fixed "
+          "at the design point by design_flow and the model's design state at from_stage.",
+          "Thermal kit: throttle flow less HP-exhaust flow and bleeds, or the OEM's leakage "
+          "(gland) flows on the heat balance; labyrinth law [Martin 1908; Egli, Trans. ASME 57 "
+          "(1935) 115-122; Traupel, Bd. 1].",
+          min_items=1, default="none: every kg of throttle steam passes the pressure stages"),
+    Field("leakages[].name", "string", "Name of the leakage.",
+          "Heat-balance diagram or seal drawing, e.g. the gland it passes.",
+          example="HP-IP gland"),
+    Field("leakages[].from_stage", "integer",
+          "Where the leakage leaves the steam path: 0 = the control-stage chamber, k = after "
+          "pressure stage k.",
+          "OEM flow-path drawing: position of the balance piston or gland on the rotor.",
+          example=0, low=0, bound_note="at most the number of [[stages]] − 1"),
+    Field("leakages[].to", "string",
+          "Where it goes: `hp_exhaust` rejoins the steam before the HP exhaust (it bypasses the "
+          "stages after from_stage); `outside` leaves the HP section (HP–IP gland to the IP "
+          "inlet, front shaft seal to a leak-off or gland-steam line).",
+          "OEM gland-steam / leak-off diagram.", example="outside",
+          choices=("hp_exhaust", "outside")),
+    Field("leakages[].design_flow", "quantity", "Leakage mass flow at rated load.",
+          HBD + ": throttle flow less HP-exhaust flow and bleeds; 1-2 % of throttle flow usual "
+          "[Cotton, ch. 6].", "kg/s", "17.5 t/h", 0.0, 100.0),
+    Field("leakages[].sink_pressure", "quantity",
+          "Pressure the leakage discharges into at rated load (to = outside only); off design "
+          "it moves in proportion with the HP-exhaust pressure.",
+          "Heat-balance diagram: IP-inlet (hot-reheat) pressure for an HP–IP gland, the "
+          "leak-off line's pressure for a shaft seal. Below ~0.3 of the upstream pressure the "
+          "seal's flow barely depends on it [Egli 1935].",
+          "Pa", "3.26 MPa", 1e4, 25e6,
+          default="required for to = outside; for hp_exhaust the HP-exhaust pressure"),
     Field("metal", "table", "The rotor and inner-casing metal the steam heats.",
           "OEM casing and rotor drawings, weights list, material data sheets."),
     Field("metal.casing_sensor_group", "string",
@@ -418,6 +459,9 @@ CONSISTENCY_RULES: tuple[str, ...] = (
     "design are exactly the first opening orders.",
     "Each `extractions[].design_pressure` lies between the control-stage and HP-exhaust design "
     "pressures; the bleeds together take less than `design.main_steam_flow`.",
+    "Leakages: names unique; `leakages[].sink_pressure` is given exactly when `to = "
+    "\"outside\"`, below `design.control_stage_pressure`; all leakages and bleeds together "
+    "take less than `design.main_steam_flow`.",
     "`metal.groups`: names unique; the control stage (stage 0) is a group of its own; the groups "
     "cover stages 0 to the last pressure stage exactly once; `metal.casing_sensor_group` names "
     "one of them.",

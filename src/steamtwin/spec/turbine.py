@@ -97,6 +97,7 @@ class PressureStage:
 
     blading: StageGeometry
     flow_capacity: float
+    tip_leakage: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -107,6 +108,23 @@ class Extraction:
     after_stage: int
     design_flow: float
     design_pressure: float
+
+
+@dataclass(frozen=True)
+class Leakage:
+    """A leakage past the pressure stages (design data; flows kg/s, pressures Pa).
+
+    It leaves the steam path after stage ``from_stage`` (0 = the control-stage chamber) and
+    either rejoins before the HP exhaust (``to == "hp_exhaust"``) or leaves the HP section
+    (``to == "outside"``, into a sink at ``sink_pressure`` at rated load). ``design_flow`` is
+    its flow at rated load; off design it follows the labyrinth law of its fixed seal.
+    """
+
+    name: str
+    from_stage: int
+    to: str
+    design_flow: float
+    sink_pressure: float | None = None
 
 
 @dataclass(frozen=True)
@@ -196,3 +214,4 @@ class TurbineSpec:
     sensors: tuple[str, ...]
     part_load: PartLoad = PartLoad()
     temperature_schedule: TemperatureSchedule | None = None
+    leakages: tuple[Leakage, ...] = ()
