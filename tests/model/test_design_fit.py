@@ -290,4 +290,7 @@ def test_fit_on_the_derived_kit_meets_every_point_within_the_band(kit_fit):
     assert (after.to_numpy() ** 2).sum() < 0.05 * (before.to_numpy() ** 2).sum()
     assert 0.2 < kit_fit.part_load.reynolds_exponent < 0.4
     assert kit_fit.part_load.control_stage_velocity_ratio_factor > 1.1
+    # the kit states no admission losses of its own: the fit takes them to their lower bound
+    assert kit_fit.bound_reached("admission_loss_multiplier") == "lower"
+    assert kit_fit.bound_reached("reynolds_exponent") is None
     assert kit_fit.wall_time_s < 60.0  # measured ~5 s alone

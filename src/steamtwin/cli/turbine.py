@@ -350,7 +350,10 @@ def _fit_table(result: DesignFit) -> Table:
         shares = result.identified_share[name]
         strong = ", ".join(f"{label} {share:.0%}" for label, share
                            in shares.sort_values(ascending=False).items() if share >= 0.2)
-        if name in result.unidentified:
+        bound = result.bound_reached(name)
+        if bound is not None:
+            strong = f"at its {bound} bound: the points push it further ({strong or '–'})"
+        elif name in result.unidentified:
             strong = "not identified by these points (kept near its start)"
         table.add_row(name, f"{getattr(result.initial_part_load, name):.4g}",
                       f"{getattr(result.part_load, name):.4g}", strong or "–")

@@ -91,6 +91,17 @@ class DesignFit:
     wall_time_s: float
     message: str
 
+    def bound_reached(self, name: str) -> str | None:
+        """"lower"/"upper" when the fitted ``name`` ended on that end of its schema range (the
+        points push it further: its finite difference there is cut off, so it reads as not
+        identified), else None."""
+        low, high = _bounds(name)
+        value = getattr(self.part_load, name)
+        tolerance = 1e-6 * (high - low)
+        if value <= low + tolerance:
+            return "lower"
+        return "upper" if value >= high - tolerance else None
+
     def fitted_spec(self, spec: TurbineSpec) -> TurbineSpec:
         """``spec`` with the fitted part-load laws."""
         return replace(spec, part_load=self.part_load)
