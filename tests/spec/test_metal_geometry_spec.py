@@ -86,10 +86,10 @@ def test_a_partial_set_of_masses_and_areas_names_the_missing_one(key):
     ({"casing_inner_radius": "0.40 m"}, "metal.groups[2].casing_inner_radius = 0.4 m must "
      "exceed metal.groups[2].rotor_radius = 0.4 m"),
     ({"rotor_radius": "0.48 m", "casing_inner_radius": "0.6 m"},
-     "metal.groups[2] ('HP stages 1-4'): rotor_radius = 0.48 m is not below the group's "
+     "metal.groups[2].rotor_radius = 0.48 m ('HP stages 1-4') must lie below the group's "
      "smallest blade mean radius 0.4717 m"),
-    ({"casing_inner_radius": "0.45 m"}, "metal.groups[2] ('HP stages 1-4'): casing_inner_radius "
-     "= 0.45 m is not above the group's largest blade mean radius 0.47995 m"),
+    ({"casing_inner_radius": "0.45 m"}, "metal.groups[2].casing_inner_radius = 0.45 m ('HP "
+     "stages 1-4') must lie above the group's largest blade mean radius 0.47995 m"),
 ])
 def test_implausible_geometry_is_refused(change, message):
     assert message in _refused(_spec({**DRAWN, **change}))

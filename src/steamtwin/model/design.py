@@ -251,8 +251,8 @@ def radial_chain(wetted_radius: float, far_radius: float, length: float, materia
     capacity = (material.density * material.specific_heat * math.pi * length
                 * np.abs(edges[1:] ** 2 - edges[:-1] ** 2))
     conductance = two_pi_k_length / np.abs(np.log(centres[1:] / centres[:-1]))
-    half_cell = wetted_radius * abs(math.log(centres[0] / wetted_radius)) \
-        / material.thermal_conductivity
+    half_cell = (wetted_radius * abs(math.log(centres[0] / wetted_radius))
+                 / material.thermal_conductivity)
     far_resistance = (abs(math.log(far_radius / centres[-1])) / two_pi_k_length
                       if far_radius > 0.0 else math.inf)
     return RadialChain(capacity, conductance, half_cell, far_resistance)

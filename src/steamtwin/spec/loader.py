@@ -558,14 +558,15 @@ def _check_geometry_against_blading(spec: TurbineSpec, number: int, group: Metal
     mean_radii = [(spec.control_stage.blading if stage == 0
                    else spec.stages[stage - 1].blading).mean_diameter / 2.0
                   for stage in group.stages]
-    where = f"{source}: metal.groups[{number}] ({group.name!r})"
+    where = f"{source}: metal.groups[{number}]"
     if geometry.rotor_radius >= min(mean_radii):
-        raise SpecError(f"{where}: rotor_radius = {geometry.rotor_radius:g} m is not below "
-                        f"the group's smallest blade mean radius {min(mean_radii):g} m")
+        raise SpecError(f"{where}.rotor_radius = {geometry.rotor_radius:g} m ({group.name!r}) "
+                        "must lie below the group's smallest blade mean radius "
+                        f"{min(mean_radii):g} m (the rotor body is inside the blading)")
     if geometry.casing_inner_radius <= max(mean_radii):
-        raise SpecError(f"{where}: casing_inner_radius = {geometry.casing_inner_radius:g} "
-                        f"m is not above the group's largest blade mean radius "
-                        f"{max(mean_radii):g} m")
+        raise SpecError(f"{where}.casing_inner_radius = {geometry.casing_inner_radius:g} m "
+                        f"({group.name!r}) must lie above the group's largest blade mean "
+                        f"radius {max(mean_radii):g} m (the casing bore is outside the blading)")
 
 
 def _check_thermocouple_depth(spec: TurbineSpec, source: str) -> None:
