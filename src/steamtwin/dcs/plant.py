@@ -204,18 +204,22 @@ class PlantTruth:
 
 
 def plant_spec(spec: TurbineSpec) -> TurbineSpec:
-    """The plant's spec: one metal group per stage, each group's mass and area split evenly."""
+    """The plant's spec: one metal group per stage, each group's mass and area (and axial length
+    when it is drawn) split evenly."""
     groups: list[MetalGroup] = []
     for group in spec.metal_groups:
         if len(group.stages) == 1:
             groups.append(group)
             continue
         share = 1.0 / len(group.stages)
+        geometry = None if group.geometry is None else replace(
+            group.geometry, axial_length=group.geometry.axial_length * share)
         for stage in group.stages:
             groups.append(replace(
                 group, name=f"{group.name} / stage {stage}", stages=(stage,),
                 casing_mass=group.casing_mass * share, casing_area=group.casing_area * share,
-                rotor_mass=group.rotor_mass * share, rotor_area=group.rotor_area * share))
+                rotor_mass=group.rotor_mass * share, rotor_area=group.rotor_area * share,
+                geometry=geometry))
     return replace(spec, metal_groups=tuple(groups))
 
 
