@@ -19,12 +19,14 @@ from steamtwin.dcs.tagmap import TagMap, TagMapError, load_tag_map
 from steamtwin.dcs.windows import find_steady_windows, parse_window, select_window
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.measurement import time_constants_for
-from steamtwin.model.parameters import ParameterError
+from steamtwin.model.parameters import ModelParameters, ParameterError
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.rom.estimator import ExtrapolationWarning
+from steamtwin.rom.provenance import check_parameters, resolve_spec
 from steamtwin.rom.romfile import BladeRom, RomFileError, load_rom
 from steamtwin.rom.snapshots import SnapshotSet, generate_snapshots
 from steamtwin.spec import SpecError, TurbineSpec, load_spec
+from steamtwin.spec.fingerprint import short_hash, spec_hash
 from steamtwin.validation.monitor import rom_parameters
 from steamtwin.validation.monitor import validate as run_validation
 from steamtwin.validation.tables import quality_section
@@ -44,8 +46,12 @@ def validate(
         "last --hours of every steady-load span of at least --hours."),
     hours: float = typer.Option(2.0, min=0.05, help="Length of the automatically found "
                                 "windows (h)."),
-    turbine: str = typer.Option("reference", help="'reference' or a turbine spec TOML (rated "
-                                "load for the window search; the FOM for --field-check)."),
+    turbine: str | None = typer.Option(
+        None, help="'reference' or a turbine spec TOML (rated load for the window search; the "
+        "FOM). Default: the spec the ROM was built from; one that differs is refused."),
+    params: Path | None = typer.Option(
+        None, help="Parameter JSON, checked to hold the parameters the ROM was built with "
+        "(refused if they differ); the twin always runs with the ROM's own."),
     monitor: str = typer.Option(
         "fom", help="What monitors the steam-path temperatures: 'fom' (the full-order model of "
         "--turbine with the ROM's parameters; metal dynamics included) or 'rom' (the ROM's "
@@ -70,7 +76,9 @@ def validate(
     the full-order model with the ROM's parameters (--monitor fom) or the ROM (--monitor rom) —
     and writes Table 5 (operating conditions), Table 8 (mean/max
     absolute deviation, RMSE and relative error per sensor and window), Figure 10 (HP-exhaust
-    tracking) and the ROM's provenance. Prints one line per window.
+    tracking) and the ROM's provenance. Prints one line per window. The turbine is the one
+    the ROM records; a --turbine or --params other than those the ROM was built from is
+    refused (exit 2) with both named.
 
     Example: steamtwin validate --rom rom.npz --data plant-data/historian.parquet --tags plant-data/tags.toml --report validation
     """  # noqa: E501
@@ -83,7 +91,11 @@ def validate(
         prepare_output_folder(report, "--report")
         clock = time.perf_counter()
         bundle = load_rom(rom)
-        spec = load_spec(turbine)
+        spec = resolve_spec(bundle, None if turbine is None else load_spec(turbine),
+                            f"--turbine {turbine}", rom)
+        if params is not None:
+            check_parameters(bundle, ModelParameters.from_json(params), f"--params {params}",
+                             rom)
         timings["load ROM and turbine"] = time.perf_counter() - clock
         clock = time.perf_counter()
         tag_map = load_tag_map(tags)
@@ -103,7 +115,9 @@ def validate(
         rated_mw = spec.design.generator_power / 1e6
         settings = {
             "ROM file": str(rom), "data": str(data), "tag map": str(tags),
-            "tag map layout": tag_map.layout, "turbine": spec.name,
+            "tag map layout": tag_map.layout,
+            "turbine": f"{spec.name} (sha256 {short_hash(spec_hash(spec))}; "
+                       + (f"--turbine {turbine})" if turbine else "the ROM's own spec)"),
             "windows from": "--window" if window else (
                 f"steady load (± {STEADY_TOLERANCE:.0%} of rated {rated_mw:g} MW) over "
                 f"≥ {hours:g} h, the last {hours:g} h of each span"),

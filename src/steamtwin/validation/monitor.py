@@ -17,9 +17,9 @@ import numpy as np
 import pandas as pd
 
 from steamtwin.calibration.objective import prepare_window
-from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import Simulator
 from steamtwin.rom.figure import field_comparison_figure
+from steamtwin.rom.provenance import rom_parameters
 from steamtwin.rom.reconstruction import FLAG_INVALID, predict_field, predict_series
 from steamtwin.rom.romfile import BladeRom
 from steamtwin.rom.snapshots import SnapshotSet
@@ -28,7 +28,7 @@ from steamtwin.validation.figures import exhaust_tracking_figure
 from steamtwin.validation.html import Section, ValidationReport
 from steamtwin.validation.tables import deviation_table, operating_table, rom_provenance_table
 
-__all__ = ["COMPARED_SIGNALS", "monitor_windows", "validate"]
+__all__ = ["COMPARED_SIGNALS", "monitor_windows", "rom_parameters", "validate"]
 
 COMPARED_SIGNALS = (
     "hp_exhaust_temperature",
@@ -83,16 +83,6 @@ def monitor_windows(bundle: BladeRom, windows: Mapping[str, pd.DataFrame],
             sensors[FLAG_INVALID] |= ~sensors.index.isin(outputs.index)
         monitored[name] = sensors
     return monitored
-
-
-def rom_parameters(bundle: BladeRom) -> ModelParameters:
-    """The model parameters the ROM was built with, from its provenance (strictly checked:
-    a missing or misspelled coefficient is a ParameterError, never a default)."""
-    values = bundle.provenance.get("model_parameters")
-    if not isinstance(values, dict):
-        raise ValueError("the ROM file records no model_parameters in its provenance; rebuild "
-                         "it with 'steamtwin rom build' or monitor with the ROM alone")
-    return ModelParameters.from_dict(values, "the ROM file's provenance.model_parameters")
 
 
 def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str | Path, *,
