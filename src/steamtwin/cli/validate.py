@@ -75,8 +75,10 @@ def validate(
     replays the twin over them — blade temperatures from the ROM, steam-path temperatures from
     the full-order model with the ROM's parameters (--monitor fom) or the ROM (--monitor rom) —
     and writes Table 5 (operating conditions), Table 8 (mean/max
-    absolute deviation, RMSE and relative error per sensor and window), Figure 10 (HP-exhaust
-    tracking) and the ROM's provenance. Prints one line per window. The turbine is the one
+    absolute deviation, RMSE, absolute and in %, per steam-path temperature and modelled
+    pressure — the control-stage pressure with --monitor fom — and window), Figure 10 (HP-exhaust
+    tracking), the per-sample series (Parquet) and the ROM's provenance, times in the tag
+    map's time zone. Prints one line per window. The turbine is the one
     the ROM records; a --turbine or --params other than those the ROM was built from is
     refused (exit 2) with both named.
 
@@ -101,6 +103,8 @@ def validate(
         tag_map = load_tag_map(tags)
         needed = _needed_signals(bundle, field_check or monitor == "fom")
         signals, quality = _read_cleaned(data, tag_map, needed, accept_quality_errors)
+        if tag_map.time_zone:  # windows named and reported in the data's own time zone
+            signals = signals.set_axis(signals.index.tz_convert(tag_map.time_zone))
         timings["read and clean data"] = time.perf_counter() - clock
         clock = time.perf_counter()
         windows = _pick_windows(signals, window, hours, spec.design.generator_power)
@@ -130,6 +134,7 @@ def validate(
                                         timings=timings, field_check=reference,
                                         simulator=_monitoring_model(spec, monitor,
                                                                     sensor_lag, tag_map),
+                                        time_zone=tag_map.time_zone,
                                         extra_sections=[quality_section(
                                             quality, "Data quality of the export (whole "
                                             "file, before windowing)")])
@@ -149,9 +154,9 @@ def validate(
             typer.echo(f"{row.window}: {shown}: no usable sample ({row.n_samples} missing, "
                        "excluded by the quality gate or flagged by the ROM); nothing to compare")
             continue
-        typer.echo(f"{row.window}: {shown} mean abs deviation {row.mean_abs_deviation_K:.2f} K, "
-                   f"max {row.max_abs_deviation_K:.2f} K, RMSE {row.rmse_K:.2f} K "
-                   f"({row.n_used} of {row.n_samples} samples used)")
+        typer.echo(f"{row.window}: {shown} mean abs deviation {row.mean_abs_deviation:.2f} "
+                   f"{row.unit}, max {row.max_abs_deviation:.2f} {row.unit}, RMSE "
+                   f"{row.rmse:.2f} {row.unit} ({row.n_used} of {row.n_samples} samples used)")
     typer.echo(f"wrote {report / 'report.html'} (+ report.json, "
                f"{len(result.tables)} CSV tables, figures)")
 
