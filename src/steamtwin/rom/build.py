@@ -14,11 +14,13 @@ import datetime as dt
 import platform
 from collections.abc import Callable
 from importlib import metadata
+from pathlib import Path
 
 from steamtwin.blade.mesh import checked_mesh
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.rom.estimator import PodRbfRom
 from steamtwin.rom.features import ControlStageFeatures
+from steamtwin.rom.provenance import parameters_source, spec_provenance
 from steamtwin.rom.romfile import BladeRom, probe_nodes
 from steamtwin.rom.snapshots import (
     ROM_INPUTS,
@@ -34,14 +36,19 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
               kernel: str = "thin_plate_spline", max_workers: int | None = None,
               scheduler: str | None = None, seed: int = 0, layout: str = "lhs",
               progress: Callable[[float], None] | None = None,
-              projection_tolerance: float | None = 0.1, physics_features: bool = True
+              projection_tolerance: float | None = 0.1, physics_features: bool = True,
+              spec_toml: str | None = None, params_file: str | Path | None = None
               ) -> tuple[BladeRom, SnapshotSet]:
     """Design of experiments → snapshots (parallel) → fitted ROM with provenance.
 
     ``projection_tolerance`` (K, None = energy only) and ``physics_features`` (RBF on
     (p0, T0, p1, T_cs, e) with range scaling; False: on (p0, T0, p1) with sensitivity scaling)
-    as in the module docstring.
+    as in the module docstring. The ROM records ``spec`` (name and content hash) with its TOML
+    text ``spec_toml`` (default: the built-in's text when ``spec`` is a built-in turbine) and
+    ``params`` with the file they were read from, ``params_file``
+    (:mod:`steamtwin.rom.provenance`).
     """
+    spec_record, spec_text = spec_provenance(spec, spec_toml)
     params = params or ModelParameters()
     mesh = checked_mesh(mesh)
     conditions = design_conditions(spec, n_snapshots, seed=seed, layout=layout)
@@ -64,6 +71,8 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
         "python": platform.python_version(),
         "turbine": spec.name,
         "turbine_description": spec.description,
+        "spec": spec_record,
+        "parameters_source": parameters_source(params_file),
         "blade_row": "control stage rotor (hp1)",
         "model_parameters": dataclasses.asdict(params),
         "design": {"n_snapshots": n_snapshots, "seed": seed, "layout": layout,
@@ -77,5 +86,6 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
         "units": "SI (K, Pa, kg/s, W)",
     }
     bundle = BladeRom(rom=rom, mesh=mesh, probes=probe_nodes(mesh),
-                      conditions=snapshots.conditions, provenance=provenance)
+                      conditions=snapshots.conditions, provenance=provenance,
+                      spec_toml=spec_text)
     return bundle, snapshots
