@@ -100,13 +100,14 @@ from steamtwin.dcs.sensors import (
 )
 from steamtwin.dcs.signals import SIGNALS
 from steamtwin.dcs.tagmap import TagMap, TagSpec, write_tag_map
-from steamtwin.model.design import CASING_THERMOCOUPLE_DEPTH, DesignConstants, kernel_constants
+from steamtwin.model.design import DesignConstants, kernel_constants
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.kernel import KernelConstants
 from steamtwin.model.operating import operating_point
 from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import Material, MetalGroup, TurbineSpec, load_spec
+from steamtwin.spec.turbine import DEFAULT_CASING_THERMOCOUPLE_DEPTH
 from steamtwin.units import convert
 
 __all__ = [
@@ -295,7 +296,8 @@ class PlantTruth:
         thermocouple depth and sheath, a solid rotor; the metal still finer than the twin's.
         ``changes`` override fields as in :func:`dataclasses.replace`."""
         simple = cls(tip_clearances=(0.0,), valve_overlap=0.0, main_steam_schedule=None,
-                     reheat_schedule=None, casing_thermocouple_depth=CASING_THERMOCOUPLE_DEPTH,
+                     reheat_schedule=None,
+                     casing_thermocouple_depth=DEFAULT_CASING_THERMOCOUPLE_DEPTH,
                      casing_sheath_time_constant=5.0, rotor_bore_radius=0.0,
                      graded_metal=False)
         return replace(simple, **changes)
