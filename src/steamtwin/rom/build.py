@@ -12,16 +12,27 @@ from __future__ import annotations
 import dataclasses
 import datetime as dt
 import platform
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from importlib import metadata
 
+import numpy as np
+import pandas as pd
+
 from steamtwin.blade.mesh import checked_mesh
+from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import ModelParameters
+from steamtwin.rom.envelope import feasible_conditions, operating_envelope
 from steamtwin.rom.estimator import PodRbfRom
 from steamtwin.rom.features import ControlStageFeatures
+from steamtwin.rom.reconstruction import MAX_EXTRAPOLATION
 from steamtwin.rom.romfile import BladeRom, probe_nodes
 from steamtwin.rom.snapshots import (
+    FLOW_VARIATION,
+    LOAD_LEVELS,
+    MAXIMUM_FLOW_FRACTION,
+    PRESSURE_VARIATION,
     ROM_INPUTS,
+    TEMPERATURE_VARIATION,
     SnapshotSet,
     design_conditions,
     generate_snapshots,
@@ -34,17 +45,33 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
               kernel: str = "thin_plate_spline", max_workers: int | None = None,
               scheduler: str | None = None, seed: int = 0, layout: str = "lhs",
               progress: Callable[[float], None] | None = None,
-              projection_tolerance: float | None = 0.1, physics_features: bool = True
+              projection_tolerance: float | None = 0.1, physics_features: bool = True,
+              parameter_intervals: Mapping[str, tuple[float, float]] | None = None,
+              observed: pd.DataFrame | None = None, params_source: str | None = None
               ) -> tuple[BladeRom, SnapshotSet]:
-    """Design of experiments → snapshots (parallel) → fitted ROM with provenance.
+    """Envelope → design of experiments → feasible conditions → snapshots (parallel) → fitted
+    ROM with provenance.
 
     ``projection_tolerance`` (K, None = energy only) and ``physics_features`` (RBF on
     (p0, T0, p1, T_cs, e) with range scaling; False: on (p0, T0, p1) with sensitivity scaling)
-    as in the module docstring.
+    as in the module docstring. ``parameter_intervals`` (name → (low, high)) and ``observed``
+    (historian signals, SI, with the ROM's inputs) widen the envelope
+    (:func:`steamtwin.rom.envelope.operating_envelope`); ``params_source`` names where
+    ``params`` came from in errors. Conditions the model cannot run are replaced and counted
+    (provenance ``envelope.replaced``); :class:`~steamtwin.rom.envelope.EnvelopeError` when the
+    operating line itself cannot be run.
     """
     params = params or ModelParameters()
     mesh = checked_mesh(mesh)
-    conditions = design_conditions(spec, n_snapshots, seed=seed, layout=layout)
+    model = FullOrderModel(spec)
+    envelope = operating_envelope(
+        spec, params, loads=LOAD_LEVELS, pressure_variation=PRESSURE_VARIATION,
+        temperature_variation=TEMPERATURE_VARIATION, flow_variation=FLOW_VARIATION,
+        maximum_flow_fraction=MAXIMUM_FLOW_FRACTION, parameter_intervals=parameter_intervals,
+        observed=observed, params_source=params_source, model=model)
+    planned = design_conditions(spec, n_snapshots, seed=seed, layout=layout, envelope=envelope)
+    conditions, replaced = feasible_conditions(spec, planned, params,
+                                               params_source=params_source, model=model)
     snapshots = generate_snapshots(spec, mesh, conditions, params, max_workers=max_workers,
                                    scheduler=scheduler, progress=progress)
     sensor_names = tuple(snapshots.sensors.columns)
@@ -68,6 +95,12 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
         "model_parameters": dataclasses.asdict(params),
         "design": {"n_snapshots": n_snapshots, "seed": seed, "layout": layout,
                    "load_levels": sorted({float(v) for v in conditions["load_level"]})},
+        "envelope": {**envelope.describe(), "replaced": len(replaced),
+                     "replacements": [{"row": int(r.row), "reason": r.reason,
+                                       "flow_before_kg_s": r.flow_before,
+                                       "flow_after_kg_s": r.flow_after}
+                                      for r in replaced.itertuples()],
+                     "observed": _observed_coverage(rom, observed)},
         "mesh": {"nodes": int(mesh.points.shape[0]), "tetrahedra": int(mesh.tetrahedra.shape[0])},
         "pod": {"energy_threshold": energy, "projection_tolerance_K": projection_tolerance,
                 "modes": rom.n_modes_, "energy_captured": rom.energy_captured_},
@@ -79,3 +112,20 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
     bundle = BladeRom(rom=rom, mesh=mesh, probes=probe_nodes(mesh),
                       conditions=snapshots.conditions, provenance=provenance)
     return bundle, snapshots
+
+
+def _observed_coverage(rom: PodRbfRom, observed: pd.DataFrame | None) -> dict[str, float] | None:
+    """How many observed samples (finite ROM inputs) lie outside the snapshots' hull, and
+    farther than the predict limit (:data:`~steamtwin.rom.reconstruction.MAX_EXTRAPOLATION`)."""
+    if observed is None:
+        return None
+    inputs = observed[list(ROM_INPUTS)].apply(pd.to_numeric, errors="coerce").to_numpy(
+        dtype=float)
+    inputs = inputs[np.all(np.isfinite(inputs), axis=1)]
+    if inputs.shape[0] == 0:
+        return {"samples": 0}
+    distance = rom.extrapolation_distance(inputs)
+    return {"samples": int(inputs.shape[0]),
+            "outside_hull": int(np.sum(distance > 0.0)),
+            "beyond_limit": int(np.sum(distance > MAX_EXTRAPOLATION)),
+            "max_distance": float(distance.max())}
