@@ -17,8 +17,9 @@ the snapshots span, as a box about the unit's operating line at that level
   so the flow box is widened by the ratio of those p1 to the calibrated model's.
 * **Observed inputs** — a historian's p0, T0, p1 (after the quality gate): each sample's load
   from its main-steam flow, else from p1 along the calibrated line; per load band, its p0 and T0
-  offsets from the line (and, with the flow, its p1 ratio) widen that level's box, plus the
-  instruments' margins; loads below the lowest level add a level.
+  offsets from the line widen that level's box, plus the instruments' margins; the outer
+  levels' flow boxes reach the samples' p1 (as the load whose line p1 it is, p1 ∝ flow), and
+  samples below the lowest level's box add a level.
 
 :func:`feasible_conditions` then runs the model once per snapshot condition (steady, no FEM):
 a condition above what the wide-open valves pass is replaced by the same (p0, T0) at the highest
@@ -44,7 +45,8 @@ from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import TurbineSpec
 
 __all__ = ["EnvelopeError", "LevelBox", "OperatingEnvelope", "feasible_conditions",
-           "line_box", "operating_envelope", "operating_line", "valve_points"]
+           "line_box", "operating_envelope", "operating_line", "parse_parameter_interval",
+           "valve_points"]
 
 MINIMUM_LOAD = 0.2  # lowest load of the sliding-pressure line helper (operating_point)
 LINE_STEP = 0.005  # load resolution of the operating-line run that finds the valve points
@@ -113,6 +115,21 @@ def line_box(load: float, pressure_variation: float, temperature_variation: floa
     return LevelBox(float(load), (1.0 - pressure_variation, 1.0 + pressure_variation),
                     (-temperature_variation, temperature_variation),
                     (centre - flow_variation, centre + flow_variation))
+
+
+def parse_parameter_interval(text: str) -> tuple[str, tuple[float, float]]:
+    """``"NAME=LOW:HIGH"`` → (name, (low, high)); ValueError naming the expected form."""
+    name, _, bounds = text.partition("=")
+    low, _, high = bounds.partition(":")
+    try:
+        interval = (float(low), float(high))
+    except ValueError:
+        interval = None
+    if name.strip() not in PARAMETER_BOUNDS or interval is None or not interval[0] <= interval[1]:
+        raise ValueError(f"parameter interval {text!r}: expected NAME=LOW:HIGH with NAME one of "
+                         f"{', '.join(PARAMETER_BOUNDS)} and LOW ≤ HIGH (e.g. "
+                         "flow_coefficient=0.94:0.97)")
+    return name.strip(), interval
 
 
 def _one_sample(condition: Mapping[str, float]) -> pd.DataFrame:
@@ -274,8 +291,8 @@ def operating_envelope(spec: TurbineSpec, params: ModelParameters | None = None,
     observed_rows = _observed_offsets(spec, line, observed) if observed is not None else None
     if observed_rows is not None and len(observed_rows):
         sources.append(f"observed inputs ({len(observed_rows)} samples)")
-        lowest = float(observed_rows["load"].min()) - OBSERVED_LOAD_MARGIN
-        if lowest < levels[0] - OBSERVED_LOAD_MARGIN:
+        lowest = float(observed_rows["equivalent_load"].min()) - OBSERVED_LOAD_MARGIN
+        if lowest < levels[0] * (1.0 - flow_variation):  # below the lowest level's box
             levels.insert(0, max(MINIMUM_LOAD, lowest))
     for level in levels:
         if not MINIMUM_LOAD <= level <= top:
@@ -362,17 +379,20 @@ def _observed_offsets(spec: TurbineSpec, line: pd.DataFrame, observed: pd.DataFr
     table["temperature_offset"] = (table["main_steam_temperature"]
                                    - point["main_steam_temperature"])
     p1_at_load = np.interp(on_line, ran.index.to_numpy(), p1_line)
-    # the sample's p1 against the line's at its load (≡ 1 when the load came from p1), and
-    # its load beyond the line's ends, both as a flow factor (p1 ∝ flow)
-    table["flow_factor"] = (table["control_stage_pressure"] / p1_at_load
-                            * table["load"].to_numpy() / on_line)
+    # the sample's flow as a load fraction, where it sits along the levels' flow axis: from
+    # the line's at its load by the cone law m ∝ p1/sqrt(T) (Stodola 1927; Cooke 1985; the
+    # control-stage temperature taken ∝ the main-steam temperature), exact on the line
+    table["equivalent_load"] = (on_line * table["control_stage_pressure"] / p1_at_load
+                                * np.sqrt(point["main_steam_temperature"]
+                                          / table["main_steam_temperature"]))
     return table
 
 
 def _widen_by_observations(boxes: list[LevelBox], rows: pd.DataFrame) -> list[LevelBox]:
     """Each level's box widened to its band's observed offsets, plus the instruments' margins.
 
-    A level's band runs halfway to its neighbours; the outer bands are open-ended.
+    A level's band runs halfway to its neighbours; the outer bands are open-ended, and the
+    outer levels' flow boxes also reach their bands' equivalent loads.
     """
     loads = np.array([box.load for box in boxes])
     edges = 0.5 * (loads[1:] + loads[:-1])
@@ -390,9 +410,11 @@ def _widen_by_observations(boxes: list[LevelBox], rows: pd.DataFrame) -> list[Le
                              mine["temperature_offset"].min() - OBSERVED_TEMPERATURE_MARGIN,
                              mine["temperature_offset"].max() + OBSERVED_TEMPERATURE_MARGIN)
         flow = box.flow_factor
-        if k in (0, len(boxes) - 1):  # inner bands are spanned by their neighbours' boxes
-            flow = _widen(flow, mine["flow_factor"].min() - OBSERVED_PRESSURE_MARGIN,
-                          mine["flow_factor"].max() + OBSERVED_PRESSURE_MARGIN)
+        equivalent = mine["equivalent_load"] / box.load
+        if k == 0:  # inner bands lie between their levels' boxes
+            flow = _widen(flow, equivalent.min() - OBSERVED_PRESSURE_MARGIN, flow[1])
+        if k == len(boxes) - 1:
+            flow = _widen(flow, flow[0], equivalent.max() + OBSERVED_PRESSURE_MARGIN)
         widened.append(dataclasses.replace(box, pressure_factor=pressure,
                                            temperature_offset=temperature, flow_factor=flow))
     return widened
@@ -404,18 +426,32 @@ def feasible_conditions(spec: TurbineSpec, conditions: pd.DataFrame,
                         ) -> tuple[pd.DataFrame, pd.DataFrame]:
     """``conditions`` with every row the model cannot run replaced by one it can (SI).
 
-    Over the valves' capacity: the same (p0, T0) at the highest flow they pass (× 0.998); any
-    other failure, or no flow passing: the farthest point that runs on the segment from the
-    level's operating-line point (``load_level``) to the row. Returns the conditions and a
-    table of the replacements (``row``, ``reason``, ``flow_before``, ``flow_after`` kg/s,
-    ``pressure_before``, ``pressure_after`` Pa, ``temperature_before``, ``temperature_after``
-    K). Raises :class:`EnvelopeError` (naming the parameters, from ``params_source``) if a
-    level's operating-line point itself fails.
+    Over the valves' capacity: the same (p0, T0) at the highest flow they pass (× 0.998), plus
+    one added row at the same flow and the lowest throttle pressure that passes it, when that
+    lies within the level's planned pressures — the two points on the capacity limit
+    (∝ p0: choked nozzle flow) that the infeasible corner stood for, so the snapshots' hull
+    keeps the flows near the limit. Any other failure, or no flow passing: the farthest point
+    that runs on the segment from the level's operating-line point (``load_level``) to the row.
+    Returns the conditions and a table of the replacements (``row``, ``reason``,
+    ``flow_before``, ``flow_after`` kg/s, ``pressure_before``, ``pressure_after`` Pa,
+    ``temperature_before``, ``temperature_after`` K; an added row has the row number it got).
+    Raises :class:`EnvelopeError` (naming the parameters, from ``params_source``) if a level's
+    operating-line point itself fails.
     """
     params = params or ModelParameters()
     model = model or FullOrderModel(spec)
     table = conditions.reset_index(drop=True).copy()
     replaced = []
+    added = []
+
+    def record(i: int, reason: str, before: Mapping[str, float], after: Mapping[str, float]
+               ) -> None:
+        replaced.append({"row": i, "reason": reason,
+                         **{f"{key}_{when}": value[name] for key, name in (
+                             ("flow", "main_steam_flow"), ("pressure", "main_steam_pressure"),
+                             ("temperature", "main_steam_temperature"))
+                            for when, value in (("before", before), ("after", after))}})
+
     for i in range(len(table)):
         row = {name: float(table.loc[i, name]) for name in INPUT_SIGNALS}
         try:
@@ -429,21 +465,47 @@ def feasible_conditions(spec: TurbineSpec, conditions: pd.DataFrame,
             flow = _highest_flow(model, row, params, spec, 0.5 * row["main_steam_flow"])
             if flow is not None:
                 new = _with_flow(spec, row, flow)
+                highest = float(table.loc[table["load_level"] == level,
+                                          "main_steam_pressure"].max())
+                pressure = _lowest_pressure(model, row, params, highest)
+                if pressure is not None:
+                    extra = dict(row, main_steam_pressure=pressure)
+                    record(len(table) + len(added), reason, row, extra)
+                    added.append({**table.loc[i].to_dict(), **extra})
         if new is None:
             new = _toward_line(spec, model, params, row, level)
         if new is None:
             raise _line_error(spec, model, params, level, reason, params_source)
-        replaced.append({"row": i, "reason": reason,
-                         **{f"{key}_{when}": value[name] for key, name in (
-                             ("flow", "main_steam_flow"), ("pressure", "main_steam_pressure"),
-                             ("temperature", "main_steam_temperature"))
-                            for when, value in (("before", row), ("after", new))}})
+        record(i, reason, row, new)
         for name in INPUT_SIGNALS:
             table.loc[i, name] = new[name]
         table.loc[i, "load_fraction"] = new["main_steam_flow"] / spec.design.main_steam_flow
+    if added:
+        table = pd.concat([table, pd.DataFrame(added)], ignore_index=True)
     return table, pd.DataFrame(replaced, columns=[
         "row", "reason", "flow_before", "flow_after", "pressure_before", "pressure_after",
-        "temperature_before", "temperature_after"])
+        "temperature_before", "temperature_after"]).sort_values("row", ignore_index=True)
+
+
+def _lowest_pressure(model: FullOrderModel, condition: Mapping[str, float],
+                     params: ModelParameters, highest: float) -> float | None:
+    """Lowest throttle pressure (Pa) in [the condition's, ``highest``] at which the model runs
+    the condition's flow, times 1/CAPACITY_MARGIN; None if not even ``highest`` does."""
+    def runs(pressure: float) -> bool:
+        try:
+            _run(model, dict(condition, main_steam_pressure=pressure), params)
+        except InputError:
+            return False
+        return True
+
+    low, high = float(condition["main_steam_pressure"]), highest
+    if high <= low or not runs(high):
+        return None
+    for _ in range(BISECTIONS):
+        middle = 0.5 * (low + high)
+        low, high = (low, middle) if runs(middle) else (middle, high)
+    pressure = min(high / CAPACITY_MARGIN, highest)
+    return pressure if runs(pressure) else high
 
 
 def _toward_line(spec: TurbineSpec, model: FullOrderModel, params: ModelParameters,
