@@ -16,12 +16,10 @@ from steamtwin.model.fom import InputError
 from steamtwin.model.operating import operating_point
 from steamtwin.model.parameters import ModelParameters, ParameterError
 from steamtwin.model.simulator import INPUT_SIGNALS
-from steamtwin.rom import snapshots
-from steamtwin.rom.build import build_rom
+from steamtwin.rom.build import build_rom, rom_envelope
 from steamtwin.rom.envelope import (
     EnvelopeError,
     feasible_conditions,
-    operating_envelope,
     operating_line,
     parse_parameter_interval,
 )
@@ -48,12 +46,7 @@ def scheduled_spec(reference_spec):
 
 
 def _envelope(spec, model, params=None, **options):
-    return operating_envelope(
-        spec, params, loads=snapshots.LOAD_LEVELS,
-        pressure_variation=snapshots.PRESSURE_VARIATION,
-        temperature_variation=snapshots.TEMPERATURE_VARIATION,
-        flow_variation=snapshots.FLOW_VARIATION,
-        maximum_flow_fraction=snapshots.MAXIMUM_FLOW_FRACTION, model=model, **options)
+    return rom_envelope(spec, params, model=model, **options)
 
 
 def _rom_inputs(model, conditions, params):
@@ -177,7 +170,8 @@ def test_the_historian_widens_the_envelope_to_its_samples(reference_spec, refere
                                                           coarse_blade):
     """A unit that runs 505 °C and 4 % below the sliding line at 30 %, a 62 % and a full-load
     hold: without --data its 30 % samples lie beyond the ROM's domain (the spec has no
-    temperature schedule: snapshots at 528–548 °C), with it every sample is inside."""
+    temperature schedule: snapshots at 528–548 °C), with it every sample is inside the
+    snapshots' hull."""
     model = reference_model
     rng = np.random.default_rng(5)
     rows = []
@@ -208,8 +202,13 @@ def test_the_historian_widens_the_envelope_to_its_samples(reference_spec, refere
     assert not flags["after"][FLAG_OUT_OF_DOMAIN].any()
     assert not flags["after"][FLAG_INVALID].any()
     coverage = bundle.provenance["envelope"]["observed"]
-    assert coverage["samples"] == 120 and coverage["beyond_limit"] == 0
-    assert coverage["outside_hull"] == int(flags["after"][FLAG_EXTRAPOLATED].sum())
+    # and inside the snapshots' hull, not only their range: the anchors about the samples
+    assert coverage == {"samples": 120, "outside_hull": 0, "beyond_limit": 0,
+                        "max_distance": 0.0}
+    assert not flags["after"][FLAG_EXTRAPOLATED].any()
+    anchors = bundle.provenance["envelope"]["observed_anchors"]
+    assert anchors % 4 == 0 and len(bundle.conditions) == 16 + anchors + len(
+        [r for r in bundle.provenance["envelope"]["replacements"] if r["row"] >= 16])
 
 
 def test_observed_loads_below_the_levels_add_a_level(reference_spec, reference_model):

@@ -21,7 +21,12 @@ import pandas as pd
 from steamtwin.blade.mesh import checked_mesh
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import ModelParameters
-from steamtwin.rom.envelope import feasible_conditions, operating_envelope
+from steamtwin.rom.envelope import (
+    OperatingEnvelope,
+    feasible_conditions,
+    observed_anchors,
+    operating_envelope,
+)
 from steamtwin.rom.estimator import PodRbfRom
 from steamtwin.rom.features import ControlStageFeatures
 from steamtwin.rom.reconstruction import MAX_EXTRAPOLATION
@@ -38,6 +43,20 @@ from steamtwin.rom.snapshots import (
     generate_snapshots,
 )
 from steamtwin.spec import TurbineSpec
+
+
+def rom_envelope(spec: TurbineSpec, params: ModelParameters | None = None, *,
+                 parameter_intervals: Mapping[str, tuple[float, float]] | None = None,
+                 observed: pd.DataFrame | None = None, params_source: str | None = None,
+                 model: FullOrderModel | None = None) -> OperatingEnvelope:
+    """The envelope :func:`build_rom` plans its snapshots in: the design's load levels and
+    variations (:mod:`steamtwin.rom.snapshots`), widened as in
+    :func:`~steamtwin.rom.envelope.operating_envelope`."""
+    return operating_envelope(
+        spec, params, loads=LOAD_LEVELS, pressure_variation=PRESSURE_VARIATION,
+        temperature_variation=TEMPERATURE_VARIATION, flow_variation=FLOW_VARIATION,
+        maximum_flow_fraction=MAXIMUM_FLOW_FRACTION, parameter_intervals=parameter_intervals,
+        observed=observed, params_source=params_source, model=model)
 
 
 def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = None, *,
@@ -57,21 +76,27 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
     as in the module docstring. ``parameter_intervals`` (name → (low, high)) and ``observed``
     (historian signals, SI, with the ROM's inputs) widen the envelope
     (:func:`steamtwin.rom.envelope.operating_envelope`); ``params_source`` names where
-    ``params`` came from in errors. Conditions the model cannot run are replaced and counted
-    (provenance ``envelope.replaced``); :class:`~steamtwin.rom.envelope.EnvelopeError` when the
+    ``params`` came from in errors. Observed samples outside the planned snapshots get anchor
+    snapshots (:func:`~steamtwin.rom.envelope.observed_anchors`, up to 4 per load band, on top
+    of ``n_snapshots``). Conditions the model cannot run are replaced and counted (provenance
+    ``envelope.replaced``); :class:`~steamtwin.rom.envelope.EnvelopeError` when the
     operating line itself cannot be run.
     """
     params = params or ModelParameters()
     mesh = checked_mesh(mesh)
     model = FullOrderModel(spec)
-    envelope = operating_envelope(
-        spec, params, loads=LOAD_LEVELS, pressure_variation=PRESSURE_VARIATION,
-        temperature_variation=TEMPERATURE_VARIATION, flow_variation=FLOW_VARIATION,
-        maximum_flow_fraction=MAXIMUM_FLOW_FRACTION, parameter_intervals=parameter_intervals,
-        observed=observed, params_source=params_source, model=model)
+    envelope = rom_envelope(spec, params, parameter_intervals=parameter_intervals,
+                            observed=observed, params_source=params_source, model=model)
     planned = design_conditions(spec, n_snapshots, seed=seed, layout=layout, envelope=envelope)
     conditions, replaced = feasible_conditions(spec, planned, params,
                                                params_source=params_source, model=model)
+    anchors = observed_anchors(spec, envelope, conditions, params, model=model)
+    if len(anchors):
+        anchors, moved = feasible_conditions(spec, anchors, params,
+                                             params_source=params_source, model=model)
+        replaced = pd.concat([replaced, moved.assign(row=moved["row"] + len(conditions))],
+                             ignore_index=True)
+        conditions = pd.concat([conditions, anchors], ignore_index=True)
     snapshots = generate_snapshots(spec, mesh, conditions, params, max_workers=max_workers,
                                    scheduler=scheduler, progress=progress)
     sensor_names = tuple(snapshots.sensors.columns)
@@ -96,6 +121,7 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
         "design": {"n_snapshots": n_snapshots, "seed": seed, "layout": layout,
                    "load_levels": sorted({float(v) for v in conditions["load_level"]})},
         "envelope": {**envelope.describe(), "replaced": len(replaced),
+                     "observed_anchors": len(anchors),
                      "replacements": [{"row": int(r.row), "reason": r.reason,
                                        "flow_before_kg_s": r.flow_before,
                                        "flow_after_kg_s": r.flow_after}

@@ -44,9 +44,18 @@ from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters, Parame
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import TurbineSpec
 
-__all__ = ["EnvelopeError", "LevelBox", "OperatingEnvelope", "feasible_conditions",
-           "line_box", "operating_envelope", "operating_line", "parse_parameter_interval",
-           "valve_points"]
+__all__ = [
+    "EnvelopeError",
+    "LevelBox",
+    "OperatingEnvelope",
+    "feasible_conditions",
+    "line_box",
+    "observed_anchors",
+    "operating_envelope",
+    "operating_line",
+    "parse_parameter_interval",
+    "valve_points",
+]
 
 MINIMUM_LOAD = 0.2  # lowest load of the sliding-pressure line helper (operating_point)
 LINE_STEP = 0.005  # load resolution of the operating-line run that finds the valve points
@@ -60,6 +69,11 @@ OBSERVED_LOAD_MARGIN = 0.01  # load fraction below the lowest observed load of a
 CAPACITY_MARGIN = 0.998  # fraction of the valves' capacity a replaced condition runs at
 BISECTIONS = 20  # flow resolution of a replacement: 2⁻²⁰ of the bracket
 OVER_CAPACITY = "exceeds what the wide-open governing valves pass"
+# An observed cluster's box [c − h, c + h] (normalised to [−1, 1]³) lies inside the simplex
+# {s_i·x_i ≤ 1, Σ s_i·x_i ≥ −3}: its vertices are the box corner s and that corner moved by
+# −ANCHOR_SPAN along each axis; 6.3 > 6 leaves the opposite corner 0.1 inside the face.
+ANCHOR_SPAN = 6.3
+STEADY_STEP_S = 1e12  # s between samples of one run: implicit Euler at Δt → ∞ is steady
 
 
 class EnvelopeError(ValueError):
@@ -87,13 +101,15 @@ class OperatingEnvelope:
 
     ``line``: the model's operating line at the build's parameters (index load fraction;
     columns the inputs and ``control_stage_pressure`` Pa, ``active_admission_arc``; NaN where
-    the model cannot run it).
+    the model cannot run it). ``observed``: the observed samples with finite inputs, their
+    ``load`` and ``equivalent_load`` (fractions; None without observations).
     """
 
     levels: tuple[LevelBox, ...]
     valve_points: tuple[float, ...]
     line: pd.DataFrame
     sources: tuple[str, ...]
+    observed: pd.DataFrame | None = None
 
     def describe(self) -> dict[str, object]:
         """JSON-serialisable summary for provenance."""
@@ -314,7 +330,7 @@ def operating_envelope(spec: TurbineSpec, params: ModelParameters | None = None,
     points = valve_points(spec, line)
     if points:
         sources.append("valve points")
-    return OperatingEnvelope(tuple(boxes), points, line, tuple(sources))
+    return OperatingEnvelope(tuple(boxes), points, line, tuple(sources), observed_rows)
 
 
 def _widen_by_parameters(spec: TurbineSpec, model: FullOrderModel, params: ModelParameters,
@@ -533,3 +549,66 @@ def _toward_line(spec: TurbineSpec, model: FullOrderModel, params: ModelParamete
         middle = 0.5 * (low + high)
         low, high = (middle, high) if runs(middle) else (low, middle)
     return at(low)
+
+
+def observed_anchors(spec: TurbineSpec, envelope: OperatingEnvelope, conditions: pd.DataFrame,
+                     params: ModelParameters | None = None, *,
+                     model: FullOrderModel | None = None) -> pd.DataFrame:
+    """Snapshot conditions (SI) that put the observed samples outside the hull of
+    ``conditions`` inside it: per load band, a simplex about those samples' box.
+
+    A Latin hypercube's points span only part of their box, and the unit's holds (the samples
+    that matter most) may sit near a box's edge, e.g. at rated flow near the valves' capacity.
+    The ROM's inputs (p0, T0, p1) of ``conditions`` come from one steady model run; an
+    observed sample outside their convex hull (scaled by their range, as the ROM's
+    extrapolation check) joins its band's group; each group's box in (p0, T0, flow) — flow
+    from the equivalent load — plus the instruments' margins gets the four vertices of a
+    simplex containing it (ANCHOR_SPAN), pointing into the design (towards the conditions'
+    mean). Empty without observations or with all of them inside.
+    """
+    from scipy.spatial import Delaunay  # only needed when there are observations
+
+    columns = ["load_level", "load_fraction", *INPUT_SIGNALS]
+    rows = envelope.observed
+    if rows is None or rows.empty:
+        return pd.DataFrame(columns=columns)
+    params = params or ModelParameters()
+    model = model or FullOrderModel(spec)
+    inputs = conditions[list(INPUT_SIGNALS)].set_index(
+        pd.Index(np.arange(len(conditions)) * STEADY_STEP_S))
+    p1 = model.simulate_detailed(inputs, params, stages=False).diagnostics[
+        "control_stage_pressure"].to_numpy()
+    planned = np.column_stack([conditions["main_steam_pressure"],
+                               conditions["main_steam_temperature"], p1])
+    low, span = planned.min(axis=0), np.ptp(planned, axis=0)
+    seen = rows[["main_steam_pressure", "main_steam_temperature",
+                 "control_stage_pressure"]].to_numpy()
+    outside = Delaunay((planned - low) / span).find_simplex((seen - low) / span) < 0
+    if not outside.any():
+        return pd.DataFrame(columns=columns)
+    flow = rows["equivalent_load"].to_numpy() * spec.design.main_steam_flow
+    points = np.column_stack([rows["main_steam_pressure"], rows["main_steam_temperature"],
+                              flow])[outside]
+    loads = np.array([box.load for box in envelope.levels])
+    band = np.searchsorted(0.5 * (loads[1:] + loads[:-1]),
+                           rows["equivalent_load"].to_numpy()[outside])
+    mean = conditions[["main_steam_pressure", "main_steam_temperature",
+                       "main_steam_flow"]].to_numpy().mean(axis=0)
+    anchors = []
+    for k in np.unique(band):
+        group = points[band == k]
+        centre = 0.5 * (group.min(axis=0) + group.max(axis=0))
+        half = 0.5 * (group.max(axis=0) - group.min(axis=0)) + np.array([
+            OBSERVED_PRESSURE_MARGIN * centre[0], OBSERVED_TEMPERATURE_MARGIN,
+            OBSERVED_PRESSURE_MARGIN * centre[2]])
+        sign = np.where(centre >= mean, 1.0, -1.0)
+        corner = centre + sign * half
+        vertices = [corner] + [corner - ANCHOR_SPAN * sign[i] * half[i] * np.eye(3)[i]
+                               for i in range(3)]
+        for p0, t0, m in vertices:
+            load = m / spec.design.main_steam_flow
+            anchors.append({"load_level": float(loads[k]), "load_fraction": load,
+                            "main_steam_pressure": p0, "main_steam_temperature": t0,
+                            "main_steam_flow": m,
+                            "hp_exhaust_pressure": float(hp_exhaust_pressure(spec, m, load))})
+    return pd.DataFrame(anchors, columns=columns)
