@@ -51,7 +51,7 @@ from steamtwin.calibration.report import (
     temperature_comparison_figure,
 )
 from steamtwin.calibration.surrogate import SurrogateCalibrator
-from steamtwin.dcs.plant import PlantRun, run_plant, write_plant
+from steamtwin.dcs.plant import PlantRun, plant_tag_map, run_plant, write_plant
 from steamtwin.dcs.quality import clean
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.measurement import TYPICAL_TIME_CONSTANTS_S
@@ -227,7 +227,7 @@ def run_demo(out: str | Path, settings: DemoSettings | None = None,
                           "thermocouple time constants of the twin (s)":
                               TYPICAL_TIME_CONSTANTS_S},
                 timings=clock.timings, field_check=reference, extra_sections=sections,
-                simulator=twin)
+                simulator=twin, time_zone=plant_tag_map().time_zone)
             report(1.0)
     result.timings = {**result.timings, **clock.timings}  # the last stage's time included
     result.write(out)

@@ -88,8 +88,8 @@ def test_demo_maps_its_options_and_prints_the_runs_figures(tmp_path, monkeypatch
                                          "rmse_calibrated_K": [0.5], "reduction_pct": [75.0]}),
             "table8_deviation": pd.DataFrame({"signal": ["hp_exhaust_temperature"],
                                               "window": ["30 % load"],
-                                              "mean_abs_deviation_K": [0.21],
-                                              "max_abs_deviation_K": [1.22]}),
+                                              "mean_abs_deviation": [0.21],
+                                              "max_abs_deviation": [1.22]}),
         }
         return DemoResult(out=out, report=None, params=ModelParameters(0.98, 1.2, 1.3),
                           tables=tables, timings={stage: 1.0 for stage in STAGES},

@@ -132,7 +132,7 @@ def test_long_map_parses():
      "(this map has layout = 'wide')"),
     (WIDE.replace('unit = "t/h"', 'unit = "t/h"\ncolum = "x"'),
      "plant.toml: signals.main_steam_flow.colum is not a tag map field (did you mean 'column'?); "
-     "expected one of: column, max_rate, noise, quality_column, range, resolution, "
+     "expected one of: column, depth, max_rate, noise, quality_column, range, resolution, "
      "time_constant, unit"),
     (WIDE.replace('unit = "t/h"', ""),
      "plant.toml: signals.main_steam_flow.unit is missing"),

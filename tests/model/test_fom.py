@@ -312,12 +312,12 @@ def test_casing_thermocouple_reading_converges_with_the_node_count(reference_mod
                                                                     reference_spec):
     """The thermocouple is read at a physical depth, so refining the wall changes it little."""
     from steamtwin.dcs.plant import PlantModel
-    from steamtwin.model.design import CASING_THERMOCOUPLE_DEPTH, _thermocouple_position
+    from steamtwin.model.design import _thermocouple_position
 
-    assert _thermocouple_position(0.225, 8) == (-1, pytest.approx(0.014 / 0.0140625))
-    node, weight = _thermocouple_position(0.225, 16)
+    assert _thermocouple_position(0.225, 8, 0.014) == (-1, pytest.approx(0.014 / 0.0140625))
+    node, weight = _thermocouple_position(0.225, 16, 0.014)
     assert node == 0 and (node + 0.5 + weight) * 0.225 / 16 == pytest.approx(
-        CASING_THERMOCOUPLE_DEPTH)
+        reference_spec.casing_thermocouple_depth)
 
     class Fine(PlantModel):
         metal_nodes = 16

@@ -154,7 +154,7 @@ def test_a_calibrated_flow_coefficient_no_longer_breaks_the_plan(reference_spec,
 def test_build_with_the_calibrated_flow_coefficient(reference_spec, reference_model,
                                                     coarse_blade):
     bundle, built = build_rom(reference_spec, coarse_blade, CALIBRATED, n_snapshots=34,
-                              layout="corners", max_workers=1, params_source="params.json",
+                              layout="corners", max_workers=1,
                               parameter_intervals={"flow_coefficient": (0.94, 0.97)})
     envelope = bundle.provenance["envelope"]
     assert envelope["replaced"] == len(envelope["replacements"]) >= 1

@@ -122,6 +122,10 @@ def test_reference_uses_every_known_key_and_no_other():
     # the reference unit's boiler holds the design main-steam temperature at every load
     del expected["temperature_schedule"]
     expected[""] -= {"temperature_schedule"}
+    # the reference unit gives its metal as masses and areas and keeps the default thermocouple
+    expected["metal"] -= {"casing_thermocouple_depth"}
+    expected["metal.groups"] -= {"axial_length", "rotor_radius", "rotor_bore_radius",
+                                 "casing_inner_radius", "casing_wall_thickness"}
     assert used == expected
     assert parse_spec(toml_text(REFERENCE), SOURCE) == load_spec("reference")
 

@@ -117,3 +117,27 @@ def test_missing_empty_or_duplicate_sections_are_refused(tmp_path):
 ])
 def test_numbers_are_formatted_with_four_significant_digits(value, text):
     assert format_value(value) == text
+
+
+def test_data_files_are_linked_listed_in_json_and_checked(tmp_path):
+    inside = tmp_path / "report" / "series_1_w.parquet"
+    inside.parent.mkdir()
+    inside.write_bytes(b"PAR1")
+    outside = tmp_path / "elsewhere.parquet"
+    outside.write_bytes(b"PAR1")
+    report = ValidationReport("files")
+    report.add_files("Series", [(inside, "window w <1>"), (outside, "another")])
+    page = report.write(tmp_path / "report").read_text(encoding="utf-8")
+    assert '<a href="series_1_w.parquet">series_1_w.parquet</a> — window w &lt;1&gt;' in page
+    assert '<a href="elsewhere.parquet">' in page
+    assert (tmp_path / "report" / "elsewhere.parquet").read_bytes() == b"PAR1"
+    document = json.loads((tmp_path / "report" / "report.json").read_text(encoding="utf-8"))
+    assert document["files"] == [
+        {"heading": "Series", "file": "series_1_w.parquet", "description": "window w <1>"},
+        {"heading": "Series", "file": "elsewhere.parquet", "description": "another"}]
+    with pytest.raises(ReportError, match="already in the report"):
+        report.add_files("again", [(inside, "same name")])
+    missing = ValidationReport("missing")
+    missing.add_files("Series", [(tmp_path / "nothing.parquet", "")])
+    with pytest.raises(ReportError, match="does not exist"):
+        missing.write(tmp_path / "other")

@@ -10,7 +10,12 @@ from steamtwin.blade.mesh import block_mesh
 from steamtwin.rom.estimator import PodRbfRom
 from steamtwin.rom.reconstruction import FLAG_EXTRAPOLATED, FLAG_INVALID
 from steamtwin.rom.romfile import FORMAT_VERSION, BladeRom, probe_nodes
-from steamtwin.validation.tables import deviation_table, operating_table, rom_provenance_table
+from steamtwin.validation.tables import (
+    deviation_table,
+    operating_table,
+    rom_provenance_table,
+    series_frame,
+)
 
 T = "hp_exhaust_temperature"
 
@@ -34,18 +39,66 @@ def test_deviation_table_matches_hand_computed_values():
     measured, monitored = _pair()
     table = deviation_table({"50 % load": (measured, monitored)}, [T])
     row = table.iloc[0]
-    assert (row.signal, row.window) == (T, "50 % load")
+    assert (row.signal, row.window, row.unit, row.measured_unit) == (T, "50 % load", "K",
+                                                                     "degC")
     # used rows 0, 1, 4, 5: d = +1, −1, +2, +0.5 K; row 2 NaN measured, row 3 ROM-invalid
     assert (row.n_samples, row.n_used, row.n_skipped_missing, row.n_skipped_rom_invalid,
             row.n_extrapolated) == (6, 4, 1, 1, 2)
-    assert row.mean_deviation_K == pytest.approx(2.5 / 4)
-    assert row.mean_abs_deviation_K == pytest.approx(4.5 / 4)
-    assert row.max_abs_deviation_K == pytest.approx(2.0)
-    assert row.rmse_K == pytest.approx(np.sqrt((1 + 1 + 4 + 0.25) / 4))
+    assert row.mean_deviation == pytest.approx(2.5 / 4)
+    assert row.mean_abs_deviation == pytest.approx(4.5 / 4)
+    assert row.max_abs_deviation == pytest.approx(2.0)
+    assert row.rmse == pytest.approx(np.sqrt((1 + 1 + 4 + 0.25) / 4))
     mean_degc = (500 + 501 + 504 + 505) / 4 - 273.15
-    assert row.mean_measured_degC == pytest.approx(mean_degc)
+    assert row.mean_measured == pytest.approx(mean_degc)
     assert row.relative_error_pct == pytest.approx(100 * 1.125 / mean_degc)
     assert row.max_relative_error_pct == pytest.approx(100 * 2.0 / (504.0 - 273.15))
+    assert row.mean_deviation_pct == pytest.approx(100 * 0.625 / mean_degc)
+    assert row.rmse_pct == pytest.approx(100 * np.sqrt(6.25 / 4) / mean_degc)
+
+
+def test_pressure_rows_are_in_mpa_with_percentages():
+    measured, monitored = _pair()
+    p1 = "control_stage_pressure"
+    measured[p1] = [10.0e6, 10.2e6, 10.4e6, np.nan, 10.0e6, 9.8e6]
+    monitored[p1] = [10.1e6, 10.0e6, 10.4e6, 10.0e6, np.nan, 9.9e6]
+    table = deviation_table({"w": (measured, monitored)}, [T, p1])
+    assert list(table.signal) == [T, p1]
+    row = table.iloc[1]
+    assert (row.unit, row.measured_unit) == ("MPa", "MPa")
+    # used rows 0, 1, 2, 5 (3 ROM-invalid, 4 twin missing): d = +0.1, −0.2, 0, +0.1 MPa
+    assert (row.n_used, row.n_skipped_missing, row.n_skipped_rom_invalid) == (4, 1, 1)
+    d = np.array([0.1, -0.2, 0.0, 0.1])
+    truth = np.array([10.0, 10.2, 10.4, 9.8])
+    assert row.mean_deviation == pytest.approx(d.mean(), abs=1e-12)
+    assert row.mean_abs_deviation == pytest.approx(0.1)
+    assert row.max_abs_deviation == pytest.approx(0.2)
+    assert row.rmse == pytest.approx(np.sqrt(np.mean(d**2)))
+    assert row.mean_measured == pytest.approx(truth.mean())
+    assert row.relative_error_pct == pytest.approx(100 * 0.1 / truth.mean())
+    assert row.rmse_pct == pytest.approx(100 * np.sqrt(np.mean(d**2)) / truth.mean())
+    assert row.max_relative_error_pct == pytest.approx(100 * 0.2 / 10.2)
+    assert row.mean_deviation_pct == pytest.approx(100 * d.mean() / truth.mean(), abs=1e-12)
+
+
+def test_series_frame_holds_measured_twin_and_residual_per_sample():
+    measured, monitored = _pair()
+    p1 = "control_stage_pressure"
+    measured[p1] = np.linspace(10e6, 10.5e6, 6)
+    monitored[p1] = measured[p1] + 0.05e6
+    zone = measured.set_axis(measured.index.tz_convert("Asia/Shanghai"))
+    twin = monitored.set_axis(zone.index)
+    series = series_frame(zone, twin, [T, p1], "w")
+    assert str(series.index.tz) == "Asia/Shanghai"
+    assert series.index[0].isoformat() == "2026-03-01T08:00:00+08:00"
+    np.testing.assert_allclose(series[f"{T}_measured_degC"], measured[T] - 273.15)
+    np.testing.assert_allclose(series[f"{T}_twin_degC"], monitored[T] - 273.15)
+    np.testing.assert_allclose(series[f"{T}_residual_K"].dropna(),
+                               (monitored[T] - measured[T]).dropna(), atol=1e-9)
+    np.testing.assert_allclose(series[f"{p1}_residual_MPa"], 0.05, atol=1e-12)
+    assert series[f"{T}_used"].tolist() == [True, True, False, False, True, True]
+    assert series.attrs["units"] == {f"{T}_measured_degC": "degC", f"{T}_twin_degC": "degC",
+                                     f"{T}_residual_K": "K", f"{p1}_measured_MPa": "MPa",
+                                     f"{p1}_twin_MPa": "MPa", f"{p1}_residual_MPa": "MPa"}
 
 
 def test_deviation_table_counts_everything_and_orders_signal_then_window():
@@ -62,14 +115,14 @@ def test_deviation_table_counts_everything_and_orders_signal_then_window():
     assert (counts == table["n_samples"]).all()
     nothing = table.iloc[0]
     assert (nothing.n_used, nothing.n_skipped_missing, nothing.n_skipped_rom_invalid) == (0, 5, 1)
-    assert np.isnan(nothing.rmse_K) and np.isnan(nothing.relative_error_pct)
-    assert table.iloc[3].rmse_K == pytest.approx(table.iloc[1].rmse_K)
+    assert np.isnan(nothing.rmse) and np.isnan(nothing.relative_error_pct)
+    assert table.iloc[3].rmse == pytest.approx(table.iloc[1].rmse)
 
 
 def test_deviation_table_refuses_bad_input():
     measured, monitored = _pair()
-    with pytest.raises(ValueError, match="temperature"):
-        deviation_table({"w": (measured, monitored)}, ["main_steam_pressure"])
+    with pytest.raises(ValueError, match=r"temperature .* or pressure"):
+        deviation_table({"w": (measured, monitored)}, ["main_steam_flow"])
     with pytest.raises(ValueError, match="lack 'control_stage_temperature'"):
         deviation_table({"w": (measured, monitored)}, ["control_stage_temperature"])
     shifted = monitored.set_axis(_index(6, "2026-03-02T00:00:00Z"))

@@ -65,7 +65,7 @@ def _summary(console: Console, result) -> None:  # result: steamtwin.pipeline.De
     table8 = result.tables["table8_deviation"]
     for row in table8[table8["signal"] == "hp_exhaust_temperature"].itertuples(index=False):
         console.print(f"monitoring, {row.window} (day run, unseen): HP-exhaust temperature mean "
-                      f"abs deviation {row.mean_abs_deviation_K:.2f} K, max "
-                      f"{row.max_abs_deviation_K:.2f} K")
+                      f"abs deviation {row.mean_abs_deviation:.2f} K, max "
+                      f"{row.max_abs_deviation:.2f} K")
     total = sum(result.timings.values())
     console.print(f"report: {result.out / 'report.html'} ({total / 60:.1f} min)")

@@ -23,8 +23,10 @@ def plant(
 ) -> None:
     """Generate DCS historian data of the virtual 600 MW plant (hidden truth in OUT/truth/).
 
-    The plant differs from the twin in its parameters and structure (finer metal model, HP
-    front-gland leakage, boiler dynamics, real instruments); the twin must not read truth/.
+    The plant differs from the twin in its parameters and structure (its own graded metal and
+    bored rotors, gland and tip leakage, overlapping valves, boiler temperature schedule and
+    dynamics, a deeper casing thermocouple, real instruments; docs/plant.md); the twin must not
+    read truth/.
 
     Example: steamtwin plant --scenario deep-peak-50 --hours 2 --seed 1 --out plant-data
     """

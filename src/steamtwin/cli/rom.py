@@ -20,6 +20,7 @@ from steamtwin.dcs.tagmap import TagMapError
 from steamtwin.model.fom import InputError
 from steamtwin.model.parameters import ModelParameters, ParameterError
 from steamtwin.rom.estimator import ExtrapolationWarning
+from steamtwin.rom.provenance import check_parameters, resolve_spec
 from steamtwin.rom.reconstruction import (
     DISTANCE,
     FLAG_EXTRAPOLATED,
@@ -30,6 +31,7 @@ from steamtwin.rom.reconstruction import (
 from steamtwin.rom.romfile import RomFileError, load_rom, save_rom
 from steamtwin.rom.snapshots import ROM_INPUTS
 from steamtwin.spec import SpecError, load_spec
+from steamtwin.spec.fingerprint import load_spec_and_text, short_hash
 
 rom_app = typer.Typer(help="Build and use the blade-temperature ROM (POD + RBF).",
                       no_args_is_help=True)
@@ -95,7 +97,7 @@ def build(
     console = Console(stderr=True)
     try:
         prepare_output_file(out, "--out")
-        spec = load_spec(turbine)
+        spec, spec_toml = load_spec_and_text(turbine)
         parameters = ModelParameters.from_json(params) if params else ModelParameters()
         intervals = dict(parse_parameter_interval(text) for text in param_interval)
         observed = None
@@ -111,9 +113,9 @@ def build(
                                   energy=energy, max_workers=workers, scheduler=scheduler,
                                   seed=seed, layout=layout, progress=progress,
                                   projection_tolerance=projection_tolerance or None,
-                                  physics_features=physics_features,
-                                  parameter_intervals=intervals or None, observed=observed,
-                                  params_source=str(params) if params else None)
+                                  physics_features=physics_features, spec_toml=spec_toml,
+                                  params_file=params, parameter_intervals=intervals or None,
+                                  observed=observed)
     except DataQualityError as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=1) from None
@@ -134,7 +136,16 @@ def build(
                    f"extrapolation limit")
     rom = bundle.rom
     typer.echo(f"wrote {out}: {rom.n_modes_} modes ({rom.energy_captured_:.6f} of the energy) "
-               f"on {rom.mean_.size} nodes from {rom.centres_.shape[0]} snapshots")
+               f"on {rom.mean_.size} nodes from {rom.centres_.shape[0]} snapshots, turbine "
+               f"{_spec_label(bundle.provenance)}")
+
+
+def _spec_label(provenance: dict) -> str:
+    """``'name' (sha256 0123456789ab)`` of the ROM's turbine, or that it records none."""
+    record = provenance.get("spec")
+    if not isinstance(record, dict):
+        return "not recorded (format 2 file)"
+    return f"{record.get('name')!r} (sha256 {short_hash(str(record.get('sha256')))})"
 
 
 _WIRE = {"K": ("degC", lambda v: v - 273.15), "Pa": ("MPa", lambda v: v / 1e6),
@@ -155,6 +166,12 @@ def predict(
     data: Path = typer.Option(..., help="Historian export: CSV or Parquet, wide or long."),
     tags: Path = typer.Option(..., help="Tag map (TOML) of the historian export."),
     out: Path = typer.Option(..., help="CSV of predictions per sample (°C, MPa, MW + flags)."),
+    turbine: str | None = typer.Option(
+        None, help="'reference' or a turbine spec TOML: checked to be the ROM's own (refused "
+        "if it differs); default: the ROM's own spec."),
+    params: Path | None = typer.Option(
+        None, help="Parameter JSON: checked to hold the ROM's own parameters (refused if "
+        "they differ)."),
     fields_every: int | None = typer.Option(None, help="Also reconstruct the field every N "
                                             "samples (needs --vtu-dir)."),
     vtu_dir: Path | None = typer.Option(None, help="Folder for the fields as VTU (ParaView)."),
@@ -174,7 +191,8 @@ def predict(
     domain (main steam not superheated, farther than --max-extrapolation outside the
     snapshots), are flagged (rom_invalid_input, rom_out_of_domain) and left empty; samples
     outside the snapshots' range but within the limit are flagged (rom_extrapolated) with
-    their distance.
+    their distance. A --turbine or --params other than those the ROM was built from is
+    refused (exit 2).
 
     Example: steamtwin rom predict --rom rom.npz --data plant-data/historian.parquet --tags plant-data/tags.toml --out monitored.csv --fields-every 600 --vtu-dir fields
     """  # noqa: E501
@@ -188,6 +206,11 @@ def predict(
         if vtu_dir is not None:
             prepare_output_folder(vtu_dir, "--vtu-dir")
         bundle = load_rom(rom)
+        if turbine is not None:
+            resolve_spec(bundle, load_spec(turbine), f"--turbine {turbine}", rom)
+        if params is not None:
+            check_parameters(bundle, ModelParameters.from_json(params), f"--params {params}",
+                             rom)
         history = load_history(data, tags, required=[str(n) for n in bundle.rom.input_names_],
                                accept_errors=accept_quality_errors)
         with warnings.catch_warnings(record=True) as caught:
@@ -197,8 +220,8 @@ def predict(
     except DataQualityError as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=1) from None
-    except (RomFileError, TagMapError, HistorianFormatError, OutputPathError, ValueError,
-            OSError) as error:
+    except (RomFileError, SpecError, ParameterError, TagMapError, HistorianFormatError,
+            OutputPathError, ValueError, OSError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=2) from None
     excluded = {name: n for name, n in history.excluded.items() if n}
@@ -244,6 +267,8 @@ def info(rom: Path = typer.Argument(..., help="ROM file (.npz).")) -> None:
     typer.echo(f"ROM {rom}: {model.n_modes_} modes, energy {model.energy_captured_:.6f} "
                f"(threshold {model.energy}), kernel {model.kernel}, "
                f"{model.centres_.shape[0]} snapshots")
+    typer.echo(f"turbine: {_spec_label(bundle.provenance)}, spec TOML "
+               f"{'recorded' if bundle.spec_toml else 'not recorded'}")
     typer.echo(f"mesh: {bundle.mesh.points.shape[0]} nodes, {bundle.mesh.tetrahedra.shape[0]} "
                f"tetrahedra; field range over the snapshots {model.field_range_:.2f} K")
     for name, low, span in zip(model.input_names_, model.input_min_, model.input_span_,

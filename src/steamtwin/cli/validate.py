@@ -19,12 +19,14 @@ from steamtwin.dcs.tagmap import TagMap, TagMapError, load_tag_map
 from steamtwin.dcs.windows import find_steady_windows, parse_window, select_window
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.measurement import time_constants_for
-from steamtwin.model.parameters import ParameterError
+from steamtwin.model.parameters import ModelParameters, ParameterError
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.rom.estimator import ExtrapolationWarning
+from steamtwin.rom.provenance import check_parameters, resolve_spec
 from steamtwin.rom.romfile import BladeRom, RomFileError, load_rom
 from steamtwin.rom.snapshots import SnapshotSet, generate_snapshots
 from steamtwin.spec import SpecError, TurbineSpec, load_spec
+from steamtwin.spec.fingerprint import short_hash, spec_hash
 from steamtwin.validation.monitor import rom_parameters
 from steamtwin.validation.monitor import validate as run_validation
 from steamtwin.validation.tables import quality_section
@@ -44,8 +46,12 @@ def validate(
         "last --hours of every steady-load span of at least --hours."),
     hours: float = typer.Option(2.0, min=0.05, help="Length of the automatically found "
                                 "windows (h)."),
-    turbine: str = typer.Option("reference", help="'reference' or a turbine spec TOML (rated "
-                                "load for the window search; the FOM for --field-check)."),
+    turbine: str | None = typer.Option(
+        None, help="'reference' or a turbine spec TOML (rated load for the window search; the "
+        "FOM). Default: the spec the ROM was built from; one that differs is refused."),
+    params: Path | None = typer.Option(
+        None, help="Parameter JSON, checked to hold the parameters the ROM was built with "
+        "(refused if they differ); the twin always runs with the ROM's own."),
     monitor: str = typer.Option(
         "fom", help="What monitors the steam-path temperatures: 'fom' (the full-order model of "
         "--turbine with the ROM's parameters; metal dynamics included) or 'rom' (the ROM's "
@@ -69,8 +75,12 @@ def validate(
     replays the twin over them — blade temperatures from the ROM, steam-path temperatures from
     the full-order model with the ROM's parameters (--monitor fom) or the ROM (--monitor rom) —
     and writes Table 5 (operating conditions), Table 8 (mean/max
-    absolute deviation, RMSE and relative error per sensor and window), Figure 10 (HP-exhaust
-    tracking) and the ROM's provenance. Prints one line per window.
+    absolute deviation, RMSE, absolute and in %, per steam-path temperature and modelled
+    pressure — the control-stage pressure with --monitor fom — and window), Figure 10 (HP-exhaust
+    tracking), the per-sample series (Parquet) and the ROM's provenance, times in the tag
+    map's time zone. Prints one line per window. The turbine is the one
+    the ROM records; a --turbine or --params other than those the ROM was built from is
+    refused (exit 2) with both named.
 
     Example: steamtwin validate --rom rom.npz --data plant-data/historian.parquet --tags plant-data/tags.toml --report validation
     """  # noqa: E501
@@ -83,12 +93,18 @@ def validate(
         prepare_output_folder(report, "--report")
         clock = time.perf_counter()
         bundle = load_rom(rom)
-        spec = load_spec(turbine)
+        spec = resolve_spec(bundle, None if turbine is None else load_spec(turbine),
+                            f"--turbine {turbine}", rom)
+        if params is not None:
+            check_parameters(bundle, ModelParameters.from_json(params), f"--params {params}",
+                             rom)
         timings["load ROM and turbine"] = time.perf_counter() - clock
         clock = time.perf_counter()
         tag_map = load_tag_map(tags)
         needed = _needed_signals(bundle, field_check or monitor == "fom")
         signals, quality = _read_cleaned(data, tag_map, needed, accept_quality_errors)
+        if tag_map.time_zone:  # windows named and reported in the data's own time zone
+            signals = signals.set_axis(signals.index.tz_convert(tag_map.time_zone))
         timings["read and clean data"] = time.perf_counter() - clock
         clock = time.perf_counter()
         windows = _pick_windows(signals, window, hours, spec.design.generator_power)
@@ -103,7 +119,9 @@ def validate(
         rated_mw = spec.design.generator_power / 1e6
         settings = {
             "ROM file": str(rom), "data": str(data), "tag map": str(tags),
-            "tag map layout": tag_map.layout, "turbine": spec.name,
+            "tag map layout": tag_map.layout,
+            "turbine": f"{spec.name} (sha256 {short_hash(spec_hash(spec))}; "
+                       + (f"--turbine {turbine})" if turbine else "the ROM's own spec)"),
             "windows from": "--window" if window else (
                 f"steady load (± {STEADY_TOLERANCE:.0%} of rated {rated_mw:g} MW) over "
                 f"≥ {hours:g} h, the last {hours:g} h of each span"),
@@ -116,6 +134,7 @@ def validate(
                                         timings=timings, field_check=reference,
                                         simulator=_monitoring_model(spec, monitor,
                                                                     sensor_lag, tag_map),
+                                        time_zone=tag_map.time_zone,
                                         extra_sections=[quality_section(
                                             quality, "Data quality of the export (whole "
                                             "file, before windowing)")])
@@ -135,9 +154,9 @@ def validate(
             typer.echo(f"{row.window}: {shown}: no usable sample ({row.n_samples} missing, "
                        "excluded by the quality gate or flagged by the ROM); nothing to compare")
             continue
-        typer.echo(f"{row.window}: {shown} mean abs deviation {row.mean_abs_deviation_K:.2f} K, "
-                   f"max {row.max_abs_deviation_K:.2f} K, RMSE {row.rmse_K:.2f} K "
-                   f"({row.n_used} of {row.n_samples} samples used)")
+        typer.echo(f"{row.window}: {shown} mean abs deviation {row.mean_abs_deviation:.2f} "
+                   f"{row.unit}, max {row.max_abs_deviation:.2f} {row.unit}, RMSE "
+                   f"{row.rmse:.2f} {row.unit} ({row.n_used} of {row.n_samples} samples used)")
     typer.echo(f"wrote {report / 'report.html'} (+ report.json, "
                f"{len(result.tables)} CSV tables, figures)")
 

@@ -29,6 +29,8 @@ map (TOML) translates them to the canonical names of :data:`steamtwin.dcs.signal
     max_rate = 0.05              # optional physical rate limit, in `unit` per second
     time_constant = 20.0         # optional first-order sensor time constant τ, in s (a
                                  # thermowell's, from its data sheet or a step test)
+    depth = "20 mm"              # hp_inner_casing_temperature only, optional: how deep the
+                                 # metal thermocouple sits under the casing bore
     quality_column = "CP001_Q"   # wide layout only, optional: this signal's quality column
 
 ``noise``, ``resolution`` and ``max_rate`` are differences, so they convert without the unit's
@@ -67,7 +69,7 @@ import pint
 from steamtwin.dcs.signals import SIGNALS
 from steamtwin.keys import unknown_key_message
 from steamtwin.textfile import read_utf8_text
-from steamtwin.units import convert, unit_registry
+from steamtwin.units import UnitError, convert, parse_quantity, unit_registry
 
 LAYOUTS = ("wide", "long")
 QUALITY_CLASSES = ("good", "uncertain", "bad")
@@ -79,7 +81,11 @@ _HISTORIAN_KEYS = (
 _LONG_ONLY = ("tag_column", "value_column", "quality_column")
 _QUALITY_KEYS = (*QUALITY_CLASSES, "exclude")
 _SIGNAL_KEYS = ("column", "unit", "range", "noise", "resolution", "max_rate", "time_constant",
-                "quality_column")
+                "depth", "quality_column")
+#: The signal measured by a thermocouple in the metal, the only one with a depth.
+METAL_THERMOCOUPLE = "hp_inner_casing_temperature"
+#: Deepest metal thermocouple accepted, m (an HP inner casing wall is 0.1-0.3 m thick).
+MAX_THERMOCOUPLE_DEPTH_M = 0.2
 #: Longest sensor time constant accepted (s): heavy thermowells in slow steam reach a few
 #: minutes (ASME PTC 19.3 TW-2016, response-time discussion); ten minutes is no sensor's.
 MAX_TIME_CONSTANT_S = 600.0
@@ -106,7 +112,9 @@ class TagSpec:
     (historian quantum) and ``max_rate_si`` (physical rate limit, per second) are optional
     differences in the SI unit (K, Pa, ...; per second for the rate). ``time_constant_s`` is
     the sensor's first-order time constant (s), which the model's readings are lagged by.
-    ``quality_column`` is the wide layout's column holding this signal's quality, if any.
+    ``depth_m`` is how deep a metal thermocouple sits under the casing bore (m; only
+    :data:`METAL_THERMOCOUPLE`). ``quality_column`` is the wide layout's column holding this
+    signal's quality, if any.
     """
 
     signal: str
@@ -118,6 +126,7 @@ class TagSpec:
     max_rate_si: float | None = None
     time_constant_s: float | None = None
     quality_column: str | None = None
+    depth_m: float | None = None
 
 
 @dataclass(frozen=True)
@@ -345,6 +354,8 @@ def write_tag_map(tag_map: TagMap, path: str | Path) -> None:
                 lines.append(f"{key} = {_toml_float(_delta(value, si_unit, spec.unit))}")
         if spec.time_constant_s is not None:
             lines.append(f"time_constant = {_toml_float(spec.time_constant_s)}")
+        if spec.depth_m is not None:
+            lines.append(f'depth = "{_toml_float(spec.depth_m * 1e3)} mm"')
         if spec.quality_column is not None:
             lines.append(f"quality_column = {_toml_string(spec.quality_column)}")
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
@@ -417,6 +428,7 @@ def _tag_spec(name: str, entry: Any, layout: str, source: str) -> TagSpec:
                               f"first-order time constant in s, a number in [0, "
                               f"{MAX_TIME_CONSTANT_S:g}]")
         time_constant = float(time_constant)
+    depth = _depth(entry, name, where)
     quality_column = None
     if "quality_column" in entry:
         if layout != "wide":
@@ -426,7 +438,26 @@ def _tag_spec(name: str, entry: Any, layout: str, source: str) -> TagSpec:
             )
         quality_column = _text(entry, "quality_column", f"signals.{name}", source)
     return TagSpec(signal=name, column=column, unit=unit, valid_range_si=valid_range,
-                   time_constant_s=time_constant, quality_column=quality_column, **deltas)
+                   time_constant_s=time_constant, quality_column=quality_column,
+                   depth_m=depth, **deltas)
+
+
+def _depth(entry: dict[str, Any], name: str, where: str) -> float | None:
+    """The metal thermocouple's depth under the bore (m), refused on any other signal."""
+    if "depth" not in entry:
+        return None
+    raw = entry["depth"]
+    if name != METAL_THERMOCOUPLE:
+        raise TagMapError(f"{where}.depth: only the metal thermocouple ({METAL_THERMOCOUPLE}) "
+                          "has a depth under the casing bore")
+    try:
+        depth = parse_quantity(raw, "m", f"{where}.depth") if isinstance(raw, str) else None
+    except UnitError as error:
+        raise TagMapError(str(error)) from None
+    if depth is None or not 0.0 <= depth <= MAX_THERMOCOUPLE_DEPTH_M:
+        raise TagMapError(f"{where}.depth = {raw!r}: expected a length such as \"20 mm\" in "
+                          f"[0, {MAX_THERMOCOUPLE_DEPTH_M * 1e3:g}] mm")
+    return depth
 
 
 def _delta(value: float, from_unit: str, to_unit: str) -> float:

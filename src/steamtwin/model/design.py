@@ -7,7 +7,9 @@ design heat balance give every constant the kernel needs:
   passes the valves open at design at the design control-stage pressure, the last of them
   throttled when the rated point lies between valve points (Saint-Venant nozzle flow);
 * blade speeds, optimum velocity ratios, extraction fractions and stage-group flow geometry;
-* the metal conduction chains of casing and rotor per stage group;
+* the metal conduction chains of casing and rotor per stage group: from the drawn geometry
+  (cylindrical casing wall, solid or bored rotor) when the spec gives it, else from masses and
+  wetted areas (plane casing wall, solid rotor);
 * one efficiency scale on all stages so the design HP-exhaust temperature of the heat balance is
   met with the empirical parameter values — the single design "tuning" (reported, bounded);
 * each leakage's labyrinth constant, so that its seal passes the spec's design flow at the
@@ -31,16 +33,10 @@ from steamtwin.model.steampath import (
     nozzle_flow_function,
     optimum_velocity_ratio,
 )
-from steamtwin.spec import Leakage, SpecError, TurbineSpec
+from steamtwin.spec import Leakage, Material, MetalGeometry, SpecError, TurbineSpec
 from steamtwin.steam import if97
 
 METAL_NODES = 8
-# Depth (m) of the inner-casing metal thermocouple under the bore. Metal thermocouples of HP
-# inner casings sit in drilled holes near the steam-side surface so that they see the bore's
-# transients (they feed the thermal-stress limiter); 14 mm is an assumed installation depth
-# (it was node 0's centre, L/16 of the reference unit's 225 mm wall, before the reading became
-# an interpolation at a physical depth that does not change with the node count).
-CASING_THERMOCOUPLE_DEPTH = 0.014
 EFFICIENCY_SCALE_RANGE = (0.8, 1.2)
 
 
@@ -99,20 +95,27 @@ def kernel_constants(spec: TurbineSpec, efficiency_scale: float = 1.0,
         diameter = float(np.mean([b.mean_diameter for b in blading]))
         hydraulic_diameter[g] = 2.0 * height
         flow_area[g] = math.pi * diameter * height
-        casing = _plane_wall(group.casing_mass, group.casing_area, spec.casing_material,
-                             group.insulation_conductance, metal_nodes)
-        rotor = _solid_cylinder(group.rotor_mass, group.rotor_area, spec.rotor_material,
-                                metal_nodes)
+        if group.geometry is None:
+            casing = _plane_wall(group.casing_mass, group.casing_area, spec.casing_material,
+                                 group.insulation_conductance, metal_nodes)
+            rotor = _solid_cylinder(group.rotor_mass, group.rotor_area, spec.rotor_material,
+                                    metal_nodes)
+            rotor_radius = 2.0 * group.rotor_mass / (spec.rotor_material.density
+                                                     * group.rotor_area)
+        else:
+            casing = cylindrical_wall(group.geometry, spec.casing_material,
+                                      group.insulation_conductance, metal_nodes)
+            rotor = hollow_cylinder(group.geometry, spec.rotor_material, metal_nodes)
+            rotor_radius = group.geometry.rotor_radius
         for body, chain in enumerate((casing, rotor)):
             row = 2 * g + body
             capacity[row], conductance[row], half_cell[row], outer[row] = chain
         area[2 * g], area[2 * g + 1] = group.casing_area, group.rotor_area
-        rotor_radius = 2.0 * group.rotor_mass / (spec.rotor_material.density * group.rotor_area)
         rotor_speed[g] = omega * rotor_radius
     sensor_group = [group.name for group in groups].index(spec.casing_sensor_group)
     sensor_node, sensor_weight = _thermocouple_position(
-        groups[sensor_group].casing_mass
-        / (spec.casing_material.density * groups[sensor_group].casing_area), metal_nodes)
+        groups[sensor_group].casing_wall_depth(spec.casing_material.density), metal_nodes,
+        spec.casing_thermocouple_depth)
     control = ControlStageConstants(
         valve_pressure_drop=design.valve_pressure_drop,
         nozzle_discharge_coefficient=cs.nozzle_discharge_coefficient,
@@ -285,14 +288,16 @@ def _level_throat_areas(spec: TurbineSpec, orders: list[int], level_arc: np.ndar
     return level_arc * area_per_arc
 
 
-def _thermocouple_position(wall_depth: float, nodes: int) -> tuple[int, float]:
-    """(node, weight) of the casing thermocouple at :data:`CASING_THERMOCOUPLE_DEPTH`.
+def _thermocouple_position(wall_depth: float, nodes: int, thermocouple_depth: float
+                           ) -> tuple[int, float]:
+    """(node, weight) of the casing thermocouple ``thermocouple_depth`` m under the bore.
 
-    Node j's centre lies (j + ½)·Δx under the bore (Δx = wall depth / nodes); node −1 stands for
-    the bore surface. The reading is node + weight·(next − node), linear in depth.
+    Node j's centre lies (j + ½)·Δx under the bore (Δx = wall depth / nodes, plane or
+    cylindrical wall alike); node −1 stands for the bore surface. The reading is
+    node + weight·(next − node), linear in depth.
     """
     dx = wall_depth / nodes
-    depth = min(CASING_THERMOCOUPLE_DEPTH, wall_depth - dx / 2.0)
+    depth = min(thermocouple_depth, wall_depth - dx / 2.0)
     if depth <= dx / 2.0:
         return -1, depth / (dx / 2.0)
     node = min(int(depth / dx - 0.5), nodes - 2)
@@ -321,3 +326,62 @@ def _solid_cylinder(mass, area, material, nodes):
                 * (outer_radii**2 - inner_radii**2) * length)
     conductance = material.thermal_conductivity * 2.0 * math.pi * inner_radii[:-1] * length / dr
     return capacity, conductance, dr / (2.0 * material.thermal_conductivity), 0.0
+
+
+@dataclass(frozen=True)
+class RadialChain:
+    """Finite volumes of a cylindrical shell, node 0 at the steam-wetted surface (SI units).
+
+    ``capacity`` J/K per node, ``conductance`` W/K between nodes j and j+1, ``half_cell`` the
+    resistance from the wetted surface to node 0 times the wetted area (m²·K/W), ``far_resistance``
+    K/W from the last node to the far surface (infinite for a solid core).
+    """
+
+    capacity: np.ndarray
+    conductance: np.ndarray
+    half_cell: float
+    far_resistance: float
+
+
+def radial_chain(wetted_radius: float, far_radius: float, length: float, material: Material,
+                 nodes: int) -> RadialChain:
+    """Equal-thickness shells from the wetted radius to the far radius (m), ``length`` m long.
+
+    Each node sits at its shell's mid-radius; nodes are joined by the exact steady resistance
+    of a cylindrical shell, ln(r_b/r_a)/(2πkL) (Incropera & DeWitt, *Fundamentals of Heat and
+    Mass Transfer*, 6th ed., eq. 3.33), so the chain's steady resistance from surface to surface
+    is the hollow cylinder's at any node count; capacities add up to ρ·c·π·|r_far² − r_wet²|·L.
+    """
+    edges = np.linspace(wetted_radius, far_radius, nodes + 1)
+    centres = 0.5 * (edges[:-1] + edges[1:])
+    two_pi_k_length = 2.0 * math.pi * material.thermal_conductivity * length
+    capacity = (material.density * material.specific_heat * math.pi * length
+                * np.abs(edges[1:] ** 2 - edges[:-1] ** 2))
+    conductance = two_pi_k_length / np.abs(np.log(centres[1:] / centres[:-1]))
+    half_cell = (wetted_radius * abs(math.log(centres[0] / wetted_radius))
+                 / material.thermal_conductivity)
+    far_resistance = (abs(math.log(far_radius / centres[-1])) / two_pi_k_length
+                      if far_radius > 0.0 else math.inf)
+    return RadialChain(capacity, conductance, half_cell, far_resistance)
+
+
+def cylindrical_wall(geometry: MetalGeometry, material: Material, insulation: float,
+                     nodes: int) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Chain of the inner casing as a cylindrical wall wetted on its bore (capacity J/K,
+    conductance W/K, half-cell m²·K/W, outer conductance W/K through the lagging of
+    ``insulation`` W/(m²·K) on the outer surface)."""
+    outer_radius = geometry.casing_inner_radius + geometry.casing_wall_thickness
+    chain = radial_chain(geometry.casing_inner_radius, outer_radius, geometry.axial_length,
+                         material, nodes)
+    lagging = insulation * 2.0 * math.pi * outer_radius * geometry.axial_length
+    outer = 1.0 / (1.0 / lagging + chain.far_resistance) if insulation > 0.0 else 0.0
+    return chain.capacity, chain.conductance, chain.half_cell, outer
+
+
+def hollow_cylinder(geometry: MetalGeometry, material: Material, nodes: int
+                    ) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Chain of the rotor wetted on its outer surface, solid or bored, the bore adiabatic
+    (capacity J/K, conductance W/K, half-cell m²·K/W, no outer loss)."""
+    chain = radial_chain(geometry.rotor_radius, geometry.rotor_bore_radius,
+                         geometry.axial_length, material, nodes)
+    return chain.capacity, chain.conductance, chain.half_cell, 0.0

@@ -1,10 +1,12 @@
 """Metal heat transfer: 1-D conduction in the inner-casing wall and the rotor, as numba code.
 
 Each body of a stage group is a chain of finite volumes (Patankar, *Numerical Heat Transfer and
-Fluid Flow*, 1980, ch. 4): the casing a plane wall of depth L = mass/(ρ·area) wetted by steam on
-its bore and losing heat through the lagging outside; the rotor a solid cylinder of radius
-R = 2·mass/(ρ·area) wetted on its surface. Time integration is implicit Euler, unconditionally
-stable; with an infinite step it returns the steady state, so a run starts from equilibrium.
+Fluid Flow*, 1980, ch. 4), built in :mod:`steamtwin.model.design`: the casing wetted by steam on
+its bore and losing heat through the lagging outside, the rotor wetted on its surface — a
+cylindrical wall and a solid or bored cylinder when the spec draws them, else a plane wall of
+depth mass/(ρ·area) and a solid cylinder of radius 2·mass/(ρ·area). Time integration is implicit
+Euler, unconditionally stable; with an infinite step it returns the steady state, so a run
+starts from equilibrium.
 
 Steam-side heat-transfer coefficient: Dittus–Boelter, Nu = 0.023·Re^0.8·Pr^n, n = 0.4 when the
 wall heats the steam and 0.3 when the steam heats the wall (Dittus & Boelter, Univ. Calif. Publ.

@@ -14,6 +14,7 @@ import datetime as dt
 import platform
 from collections.abc import Callable, Mapping
 from importlib import metadata
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -29,6 +30,7 @@ from steamtwin.rom.envelope import (
 )
 from steamtwin.rom.estimator import PodRbfRom
 from steamtwin.rom.features import ControlStageFeatures
+from steamtwin.rom.provenance import parameters_source, spec_provenance
 from steamtwin.rom.reconstruction import MAX_EXTRAPOLATION
 from steamtwin.rom.romfile import BladeRom, probe_nodes
 from steamtwin.rom.snapshots import (
@@ -65,25 +67,31 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
               scheduler: str | None = None, seed: int = 0, layout: str = "lhs",
               progress: Callable[[float], None] | None = None,
               projection_tolerance: float | None = 0.1, physics_features: bool = True,
+              spec_toml: str | None = None, params_file: str | Path | None = None,
               parameter_intervals: Mapping[str, tuple[float, float]] | None = None,
-              observed: pd.DataFrame | None = None, params_source: str | None = None
+              observed: pd.DataFrame | None = None
               ) -> tuple[BladeRom, SnapshotSet]:
     """Envelope → design of experiments → feasible conditions → snapshots (parallel) → fitted
     ROM with provenance.
 
     ``projection_tolerance`` (K, None = energy only) and ``physics_features`` (RBF on
     (p0, T0, p1, T_cs, e) with range scaling; False: on (p0, T0, p1) with sensitivity scaling)
-    as in the module docstring. ``parameter_intervals`` (name → (low, high)) and ``observed``
-    (historian signals, SI, with the ROM's inputs) widen the envelope
-    (:func:`steamtwin.rom.envelope.operating_envelope`); ``params_source`` names where
-    ``params`` came from in errors. Observed samples outside the planned snapshots get anchor
-    snapshots (:func:`~steamtwin.rom.envelope.observed_anchors`, up to 4 per load band, on top
-    of ``n_snapshots``). Conditions the model cannot run are replaced and counted (provenance
+    as in the module docstring. The ROM records ``spec`` (name and content hash) with its TOML
+    text ``spec_toml`` (default: the built-in's text when ``spec`` is a built-in turbine) and
+    ``params`` with the file they were read from, ``params_file``
+    (:mod:`steamtwin.rom.provenance`), which errors name too.
+    ``parameter_intervals`` (name → (low, high)) and ``observed`` (historian signals, SI, with
+    the ROM's inputs) widen the envelope (:func:`steamtwin.rom.envelope.operating_envelope`).
+    Observed samples outside the planned snapshots get anchor snapshots
+    (:func:`~steamtwin.rom.envelope.observed_anchors`, up to 4 per load band, on top of
+    ``n_snapshots``). Conditions the model cannot run are replaced and counted (provenance
     ``envelope.replaced``); :class:`~steamtwin.rom.envelope.EnvelopeError` when the
     operating line itself cannot be run.
     """
+    spec_record, spec_text = spec_provenance(spec, spec_toml)
     params = params or ModelParameters()
     mesh = checked_mesh(mesh)
+    params_source = str(params_file) if params_file is not None else None
     model = FullOrderModel(spec)
     envelope = rom_envelope(spec, params, parameter_intervals=parameter_intervals,
                             observed=observed, params_source=params_source, model=model)
@@ -116,6 +124,8 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
         "python": platform.python_version(),
         "turbine": spec.name,
         "turbine_description": spec.description,
+        "spec": spec_record,
+        "parameters_source": parameters_source(params_file),
         "blade_row": "control stage rotor (hp1)",
         "model_parameters": dataclasses.asdict(params),
         "design": {"n_snapshots": n_snapshots, "seed": seed, "layout": layout,
@@ -136,7 +146,8 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
         "units": "SI (K, Pa, kg/s, W)",
     }
     bundle = BladeRom(rom=rom, mesh=mesh, probes=probe_nodes(mesh),
-                      conditions=snapshots.conditions, provenance=provenance)
+                      conditions=snapshots.conditions, provenance=provenance,
+                      spec_toml=spec_text)
     return bundle, snapshots
 
 

@@ -9,9 +9,12 @@ inputs, the physics-feature table (``feature_pressure_nodes``, ``feature_tempera
 :mod:`steamtwin.rom.features`), ``snapshot_conditions`` (m, c) with
 ``condition_names``, the mesh (``points``, ``tetrahedra``, ``boundary_triangles``,
 ``boundary_regions``, ``region_names``), the sensor layout (``sensor_names`` steam-path signals,
-``probe_names``/``probe_nodes`` blade nodes), the RBF settings, ``format_version`` and
-``provenance`` (a JSON string). :func:`load_rom` reads with ``allow_pickle=False`` and checks
-every key, dtype, shape and the version before building the model.
+``probe_names``/``probe_nodes`` blade nodes), the RBF settings, ``format_version``,
+``provenance`` (a JSON string; its ``spec`` and ``model_parameters`` say which turbine and
+parameters the ROM was built from, :mod:`steamtwin.rom.provenance`) and ``spec_toml`` (the
+spec's TOML text, "" when not known). :func:`load_rom` reads with ``allow_pickle=False`` and
+checks every key, dtype, shape and the version before building the model. Format 2 files
+(before ``spec_toml`` and the spec record) are still read; they carry no spec to check.
 """
 
 from __future__ import annotations
@@ -30,7 +33,8 @@ from steamtwin.rom.estimator import PodRbfRom
 from steamtwin.rom.features import FEATURE_NAMES, feature_table_arrays, features_from_arrays
 
 FORMAT = "steamtwin-pod-rbf-rom"
-FORMAT_VERSION = 2  # 2: physics features, input_points, projection_tolerance
+FORMAT_VERSION = 3  # 2: physics features, input_points, projection_tolerance; 3: spec_toml
+READABLE_VERSIONS = (2, 3)
 
 
 class RomFileError(ValueError):
@@ -42,7 +46,8 @@ class BladeRom:
     """A fitted :class:`PodRbfRom` with its mesh, sensor layout and provenance.
 
     ``probes`` maps blade probe names to node indices; ``conditions`` holds the snapshots'
-    conditions (SI) and ``provenance`` how the ROM was made (JSON-serialisable).
+    conditions (SI), ``provenance`` how the ROM was made (JSON-serialisable) and ``spec_toml``
+    the TOML text of the turbine it was built from ("" when not known).
     """
 
     rom: PodRbfRom
@@ -50,6 +55,7 @@ class BladeRom:
     probes: dict[str, int]
     conditions: pd.DataFrame
     provenance: dict[str, Any] = field(default_factory=dict)
+    spec_toml: str = ""
 
     @property
     def sensor_names(self) -> tuple[str, ...]:
@@ -115,6 +121,7 @@ def save_rom(bundle: BladeRom, path: str | Path) -> Path:
         "snapshot_conditions": conditions.to_numpy(dtype=float),
         "condition_names": _text_array(list(conditions.columns)),
         "provenance": np.array(json.dumps(bundle.provenance, sort_keys=True, default=str)),
+        "spec_toml": np.array(bundle.spec_toml, dtype=np.str_),
     }
     with path.open("wb") as handle:
         np.savez_compressed(handle, **arrays)
@@ -150,10 +157,14 @@ def _read_arrays(path: Path) -> dict[str, np.ndarray]:
             arrays["format"]) != FORMAT:
         raise RomFileError(f"{path}: not a steamtwin ROM file (no format tag {FORMAT!r})")
     version = arrays.get("format_version")
-    if version is None or version.dtype.kind not in "iu" or int(version) != FORMAT_VERSION:
+    if version is None or version.dtype.kind not in "iu" or int(
+            version) not in READABLE_VERSIONS:
         raise RomFileError(f"{path}: ROM format version {version!r} is not supported (this "
-                           f"steamtwin reads version {FORMAT_VERSION}); rebuild the ROM")
-    for name, (kind, ndim) in _REQUIRED.items():
+                           f"steamtwin reads versions {READABLE_VERSIONS}); rebuild the ROM")
+    required = dict(_REQUIRED)
+    if int(version) >= 3:
+        required["spec_toml"] = ("U", 0)
+    for name, (kind, ndim) in required.items():
         if name not in arrays:
             raise RomFileError(f"{path}: missing array {name!r}")
         array = arrays[name]
@@ -252,5 +263,6 @@ def load_rom(path: str | Path) -> BladeRom:
         raise RomFileError(f"{path}: inconsistent ROM data ({error})") from None
     conditions = pd.DataFrame(a["snapshot_conditions"], columns=list(a["condition_names"]))
     probes = {str(k): int(v) for k, v in zip(a["probe_names"], a["probe_nodes"], strict=True)}
+    spec_toml = str(a["spec_toml"]) if "spec_toml" in a else ""
     return BladeRom(rom=rom, mesh=mesh, probes=probes, conditions=conditions,
-                    provenance=provenance)
+                    provenance=provenance, spec_toml=spec_toml)

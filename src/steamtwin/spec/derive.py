@@ -19,8 +19,10 @@ in ``docs/heat-balance.md`` ("Deriving a spec from a heat balance"); in short:
   and temperature; Stodola flow capacities, mean diameters and blade heights (continuity) follow.
 * **Steam-temperature schedule**: every point's main-steam temperature and, if every point
   gives one, hot-reheat temperature against its load / design load (``[temperature_schedule]``).
-* **Metal**: the rotor a solid drum of the blading's root radius, the inner casing a wall whose
-  depth is the thin-wall hoop-stress thickness at an allowable stress of a Cr-Mo steel.
+* **Metal**: written as drawn geometry: the rotor a drum of the blading's root radius (solid
+  unless the kit gives its bore), the inner casing a cylindrical wall beyond the blade tips of
+  the kit's wall thickness, else the thin-wall hoop-stress thickness at an allowable stress of a
+  Cr-Mo steel.
 
 Every value is checked against the spec's ranges (:data:`steamtwin.spec.schema.FIELD_BY_KEY`):
 nothing is clamped; a value out of range raises :class:`DeriveError` naming the heat-balance
@@ -37,7 +39,7 @@ import numpy as np
 
 from steamtwin.spec.heat_balance import HeatBalance, HeatBalancePoint
 from steamtwin.spec.loader import SpecError, parse_spec
-from steamtwin.spec.schema import FIELD_BY_KEY, FORMAT_VERSION
+from steamtwin.spec.schema import FIELD_BY_KEY, FORMAT_VERSION, METAL_DEPTH_RANGE_M
 from steamtwin.steam import if97
 
 __all__ = ["DeriveError", "DerivedSpec", "StageRow", "derive_spec", "design_point_of",
@@ -95,6 +97,9 @@ BORE_CLEARANCE = 0.05
 CASING_ALLOWABLE_STRESS = 54e6
 #: Pressure stages per metal group (the reference unit groups them by four).
 STAGES_PER_GROUP = 4
+#: Depth of the DCS casing thermocouple under the inner-casing bore, m: an assumed installation
+#: depth near the steam-side surface (the spec's default, the reference unit's).
+CASING_THERMOCOUPLE_DEPTH = 0.014
 #: Lagging conductance, W/(m²·K): designed for ~0.3 kW/m² at ~500 K over ambient (ASTM C680).
 INSULATION_CONDUCTANCE = 0.6
 #: Low-alloy Cr-Mo-V steel near 500 °C [ASME II-D Table TCD, Group C]: k ~ 34 W/(m K),
@@ -802,6 +807,10 @@ def _metal_block(w: _Writer, hb: HeatBalance, point: HeatBalancePoint, where: st
     w.value("ambient_temperature", "metal.ambient_temperature", AMBIENT_TEMPERATURE,
             _degc(AMBIENT_TEMPERATURE), "rule: turbine-hall air, 30-40 °C typical",
             "ambient_temperature")
+    w.value("casing_thermocouple_depth", "metal.casing_thermocouple_depth",
+            CASING_THERMOCOUPLE_DEPTH, f'"{CASING_THERMOCOUPLE_DEPTH * 1e3:g} mm"',
+            "rule: assumed installation depth; take it from the casing drawing",
+            "casing_thermocouple_depth")
     w.raw()
     w.raw("# Low-alloy Cr-Mo-V steels (cast inner casing, forged rotor): [ASME II-D] Table TCD,")
     w.raw("# Group C near 500 °C: k ~ 34 W/(m K), diffusivity ~ 7.3e-6 m^2/s, rho 7800 kg/m^3.")
@@ -811,14 +820,21 @@ def _metal_block(w: _Writer, hb: HeatBalance, point: HeatBalancePoint, where: st
         w.raw(f'specific_heat = "{STEEL_SPECIFIC_HEAT:g} J/(kg*K)"')
         w.raw(f'thermal_conductivity = "{STEEL_CONDUCTIVITY:g} W/(m*K)"')
         w.raw()
-    w.raw("# Rotor: a solid drum of the blading's root radius over the group's axial length")
-    w.raw(f"# ({STAGE_AXIAL_PITCH:g} m per pressure stage, {CONTROL_STAGE_AXIAL_LENGTH:g} m for "
-          "the control-stage wheel and chamber);")
-    w.raw("# inner casing: bore = blade tip radius + "
-          f"{BORE_CLEARANCE:g} m, wall = thin-wall hoop thickness p·r/S at the group's inlet")
-    w.raw(f"# pressure, S = {CASING_ALLOWABLE_STRESS / 1e6:g} MPa (2¼Cr-1Mo cast steel near "
-          "538 °C, ASME BPVC II-D Table 1A).")
     machine = hb.machine
+    bore = (machine.rotor_bore_diameter_m or 0.0) / 2.0
+    w.raw("# Drawn geometry over the group's axial length "
+          f"({STAGE_AXIAL_PITCH:g} m per pressure stage,")
+    w.raw(f"# {CONTROL_STAGE_AXIAL_LENGTH:g} m for the control-stage wheel and chamber). "
+          "Rotor: a drum of the blading's root radius,")
+    w.raw("# " + ("bored as the kit's machine.rotor_bore_diameter says;" if bore > 0.0
+                  else "solid (the kit gives no machine.rotor_bore_diameter);")
+          + f" inner casing: bore = blade tip radius + {BORE_CLEARANCE:g} m,")
+    if machine.casing_wall_thickness_m is not None:
+        w.raw("# wall = the kit's machine.casing_wall_thickness.")
+    else:
+        w.raw("# wall = thin-wall hoop thickness p·r/S at the group's inlet pressure, "
+              f"S = {CASING_ALLOWABLE_STRESS / 1e6:g} MPa")
+        w.raw("# (2¼Cr-1Mo cast steel near 538 °C, ASME BPVC II-D Table 1A).")
     rows = expansion.rows
     groups: list[tuple[str, list[int], float, float, float, float]] = []
     cs_root = machine.control_stage_mean_diameter_m / 2.0 - cs.height / 2.0
@@ -833,25 +849,35 @@ def _metal_block(w: _Writer, hb: HeatBalance, point: HeatBalancePoint, where: st
                        STAGE_AXIAL_PITCH * len(stages), group_rows[0].inlet_pressure_pa))
     for name, stages, rotor_radius, tip, length, pressure in groups:
         origin = f"{where}: control_stage_pressure, hp_exhaust_pressure (metal group {name!r})"
-        bore = tip + BORE_CLEARANCE
-        wall = pressure * bore / CASING_ALLOWABLE_STRESS
-        casing_area = 2.0 * math.pi * bore * length
-        casing_mass = STEEL_DENSITY * casing_area * wall
-        rotor_area = 2.0 * math.pi * rotor_radius * length
-        rotor_mass = STEEL_DENSITY * math.pi * rotor_radius**2 * length
+        casing_radius = tip + BORE_CLEARANCE
         w.raw("[[metal.groups]]")
         w.raw(f"name = {_toml_string(name)}")
         w.raw(f"stages = [{', '.join(str(s) for s in stages)}]")
-        w.value("casing_mass", "metal.groups.casing_mass", casing_mass,
-                f'"{casing_mass:.4g} kg"',
-                f"area x wall {wall * 1e3:.0f} mm (p {pressure / 1e6:.3g} MPa, r {bore:.3f} m)"
-                " x density", origin)
-        w.value("casing_area", "metal.groups.casing_area", casing_area,
-                f'"{casing_area:.4g} m^2"', f"2 pi x bore {bore:.3f} m x {length:g} m", origin)
-        w.value("rotor_mass", "metal.groups.rotor_mass", rotor_mass, f'"{rotor_mass:.4g} kg"',
-                f"solid drum, radius {rotor_radius:.3f} m x {length:g} m x density", origin)
-        w.value("rotor_area", "metal.groups.rotor_area", rotor_area, f'"{rotor_area:.4g} m^2"',
-                f"2 pi x root radius {rotor_radius:.3f} m x {length:g} m", origin)
+        w.value("axial_length", "metal.groups.axial_length", length, f'"{length:g} m"',
+                "rule: " + (f"{STAGE_AXIAL_PITCH:g} m per pressure stage" if stages != [0]
+                            else "control-stage wheel and nozzle chamber"), origin)
+        w.value("rotor_radius", "metal.groups.rotor_radius", rotor_radius,
+                f'"{rotor_radius:.4f} m"', "the blading's root radius (drum rotor)", origin)
+        if bore > rotor_radius - METAL_DEPTH_RANGE_M[0]:
+            raise DeriveError(
+                f"{hb.source}: machine.rotor_bore_diameter = {2.0 * bore:g} m leaves less than "
+                f"{METAL_DEPTH_RANGE_M[0]:g} m of metal under the root radius "
+                f"{rotor_radius:.4f} m of metal group {name!r}")
+        w.value("rotor_bore_radius", "metal.groups.rotor_bore_radius", bore, f'"{bore:.4g} m"',
+                "machine.rotor_bore_diameter / 2" if bore > 0.0 else "solid forging", origin)
+        w.value("casing_inner_radius", "metal.groups.casing_inner_radius", casing_radius,
+                f'"{casing_radius:.4f} m"',
+                f"blade tip radius {tip:.4f} m + {BORE_CLEARANCE:g} m", origin)
+        if machine.casing_wall_thickness_m is not None:
+            wall = machine.casing_wall_thickness_m
+            w.value("casing_wall_thickness", "metal.groups.casing_wall_thickness", wall,
+                    f'"{wall:.4g} m"', "machine.casing_wall_thickness",
+                    f"{hb.source}: machine.casing_wall_thickness")
+        else:
+            wall = pressure * casing_radius / CASING_ALLOWABLE_STRESS
+            w.value("casing_wall_thickness", "metal.groups.casing_wall_thickness", wall,
+                    f'"{wall:.4f} m"', f"hoop p·r/S: p {pressure / 1e6:.3g} MPa, r "
+                    f"{casing_radius:.3f} m, S {CASING_ALLOWABLE_STRESS / 1e6:g} MPa", origin)
         w.value("insulation_conductance", "metal.groups.insulation_conductance",
                 INSULATION_CONDUCTANCE, f'"{INSULATION_CONDUCTANCE:g} W/(m^2*K)"',
                 "rule: lagging for ~0.3 kW/m^2 (ASTM C680)", "insulation_conductance")

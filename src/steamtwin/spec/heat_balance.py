@@ -55,7 +55,8 @@ _POINT_REQUIRED = ("label", "load", "main_steam_pressure", "main_steam_temperatu
 HEAT_BALANCE_KEYS: Mapping[str, frozenset[str]] = {
     "": frozenset({"name", "description", "machine", "points"}),
     "machine": frozenset({*_MACHINE_REQUIRED, "valve_names", "valve_overlap", "rated_load",
-                          "valve_pressure_drop"}),
+                          "valve_pressure_drop", "rotor_bore_diameter",
+                          "casing_wall_thickness"}),
     "points": frozenset({*_POINT_REQUIRED, "control_stage_temperature", "hp_exhaust_flow",
                          "valve_outlet_pressure",
                          "hp_power", "reheat_temperature", "feedwater_temperature",
@@ -83,6 +84,8 @@ _RANGES: Mapping[str, tuple[str, float, float, str]] = {
     "rotational_speed": ("rad/s", 300 * math.pi / 30, 30000 * math.pi / 30, "rpm"),
     "control_stage_mean_diameter": ("m", 0.2, 3.0, "m"),
     "rated_load": ("W", 0.1e6, 2000e6, "MW"),
+    "rotor_bore_diameter": ("m", 0.0, 2.0, "m"),
+    "casing_wall_thickness": ("m", 0.01, 1.0, "m"),
 }
 
 #: Band of the whole-HP isentropic efficiency (main steam to HP exhaust, valves included):
@@ -153,6 +156,8 @@ class MachineDescription:
     valve_overlap: float | None = None  #: lift fraction left when the next group opens
     rated_load_w: float | None = None  #: nameplate (THA) rating, W
     valve_pressure_drop: float | None = None  #: wide-open stop + governing valve loss, of p0
+    rotor_bore_diameter_m: float | None = None  #: central bore of the rotor forging, m
+    casing_wall_thickness_m: float | None = None  #: inner-casing wall over the blading, m
 
 
 @dataclass(frozen=True)
@@ -366,6 +371,8 @@ def _machine(table: _Fields) -> MachineDescription:
                                    "1, so there is no next group to overlap with")
         overlap = float(overlap)
     rated = table.quantity("rated_load") if table.has("rated_load") else None
+    bore, wall = (table.quantity(key) if table.has(key) else None
+                  for key in ("rotor_bore_diameter", "casing_wall_thickness"))
     drop = None
     if table.has("valve_pressure_drop"):
         drop = table.raw("valve_pressure_drop")
@@ -380,7 +387,8 @@ def _machine(table: _Fields) -> MachineDescription:
         pressure_stages=stages, rotational_speed_rad_s=speed,
         control_stage_mean_diameter_m=diameter, valve_arcs=tuple(float(a) for a in arcs),
         valve_opening_order=tuple(order), valve_names=names, valve_overlap=overlap,
-        rated_load_w=rated, valve_pressure_drop=drop)
+        rated_load_w=rated, valve_pressure_drop=drop, rotor_bore_diameter_m=bore,
+        casing_wall_thickness_m=wall)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -26,12 +26,14 @@ from steamtwin.dcs.signals import SIGNALS
 from steamtwin.keys import unknown_key_message
 from steamtwin.spec.schema import FORMAT_VERSION, METAL_DEPTH_RANGE_M, Field, field_for
 from steamtwin.spec.turbine import (
+    DEFAULT_CASING_THERMOCOUPLE_DEPTH,
     ControlStage,
     DesignPoint,
     Extraction,
     GoverningValve,
     Leakage,
     Material,
+    MetalGeometry,
     MetalGroup,
     PartLoad,
     PressureStage,
@@ -53,6 +55,9 @@ _BLADING = frozenset({"mean_diameter", "blade_height", "blade_count", "reaction"
                       "nozzle_exit_angle", "peak_blade_efficiency", "friction_loss"})
 _MATERIAL = frozenset({"density", "specific_heat", "thermal_conductivity"})
 _PART_LOAD = frozenset(field.name for field in fields(PartLoad))
+#: A metal group gives either its masses and areas or its geometry (rotor_bore_radius optional).
+_MASS_AND_AREA = ("casing_mass", "casing_area", "rotor_mass", "rotor_area")
+_GEOMETRY = ("axial_length", "rotor_radius", "casing_inner_radius", "casing_wall_thickness")
 
 #: The keys each table may hold, by its path without array positions ("" is the top level).
 SPEC_KEYS: Mapping[str, frozenset[str]] = {
@@ -72,11 +77,11 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
     "extractions": frozenset({"name", "after_stage", "design_flow", "design_pressure"}),
     "leakages": frozenset({"name", "from_stage", "to", "design_flow", "sink_pressure"}),
     "metal": frozenset({"casing_sensor_group", "ambient_temperature", "casing_material",
-                        "rotor_material", "groups"}),
+                        "rotor_material", "groups", "casing_thermocouple_depth"}),
     "metal.casing_material": _MATERIAL,
     "metal.rotor_material": _MATERIAL,
-    "metal.groups": frozenset({"name", "stages", "casing_mass", "casing_area", "rotor_mass",
-                               "rotor_area", "insulation_conductance"}),
+    "metal.groups": frozenset({"name", "stages", "insulation_conductance", *_MASS_AND_AREA,
+                               *_GEOMETRY, "rotor_bore_radius"}),
     "sliding_pressure": frozenset({"load_fraction", "pressure"}),
     "part_load": _PART_LOAD,
     "temperature_schedule": frozenset({"load_fraction", "main_steam_temperature",
@@ -88,13 +93,16 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
 #: rated point is a valve point unless its valve outlet pressure is given; the model sizes the
 #: nozzle throat areas unless they are given; without a temperature schedule the boiler holds
 #: the design main-steam temperature at every load; a unit may state no leakages and no tip
-#: leakage, and only a leakage to the outside has a sink pressure.
+#: leakage, and only a leakage to the outside has a sink pressure; a metal group gives either
+#: its masses and areas or its geometry; the casing thermocouple depth has a default.
 OPTIONAL_KEYS = frozenset({"extractions", "part_load", "control_stage.valve_overlap",
                            "control_stage.valve_characteristic", "design.valve_outlet_pressure",
                            "control_stage.valves.throat_area",
                            *(f"part_load.{key}" for key in _PART_LOAD),
                            "temperature_schedule", "temperature_schedule.reheat_temperature",
-                           "leakages", "leakages.sink_pressure", "stages.tip_leakage"})
+                           "leakages", "leakages.sink_pressure", "stages.tip_leakage",
+                           *(f"metal.groups.{key}" for key in (*_MASS_AND_AREA, *_GEOMETRY)),
+                           "metal.groups.rotor_bore_radius", "metal.casing_thermocouple_depth"})
 
 
 class SpecError(ValueError):
@@ -249,7 +257,10 @@ def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
     bleeds = document.tables("extractions") if "extractions" in document.data else []
     extractions = tuple(_extraction(table, len(stages)) for table in bleeds)
     metal = document.table("metal")
-    groups = tuple(_metal_group(table, len(stages)) for table in metal.tables("groups"))
+    casing_material = _material(metal.table("casing_material"))
+    rotor_material = _material(metal.table("rotor_material"))
+    groups = tuple(_metal_group(table, len(stages), casing_material, rotor_material)
+                   for table in metal.tables("groups"))
     spec = TurbineSpec(
         name=document.text("name"),
         description=document.text("description"),
@@ -257,8 +268,8 @@ def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
         control_stage=control_stage,
         stages=stages,
         extractions=extractions,
-        casing_material=_material(metal.table("casing_material")),
-        rotor_material=_material(metal.table("rotor_material")),
+        casing_material=casing_material,
+        rotor_material=rotor_material,
         metal_groups=groups,
         casing_sensor_group=metal.text("casing_sensor_group"),
         ambient_temperature=metal.quantity("ambient_temperature"),
@@ -271,6 +282,8 @@ def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
         leakages=tuple(_leakage(table, len(stages), design)
                        for table in (document.tables("leakages")
                                      if "leakages" in document.data else [])),
+        casing_thermocouple_depth=metal.quantity("casing_thermocouple_depth")
+        if "casing_thermocouple_depth" in metal.data else DEFAULT_CASING_THERMOCOUPLE_DEPTH,
     )
     _check_consistency(spec, source)
     return spec
@@ -434,7 +447,8 @@ def _material(table: _Table) -> Material:
     )
 
 
-def _metal_group(table: _Table, stage_count: int) -> MetalGroup:
+def _metal_group(table: _Table, stage_count: int, casing_material: Material,
+                 rotor_material: Material) -> MetalGroup:
     stages = table.raw("stages")
     first = int(table.field("stages").low or 0)
     if (
@@ -448,15 +462,55 @@ def _metal_group(table: _Table, stage_count: int) -> MetalGroup:
             f"{table.label}: {table.path}.stages = {stages!r}: expected consecutive stage numbers "
             f"within {first}…{stage_count} (0 = control stage)"
         )
-    return MetalGroup(
-        name=table.text("name"),
-        stages=tuple(stages),
-        casing_mass=table.quantity("casing_mass"),
-        casing_area=table.quantity("casing_area"),
-        rotor_mass=table.quantity("rotor_mass"),
-        rotor_area=table.quantity("rotor_area"),
-        insulation_conductance=table.quantity("insulation_conductance"),
-    )
+    name = table.text("name")
+    given = {key: table.quantity(key) for key in (*_MASS_AND_AREA, *_GEOMETRY,
+                                                  "rotor_bore_radius") if key in table.data}
+    insulation = table.quantity("insulation_conductance")
+    geometry = _metal_geometry(table, given)
+    if geometry is None:
+        return MetalGroup(name=name, stages=tuple(stages),
+                          **{key: given[key] for key in _MASS_AND_AREA},
+                          insulation_conductance=insulation)
+    casing_mass, casing_area, rotor_mass, rotor_area = geometry.masses_and_areas(
+        casing_material.density, rotor_material.density)
+    return MetalGroup(name=name, stages=tuple(stages), casing_mass=casing_mass,
+                      casing_area=casing_area, rotor_mass=rotor_mass, rotor_area=rotor_area,
+                      insulation_conductance=insulation, geometry=geometry)
+
+
+def _metal_geometry(table: _Table, given: Mapping[str, float]) -> MetalGeometry | None:
+    """The group's geometry (None when it gives masses and areas), refusing a mix or a part."""
+    mass_keys = [key for key in _MASS_AND_AREA if key in given]
+    geometry_keys = [key for key in (*_GEOMETRY, "rotor_bore_radius") if key in given]
+    either = (f"a metal group gives either {', '.join(_MASS_AND_AREA)} or the geometry "
+              f"{', '.join(_GEOMETRY)} (and optionally rotor_bore_radius)")
+    if mass_keys and geometry_keys:
+        raise SpecError(f"{table.label}: {table.path} mixes masses/areas ({', '.join(mass_keys)}) "
+                        f"with geometry ({', '.join(geometry_keys)}): {either}")
+    if not geometry_keys:
+        for key in _MASS_AND_AREA:
+            if key not in given:
+                raise SpecError(f"{table.label}: {table.path}.{key} is missing ({either})")
+        return None
+    missing = [key for key in _GEOMETRY if key not in given]
+    if missing:
+        raise SpecError(f"{table.label}: {table.path} gives the geometry fields "
+                        f"{', '.join(geometry_keys)} but not {', '.join(missing)} ({either})")
+    bore, radius = given.get("rotor_bore_radius", 0.0), given["rotor_radius"]
+    thinnest = METAL_DEPTH_RANGE_M[0]
+    if bore > radius - thinnest:
+        raise SpecError(
+            f"{table.label}: {table.path}.rotor_bore_radius = {bore:g} m leaves less than "
+            f"{thinnest:g} m of metal under {table.path}.rotor_radius = {radius:g} m")
+    if given["casing_inner_radius"] <= radius:
+        raise SpecError(
+            f"{table.label}: {table.path}.casing_inner_radius = "
+            f"{given['casing_inner_radius']:g} m must exceed {table.path}.rotor_radius = "
+            f"{radius:g} m (the steam flows between rotor and casing)")
+    return MetalGeometry(axial_length=given["axial_length"], rotor_radius=radius,
+                         rotor_bore_radius=bore,
+                         casing_inner_radius=given["casing_inner_radius"],
+                         casing_wall_thickness=given["casing_wall_thickness"])
 
 
 def _sliding_pressure(table: _Table) -> SlidingPressureLine:
@@ -611,6 +665,9 @@ def _check_consistency(spec: TurbineSpec, source: str) -> None:
         )
     shallowest, deepest = METAL_DEPTH_RANGE_M
     for number, group in enumerate(spec.metal_groups, start=1):
+        if group.geometry is not None:
+            _check_geometry_against_blading(spec, number, group, group.geometry, source)
+            continue
         for body, mass, area, material in (
             ("casing", group.casing_mass, group.casing_area, spec.casing_material),
             ("rotor", group.rotor_mass, group.rotor_area, spec.rotor_material),
@@ -622,3 +679,34 @@ def _check_consistency(spec: TurbineSpec, source: str) -> None:
                     f"imply a metal depth of {thickness:.3f} m (expected {shallowest:g}–"
                     f"{deepest:g} m)"
                 )
+    _check_thermocouple_depth(spec, source)
+
+
+def _check_geometry_against_blading(spec: TurbineSpec, number: int, group: MetalGroup,
+                                    geometry: MetalGeometry, source: str) -> None:
+    """The drawn rotor lies inside, the casing bore outside every blade row's mean radius."""
+    mean_radii = [(spec.control_stage.blading if stage == 0
+                   else spec.stages[stage - 1].blading).mean_diameter / 2.0
+                  for stage in group.stages]
+    where = f"{source}: metal.groups[{number}]"
+    if geometry.rotor_radius >= min(mean_radii):
+        raise SpecError(f"{where}.rotor_radius = {geometry.rotor_radius:g} m ({group.name!r}) "
+                        "must lie below the group's smallest blade mean radius "
+                        f"{min(mean_radii):g} m (the rotor body is inside the blading)")
+    if geometry.casing_inner_radius <= max(mean_radii):
+        raise SpecError(f"{where}.casing_inner_radius = {geometry.casing_inner_radius:g} m "
+                        f"({group.name!r}) must lie above the group's largest blade mean "
+                        f"radius {max(mean_radii):g} m (the casing bore is outside the blading)")
+
+
+def _check_thermocouple_depth(spec: TurbineSpec, source: str) -> None:
+    """The casing thermocouple lies within the sensor group's wall."""
+    number, group = next((number, group) for number, group in
+                         enumerate(spec.metal_groups, start=1)
+                         if group.name == spec.casing_sensor_group)
+    depth = group.casing_wall_depth(spec.casing_material.density)
+    if spec.casing_thermocouple_depth > depth:
+        raise SpecError(
+            f"{source}: metal.casing_thermocouple_depth = {spec.casing_thermocouple_depth:g} m "
+            f"lies beyond the inner-casing wall of metal.groups[{number}] ({group.name!r}), "
+            f"{depth:g} m deep")

@@ -34,6 +34,8 @@ QUANTITY_PATTERN = r"^\s*[-+]?([0-9]+\.?[0-9]*|\.[0-9]+)([eE][-+]?[0-9]+)?\s*[^\
 
 #: Plausible heated metal depth mass / (density · wetted area) of a metal group, in m.
 METAL_DEPTH_RANGE_M = (0.01, 1.0)
+_BY_GEOMETRY = "computed from the geometry fields when the group gives them"
+_BY_MASS = "left out when the group gives masses and areas"
 
 
 @dataclass(frozen=True)
@@ -351,6 +353,12 @@ FIELDS: tuple[Field, ...] = (
           example="control stage"),
     Field("metal.ambient_temperature", "quantity", "Turbine-hall air around the lagging.",
           "Plant records; 30-40 °C typical.", "K", "35 degC", 223.15, 373.15),
+    Field("metal.casing_thermocouple_depth", "quantity",
+          "Depth of the DCS casing thermocouple's hot junction under the inner-casing bore of "
+          "metal.casing_sensor_group; at most that group's wall depth.",
+          "Casing drawing or the thermocouple's installation sheet (drilled-hole depth).",
+          "m", "14 mm", 0.0, 0.2,
+          default="14 mm: an assumed installation depth near the steam-side surface"),
     Field("metal.casing_material", "table", "Inner-casing steel.", "Material data sheet."),
     *_material("metal.casing_material", "inner-casing"),
     Field("metal.rotor_material", "table", "Rotor steel.", "Material data sheet."),
@@ -368,16 +376,41 @@ FIELDS: tuple[Field, ...] = (
     Field("metal.groups[].casing_mass", "quantity",
           "Inner-casing metal mass heated by the group's steam.",
           "OEM weights list or casing drawing (wall volume times density).",
-          "kg", "7020 kg", 1.0, 1e6),
+          "kg", "7020 kg", 1.0, 1e6, default=_BY_GEOMETRY),
     Field("metal.groups[].casing_area", "quantity",
           "Inner-casing surface wetted by the group's steam.",
           "Casing drawing: bore circumference times the group's axial length.",
-          "m^2", "4.5 m^2", 1e-3, 1e3),
+          "m^2", "4.5 m^2", 1e-3, 1e3, default=_BY_GEOMETRY),
     Field("metal.groups[].rotor_mass", "quantity", "Rotor metal mass heated by the group's steam.",
-          "OEM weights list or rotor drawing.", "kg", "4680 kg", 1.0, 1e6),
+          "OEM weights list or rotor drawing.", "kg", "4680 kg", 1.0, 1e6, default=_BY_GEOMETRY),
     Field("metal.groups[].rotor_area", "quantity", "Rotor surface wetted by the group's steam.",
           "Rotor drawing: drum circumference times the group's axial length.",
-          "m^2", "3.0 m^2", 1e-3, 1e3),
+          "m^2", "3.0 m^2", 1e-3, 1e3, default=_BY_GEOMETRY),
+    Field("metal.groups[].axial_length", "quantity",
+          "Axial length of rotor and inner casing wetted by the group's steam (geometry fields: "
+          "give these instead of the masses and areas).",
+          "OEM flow-path drawing: from the group's first stator inlet to its last rotor exit "
+          "(with the nozzle chamber for the control stage).",
+          "m", "0.60 m", 0.01, 10.0, default=_BY_MASS),
+    Field("metal.groups[].rotor_radius", "quantity",
+          "Outer radius of the drum or rotor body the group's steam wets (the blade roots' "
+          "radius for a drum rotor, the hub between the discs for a disc rotor); below the "
+          "group's blade mean radii.",
+          "OEM rotor drawing.", "m", "0.45 m", 0.05, 1.5, default=_BY_MASS),
+    Field("metal.groups[].rotor_bore_radius", "quantity",
+          "Radius of the rotor's central bore, below rotor_radius by at least "
+          f"{METAL_DEPTH_RANGE_M[0]:g} m; the bore is taken as adiabatic.",
+          "OEM rotor drawing (bore for inspection / material removal).",
+          "m", "0.05 m", 0.0, 1.0, default="0 m: a solid forging (geometry fields only)"),
+    Field("metal.groups[].casing_inner_radius", "quantity",
+          "Bore radius of the inner casing over the group (its steam-side surface); above the "
+          "group's blade mean radii and rotor_radius.",
+          "OEM casing drawing: blade tip radius plus the tip seals and stator shrouds.",
+          "m", "0.62 m", 0.1, 2.0, default=_BY_MASS),
+    Field("metal.groups[].casing_wall_thickness", "quantity",
+          "Radial wall thickness of the inner casing over the group.",
+          "OEM casing drawing (wall between the bore and the outer surface under the lagging).",
+          "m", "0.15 m", *METAL_DEPTH_RANGE_M, default=_BY_MASS),
     Field("metal.groups[].insulation_conductance", "quantity",
           "Heat-loss conductance from the casing's outer surface to the turbine hall.",
           "Lagging specification (ASTM C680 method); about 0.6 W/(m²·K) for lagging designed "
@@ -465,9 +498,17 @@ CONSISTENCY_RULES: tuple[str, ...] = (
     "`metal.groups`: names unique; the control stage (stage 0) is a group of its own; the groups "
     "cover stages 0 to the last pressure stage exactly once; `metal.casing_sensor_group` names "
     "one of them.",
-    "Each group's `casing_mass / (density × casing_area)` and `rotor_mass / (density × "
-    f"rotor_area)` is a plausible heated metal depth, {METAL_DEPTH_RANGE_M[0]:g}–"
-    f"{METAL_DEPTH_RANGE_M[1]:g} m.",
+    "Each group gives either `casing_mass`, `casing_area`, `rotor_mass` and `rotor_area` or "
+    "the geometry `axial_length`, `rotor_radius`, `casing_inner_radius`, "
+    "`casing_wall_thickness` (and optionally `rotor_bore_radius`), never a mix. With masses and "
+    "areas, `casing_mass / (density × casing_area)` and `rotor_mass / (density × rotor_area)` "
+    f"are plausible heated metal depths, {METAL_DEPTH_RANGE_M[0]:g}–{METAL_DEPTH_RANGE_M[1]:g} "
+    "m; with the geometry, `rotor_bore_radius` lies at least "
+    f"{METAL_DEPTH_RANGE_M[0]:g} m below `rotor_radius`, `rotor_radius` below and "
+    "`casing_inner_radius` above every mean blade radius of the group's stages.",
+    "`metal.casing_thermocouple_depth` is at most the wall depth of the "
+    "`metal.casing_sensor_group` (its `casing_wall_thickness`, or `casing_mass / (density × "
+    "casing_area)`).",
 )
 
 

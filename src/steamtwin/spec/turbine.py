@@ -9,7 +9,15 @@ steam-temperature schedule against load. It is built from TOML by
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+
+#: Depth (m) of the inner-casing metal thermocouple under the bore when the spec does not give
+#: it. Metal thermocouples of HP inner casings sit in drilled holes near the steam-side surface
+#: so that they see the bore's transients (they feed the thermal-stress limiter); 14 mm is an
+#: assumed installation depth (node 0's centre, L/16 of the reference unit's 225 mm wall, before
+#: the reading became an interpolation at a physical depth).
+DEFAULT_CASING_THERMOCOUPLE_DEPTH = 0.014
 
 
 @dataclass(frozen=True)
@@ -137,12 +145,43 @@ class Material:
 
 
 @dataclass(frozen=True)
+class MetalGeometry:
+    """The drawn shape of a metal group's rotor and inner casing, lengths in m.
+
+    The rotor is a cylinder of ``rotor_radius`` (the drum or rotor body the steam wets) with a
+    central bore of ``rotor_bore_radius`` (0: a solid forging); the inner casing a cylindrical
+    wall from ``casing_inner_radius`` (its bore) to ``casing_inner_radius +
+    casing_wall_thickness``; both over the group's ``axial_length``.
+    """
+
+    axial_length: float
+    rotor_radius: float
+    rotor_bore_radius: float
+    casing_inner_radius: float
+    casing_wall_thickness: float
+
+    def masses_and_areas(self, casing_density: float, rotor_density: float
+                         ) -> tuple[float, float, float, float]:
+        """(casing mass kg, casing wetted area m², rotor mass kg, rotor wetted area m²) of the
+        cylinders at the densities given (kg/m³)."""
+        length, outer = self.axial_length, self.casing_inner_radius + self.casing_wall_thickness
+        return (casing_density * math.pi * (outer**2 - self.casing_inner_radius**2) * length,
+                2.0 * math.pi * self.casing_inner_radius * length,
+                rotor_density * math.pi * (self.rotor_radius**2 - self.rotor_bore_radius**2)
+                * length,
+                2.0 * math.pi * self.rotor_radius * length)
+
+
+@dataclass(frozen=True)
 class MetalGroup:
     """Rotor and inner-casing metal wetted by the steam of a group of stages.
 
     ``stages`` lists stage numbers (0 = control stage, 1… = pressure stages). Masses in kg, wetted
     areas in m², ``insulation_conductance`` in W/(m²·K) from the casing's outer surface to the
-    surroundings.
+    surroundings. ``geometry`` is the drawn shape when the spec gives it (masses and areas are
+    then the cylinders'); None when the spec gives masses and areas, the model then takes the
+    casing as a plane wall of depth mass/(ρ·area) and the rotor as a solid cylinder of radius
+    2·mass/(ρ·area).
     """
 
     name: str
@@ -152,6 +191,14 @@ class MetalGroup:
     rotor_mass: float
     rotor_area: float
     insulation_conductance: float
+    geometry: MetalGeometry | None = None
+
+    def casing_wall_depth(self, casing_density: float) -> float:
+        """Depth (m) of the inner-casing wall: the drawn thickness, else mass/(ρ·area) with the
+        casing steel's density ρ in kg/m³."""
+        if self.geometry is not None:
+            return self.geometry.casing_wall_thickness
+        return self.casing_mass / (casing_density * self.casing_area)
 
 
 @dataclass(frozen=True)
@@ -215,3 +262,4 @@ class TurbineSpec:
     part_load: PartLoad = PartLoad()
     temperature_schedule: TemperatureSchedule | None = None
     leakages: tuple[Leakage, ...] = ()
+    casing_thermocouple_depth: float = DEFAULT_CASING_THERMOCOUPLE_DEPTH

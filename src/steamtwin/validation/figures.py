@@ -2,8 +2,10 @@
 
 One column per window: the upper panel shows measured and monitored temperature (°C), the
 lower one the deviation monitored − measured (K), against minutes from the window's first
-sample. Samples the ROM could not predict (NaN) leave gaps. Drawn on a bare
-:class:`matplotlib.figure.Figure` (Agg canvas, no pyplot state), written as PNG.
+sample; each column is titled with the window's name and its start and end in the time zone of
+its index (the data's own, see :func:`window_label`). Samples the ROM could not predict (NaN)
+leave gaps. Drawn on a bare :class:`matplotlib.figure.Figure` (Agg canvas, no pyplot state),
+written as PNG.
 """
 
 from __future__ import annotations
@@ -17,11 +19,21 @@ from matplotlib.figure import Figure
 
 from steamtwin.units import convert
 
-__all__ = ["exhaust_tracking_figure"]
+__all__ = ["exhaust_tracking_figure", "window_label"]
 
 _LABELS = {"hp_exhaust_temperature": "HP-exhaust steam temperature",
            "control_stage_temperature": "control-stage steam temperature",
            "hp_inner_casing_temperature": "inner-casing metal temperature"}
+
+
+def window_label(name: str, index: pd.Index) -> str:
+    """``"<name>, <start> … <end>"`` with ISO times in the index's own zone (e.g. +08:00)."""
+    if not isinstance(index, pd.DatetimeIndex) or len(index) == 0:
+        return name
+    start, end = index[0], index[-1]
+    end_text = (end.strftime("%H:%M") if end.date() == start.date()
+                else end.isoformat(timespec="minutes"))
+    return f"{name}, {start.isoformat(timespec='minutes')} … {end_text}"
 
 
 def exhaust_tracking_figure(measured: Mapping[str, pd.DataFrame],
@@ -60,7 +72,8 @@ def exhaust_tracking_figure(measured: Mapping[str, pd.DataFrame],
         top, bottom = axes[0, column], axes[1, column]
         top.plot(minutes, measured_degc, color="0.45", lw=0.7, label="measured (DCS)")
         top.plot(minutes, monitored_degc, color="tab:red", lw=1.2, label="monitored (twin)")
-        top.set(title=name, ylabel=f"{label} (°C)")
+        top.set_title(window_label(name, truth.index), fontsize=9)
+        top.set(ylabel=f"{label} (°C)")
         top.legend(loc="best", fontsize=8)
         bottom.plot(minutes, deviation, color="tab:blue", lw=0.8)
         bottom.axhline(0.0, color="black", lw=0.6)

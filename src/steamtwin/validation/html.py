@@ -1,12 +1,13 @@
 """A small HTML report writer (standard library only): tables, figures, notes, provenance.
 
-:class:`ValidationReport` collects, in order, sections of three kinds — tables (a DataFrame,
+:class:`ValidationReport` collects, in order, sections of four kinds — tables (a DataFrame,
 shown as an HTML table and written as ``<name>.csv`` next to the report), figures (PNG files,
-referenced by relative path and copied into the report folder when they lie elsewhere) and
-notes (paragraphs of text) — plus the run's settings, package versions and timings (stage →
+referenced by relative path and copied into the report folder when they lie elsewhere), data
+files (e.g. Parquet series, listed with links, placed like figures) and notes (paragraphs of
+text) — plus the run's settings, package versions and timings (stage →
 seconds). :meth:`ValidationReport.write` writes ``report.html`` and ``report.json`` (the same
 content machine-readable: settings, versions, timings, tables as records at full precision,
-figures and notes). Every text is HTML-escaped; numbers are shown with four significant
+figures, data files and notes). Every text is HTML-escaped; numbers are shown with four significant
 digits in the HTML (the CSV and JSON files keep full precision).
 """
 
@@ -28,8 +29,8 @@ from urllib.parse import quote
 import numpy as np
 import pandas as pd
 
-__all__ = ["FigureSection", "NotesSection", "ReportError", "Section", "TableSection",
-           "ValidationReport", "format_value", "package_versions"]
+__all__ = ["FigureSection", "FilesSection", "NotesSection", "ReportError", "Section",
+           "TableSection", "ValidationReport", "format_value", "package_versions"]
 
 BASE_PACKAGES = ("steamtwin", "numpy", "scipy", "pandas", "matplotlib")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
@@ -74,7 +75,15 @@ class NotesSection:
     paragraphs: tuple[str, ...]
 
 
-Section = TableSection | FigureSection | NotesSection
+@dataclass(frozen=True)
+class FilesSection:
+    """Data files beside the report (e.g. per-sample series), each with a description."""
+
+    heading: str
+    files: tuple[tuple[Path, str], ...]
+
+
+Section = TableSection | FigureSection | NotesSection | FilesSection
 
 
 def package_versions(extra: Mapping[str, str] | None = None) -> dict[str, str]:
@@ -140,6 +149,13 @@ class ValidationReport:
             if section.path.name in taken:
                 raise ReportError(f"a figure file named {section.path.name!r} is already in "
                                   "the report")
+        elif isinstance(section, FilesSection):
+            taken = {path.name for s in self.sections if isinstance(s, FilesSection)
+                     for path, _ in s.files}
+            names = [Path(path).name for path, _ in section.files]
+            if taken & set(names) or len(set(names)) < len(names):
+                raise ReportError(f"a data file named like one of {names} is already in the "
+                                  "report")
         elif not isinstance(section, NotesSection):
             raise TypeError(f"not a report section: {section!r}")
         self.sections.append(section)
@@ -154,6 +170,13 @@ class ValidationReport:
     def add_figure(self, path: str | Path, caption: str = "") -> FigureSection:
         """Append a figure file (PNG)."""
         section = FigureSection(Path(path), caption)
+        self.add(section)
+        return section
+
+    def add_files(self, heading: str, files: Sequence[tuple[str | Path, str]]
+                  ) -> FilesSection:
+        """Append a list of data files (path, description), linked from the HTML."""
+        section = FilesSection(heading, tuple((Path(p), text) for p, text in files))
         self.add(section)
         return section
 
@@ -183,6 +206,7 @@ class ValidationReport:
                    if isinstance(s, FigureSection)}
         tables: dict[str, object] = {}
         figure_list: list[dict[str, str]] = []
+        file_list: list[dict[str, str]] = []
         notes: list[dict[str, object]] = []
         body = [f"<h1>{_text(self.title)}</h1>",
                 f'<p class="meta">written {_text(created)} by steamtwin</p>']
@@ -209,6 +233,16 @@ class ValidationReport:
                 body.append(f'<figure><img src="{_text(quote(relative))}" alt="'
                             f'{_text(section.caption or relative)}"><figcaption>'
                             f"{_text(section.caption)}</figcaption></figure>")
+            elif isinstance(section, FilesSection):
+                body.append(f"<h2>{_text(section.heading)}</h2>")
+                items = []
+                for path, description in section.files:
+                    relative = _place_figure(path, directory)
+                    file_list.append({"heading": section.heading, "file": relative,
+                                      "description": description})
+                    items.append(f'<li><a href="{_text(quote(relative))}">{_text(relative)}'
+                                 f"</a> — {_text(description)}</li>")
+                body.append("<ul>" + "".join(items) + "</ul>")
             else:
                 notes.append({"heading": section.heading,
                               "paragraphs": list(section.paragraphs)})
@@ -218,7 +252,7 @@ class ValidationReport:
             "title": self.title, "created_utc": created,
             "settings": _json_value(self.settings), "versions": dict(self.versions),
             "timings_s": {k: float(v) for k, v in self.timings.items()},
-            "tables": tables, "figures": figure_list, "notes": notes,
+            "tables": tables, "figures": figure_list, "files": file_list, "notes": notes,
         }
         (directory / "report.json").write_text(
             json.dumps(document, indent=2, ensure_ascii=False, allow_nan=False) + "\n",
@@ -240,10 +274,15 @@ class ValidationReport:
                     raise ReportError(f"figure file {section.path} does not exist")
                 if section.path.stat().st_size == 0:
                     raise ReportError(f"figure file {section.path} is empty")
+            elif isinstance(section, FilesSection):
+                for path, _ in section.files:
+                    if not path.is_file():
+                        raise ReportError(f"data file {path} does not exist")
 
 
 def _place_figure(path: Path, directory: Path) -> str:
-    """The figure's path relative to ``directory`` (as URL-style text), copied in if outside."""
+    """A figure's (or data file's) path relative to ``directory`` (as URL-style text), copied
+    in if outside."""
     try:
         return path.resolve().relative_to(directory.resolve()).as_posix()
     except ValueError:

@@ -2,47 +2,70 @@
 
 :func:`monitor_windows` replays the ROM over each window of DCS data (canonical SI);
 :func:`validate` compares the monitored steam-path temperatures with the measured ones and
-writes the report: Table 5 (operating conditions), Table 8 (deviations, definitions in
-:mod:`steamtwin.validation.tables`), Figure 10 (HP-exhaust tracking), optionally Figure 9 (ROM
-vs FOM blade field at reference conditions) and the ROM's provenance.
+writes the report: Table 5 (operating conditions), Table 8 (deviations of the steam-path
+temperatures and of every measured pressure the twin models, definitions in
+:mod:`steamtwin.validation.tables`), the per-sample series (one Parquet file per window),
+Figure 10 (HP-exhaust tracking), optionally Figure 9 (ROM vs FOM blade field at reference
+conditions) and the ROM's provenance — times in the data's own time zone.
 """
 
 from __future__ import annotations
 
+import json
+import re
 import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
 
 from steamtwin.calibration.objective import prepare_window
-from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import Simulator
 from steamtwin.rom.figure import field_comparison_figure
+from steamtwin.rom.provenance import rom_parameters
 from steamtwin.rom.reconstruction import FLAG_INVALID, predict_field, predict_series
 from steamtwin.rom.romfile import BladeRom
 from steamtwin.rom.snapshots import SnapshotSet
 from steamtwin.units import convert
 from steamtwin.validation.figures import exhaust_tracking_figure
 from steamtwin.validation.html import Section, ValidationReport
-from steamtwin.validation.tables import deviation_table, operating_table, rom_provenance_table
+from steamtwin.validation.tables import (
+    deviation_table,
+    operating_table,
+    rom_provenance_table,
+    series_frame,
+)
 
-__all__ = ["COMPARED_SIGNALS", "monitor_windows", "validate"]
+__all__ = ["COMPARED_PRESSURES", "COMPARED_SIGNALS", "monitor_windows", "rom_parameters",
+           "validate", "write_series"]
 
 COMPARED_SIGNALS = (
     "hp_exhaust_temperature",
     "control_stage_temperature",
     "hp_inner_casing_temperature",
 )
-"""Steam-path temperatures Table 8 compares when the ROM predicts them and the data hold them."""
+"""Steam-path temperatures Table 8 compares when the twin predicts them and the data hold them."""
+
+COMPARED_PRESSURES = (
+    "main_steam_pressure",
+    "control_stage_pressure",
+    "hp_exhaust_pressure",
+)
+"""Pressures Table 8 compares (after the temperatures) when the twin models them — an output of
+the monitoring model, not one of its inputs — and the data hold them: the control-stage
+pressure, the most sensitive witness of the flow coefficient, with the full-order model."""
 
 _DEFINITIONS = (
-    "Deviation d = monitored (twin) − measured (DCS), in K, over the samples where both are "
-    "finite and the ROM input is valid. mean |d|, max |d| and RMSE = sqrt(mean d²) in K; "
-    "mean d is the bias.",
-    "relative_error_pct = 100 · mean |d| / mean measured temperature in °C (°C scale); "
-    "max_relative_error_pct = 100 · max over samples of |d| / measured temperature in °C.",
+    "Deviation d = monitored (twin) − measured (DCS), in the row's unit (K for temperatures, "
+    "MPa for pressures), over the samples where both are finite and the ROM input is valid. "
+    "mean |d|, max |d| and RMSE = sqrt(mean d²); mean d is the bias.",
+    "In % of the measured value (temperatures in °C, the °C scale; pressures absolute, MPa): "
+    "mean_deviation_pct = 100 · mean d / mean measured, relative_error_pct = 100 · mean |d| / "
+    "mean measured, rmse_pct = 100 · RMSE / mean measured, max_relative_error_pct = 100 · max "
+    "over samples of |d| / measured.",
     "Samples not used are counted: n_skipped_rom_invalid (ROM input missing or not finite), "
     "n_skipped_missing (measured or monitored value missing, e.g. a dropout or a rejected "
     "spike); n_used + n_skipped_missing + n_skipped_rom_invalid = n_samples. n_extrapolated: "
@@ -85,16 +108,6 @@ def monitor_windows(bundle: BladeRom, windows: Mapping[str, pd.DataFrame],
     return monitored
 
 
-def rom_parameters(bundle: BladeRom) -> ModelParameters:
-    """The model parameters the ROM was built with, from its provenance (strictly checked:
-    a missing or misspelled coefficient is a ParameterError, never a default)."""
-    values = bundle.provenance.get("model_parameters")
-    if not isinstance(values, dict):
-        raise ValueError("the ROM file records no model_parameters in its provenance; rebuild "
-                         "it with 'steamtwin rom build' or monitor with the ROM alone")
-    return ModelParameters.from_dict(values, "the ROM file's provenance.model_parameters")
-
-
 def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str | Path, *,
              title: str = "Blade-temperature ROM against DCS data: validation report",
              settings: Mapping[str, object] | None = None,
@@ -102,7 +115,8 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
              versions: Mapping[str, str] | None = None,
              field_check: SnapshotSet | None = None,
              extra_sections: Sequence[Section] = (),
-             simulator: Simulator | None = None) -> ValidationReport:
+             simulator: Simulator | None = None,
+             time_zone: str | None = None) -> ValidationReport:
     """Compare the ROM with measured windows and write the report into ``out_dir``.
 
     ``windows`` maps a name (e.g. "50 % load") to canonical SI data. ``settings``,
@@ -110,13 +124,18 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
     caller head the report; ``field_check`` (FOM fields, e.g. from
     :func:`~steamtwin.rom.snapshots.generate_snapshots` on the ROM's mesh) adds Figure 9 per
     field with a table of its errors; ``extra_sections`` follow the validation's own.
-    Writes ``report.html``, ``report.json``, the CSV tables and PNG figures; returns the report.
+    ``time_zone`` (IANA name, e.g. "Asia/Shanghai"; the tag map's ``historian.time_zone``):
+    the zone the report's times are given in (default: the windows' own).
+    Writes ``report.html``, ``report.json``, the CSV tables, the per-sample series
+    (``series_<n>_<window>.parquet``, :func:`write_series`) and PNG figures; returns the report.
     """
     if not windows:
         raise ValueError("no validation windows given")
     for name, frame in windows.items():
         if frame.empty:
             raise ValueError(f"window {name!r} holds no sample")
+    if time_zone is not None:
+        windows = {name: _in_zone(frame, time_zone, name) for name, frame in windows.items()}
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     stages = dict(timings or {})
@@ -126,20 +145,29 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
 
     clock = time.perf_counter()
     predicted = set(bundle.sensor_names) | set(simulator.output_signals if simulator else ())
-    signals = [s for s in COMPARED_SIGNALS if s in predicted
-               and all(s in frame.columns for frame in windows.values())]
+    # a pressure the monitoring model takes as input is not modelled: nothing to compare
+    inputs = set(simulator.input_signals if simulator else bundle.rom.input_names_)
+
+    def held(signal: str) -> bool:
+        return all(signal in frame.columns for frame in windows.values())
+
+    signals = [s for s in COMPARED_SIGNALS if s in predicted and held(s)]
     if not signals:
         raise ValueError(f"the data hold none of the ROM's steam-path temperatures "
                          f"{[s for s in COMPARED_SIGNALS if s in bundle.sensor_names]} in "
                          "every window; nothing to compare")
+    signals += [s for s in COMPARED_PRESSURES
+                if s in predicted and s not in inputs and held(s)]
     table5 = operating_table(windows)
     table8 = deviation_table({name: (windows[name], monitored[name]) for name in windows},
                              signals)
     stages["tables"] = time.perf_counter() - clock
+    zone = time_zone or str(next(iter(windows.values())).index.tz or "as in the data")
 
     report = ValidationReport(title, settings={
         **(settings or {}),
         "windows": list(windows),
+        "times in": zone,
         "compared signals": signals,
         "ROM inputs": [str(name) for name in bundle.rom.input_names_],
         "steam-path temperatures monitored by": (
@@ -149,12 +177,17 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
     })
     report.versions |= dict(versions or {})
     report.add_table("table5_operating", table5,
-                     "Table 5 — operating conditions of the validation windows (DCS; MW, MPa, "
-                     "°C, t/h)")
+                     f"Table 5 — operating conditions of the validation windows (DCS; MW, MPa, "
+                     f"°C, t/h; times in {zone})")
     report.add_table("table8_deviation", table8,
-                     "Table 8 — monitored (twin) vs measured temperatures per measurement point "
-                     "and window (K, %)")
+                     "Table 8 — monitored (twin) vs measured temperatures and pressures per "
+                     "measurement point and window (K or MPa as the unit column says, %)")
     report.add_notes("Table 8: definitions", _DEFINITIONS)
+    series = write_series(windows, monitored, signals, out_dir)
+    report.add_files("Per-sample series (Parquet): measured, twin and residual per signal", [
+        (path, f"{name}: {len(windows[name])} samples of {', '.join(signals)}; units in the "
+         f"column names and the file's metadata; times in {zone}")
+        for name, path in series.items()])
     clock = time.perf_counter()
     if "hp_exhaust_temperature" in signals:
         path = exhaust_tracking_figure(windows, monitored,
@@ -178,6 +211,40 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
     report.timings = stages
     report.write(out_dir)
     return report
+
+
+def write_series(windows: Mapping[str, pd.DataFrame], monitored: Mapping[str, pd.DataFrame],
+                 signals: Sequence[str], out_dir: str | Path) -> dict[str, Path]:
+    """One Parquet file per window of :func:`~steamtwin.validation.tables.series_frame`.
+
+    Named ``series_<n>_<window>.parquet`` (n from 1, the window name reduced to letters,
+    digits and ``_``); the schema metadata key ``steamtwin`` holds JSON with the window name,
+    its time zone, each column's unit and the residual's definition. Returns name → path.
+    """
+    out_dir = Path(out_dir)
+    written = {}
+    for number, (name, frame) in enumerate(windows.items(), start=1):
+        series = series_frame(frame, monitored[name], signals, name)
+        slug = re.sub(r"[^A-Za-z0-9]+", "_", name.replace("%", "pct")).strip("_")
+        path = out_dir / f"series_{number}_{slug}.parquet"
+        table = pa.Table.from_pandas(series, preserve_index=True)
+        metadata = {"window": name, "time_zone": str(series.index.tz),
+                    "units": series.attrs["units"],
+                    "residual": "twin − measured, in the residual column's unit"}
+        table = table.replace_schema_metadata({**(table.schema.metadata or {}),
+                                               b"steamtwin": json.dumps(metadata).encode()})
+        pq.write_table(table, path)
+        written[name] = path
+    return written
+
+
+def _in_zone(frame: pd.DataFrame, time_zone: str, name: str) -> pd.DataFrame:
+    """``frame`` with its time index converted to ``time_zone`` (a naive index is refused)."""
+    index = frame.index
+    if not isinstance(index, pd.DatetimeIndex) or index.tz is None:
+        raise ValueError(f"window {name!r}: times without a time zone cannot be shown in "
+                         f"{time_zone}")
+    return frame.set_axis(index.tz_convert(time_zone))
 
 
 def _field_check(bundle: BladeRom, reference: SnapshotSet, out_dir: Path,
