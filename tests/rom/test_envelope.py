@@ -9,6 +9,8 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from scipy.spatial import Delaunay
 
 from steamtwin.model.design_check import valve_openings
@@ -117,12 +119,12 @@ def test_a_calibrated_flow_coefficient_no_longer_breaks_the_plan(reference_spec,
     envelope = _envelope(reference_spec, reference_model, CALIBRATED,
                          parameter_intervals={"flow_coefficient": (0.94, 0.97)})
     conditions, replaced, inputs = _planned(reference_spec, reference_model, CALIBRATED,
-                                            envelope, 34, layout="corners")
-    assert len(envelope.valve_points) == 2  # 32 corners + 2 valve points
+                                            envelope, 35, layout="corners")
+    assert len(envelope.valve_points) == 2  # 32 corners + 2 valve points + the rated point
     assert len(replaced) >= 1
     assert replaced["reason"].str.contains("wide-open governing valves").all()
-    in_place, added = replaced[replaced["row"] < 34], replaced[replaced["row"] >= 34]
-    assert len(conditions) == 34 + len(added) and len(added) == len(in_place) >= 1
+    in_place, added = replaced[replaced["row"] < 35], replaced[replaced["row"] >= 35]
+    assert len(conditions) == 35 + len(added) and len(added) == len(in_place) >= 1
     # in place: the same (p0, T0) just below the flow the valves pass; added: the same flow
     # at the lowest throttle pressure that passes it — both on the capacity limit
     assert np.all(in_place["flow_after"] < in_place["flow_before"])
@@ -132,7 +134,7 @@ def test_a_calibrated_flow_coefficient_no_longer_breaks_the_plan(reference_spec,
     assert np.all(replaced["temperature_after"] == replaced["temperature_before"])
     for row in replaced.itertuples():
         beyond = conditions.iloc[[row.row]].copy()
-        if row.row < 34:
+        if row.row < 35:
             beyond["main_steam_flow"] *= 1.01
         else:
             beyond["main_steam_pressure"] *= 0.99
@@ -153,7 +155,7 @@ def test_a_calibrated_flow_coefficient_no_longer_breaks_the_plan(reference_spec,
 
 def test_build_with_the_calibrated_flow_coefficient(reference_spec, reference_model,
                                                     coarse_blade):
-    bundle, built = build_rom(reference_spec, coarse_blade, CALIBRATED, n_snapshots=34,
+    bundle, built = build_rom(reference_spec, coarse_blade, CALIBRATED, n_snapshots=35,
                               layout="corners", max_workers=1,
                               parameter_intervals={"flow_coefficient": (0.94, 0.97)})
     envelope = bundle.provenance["envelope"]
@@ -247,3 +249,25 @@ def test_bad_parameter_intervals_are_refused(reference_spec, reference_model):
     with pytest.raises(ParameterError, match="outside its physical bounds"):
         _envelope(reference_spec, reference_model, CALIBRATED,
                   parameter_intervals={"flow_coefficient": (0.85, 0.98)})
+
+
+@settings(max_examples=6, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(flow_coefficient=st.floats(0.925, 1.1), seed=st.integers(0, 50),
+       layout=st.sampled_from(["lhs", "corners", "bands"]))
+def test_every_planned_condition_runs_and_spans_the_line(reference_spec, reference_model,
+                                                         flow_coefficient, seed, layout):
+    """For any flow coefficient that passes rated flow, the repaired plan runs in the model
+    as a whole and its p1 span the line's at 30…100 %."""
+    params = ModelParameters(flow_coefficient=flow_coefficient)
+    envelope = _envelope(reference_spec, reference_model, params)
+    conditions, _ = feasible_conditions(
+        reference_spec, design_conditions(reference_spec, 32, seed=seed, layout=layout,
+                                          envelope=envelope), params, model=reference_model)
+    steady = conditions[list(INPUT_SIGNALS)].set_index(pd.Index(np.arange(len(conditions))
+                                                                * 1e12))
+    p1 = reference_model.simulate_detailed(steady, params, stages=False).diagnostics[
+        "control_stage_pressure"].to_numpy()
+    line = operating_line(reference_spec, params, [0.3, 0.5, 0.75, 1.0],
+                          model=reference_model)["control_stage_pressure"].to_numpy()
+    assert p1.min() <= line.min() and line.max() <= p1.max()

@@ -54,6 +54,7 @@ FLOW_VARIATION = 0.04  # fraction of the level's flow
 # puts the rated point inside the design's hull rather than on its edge.
 MAXIMUM_FLOW_FRACTION = 1.01
 LAYOUTS = ("bands", "lhs", "corners")
+RATED_POINT_TOLERANCE = 0.005  # load fraction: a valve point this close stands for the top point
 ROM_INPUTS = ("main_steam_pressure", "main_steam_temperature", "control_stage_pressure")
 
 
@@ -72,7 +73,9 @@ def design_conditions(spec: TurbineSpec, n_snapshots: int = 32,
     ``load_level`` names the level a row belongs to, ``load_fraction`` is its own load.
     ``envelope`` (:func:`steamtwin.rom.envelope.operating_envelope`) replaces ``loads`` and
     the variations by its levels' boxes and adds one snapshot on the operating line at each of
-    its valve points (taken from the count, when each level keeps at least one).
+    its valve points and at its top level (taken from the count, when each level keeps at
+    least one): the top level's box reaches the valves' capacity, where the model may cut its
+    corners, and the line point there is one the envelope has checked the model runs.
     """
     if layout not in LAYOUTS:
         raise ValueError(f"layout must be one of {LAYOUTS}, got {layout!r}")
@@ -87,6 +90,8 @@ def design_conditions(spec: TurbineSpec, n_snapshots: int = 32,
         boxes = list(envelope.levels)
         levels = np.array([box.load for box in boxes])
         points = envelope.valve_points
+        if not any(abs(point - levels[-1]) <= RATED_POINT_TOLERANCE for point in points):
+            points = (*points, float(levels[-1]))
     if n_snapshots < len(levels):
         raise ValueError(f"n_snapshots must be ≥ the number of load levels ({len(levels)})")
     if n_snapshots - len(points) < len(levels):
