@@ -23,9 +23,11 @@ the snapshots span, as a box about the unit's operating line at that level
 
 :func:`feasible_conditions` then runs the model once per snapshot condition (steady, no FEM):
 a condition above what the wide-open valves pass is replaced by the same (p0, T0) at the highest
-flow they pass, any other failure by the farthest feasible point on the segment from its level's
-operating-line point; replacements are counted. When the operating line itself cannot be run,
-:class:`EnvelopeError` names the parameter and the plant limit.
+flow they pass (plus one row at its flow and the lowest throttle pressure that passes it), any
+other failure by the farthest feasible point on the segment from its level's operating-line
+point; replacements are counted. When the operating line itself cannot be run,
+:class:`EnvelopeError` names the parameter and the plant limit. :func:`observed_anchors` adds
+snapshots about observed samples the planned ones leave outside their hull.
 """
 
 from __future__ import annotations
