@@ -106,3 +106,29 @@ def test_build_passes_the_accuracy_options(tmp_path, monkeypatch):
     assert seen["projection_tolerance"] == 0.1 and seen["physics_features"] is True
     runner.invoke(rom_app, [*common, "--projection-tolerance", "0", "--no-physics-features"])
     assert seen["projection_tolerance"] is None and seen["physics_features"] is False
+
+
+def test_build_covers_the_historian_and_names_the_parameter(tmp_path, plant_files,
+                                                            reference_model):
+    """--data/--tags widen the envelope to the plant's inputs; a flow coefficient that cannot
+    pass rated flow is named with its file; bad --param-interval and --data alone refused."""
+    paths, _ = plant_files
+    runner = CliRunner()
+    common = ["build", "--snapshots", "8", "--element-size", "0.006", "--workers", "1"]
+    built = runner.invoke(rom_app, [*common, "--data", str(paths["historian"]), "--tags",
+                                    str(paths["tag_map"]), "--out", str(tmp_path / "r.npz")])
+    assert built.exit_code == 0, built.output
+    assert "0 beyond the extrapolation limit" in built.output
+    params = tmp_path / "params.json"
+    params.write_text('{"flow_coefficient": 0.9, "friction_coefficient": 1.0, '
+                      '"heat_transfer_coefficient": 1.0}')
+    failed = runner.invoke(rom_app, [*common, "--params", str(params), "--out",
+                                     str(tmp_path / "f.npz")])
+    assert failed.exit_code == 2
+    assert f"flow_coefficient 0.9 from {params}: at 100% load" in failed.output
+    bad = runner.invoke(rom_app, [*common, "--param-interval", "flow_coefficient=1", "--out",
+                                  str(tmp_path / "b.npz")])
+    assert bad.exit_code == 2 and "NAME=LOW:HIGH" in bad.output
+    alone = runner.invoke(rom_app, [*common, "--data", str(paths["historian"]), "--out",
+                                    str(tmp_path / "a.npz")])
+    assert alone.exit_code == 2 and "go together" in alone.output

@@ -29,6 +29,7 @@ from steamtwin.rom.reconstruction import (
     MAX_EXTRAPOLATION,
 )
 from steamtwin.rom.romfile import RomFileError, load_rom, save_rom
+from steamtwin.rom.snapshots import ROM_INPUTS
 from steamtwin.spec import SpecError, load_spec
 from steamtwin.spec.fingerprint import load_spec_and_text, short_hash
 
@@ -63,20 +64,46 @@ def build(
     physics_features: bool = typer.Option(
         True, help="RBF on the governing stage's features (p0, T0, p1, T_cs, admitted arc) "
         "instead of (p0, T0, p1)."),
+    param_interval: list[str] = typer.Option(
+        [], "--param-interval", help="NAME=LOW:HIGH, a model parameter's interval (e.g. its "
+        "calibration interval); the snapshots cover the control-stage pressure a plant "
+        "anywhere in it shows. Repeatable."),
+    data: Path | None = typer.Option(None, help="Historian export (CSV/Parquet) whose "
+                                     "main-steam p, T and control-stage pressure the "
+                                     "snapshots must cover (needs --tags)."),
+    tags: Path | None = typer.Option(None, help="Tag map (TOML) of --data."),
+    accept_quality_errors: bool = typer.Option(
+        False, OVERRIDE_OPTION, help="Go on despite error-level data-quality findings in "
+        "--data; the bad samples stay excluded."),
 ) -> None:
     """Generate blade-field snapshots with the FOM + FEM and fit the POD-RBF ROM.
+
+    The snapshots cover the spec's operating envelope (sliding pressure, temperature schedule,
+    valve points), widened by --param-interval and by the inputs observed in --data. A
+    snapshot condition the model cannot run (e.g. more flow than the valves pass at the
+    calibrated flow coefficient) is replaced by a feasible one and counted; when the operating
+    line itself cannot be run, the error names the parameter.
 
     Example: steamtwin rom build --turbine reference --params params.json --snapshots 32 --out rom.npz
     """  # noqa: E501
     from steamtwin.geometry.meshing import blade_volume_mesh
     from steamtwin.geometry.volume_mesh import read_volume_mesh
     from steamtwin.rom.build import build_rom
+    from steamtwin.rom.envelope import parse_parameter_interval
 
+    if (data is None) != (tags is None):
+        typer.echo("error: --data and --tags go together", err=True)
+        raise typer.Exit(code=2)
     console = Console(stderr=True)
     try:
         prepare_output_file(out, "--out")
         spec, spec_toml = load_spec_and_text(turbine)
         parameters = ModelParameters.from_json(params) if params else ModelParameters()
+        intervals = dict(parse_parameter_interval(text) for text in param_interval)
+        observed = None
+        if data is not None and tags is not None:
+            observed = load_history(data, tags, required=list(ROM_INPUTS),
+                                    accept_errors=accept_quality_errors).data
         with console.status("meshing the control-stage blade"):
             volume = (read_volume_mesh(mesh) if mesh is not None
                       else blade_volume_mesh(spec, "hp1", element_size=element_size))
@@ -87,12 +114,26 @@ def build(
                                   seed=seed, layout=layout, progress=progress,
                                   projection_tolerance=projection_tolerance or None,
                                   physics_features=physics_features, spec_toml=spec_toml,
-                                  params_file=params)
-    except (SpecError, ParameterError, InputError, MeshError, OutputPathError, ValueError,
-            OSError) as error:
+                                  params_file=params, parameter_intervals=intervals or None,
+                                  observed=observed)
+    except DataQualityError as error:
+        typer.echo(f"error: {error}", err=True)
+        raise typer.Exit(code=1) from None
+    except (SpecError, ParameterError, InputError, MeshError, OutputPathError, TagMapError,
+            HistorianFormatError, ValueError, OSError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=2) from None
     save_rom(bundle, out)
+    envelope = bundle.provenance["envelope"]
+    if envelope["replaced"]:
+        typer.echo(f"{envelope['replaced']} snapshot condition(s) the model cannot run were "
+                   "replaced by feasible ones (e.g. the highest flow the valves pass); "
+                   "'steamtwin rom info' lists them", err=True)
+    coverage = envelope["observed"]
+    if coverage is not None and coverage["samples"]:
+        typer.echo(f"--data: {coverage['outside_hull']} of {coverage['samples']} sample(s) "
+                   f"outside the snapshots' hull, {coverage['beyond_limit']} beyond the "
+                   f"extrapolation limit")
     rom = bundle.rom
     typer.echo(f"wrote {out}: {rom.n_modes_} modes ({rom.energy_captured_:.6f} of the energy) "
                f"on {rom.mean_.size} nodes from {rom.centres_.shape[0]} snapshots, turbine "

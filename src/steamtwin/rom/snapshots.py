@@ -42,6 +42,7 @@ from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.operating import hp_exhaust_pressure, operating_point
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
+from steamtwin.rom.envelope import MINIMUM_LOAD, OperatingEnvelope, line_box
 from steamtwin.spec import TurbineSpec
 
 LOAD_LEVELS = (0.30, 0.50, 0.75, 1.00)
@@ -52,8 +53,8 @@ FLOW_VARIATION = 0.04  # fraction of the level's flow
 # rated pressure and ~1.016 at −5 % (capacity ∝ p0); 1.01 keeps every design point feasible and
 # puts the rated point inside the design's hull rather than on its edge.
 MAXIMUM_FLOW_FRACTION = 1.01
-MINIMUM_LOAD = 0.2  # lowest load of the sliding-pressure line helper (operating_point)
 LAYOUTS = ("bands", "lhs", "corners")
+RATED_POINT_TOLERANCE = 0.005  # load fraction: a valve point this close stands for the top point
 ROM_INPUTS = ("main_steam_pressure", "main_steam_temperature", "control_stage_pressure")
 
 
@@ -62,21 +63,39 @@ def design_conditions(spec: TurbineSpec, n_snapshots: int = 32,
                       pressure_variation: float = PRESSURE_VARIATION,
                       temperature_variation: float = TEMPERATURE_VARIATION,
                       flow_variation: float = FLOW_VARIATION, seed: int = 0,
-                      layout: str = "lhs") -> pd.DataFrame:
+                      layout: str = "lhs", envelope: OperatingEnvelope | None = None
+                      ) -> pd.DataFrame:
     """FOM input conditions (SI) of the design, one row per snapshot, with ``load_fraction``.
 
     ``layout`` is ``"bands"`` (Latin hypercube in load band × pressure × temperature around
     each level), ``"lhs"`` (Latin hypercube per level with the flow varied by
     ``flow_variation``) or ``"corners"`` (2³ corners per level, then Latin-hypercube points).
     ``load_level`` names the level a row belongs to, ``load_fraction`` is its own load.
+    ``envelope`` (:func:`steamtwin.rom.envelope.operating_envelope`) replaces ``loads`` and
+    the variations by its levels' boxes and adds one snapshot on the operating line at each of
+    its valve points and at its top level (taken from the count, when each level keeps at
+    least one): the top level's box reaches the valves' capacity, where the model may cut its
+    corners, and the line point there is one the envelope has checked the model runs.
     """
-    if n_snapshots < len(loads):
-        raise ValueError(f"n_snapshots must be ≥ the number of load levels ({len(loads)})")
     if layout not in LAYOUTS:
         raise ValueError(f"layout must be one of {LAYOUTS}, got {layout!r}")
-    levels = np.asarray(loads, dtype=float)
-    if np.any(np.diff(levels) <= 0):
-        raise ValueError("loads must increase")
+    if envelope is None:
+        levels = np.asarray(loads, dtype=float)
+        if np.any(np.diff(levels) <= 0):
+            raise ValueError("loads must increase")
+        boxes = [line_box(float(level), pressure_variation, temperature_variation,
+                          flow_variation, MAXIMUM_FLOW_FRACTION) for level in levels]
+        points: tuple[float, ...] = ()
+    else:
+        boxes = list(envelope.levels)
+        levels = np.array([box.load for box in boxes])
+        points = envelope.valve_points
+        if not any(abs(point - levels[-1]) <= RATED_POINT_TOLERANCE for point in points):
+            points = (*points, float(levels[-1]))
+    if n_snapshots < len(levels):
+        raise ValueError(f"n_snapshots must be ≥ the number of load levels ({len(levels)})")
+    if n_snapshots - len(points) < len(levels):
+        points = ()
     middle = 0.5 * (levels[1:] + levels[:-1])
     band_low = np.concatenate([[max(MINIMUM_LOAD, 2 * levels[0] - middle[0]) if middle.size
                                 else levels[0]], middle])
@@ -84,10 +103,14 @@ def design_conditions(spec: TurbineSpec, n_snapshots: int = 32,
     top = spec.sliding_pressure.load_fraction[-1]
     rng = np.random.default_rng(seed)
     corners = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
-    counts = np.full(len(loads), n_snapshots // len(loads))
-    counts[: n_snapshots % len(loads)] += 1
+    n_levels = n_snapshots - len(points)
+    counts = np.full(len(levels), n_levels // len(levels))
+    counts[: n_levels % len(levels)] += 1
     rows = []
-    for index, (level, count) in enumerate(zip(levels, counts, strict=True)):
+    for index, (box, count) in enumerate(zip(boxes, counts, strict=True)):
+        pressure, temperature, flow_box = (_centre_half(box.pressure_factor),
+                                           _centre_half(box.temperature_offset),
+                                           _centre_half(box.flow_factor))
         if layout == "bands":
             sampler = qmc.LatinHypercube(d=3, seed=rng, optimization="random-cd")
             unit = sampler.random(count)
@@ -95,12 +118,13 @@ def design_conditions(spec: TurbineSpec, n_snapshots: int = 32,
                 load = band_low[index] + (band_high[index] - band_low[index]) * u_load
                 point = operating_point(spec, min(load, top))
                 flow = load * spec.design.main_steam_flow
-                rows.append(_design_row(spec, level, load, float(point["main_steam_pressure"])
-                                        * (1.0 + pressure_variation * (2 * u_p - 1)),
-                                        float(point["main_steam_temperature"])
-                                        + temperature_variation * (2 * u_t - 1), flow))
+                rows.append(_design_row(
+                    spec, box.load, load, float(point["main_steam_pressure"])
+                    * (pressure[0] + pressure[1] * (2 * u_p - 1)),
+                    float(point["main_steam_temperature"])
+                    + temperature[0] + temperature[1] * (2 * u_t - 1), flow))
             continue
-        load = float(level)
+        load = box.load
         if layout == "corners" and count >= 8:
             unit = corners
             if count > 8:
@@ -110,15 +134,23 @@ def design_conditions(spec: TurbineSpec, n_snapshots: int = 32,
             sampler = qmc.LatinHypercube(d=3, seed=rng, optimization="random-cd")
             unit = 2.0 * sampler.random(count) - 1.0
         point = operating_point(spec, load)
-        flow_centre = min(1.0 + flow_variation, MAXIMUM_FLOW_FRACTION / load) - flow_variation
         for dp, dt, dm in unit:
-            flow = float(point["main_steam_flow"]) * (flow_centre + flow_variation * dm)
+            flow = float(point["main_steam_flow"]) * (flow_box[0] + flow_box[1] * dm)
             rows.append(_design_row(spec, load, flow / spec.design.main_steam_flow,
                                     float(point["main_steam_pressure"])
-                                    * (1.0 + pressure_variation * dp),
+                                    * (pressure[0] + pressure[1] * dp),
                                     float(point["main_steam_temperature"])
-                                    + temperature_variation * dt, flow))
+                                    + temperature[0] + temperature[1] * dt, flow))
+    for load in points:
+        point = operating_point(spec, load)
+        rows.append(_design_row(spec, load, load, float(point["main_steam_pressure"]),
+                                float(point["main_steam_temperature"]),
+                                float(point["main_steam_flow"])))
     return pd.DataFrame(rows)
+
+
+def _centre_half(interval: tuple[float, float]) -> tuple[float, float]:
+    return 0.5 * (interval[0] + interval[1]), 0.5 * (interval[1] - interval[0])
 
 
 def _design_row(spec: TurbineSpec, level: float, load: float, pressure: float,
