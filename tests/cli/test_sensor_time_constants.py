@@ -10,7 +10,8 @@ import pytest
 from steamtwin.cli.validate import _monitoring_model
 from steamtwin.dcs.plant import plant_tag_map
 from steamtwin.dcs.tagmap import TagMapError, parse_tag_map, write_tag_map
-from steamtwin.model.measurement import TYPICAL_TIME_CONSTANTS_S, time_constants_for
+from steamtwin.model.measurement import TYPICAL_TIME_CONSTANTS_S
+from steamtwin.model.sensor_setup import sensor_setup
 
 TAGS = """
 [historian]
@@ -41,13 +42,13 @@ def test_time_constant_is_read_written_and_checked(tmp_path):
             parse_tag_map(TAGS.replace("45.5", bad), "tags.toml")
 
 
-def test_the_plants_own_time_constants_replace_the_typical_ones():
-    outputs = ("control_stage_temperature", "hp_exhaust_temperature", "hp_power")
-    merged = time_constants_for(outputs, {"hp_exhaust_temperature": 45.5,
-                                          "main_steam_pressure": 2.0})
-    assert merged == {"control_stage_temperature":
-                      TYPICAL_TIME_CONSTANTS_S["control_stage_temperature"],
-                      "hp_exhaust_temperature": 45.5}  # inputs are not lagged
+def test_the_plants_own_time_constants_replace_the_typical_ones(reference_spec):
+    setup = sensor_setup(reference_spec, parse_tag_map(TAGS, "tags.toml"))
+    assert setup.time_constants == {  # inputs are not lagged
+        "control_stage_temperature": TYPICAL_TIME_CONSTANTS_S["control_stage_temperature"],
+        "hp_exhaust_temperature": 45.5,
+        "hp_inner_casing_temperature": TYPICAL_TIME_CONSTANTS_S["hp_inner_casing_temperature"]}
+    assert setup.sources["hp_exhaust_temperature"] == "tag map"
 
 
 def test_validate_lags_the_model_by_the_tag_maps_time_constants(reference_spec):

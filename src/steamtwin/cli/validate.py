@@ -18,8 +18,8 @@ from steamtwin.dcs.readers import HistorianFormatError
 from steamtwin.dcs.tagmap import TagMap, TagMapError, load_tag_map
 from steamtwin.dcs.windows import find_steady_windows, parse_window, select_window
 from steamtwin.model.fom import FullOrderModel
-from steamtwin.model.measurement import time_constants_for
 from steamtwin.model.parameters import ModelParameters, ParameterError
+from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.rom.estimator import ExtrapolationWarning
 from steamtwin.rom.provenance import check_parameters, resolve_spec
@@ -163,15 +163,15 @@ def validate(
 
 def _monitoring_model(spec: TurbineSpec, monitor: str, sensor_lag: bool, tag_map: TagMap
                       ) -> FullOrderModel | None:
-    """The FOM that monitors the steam path (None: the ROM does), lagged like the plant's
-    sensors (the tag map's time constants, typical thermowells' otherwise)."""
+    """The FOM that monitors the steam path (None: the ROM does), read through the plant's
+    sensors as every mode reads it (:func:`~steamtwin.model.sensor_setup.sensor_setup`: the
+    tag map's time constants and thermocouple depth, typical thermowells' otherwise)."""
     if monitor != "fom":
         return None
+    setup = sensor_setup(spec, tag_map)
     if not sensor_lag:
-        return FullOrderModel(spec)
-    outputs = FullOrderModel(spec).output_signals
-    return FullOrderModel(spec, sensor_time_constants=time_constants_for(
-        outputs, tag_map.time_constants))
+        return FullOrderModel(setup.spec_for(spec))
+    return setup.model(spec)
 
 
 def _needed_signals(bundle: BladeRom, with_model: bool) -> tuple[str, ...]:

@@ -23,24 +23,13 @@ import numpy as np
 import pandas as pd
 from numba import njit
 
-__all__ = ["TYPICAL_TIME_CONSTANTS_S", "check_time_constants", "lag", "lag_outputs",
-           "time_constants_for"]
+__all__ = ["TYPICAL_TIME_CONSTANTS_S", "check_time_constants", "lag", "lag_outputs"]
 
 TYPICAL_TIME_CONSTANTS_S: dict[str, float] = {
     "control_stage_temperature": 20.0,  # thermowell in dense, fast steam
     "hp_exhaust_temperature": 30.0,  # thermowell in thinner exhaust steam (lower h)
     "hp_inner_casing_temperature": 5.0,  # sheathed TC in a drilled hole (contact resistance)
 }
-
-
-def time_constants_for(outputs: tuple[str, ...], plant: Mapping[str, float] | None = None
-                       ) -> dict[str, float]:
-    """Sensor time constants (s) of the model's ``outputs``: the plant's own (``plant``, e.g. a
-    tag map's ``time_constant`` per signal) where given, :data:`TYPICAL_TIME_CONSTANTS_S`
-    otherwise. Signals that are not outputs (the model's inputs) are left out: the model takes
-    the measured inputs as they are."""
-    merged = {**TYPICAL_TIME_CONSTANTS_S, **(plant or {})}
-    return {name: tau for name, tau in merged.items() if name in outputs}
 
 
 def check_time_constants(time_constants: Mapping[str, float] | None,
