@@ -16,6 +16,17 @@ Missing inputs (explicit choice)
     dynamics the HP temperatures follow) and counted (``filled_rows``); a longer dropout is a
     ``ValueError`` naming window, signal and time — split the window instead.
 
+Posterior score (joint calibration with priors)
+    With per-sample window weights ω (a :class:`~steamtwin.calibration.windowset.WindowSet`'s
+    load-band weights; 1 for plain frames), the measurement error σ_s per sensor (K; default
+    1 K) and priors per parameter, the Gaussian likelihood and the priors give the negative log
+    posterior ``NLP = ½ (χ² + Σ_k z_k²)`` with ``χ² = Σ_w ω_w Σ_s w_s Σ_i (T_sim − T_meas)²/σ_s²``
+    and ``z_k = (θ_k − m_k)/s_k`` in each prior's normal coordinate θ (x, or ln x for a
+    log-normal prior; Gelman et al. 2013, *Bayesian Data Analysis*, §4.1). What the optimisers
+    minimise is the *score* ``sqrt((χ² + Σ z²) / Σ_w ω_w Σ_s w_s n_ws)``, a monotone function of
+    the NLP, so its minimum is the MAP. Without priors and with σ = 1 K the score is the RMSE
+    above (K), the method's own objective. The RMSE itself is reported alongside.
+
 Infeasible candidates
     When the simulator rejects a candidate (``ValueError``, e.g. the FOM's ``InputError`` for a
     flow coefficient too low to pass rated flow) or returns non-finite temperatures at valid
@@ -27,13 +38,13 @@ Infeasible candidates
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
 from pymoo.core.problem import Problem
 
-from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
+from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters, ParameterPrior
 from steamtwin.model.simulator import Simulator
 
 __all__ = [
@@ -111,7 +122,9 @@ class PreparedWindow:
     (n, n_sensors) measured temperatures (K), NaN where excluded; ``filled_rows``: rows with a
     forward-filled input; ``dropped_rows``: leading rows dropped; ``excluded``: NaN measured
     samples per sensor; ``checked``: the inputs as the simulator's ``check_inputs`` returned
-    them, when it has that fast path (see :func:`predict_window`), else None.
+    them, when it has that fast path (see :func:`predict_window`), else None; ``weight``: the
+    weight ω of each of its samples (dimensionless); ``sigma``: measurement error σ per sensor
+    (K), None for 1 K each.
     """
 
     inputs: pd.DataFrame
@@ -120,6 +133,8 @@ class PreparedWindow:
     dropped_rows: int
     excluded: tuple[int, ...]
     checked: object = None
+    weight: float = 1.0
+    sigma: np.ndarray | None = None
 
 
 def _seconds(index: pd.Index) -> np.ndarray:
@@ -237,10 +252,18 @@ def _weights(sensors: Sequence[str], weights: Mapping[str, float] | Sequence[flo
 
 @dataclass(frozen=True)
 class Evaluation:
-    """One candidate's result: ``rmse`` (K; :data:`PENALTY_RMSE` if rejected) and why."""
+    """One candidate's result: ``rmse`` (K; :data:`PENALTY_RMSE` if rejected), why, and the
+    ``score`` the optimisers minimise (the posterior score; equal to ``rmse`` without priors
+    and with σ = 1 K; None = ``rmse``)."""
 
     rmse: float
     error: str = ""
+    score: float | None = None
+
+    @property
+    def value(self) -> float:
+        """What the optimisers minimise: ``score``, or ``rmse`` when no score was set."""
+        return self.rmse if self.score is None else self.score
 
     @property
     def penalised(self) -> bool:
@@ -250,7 +273,9 @@ class Evaluation:
 
 @dataclass(frozen=True)
 class Objective:
-    """What scores a candidate: weighted pooled RMSE (K) of ``simulator`` over ``windows``.
+    """What scores a candidate: weighted pooled RMSE (K) of ``simulator`` over ``windows`` and
+    the posterior score (module docstring) with ``priors`` (one per parameter, in
+    PARAMETER_NAMES order; None = no prior term).
 
     Picklable and self-contained: this is what evaluators send to their workers once.
     """
@@ -259,6 +284,33 @@ class Objective:
     windows: tuple[PreparedWindow, ...]
     sensors: tuple[str, ...]
     weights: np.ndarray
+    priors: tuple[ParameterPrior, ...] | None = None
+
+    def prior_terms(self, x: Sequence[float]) -> np.ndarray:
+        """z_k = (θ_k − m_k)/s_k per parameter (empty without priors)."""
+        if self.priors is None:
+            return np.empty(0)
+        return np.array([(prior.to_internal(float(v)) - prior.mean_internal) / prior.spread
+                         for prior, v in zip(self.priors, x, strict=True)])
+
+    def standardised_residuals(self, params: ModelParameters) -> np.ndarray:
+        """Every valid sample's residual √(ω w_s)·(T_sim − T_meas)/σ_s, flattened
+        (dimensionless; sample order fixed by the windows); raises if the model rejects it."""
+        parts = []
+        for window in self.windows:
+            predicted = predict_window(self.simulator, window, params, self.sensors)
+            valid = ~np.isnan(window.measured)
+            if not np.isfinite(predicted[valid]).all():
+                raise ValueError("the simulator returned non-finite temperatures")
+            sigma = np.ones(len(self.sensors)) if window.sigma is None else window.sigma
+            scale = np.sqrt(window.weight * self.weights) / sigma
+            parts.append(((predicted - window.measured) * scale)[valid])
+        return np.concatenate(parts)
+
+    def weighted_count(self) -> float:
+        """Σ_w ω_w Σ_s w_s n_ws: the number of samples the objective counts."""
+        return float(sum(w.weight * (self.weights * (~np.isnan(w.measured)).sum(axis=0)).sum()
+                         for w in self.windows))
 
     def parameters(self, x: Sequence[float]) -> ModelParameters:
         """The :class:`ModelParameters` of a decision vector (order: PARAMETER_NAMES)."""
@@ -274,11 +326,17 @@ class Objective:
         try:
             parts = self.squared_errors(self.parameters(x))
         except ValueError as error:
-            return Evaluation(PENALTY_RMSE, str(error) or type(error).__name__)
-        sse = sum(p[0] for p in parts)
-        count = sum(p[1] for p in parts)
-        return Evaluation(float(np.sqrt((self.weights * sse).sum()
-                                        / (self.weights * count).sum())))
+            reason = str(error) or type(error).__name__
+            return Evaluation(PENALTY_RMSE, reason, PENALTY_RMSE)
+        sse = sum(w.weight * p[0] for w, p in zip(self.windows, parts, strict=True))
+        count = sum(w.weight * p[1] for w, p in zip(self.windows, parts, strict=True))
+        chi2 = sum(w.weight * p[0] / (1.0 if w.sigma is None else w.sigma**2)
+                   for w, p in zip(self.windows, parts, strict=True))
+        total = (self.weights * count).sum()
+        rmse = float(np.sqrt((self.weights * sse).sum() / total))
+        score = float(np.sqrt(((self.weights * chi2).sum()
+                               + (self.prior_terms(x) ** 2).sum()) / total))
+        return Evaluation(rmse, score=score)
 
     def evaluate_many(self, rows: np.ndarray) -> list[Evaluation]:
         """Score each row of ``rows`` (n, 3) in order."""
@@ -286,8 +344,13 @@ class Objective:
 
 
 class CalibrationProblem(Problem):
-    """Single-objective pymoo problem: minimise the weighted RMSE (K) over measured windows.
+    """Single-objective pymoo problem: minimise the posterior score over measured windows (the
+    weighted RMSE in K without ``priors`` and ``sigma``; module docstring).
 
+    ``windows``: DataFrames (weight 1 each) or a
+    :class:`~steamtwin.calibration.windowset.WindowSet` (its load-band weights and per-window
+    σ); ``sigma``: measurement error per sensor (K) for windows that do not bring their own
+    (default 1 K); ``priors``: name → :class:`ParameterPrior` for every parameter, or None.
     Variables ``x`` = (flow, friction, heat-transfer coefficient), dimensionless, within
     ``bounds`` (default :data:`PARAMETER_BOUNDS`). Each generation's candidates go to
     ``evaluator`` as one batch (see :mod:`steamtwin.calibration.evaluation`; ``None``
@@ -300,9 +363,12 @@ class CalibrationProblem(Problem):
                  sensors: Sequence[str] = DEFAULT_SENSORS,
                  weights: Mapping[str, float] | Sequence[float] | None = None,
                  max_input_gap_s: float = MAX_INPUT_GAP_S, evaluator: object = None,
-                 min_samples: int = MIN_WINDOW_SAMPLES) -> None:
+                 min_samples: int = MIN_WINDOW_SAMPLES,
+                 sigma: Mapping[str, float] | None = None,
+                 priors: Mapping[str, ParameterPrior] | None = None) -> None:
         if isinstance(windows, pd.DataFrame) or len(windows) == 0:
             raise ValueError("windows must be a non-empty list of DataFrames")
+        frames, names, sample_weights, sigmas = _window_parts(windows)
         sensors = tuple(sensors)
         if not sensors or len(set(sensors)) != len(sensors):
             raise ValueError("sensors must be a non-empty list of distinct signal names")
@@ -311,11 +377,14 @@ class CalibrationProblem(Problem):
             raise ValueError(f"sensor(s) {unknown} are not predicted by the simulator "
                              f"(it predicts {list(simulator.output_signals)})")
         prepared = tuple(
-            prepare_window(w, simulator, sensors, max_input_gap_s, name=f"window {i}",
-                           min_samples=min_samples)
-            for i, w in enumerate(windows)
+            replace(prepare_window(w, simulator, sensors, max_input_gap_s, name=name,
+                                   min_samples=min_samples),
+                    weight=weight, sigma=_sigma(sensors, own if own is not None else sigma,
+                                                name))
+            for w, name, weight, own in zip(frames, names, sample_weights, sigmas, strict=True)
         )
-        self.objective = Objective(simulator, prepared, sensors, _weights(sensors, weights))
+        self.objective = Objective(simulator, prepared, sensors, _weights(sensors, weights),
+                                   _priors(priors))
         self.parameter_bounds = check_bounds(bounds)
         self.evaluator = evaluator
         self.n_evaluations = 0
@@ -350,7 +419,8 @@ class CalibrationProblem(Problem):
         return self.objective.parameters(x)
 
     def evaluate_candidates(self, candidates: np.ndarray) -> np.ndarray:
-        """RMSE (K) of each row of ``candidates`` (n, 3), counted, via the evaluator."""
+        """Score of each row of ``candidates`` (n, 3), counted, via the evaluator (the RMSE in
+        K without priors and σ)."""
         rows = np.atleast_2d(np.asarray(candidates, dtype=float))
         if self.evaluator is None:
             results = self.objective.evaluate_many(rows)
@@ -361,15 +431,63 @@ class CalibrationProblem(Problem):
             if result.penalised:
                 self.n_penalised += 1
                 self.last_error = result.error
-        return np.array([result.rmse for result in results])
+        return np.array([result.value for result in results])
+
+    def evaluate_full(self, params: ModelParameters) -> Evaluation:
+        """RMSE (K) and score of ``params``, counted as one evaluation."""
+        x = np.array([getattr(params, name) for name in PARAMETER_NAMES])
+        result = self.objective.evaluate(x)
+        self.n_evaluations += 1
+        if result.penalised:
+            self.n_penalised += 1
+            self.last_error = result.error
+        return result
 
     def rmse(self, params: ModelParameters) -> float:
         """Weighted pooled RMSE (K) of ``params``; :data:`PENALTY_RMSE` if rejected."""
-        x = [getattr(params, name) for name in PARAMETER_NAMES]
-        return float(self.evaluate_candidates(np.array([x]))[0])
+        return self.evaluate_full(params).rmse
+
+    def score(self, params: ModelParameters) -> float:
+        """Posterior score of ``params`` (what the optimisers minimise)."""
+        return self.evaluate_full(params).value
 
     def _evaluate(self, x: np.ndarray, out: dict, *args: object, **kwargs: object) -> None:
         out["F"] = self.evaluate_candidates(x)[:, None]
+
+
+def _window_parts(windows: object) -> tuple[list[pd.DataFrame], list[str], list[float],
+                                             list[Mapping[str, float] | None]]:
+    """Frames, names, per-sample weights and own σ of plain frames or a WindowSet."""
+    if hasattr(windows, "sample_weights"):
+        weights = list(windows.sample_weights())
+        return ([w.data for w in windows], [w.name for w in windows], weights,
+                [w.sigma for w in windows])
+    frames = list(windows)
+    return (frames, [f"window {i}" for i in range(len(frames))], [1.0] * len(frames),
+            [None] * len(frames))
+
+
+def _sigma(sensors: Sequence[str], sigma: Mapping[str, float] | None, name: str
+           ) -> np.ndarray | None:
+    """Per-sensor σ (K) in ``sensors`` order; 1 K for a sensor not given; None if none given."""
+    if sigma is None:
+        return None
+    values = np.array([float(sigma.get(s, 1.0)) for s in sensors])
+    if not (np.isfinite(values).all() and (values > 0).all()):
+        raise ValueError(f"{name}: measurement errors σ must be finite numbers > 0 K "
+                         f"(got {dict(zip(sensors, values.tolist(), strict=True))})")
+    return values
+
+
+def _priors(priors: Mapping[str, ParameterPrior] | None) -> tuple[ParameterPrior, ...] | None:
+    if priors is None:
+        return None
+    unknown = sorted(set(priors) - set(PARAMETER_NAMES))
+    missing = [n for n in PARAMETER_NAMES if n not in priors]
+    if unknown or missing:
+        raise ValueError(f"priors: give one per parameter {list(PARAMETER_NAMES)} "
+                         f"(unknown {unknown}, missing {missing})")
+    return tuple(priors[name] for name in PARAMETER_NAMES)
 
 
 def window_rmse(simulator: Simulator, windows: Sequence[pd.DataFrame],

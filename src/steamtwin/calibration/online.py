@@ -212,7 +212,7 @@ class OnlineCalibrator:
         evaluator.start(problem.objective)
         problem.evaluator = evaluator
         try:
-            previous = problem.rmse(current)
+            previous = problem.score(current)
             while algorithm.has_next():
                 algorithm.next()
         finally:
