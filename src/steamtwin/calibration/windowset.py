@@ -37,7 +37,8 @@ import pandas as pd
 
 from steamtwin.dcs.windows import find_steady_windows, select_window
 
-__all__ = ["RAMP_BAND", "CalibrationWindow", "WindowSet", "find_calibration_windows"]
+__all__ = ["RAMP_BAND", "CalibrationWindow", "WindowSet", "WindowSource",
+           "find_calibration_windows", "given_windows", "joint_window_set", "measurement_sigma"]
 
 RAMP_BAND = "ramps"
 """Band label of every ramp window."""
@@ -154,8 +155,10 @@ def find_calibration_windows(
     if not max_steady_s >= min_steady_s > 0:
         raise ValueError(f"need 0 < min_steady_s ≤ max_steady_s (got {min_steady_s}, "
                          f"{max_steady_s} s)")
+    # the steadiness test's sub-window (600 s by default) must fit in the shortest hold
     steady = sorted(find_steady_windows(data, duration_s=min_steady_s,
-                                        rated_load_w=rated_load_w, tolerance=tolerance),
+                                        rated_load_w=rated_load_w, tolerance=tolerance,
+                                        sub_window_s=min(600.0, min_steady_s / 2.0)),
                     key=lambda w: pd.Timestamp(w.start))
     result: list[CalibrationWindow] = []
     for span in steady:
@@ -178,3 +181,68 @@ def find_calibration_windows(
         result.append(CalibrationWindow(frame, "ramp", _load_fraction(frame, rated_load_w),
                                         source, sigma))
     return sorted(result, key=lambda w: w.data.index[0])
+
+
+def measurement_sigma(noise: Mapping[str, float | None], resolution: Mapping[str, float | None]
+                      ) -> dict[str, float]:
+    """Measurement error σ (K) per signal from a tag map's white noise σ and resolution Δ (K):
+    ``σ² = noise² + Δ²/12`` (rounding to Δ adds uniform noise of variance Δ²/12; Widrow &
+    Kollár 2008, *Quantization Noise*, ch. 4). Signals with neither are left out (the
+    calibration's default applies)."""
+    result = {}
+    for name in set(noise) | set(resolution):
+        n, d = noise.get(name), resolution.get(name)
+        if n is None and d is None:
+            continue
+        result[name] = float(np.sqrt((n or 0.0) ** 2 + (d or 0.0) ** 2 / 12.0))
+    return {name: value for name, value in result.items() if value > 0}
+
+
+@dataclass(frozen=True)
+class WindowSource:
+    """One historian file of a joint calibration: ``name`` (its path, for messages), ``data``
+    (cleaned canonical SI signals) and ``sigma`` (measurement error per sensor in K, or None)."""
+
+    name: str
+    data: pd.DataFrame
+    sigma: Mapping[str, float] | None = None
+
+
+def joint_window_set(sources: Sequence[WindowSource], rated_load_w: float, *,
+                     given: Sequence[tuple[pd.Timestamp, pd.Timestamp]] = (),
+                     ramps: bool = True, band_width: float = 0.10,
+                     **search: float) -> WindowSet:
+    """The windows of several files as one :class:`WindowSet`.
+
+    ``given`` (START, END) windows are taken from every file that covers them (ValueError
+    naming the window and each file's span if none does); without them every file is searched
+    (:func:`find_calibration_windows` with ``search``'s durations/tolerances), ramps dropped
+    when ``ramps`` is False. ValueError naming the file when a file yields no window.
+    """
+    if not sources:
+        raise ValueError("no historian file given")
+    windows: list[CalibrationWindow] = []
+    for start, end in given:
+        found = [s for s in sources if len(s.data) and s.data.index[0] <= start
+                 and end <= s.data.index[-1] + pd.Timedelta(seconds=1)]
+        if not found:
+            spans = "; ".join(f"{s.name}: {s.data.index[0]} … {s.data.index[-1]}"
+                              for s in sources)
+            raise ValueError(f"window {start}/{end} lies in none of the files ({spans})")
+        for source in found:
+            frame = select_window(source.data, start, end)
+            windows.extend(given_windows([frame], rated_load_w, source=source.name,
+                                         sigma=source.sigma))
+    if not given:
+        for source in sources:
+            found = find_calibration_windows(source.data, rated_load_w, source=source.name,
+                                             sigma=source.sigma, **search)
+            if not ramps:
+                found = [w for w in found if w.kind != "ramp"]
+            if not found:
+                raise ValueError(
+                    f"{source.name}: no steady window of at least "
+                    f"{search.get('min_steady_s', 3600.0) / 60:g} min and no load ramp found; "
+                    "pass --window START/END or a shorter --min-steady-minutes")
+            windows.extend(found)
+    return WindowSet(tuple(windows), band_width)

@@ -131,6 +131,28 @@ DEFAULT_PRIORS: dict[str, ParameterPrior] = {
 """Default prior per coefficient (see the module docstring for the reasoning)."""
 
 
+def parse_prior(text: str, option: str = "--prior") -> tuple[str, ParameterPrior]:
+    """``NAME=DISTRIBUTION:CENTER:SPREAD`` (e.g. ``flow_coefficient=normal:1.0:0.03``) →
+    (name, prior); ParameterError naming ``option`` and the expected form."""
+    name, sep, rest = text.partition("=")
+    parts = rest.split(":")
+    form = "NAME=normal|lognormal:CENTER:SPREAD, e.g. flow_coefficient=normal:1.0:0.03"
+    if not sep or len(parts) != 3:
+        raise ParameterError(f"{option} {text!r}: expected {form}")
+    if name not in PARAMETER_BOUNDS:
+        raise ParameterError(f"{option} {text!r}: unknown parameter {name!r}; known: "
+                             f"{', '.join(PARAMETER_BOUNDS)}")
+    try:
+        center, spread = float(parts[1]), float(parts[2])
+    except ValueError:
+        raise ParameterError(f"{option} {text!r}: CENTER and SPREAD must be numbers ({form})"
+                             ) from None
+    try:
+        return name, ParameterPrior(parts[0], center, spread, f"{option} {text}")
+    except ParameterError as error:
+        raise ParameterError(f"{option} {text!r}: {error}") from None
+
+
 def priors_from_dict(document: Any, source: str = "<priors>",
                      base: Mapping[str, ParameterPrior] | None = None
                      ) -> dict[str, ParameterPrior]:
