@@ -11,7 +11,12 @@ import pytest
 from scipy.signal import lfilter
 
 from steamtwin.calibration.calibrator import write_parameters
-from steamtwin.calibration.objective import PARAMETER_NAMES, CalibrationProblem
+from steamtwin.calibration.objective import (
+    PARAMETER_NAMES,
+    THERMOCOUPLE_BIAS,
+    CalibrationProblem,
+    thermocouple_bias_spread,
+)
 from steamtwin.calibration.posterior import fit_map, laplace_posterior, metropolis
 from steamtwin.calibration.windowset import CalibrationWindow, WindowSet
 from steamtwin.model.parameters import (
@@ -166,7 +171,7 @@ def test_duplicating_a_loads_windows_changes_nothing():
 def test_metropolis_agrees_with_laplace():
     objective = _objective(_window_set(np.random.default_rng(11)))
     estimate = fit_map(objective)
-    posterior = laplace_posterior(objective, estimate, autocorrelation=False)
+    posterior = laplace_posterior(objective, estimate, inflate=False)
     priors = [DEFAULT_PRIORS[name] for name in PARAMETER_NAMES]
 
     def log_posterior(theta: np.ndarray) -> float:
@@ -221,3 +226,65 @@ def test_prior_overrides_are_checked():
         priors_from_dict({"friction_coefficient": {"distribution": "uniform"}}, "p.json")
     with pytest.raises(ParameterError, match="did you mean"):
         priors_from_dict({"flow_coefficent": {"spread": 0.1}}, "p.json")
+
+
+def _biased(seed: int) -> tuple[WindowSet, dict[str, float]]:
+    """A window set whose thermocouples carry class-1 biases drawn uniformly in ± tolerance."""
+    random = np.random.default_rng(100 + seed)
+    windows = _window_set(random)
+    bias = {}
+    for sensor in SENSORS:
+        level = np.mean(np.concatenate([w.data[sensor].to_numpy() for w in windows]))
+        tolerance = thermocouple_bias_spread(level) * math.sqrt(3.0)
+        bias[sensor] = random.uniform(-tolerance, tolerance)
+    return WindowSet(tuple(
+        CalibrationWindow(w.data.assign(**{s: w.data[s] + bias[s] for s in SENSORS}), w.kind,
+                          w.load_fraction, w.source, w.sigma) for w in windows)), bias
+
+
+def test_thermocouple_biases_are_integrated_out_and_intervals_stay_honest():
+    covered = {mode: dict.fromkeys(PARAMETER_NAMES, 0) for mode in (THERMOCOUPLE_BIAS, None)}
+    draws = 20
+    for seed in range(draws):
+        windows, bias = _biased(seed)
+        for mode in covered:
+            objective = CalibrationProblem(LagSimulator(), windows, sensors=SENSORS,
+                                           priors=DEFAULT_PRIORS, min_samples=30,
+                                           sensor_bias=mode).objective
+            estimate = fit_map(objective)
+            table = laplace_posterior(objective, estimate).table()
+            for name in PARAMETER_NAMES:
+                covered[mode][name] += table.loc[name, "low"] <= getattr(TRUTH, name) <= \
+                    table.loc[name, "high"]
+            if mode is not None:
+                # χ² is the sum of squares of the profiled residuals (the Gauss–Newton form)
+                x = [getattr(estimate, n) for n in PARAMETER_NAMES]
+                result = objective.evaluate(x)
+                residuals = objective.standardised_residuals(estimate)
+                assert result.value**2 * objective.weighted_count() == pytest.approx(
+                    residuals @ residuals + (objective.prior_terms(x) ** 2).sum(), rel=1e-9)
+                estimated = objective.sensor_biases(estimate)[0]
+                np.testing.assert_allclose(estimated, [bias[s] for s in SENSORS], atol=0.15)
+    assert all(n >= 0.9 * draws for n in covered[THERMOCOUPLE_BIAS].values()), covered
+    # counted as noise, the biases pose as information: the intervals miss the truth
+    assert all(n <= 0.5 * draws for n in covered[None].values()), covered
+
+
+def test_a_model_missing_the_data_by_more_than_sigma_widens_the_intervals():
+    """σ stated 3× too small (as when the twin's own error exceeds the instruments'): the
+    Birge ratio restores coverage; without it the intervals are 3× too narrow."""
+    covered = {True: 0, False: 0}
+    draws = 20
+    understated = {name: 0.5 / 3.0 for name in SENSORS}
+    for seed in range(draws):
+        windows = _window_set(np.random.default_rng(200 + seed))
+        windows = WindowSet(tuple(CalibrationWindow(w.data, w.kind, w.load_fraction, w.source,
+                                                    understated) for w in windows))
+        objective = _objective(windows)
+        estimate = fit_map(objective)
+        for inflate in covered:
+            row = laplace_posterior(objective, estimate, inflate=inflate).table().loc[
+                "flow_coefficient"]
+            covered[inflate] += row["low"] <= TRUTH.flow_coefficient <= row["high"]
+        assert laplace_posterior(objective, estimate).scale_factor == pytest.approx(3.0, rel=0.1)
+    assert covered[True] >= 0.9 * draws and covered[False] <= 0.7 * draws, covered

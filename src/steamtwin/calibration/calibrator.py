@@ -34,6 +34,7 @@ from steamtwin.calibration.objective import (
     MIN_WINDOW_SAMPLES,
     PARAMETER_NAMES,
     PENALTY_RMSE,
+    THERMOCOUPLE_BIAS,
     CalibrationProblem,
     Evaluation,
     fitness,
@@ -123,7 +124,9 @@ class Calibrator:
     :class:`~steamtwin.calibration.windowset.WindowSet` (joint calibration: its load-band
     weights and per-file σ). ``priors``: name → :class:`ParameterPrior` (default
     :data:`DEFAULT_PRIORS`; None = plain RMSE, no intervals); ``sigma``: measurement error per
-    sensor (K) for windows without their own (default 1 K).
+    sensor (K) for windows without their own (default 1 K); ``sensor_bias``: the sensors'
+    constant biases integrated out (default: class-1 thermocouples; None: none; see
+    :mod:`~steamtwin.calibration.objective`).
     Same ``seed`` → same result, whatever evaluates the candidates.
 
     ``workers``: local processes (default every core; 1 = in this process); ``scheduler``: a
@@ -145,7 +148,8 @@ class Calibrator:
                  min_samples: int = MIN_WINDOW_SAMPLES, workers: int | None = None,
                  scheduler: Any = None, checkpoint: str | Path | None = None,
                  priors: Mapping[str, ParameterPrior] | None = DEFAULT_PRIORS,
-                 sigma: Mapping[str, float] | None = None) -> None:
+                 sigma: Mapping[str, float] | None = None,
+                 sensor_bias: str | Mapping[str, float] | None = THERMOCOUPLE_BIAS) -> None:
         self.simulator = simulator
         self.bounds = bounds
         self.sensors = sensors
@@ -166,6 +170,7 @@ class Calibrator:
         self.checkpoint = checkpoint
         self.priors = priors
         self.sigma = sigma
+        self.sensor_bias = sensor_bias
 
     # -- pieces (seams for parallel evaluation, checkpointing and other modes) ---------------
 
@@ -174,7 +179,7 @@ class Calibrator:
                                   sensors=self.sensors, weights=self.weights,
                                   max_input_gap_s=self.max_input_gap_s,
                                   min_samples=self.min_samples, sigma=self.sigma,
-                                  priors=self.priors)
+                                  priors=self.priors, sensor_bias=self.sensor_bias)
 
     def _algorithm(self, problem: CalibrationProblem) -> tuple[Algorithm, RemutationRepair]:
         repair = RemutationRepair(eta=self.mutation_eta)
@@ -207,7 +212,8 @@ class Calibrator:
         return {name: getattr(self, name) for name in (
             "bounds", "sensors", "weights", "population", "generations",
             "crossover_probability", "crossover_eta", "mutation_probability", "mutation_eta",
-            "tournament_size", "seed", "max_input_gap_s", "min_samples", "priors", "sigma")}
+            "tournament_size", "seed", "max_input_gap_s", "min_samples", "priors", "sigma",
+            "sensor_bias")}
 
     def fit(self, windows: Sequence[pd.DataFrame], resume: bool = False) -> Calibrator:
         """Calibrate against measured windows (canonical SI signals); returns self.

@@ -9,14 +9,21 @@ Coordinates
 Laplace approximation (MacKay 2003, *Information Theory, Inference and Learning Algorithms*,
 ch. 27; Bates & Watts 1988, §2.2 for the Gauss–Newton Hessian)
     With J = ∂r/∂θ of the standardised residuals r = √(ω w_s)·(T_sim − T_meas)/σ_s (central
-    differences), the posterior precision at the MAP is ``H = J^T J / τ + diag(1/s²)`` and the
-    covariance ``C = H⁻¹``; 95 % intervals are θ̂ ± 1.96 √C_ii mapped back to x. τ ≥ 1 is the
-    residuals' integrated autocorrelation time (samples; Sokal's estimator as in
-    :mod:`~steamtwin.calibration.identifiability`): the Gaussian likelihood counts every sample
-    as independent, while lagged instruments and the model's own bias make neighbouring
-    residuals alike, so n samples carry the information of n/τ (the effective-sample-size
-    correction; Sokal 1997). White residuals give τ ≈ 1 and the plain Laplace result. A
-    parameter the data cannot see has a near-zero column of J: its interval is its prior's.
+    differences), the posterior precision at the MAP is ``H = J^T J / (τ·S²) + diag(1/s²)`` and
+    the covariance ``C = H⁻¹``; 95 % intervals are θ̂ ± 1.96 √C_ii mapped back to x.
+
+    * τ ≥ 1 is the residuals' integrated autocorrelation time (samples; Sokal's estimator as
+      in :mod:`~steamtwin.calibration.identifiability`): the Gaussian likelihood counts every
+      sample as independent, while lagged instruments and the model's own error make
+      neighbouring residuals alike, so n samples carry the information of n/τ (the
+      effective-sample-size correction; Sokal 1997).
+    * S² = max(1, χ²/(n − p)) is the Birge ratio (Birge 1932, *Phys. Rev.* 40:207; the Particle
+      Data Group's scale factor): when the model misses the data by more than the instruments'
+      σ — a twin is never the plant — the spread of what it misses, not the instruments' σ,
+      sets how well the data pin a parameter.
+
+    Residuals that are white and of the stated σ give τ ≈ S ≈ 1 and the plain Laplace result.
+    A parameter the data cannot see has a near-zero column of J: its interval is its prior's.
 
 MAP by Gauss–Newton (:func:`fit_map`)
     ``scipy.optimize.least_squares`` (trust-region reflective) on the stacked vector
@@ -61,7 +68,8 @@ _STEP = 1e-4  # central-difference step in θ (a fraction of a per cent of any p
 class Posterior:
     """Laplace posterior at ``map`` (:class:`ModelParameters`): ``theta`` (MAP in the priors'
     normal coordinates), ``covariance`` (in θ), ``priors`` (PARAMETER_NAMES order),
-    ``autocorrelation_time`` (samples, τ), ``samples`` (residuals used)."""
+    ``autocorrelation_time`` (samples, τ), ``samples`` (residuals used), ``scale_factor``
+    (the Birge ratio S, ≥ 1)."""
 
     map: ModelParameters
     theta: np.ndarray
@@ -69,6 +77,7 @@ class Posterior:
     priors: tuple[ParameterPrior, ...]
     autocorrelation_time: float
     samples: int
+    scale_factor: float = 1.0
 
     def table(self, probability: float = INTERVAL_PROBABILITY) -> pd.DataFrame:
         """One row per parameter: ``map``, ``low``/``high`` (central interval, clipped to the
@@ -105,7 +114,7 @@ class Posterior:
         return {
             "schema_version": PARAMETERS_SCHEMA_VERSION, "method": "laplace",
             "probability": probability, "autocorrelation_time_samples": self.autocorrelation_time,
-            "samples": self.samples,
+            "scale_factor": self.scale_factor, "samples": self.samples,
             "intervals": {name: {"map": float(row["map"]), "low": float(row["low"]),
                                  "high": float(row["high"]), "std": float(row["std"]),
                                  "shrinkage": float(row["shrinkage"])}
@@ -143,10 +152,10 @@ def _theta_bounds(priors: tuple[ParameterPrior, ...]) -> tuple[np.ndarray, np.nd
 
 def laplace_posterior(objective: Objective, params: ModelParameters,
                       priors: Mapping[str, ParameterPrior] | None = None, *,
-                      autocorrelation: bool = True) -> Posterior:
+                      inflate: bool = True) -> Posterior:
     """Laplace posterior at ``params`` (the MAP; module docstring). ``priors`` default to the
-    objective's; ``autocorrelation=False`` takes τ = 1 (independent residuals). Costs
-    1 + 2·3 model runs per window."""
+    objective's; ``inflate=False`` takes τ = S = 1 (independent residuals of the stated
+    σ). Costs 1 + 2·3 model runs per window."""
     prior_tuple = _priors(objective, priors)
     theta = np.array([p.to_internal(getattr(params, n))
                       for n, p in zip(PARAMETER_NAMES, prior_tuple, strict=True)])
@@ -159,10 +168,14 @@ def laplace_posterior(objective: Objective, params: ModelParameters,
         r_up = objective.standardised_residuals(_to_params(up, prior_tuple))
         r_down = objective.standardised_residuals(_to_params(down, prior_tuple))
         jacobian[:, i] = (r_up - r_down) / (up[i] - down[i])
-    tau = _residual_time(objective, params) if autocorrelation else 1.0
-    precision = jacobian.T @ jacobian / tau + np.diag([1.0 / p.spread**2 for p in prior_tuple])
+    tau = _residual_time(objective, params) if inflate else 1.0
+    freedom = objective.weighted_count() - theta.size
+    scale = float(np.sqrt(max(1.0, base @ base / freedom))) if inflate and \
+        freedom > 0 else 1.0
+    precision = jacobian.T @ jacobian / (tau * scale**2) + np.diag(
+        [1.0 / p.spread**2 for p in prior_tuple])
     covariance = np.linalg.inv(precision)
-    return Posterior(params, theta, covariance, prior_tuple, tau, int(base.size))
+    return Posterior(params, theta, covariance, prior_tuple, tau, int(base.size), scale)
 
 
 def _residual_time(objective: Objective, params: ModelParameters) -> float:

@@ -56,6 +56,7 @@ from steamtwin.calibration.objective import (
     MIN_WINDOW_SAMPLES,
     PARAMETER_NAMES,
     PENALTY_RMSE,
+    THERMOCOUPLE_BIAS,
     CalibrationProblem,
     fitness,
 )
@@ -83,7 +84,7 @@ class _SurrogateProblem(Problem):
 class SurrogateCalibrator:
     """Calibrate with far fewer model runs: GA on an RBF surrogate with model-run infill.
 
-    Same objective (``priors``, ``sigma``, window sets), bounds and evaluators as
+    Same objective (``priors``, ``sigma``, ``sensor_bias``, window sets), bounds and evaluators as
     :class:`~steamtwin.calibration.Calibrator`. After :meth:`fit`: ``params_``, ``rmse_`` (K,
     model-evaluated), ``score_``, ``posterior_``, ``n_evaluations_`` (model runs),
     ``history_`` (per round: model runs so far, best RMSE and fitness, the surrogate's own
@@ -103,7 +104,8 @@ class SurrogateCalibrator:
                  max_input_gap_s: float = MAX_INPUT_GAP_S,
                  min_samples: int = MIN_WINDOW_SAMPLES,
                  priors: Mapping[str, ParameterPrior] | None = DEFAULT_PRIORS,
-                 sigma: Mapping[str, float] | None = None) -> None:
+                 sigma: Mapping[str, float] | None = None,
+                 sensor_bias: str | Mapping[str, float] | None = THERMOCOUPLE_BIAS) -> None:
         self.simulator = simulator
         self.bounds = bounds
         self.sensors = sensors
@@ -123,6 +125,7 @@ class SurrogateCalibrator:
         self.min_samples = min_samples
         self.priors = priors
         self.sigma = sigma
+        self.sensor_bias = sensor_bias
 
     def _validate(self, n_var: int) -> int:
         """Check every argument, one message each, before any work; the initial design size."""
@@ -161,7 +164,7 @@ class SurrogateCalibrator:
                                      sensors=self.sensors, weights=self.weights,
                                      max_input_gap_s=self.max_input_gap_s,
                                      min_samples=self.min_samples, sigma=self.sigma,
-                                     priors=self.priors)
+                                     priors=self.priors, sensor_bias=self.sensor_bias)
         n_var = problem.n_var
         low, high = np.asarray(problem.xl, float), np.asarray(problem.xu, float)
         random = np.random.default_rng(self.seed)

@@ -19,6 +19,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from steamtwin.calibration import CalibrationError, Calibrator
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
+from steamtwin.calibration.objective import THERMOCOUPLE_BIAS
 from steamtwin.calibration.online import OnlineCalibrator, ParameterStore
 from steamtwin.calibration.report import (
     band_rmse_table,
@@ -157,6 +158,10 @@ def calibrate(
     no_priors: bool = typer.Option(
         False, "--no-priors", help="Plain RMSE fit without priors (the method's original; no "
         "intervals)."),
+    sensor_bias: bool = typer.Option(
+        True, "--sensor-bias/--no-sensor-bias", help="Integrate out each thermocouple's "
+        "constant bias per file (IEC 60584-1 class 1 tolerance); --no-sensor-bias counts "
+        "every error as independent noise."),
     workers: int | None = typer.Option(
         None, min=1, help="Local worker processes evaluating the GA's candidates (default: "
         "every core; 1 = no pool)."),
@@ -219,7 +224,8 @@ def calibrate(
                 bar.update(task, completed=fraction, description=message)
 
             settings = {"population": population, "seed": seed, "workers": workers,
-                        "scheduler": scheduler, "priors": priors}
+                        "scheduler": scheduler, "priors": priors,
+                        "sensor_bias": THERMOCOUPLE_BIAS if sensor_bias else None}
             if surrogate:
                 calibrator = SurrogateCalibrator(model, max_evaluations=max_evaluations,
                                                  progress=progress, **settings)
