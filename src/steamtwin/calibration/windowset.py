@@ -91,9 +91,6 @@ class WindowSet:
     def __len__(self) -> int:
         return len(self.windows)
 
-    def __add__(self, other: WindowSet) -> WindowSet:
-        return WindowSet(self.windows + other.windows, self.band_width)
-
     def bands(self) -> list[str]:
         """Band label of each window: "ramps", "<lo>–<hi> %" of rated, or "no load"."""
         labels = []
