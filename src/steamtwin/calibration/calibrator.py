@@ -261,9 +261,9 @@ class Calibrator:
             problem.evaluator = None
             evaluator.close()
         best = algorithm.opt[0]
-        check_calibration_result(float(best.F[0]), problem)
-        self.params_ = problem.parameters(best.X)
         result = problem.objective.evaluate(best.X)
+        check_calibration_result(result.rmse, problem)
+        self.params_ = problem.parameters(best.X)
         self.rmse_, self.score_ = result.rmse, result.value
         self.posterior_ = posterior_at(problem, self.params_, result)
         self.history_ = pd.DataFrame(rows).set_index("generation")

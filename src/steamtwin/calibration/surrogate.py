@@ -205,10 +205,10 @@ class SurrogateCalibrator:
             problem.evaluator = None
             evaluator.close()
         best_index = int(np.argmin(values))
-        check_calibration_result(float(values[best_index]), problem)
         best_x = low + points[best_index] * (high - low)
-        self.params_ = problem.parameters(best_x)
         result = problem.objective.evaluate(best_x)
+        check_calibration_result(result.rmse, problem)
+        self.params_ = problem.parameters(best_x)
         self.rmse_, self.score_ = result.rmse, result.value
         self.posterior_ = posterior_at(problem, self.params_, result)
         self.n_evaluations_ = problem.n_evaluations
