@@ -74,7 +74,7 @@ def main() -> None:
         float_format=lambda v: f"{v:.2f}"))
     start = time.perf_counter()
     joint = SurrogateCalibrator(model, seed=0, max_evaluations=150 if arguments.quick else 400,
-                                sigma=sigma).fit(windows)
+                                sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS).fit(windows)
     joint_time = time.perf_counter() - start
     print(f"surrogate: {joint_time:.0f} s wall, {joint.n_evaluations_} model runs; "
           f"weighted RMSE {joint.rmse_:.3f} K (empirical "
@@ -100,14 +100,15 @@ def main() -> None:
           "the local pool")
     start = time.perf_counter()
     ga = Calibrator(model, population=population, generations=generations, seed=0,
-                    sigma=sigma).fit(pair_set)
+                    sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS).fit(pair_set)
     ga_time = time.perf_counter() - start
     print(f"GA: {ga_time:.0f} s wall ({'✓' if ga_time <= 300 else '✗'} ≤ 300 s), "
           f"{ga.n_evaluations_} runs ({ga_time / ga.n_evaluations_ * 1e3:.0f} ms each); "
           f"RMSE {ga.rmse_:.3f} K, score {ga.score_:.4f}")
     _parameters(ga, truth)
     start = time.perf_counter()
-    surrogate = SurrogateCalibrator(model, seed=0, sigma=sigma, max_evaluations=min(
+    surrogate = SurrogateCalibrator(model, seed=0, sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS,
+                                    max_evaluations=min(
         1000, ga.n_evaluations_ // 10)).fit(pair_set)
     surrogate_time = time.perf_counter() - start
     share = surrogate.n_evaluations_ / ga.n_evaluations_

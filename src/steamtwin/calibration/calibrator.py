@@ -34,7 +34,6 @@ from steamtwin.calibration.objective import (
     MIN_WINDOW_SAMPLES,
     PARAMETER_NAMES,
     PENALTY_RMSE,
-    THERMOCOUPLE_BIAS,
     CalibrationProblem,
     Evaluation,
     fitness,
@@ -125,8 +124,8 @@ class Calibrator:
     weights and per-file σ). ``priors``: name → :class:`ParameterPrior` (default
     :data:`DEFAULT_PRIORS`; None = plain RMSE, no intervals); ``sigma``: measurement error per
     sensor (K) for windows without their own (default 1 K); ``sensor_bias``: the sensors'
-    constant biases integrated out (default: class-1 thermocouples; None: none; see
-    :mod:`~steamtwin.calibration.objective`).
+    constant biases integrated out (:data:`~steamtwin.calibration.objective.THERMOCOUPLE_BIAS`:
+    class-1 thermocouples; default None: none; see :mod:`~steamtwin.calibration.objective`).
     Same ``seed`` → same result, whatever evaluates the candidates.
 
     ``workers``: local processes (default every core; 1 = in this process); ``scheduler``: a
@@ -149,7 +148,7 @@ class Calibrator:
                  scheduler: Any = None, checkpoint: str | Path | None = None,
                  priors: Mapping[str, ParameterPrior] | None = DEFAULT_PRIORS,
                  sigma: Mapping[str, float] | None = None,
-                 sensor_bias: str | Mapping[str, float] | None = THERMOCOUPLE_BIAS) -> None:
+                 sensor_bias: str | Mapping[str, float] | None = None) -> None:
         self.simulator = simulator
         self.bounds = bounds
         self.sensors = sensors

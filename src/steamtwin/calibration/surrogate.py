@@ -56,7 +56,6 @@ from steamtwin.calibration.objective import (
     MIN_WINDOW_SAMPLES,
     PARAMETER_NAMES,
     PENALTY_RMSE,
-    THERMOCOUPLE_BIAS,
     CalibrationProblem,
     fitness,
 )
@@ -105,7 +104,7 @@ class SurrogateCalibrator:
                  min_samples: int = MIN_WINDOW_SAMPLES,
                  priors: Mapping[str, ParameterPrior] | None = DEFAULT_PRIORS,
                  sigma: Mapping[str, float] | None = None,
-                 sensor_bias: str | Mapping[str, float] | None = THERMOCOUPLE_BIAS) -> None:
+                 sensor_bias: str | Mapping[str, float] | None = None) -> None:
         self.simulator = simulator
         self.bounds = bounds
         self.sensors = sensors

@@ -159,9 +159,10 @@ def calibrate(
         False, "--no-priors", help="Plain RMSE fit without priors (the method's original; no "
         "intervals)."),
     sensor_bias: bool = typer.Option(
-        True, "--sensor-bias/--no-sensor-bias", help="Integrate out each thermocouple's "
-        "constant bias per file (IEC 60584-1 class 1 tolerance); --no-sensor-bias counts "
-        "every error as independent noise."),
+        False, "--sensor-bias/--no-sensor-bias", help="Integrate out each thermocouple's "
+        "constant bias per file (IEC 60584-1 class 1 tolerance): the fit then learns from how "
+        "the temperatures change with load, not from their level; for a twin that already "
+        "matches the level within a few K."),
     workers: int | None = typer.Option(
         None, min=1, help="Local worker processes evaluating the GA's candidates (default: "
         "every core; 1 = no pool)."),
