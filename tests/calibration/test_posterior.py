@@ -4,20 +4,26 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 import pytest
 from scipy.signal import lfilter
 
-from steamtwin.calibration.calibrator import write_parameters
+from steamtwin.calibration.calibrator import Calibrator, write_parameters
 from steamtwin.calibration.objective import (
     PARAMETER_NAMES,
     THERMOCOUPLE_BIAS,
     CalibrationProblem,
     thermocouple_bias_spread,
 )
-from steamtwin.calibration.posterior import fit_map, laplace_posterior, metropolis
+from steamtwin.calibration.posterior import (
+    fit_map,
+    laplace_posterior,
+    likelihood_tempering,
+    metropolis,
+)
 from steamtwin.calibration.windowset import CalibrationWindow, WindowSet
 from steamtwin.model.parameters import (
     DEFAULT_PRIORS,
@@ -288,3 +294,31 @@ def test_a_model_missing_the_data_by_more_than_sigma_widens_the_intervals():
             covered[inflate] += row["low"] <= TRUTH.flow_coefficient <= row["high"]
         assert laplace_posterior(objective, estimate).scale_factor == pytest.approx(3.0, rel=0.1)
     assert covered[True] >= 0.9 * draws and covered[False] <= 0.7 * draws, covered
+
+
+def test_likelihood_tempering_is_one_for_honest_residuals_and_shrinks_otherwise():
+    honest = _objective(_window_set(np.random.default_rng(7)))
+    assert likelihood_tempering(honest, TRUTH) == pytest.approx(1.0, abs=0.35)
+    windows = WindowSet(tuple(CalibrationWindow(w.data, w.kind, w.load_fraction, w.source,
+                                                {s: 0.5 / 3.0 for s in SENSORS})
+                              for w in _window_set(np.random.default_rng(7))))
+    understated = _objective(windows)
+    kappa = likelihood_tempering(understated, TRUTH)
+    assert kappa == pytest.approx(1.0 / 9.0, rel=0.35)
+    # a tempered objective gives the same interval (κ is taken out and put back as 1/(τ S²))
+    tempered = replace(understated, tempering=kappa)
+    plain = laplace_posterior(understated, TRUTH).table()
+    again = laplace_posterior(tempered, TRUTH).table()
+    np.testing.assert_allclose(again["std"], plain["std"], rtol=1e-6)
+
+
+def test_calibrator_tempering_setting(tmp_path):
+    windows = _window_set(np.random.default_rng(8))
+    fitted = Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=2,
+                        workers=1, min_samples=30).fit(windows)
+    assert 0.0 < fitted.tempering_ <= 1.0
+    assert Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=1, workers=1,
+                      min_samples=30, priors=None).fit(windows).tempering_ == 1.0
+    with pytest.raises(ValueError, match="tempering must be"):
+        Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=1, workers=1,
+                   min_samples=30, tempering=2.0).fit(windows)

@@ -11,7 +11,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -38,7 +38,7 @@ from steamtwin.calibration.objective import (
     Evaluation,
     fitness,
 )
-from steamtwin.calibration.posterior import Posterior, laplace_posterior
+from steamtwin.calibration.posterior import Posterior, laplace_posterior, likelihood_tempering
 from steamtwin.model.parameters import (
     DEFAULT_PRIORS,
     PARAMETER_BOUNDS,
@@ -125,7 +125,10 @@ class Calibrator:
     :data:`DEFAULT_PRIORS`; None = plain RMSE, no intervals); ``sigma``: measurement error per
     sensor (K) for windows without their own (default 1 K); ``sensor_bias``: the sensors'
     constant biases integrated out (:data:`~steamtwin.calibration.objective.THERMOCOUPLE_BIAS`:
-    class-1 thermocouples; default None: none; see :mod:`~steamtwin.calibration.objective`).
+    class-1 thermocouples; default None: none; see :mod:`~steamtwin.calibration.objective`);
+    ``tempering``: κ ∈ (0, 1] weighting the likelihood, or "auto" (default: 1/(τ·S²) at the
+    priors' centres, :func:`~steamtwin.calibration.posterior.likelihood_tempering`; 1 without
+    priors), set as ``tempering_``.
     Same ``seed`` → same result, whatever evaluates the candidates.
 
     ``workers``: local processes (default every core; 1 = in this process); ``scheduler``: a
@@ -148,7 +151,8 @@ class Calibrator:
                  scheduler: Any = None, checkpoint: str | Path | None = None,
                  priors: Mapping[str, ParameterPrior] | None = DEFAULT_PRIORS,
                  sigma: Mapping[str, float] | None = None,
-                 sensor_bias: str | Mapping[str, float] | None = None) -> None:
+                 sensor_bias: str | Mapping[str, float] | None = None,
+                 tempering: float | str = "auto") -> None:
         self.simulator = simulator
         self.bounds = bounds
         self.sensors = sensors
@@ -170,6 +174,7 @@ class Calibrator:
         self.priors = priors
         self.sigma = sigma
         self.sensor_bias = sensor_bias
+        self.tempering = tempering
 
     # -- pieces (seams for parallel evaluation, checkpointing and other modes) ---------------
 
@@ -212,7 +217,7 @@ class Calibrator:
             "bounds", "sensors", "weights", "population", "generations",
             "crossover_probability", "crossover_eta", "mutation_probability", "mutation_eta",
             "tournament_size", "seed", "max_input_gap_s", "min_samples", "priors", "sigma",
-            "sensor_bias")}
+            "sensor_bias", "tempering")}
 
     def fit(self, windows: Sequence[pd.DataFrame], resume: bool = False) -> Calibrator:
         """Calibrate against measured windows (canonical SI signals); returns self.
@@ -228,6 +233,7 @@ class Calibrator:
         if resume and self.checkpoint is None:
             raise ValueError("resume needs a checkpoint file")
         problem = self._problem(windows)
+        self.tempering_ = apply_tempering(problem, self.tempering)
         fingerprint = run_fingerprint(self._settings(), problem.objective)
         checkpoint = None if self.checkpoint is None else Path(self.checkpoint)
         algorithm, repair = self._algorithm(problem)
@@ -313,10 +319,33 @@ class Calibrator:
             raise RuntimeError("Calibrator is not fitted; call fit(windows) first")
         settings = {"mode": "ga", "population": self.population,
                     "generations": self.generations, "seed": self.seed,
-                    "score": self.score_}
+                    "score": self.score_, "tempering": self.tempering_}
         return write_parameters(path, self.params_, self.rmse_, self.sensors,
                                 self.n_evaluations_, settings, self.history_,
                                 self.priors, self.posterior_)
+
+
+def apply_tempering(problem: CalibrationProblem, tempering: float | str) -> float:
+    """Set the problem's likelihood tempering κ (a number in (0, 1], or "auto": estimated at
+    the priors' centres; 1 without priors or when the model rejects that point); returns κ."""
+    if tempering == "auto":
+        kappa = 1.0
+        priors = problem.objective.priors
+        if priors is not None:
+            centre = ModelParameters(**{
+                name: float(np.clip(prior.center, *problem.parameter_bounds[name]))
+                for name, prior in zip(PARAMETER_NAMES, priors, strict=True)})
+            try:
+                kappa = likelihood_tempering(problem.objective, centre)
+            except ValueError:
+                kappa = 1.0
+    elif (isinstance(tempering, int | float) and not isinstance(tempering, bool)
+          and 0.0 < tempering <= 1.0):
+        kappa = float(tempering)
+    else:
+        raise ValueError(f"tempering must be a number in (0, 1] or 'auto' (got {tempering!r})")
+    problem.objective = replace(problem.objective, tempering=kappa)
+    return kappa
 
 
 def posterior_at(problem: CalibrationProblem, params: ModelParameters, result: Evaluation

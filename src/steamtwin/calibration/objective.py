@@ -293,7 +293,9 @@ class Evaluation:
 class Objective:
     """What scores a candidate: weighted pooled RMSE (K) of ``simulator`` over ``windows`` and
     the posterior score (module docstring) with ``priors`` (one per parameter, in
-    PARAMETER_NAMES order; None = no prior term).
+    PARAMETER_NAMES order; None = no prior term) and the likelihood tempered by
+    ``tempering`` κ ∈ (0, 1] (χ² counts κ-fold; see
+    :func:`~steamtwin.calibration.posterior.likelihood_tempering`).
 
     Picklable and self-contained: this is what evaluators send to their workers once.
     """
@@ -303,6 +305,7 @@ class Objective:
     sensors: tuple[str, ...]
     weights: np.ndarray
     priors: tuple[ParameterPrior, ...] | None = None
+    tempering: float = 1.0
 
     def prior_terms(self, x: Sequence[float]) -> np.ndarray:
         """z_k = (θ_k − m_k)/s_k per parameter (empty without priors)."""
@@ -362,7 +365,7 @@ class Objective:
         for group, (_, _, inverse) in sums.items():
             has = np.isfinite(inverse)
             flat.append(bias[group][has] * np.sqrt(inverse[has]))
-        return np.concatenate(flat)
+        return np.concatenate(flat) * np.sqrt(self.tempering)
 
     def weighted_count(self) -> float:
         """Σ_w ω_w Σ_s w_s n_ws: the number of samples the objective counts."""
@@ -395,7 +398,8 @@ class Objective:
         for a, b, inverse in self._bias_sums(parts).values():
             chi2 -= float((b**2 / (a + inverse)).sum())  # the marginalised biases
         rmse = float(np.sqrt(sse / count))
-        score = float(np.sqrt((max(chi2, 0.0) + (self.prior_terms(x) ** 2).sum()) / count))
+        score = float(np.sqrt((self.tempering * max(chi2, 0.0)
+                               + (self.prior_terms(x) ** 2).sum()) / count))
         return Evaluation(rmse, score=score)
 
     def evaluate_many(self, rows: np.ndarray) -> list[Evaluation]:

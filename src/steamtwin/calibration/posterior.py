@@ -25,6 +25,16 @@ ch. 27; Bates & Watts 1988, §2.2 for the Gauss–Newton Hessian)
     Residuals that are white and of the stated σ give τ ≈ S ≈ 1 and the plain Laplace result.
     A parameter the data cannot see has a near-zero column of J: its interval is its prior's.
 
+Tempered likelihood (:func:`likelihood_tempering`)
+    The same κ = 1/(τ·S²) applied to the χ² the optimisers minimise makes the MAP the mode of
+    the posterior whose width the intervals report (a "power likelihood", Grünwald & van
+    Ommen 2017, *Bayesian Analysis* 12:1069, for misspecified models). Without it the
+    instruments' σ and n independent samples let a parameter the data barely see (the
+    heat-transfer coefficient on holds) follow thousands of samples' tiny preference to a bound
+    while its interval spans the prior. The calibrators estimate κ once, at the priors'
+    centres, before the search (``tempering="auto"``): residuals there are at least as large
+    as at the MAP, so κ errs towards the prior.
+
 MAP by Gauss–Newton (:func:`fit_map`)
     ``scipy.optimize.least_squares`` (trust-region reflective) on the stacked vector
     [r(θ); (θ − m)/s], whose half sum of squares is the negative log posterior: the cheap local
@@ -56,7 +66,8 @@ from steamtwin.model.parameters import (
     ParameterPrior,
 )
 
-__all__ = ["INTERVAL_PROBABILITY", "Posterior", "fit_map", "laplace_posterior", "metropolis"]
+__all__ = ["INTERVAL_PROBABILITY", "Posterior", "fit_map", "laplace_posterior",
+           "likelihood_tempering", "metropolis"]
 
 INTERVAL_PROBABILITY = 0.95
 """Probability of the reported central posterior intervals."""
@@ -168,11 +179,12 @@ def laplace_posterior(objective: Objective, params: ModelParameters,
         r_up = objective.standardised_residuals(_to_params(up, prior_tuple))
         r_down = objective.standardised_residuals(_to_params(down, prior_tuple))
         jacobian[:, i] = (r_up - r_down) / (up[i] - down[i])
+    kappa = objective.tempering  # undo the objective's tempering: τ and S give it anew
     tau = _residual_time(objective, params) if inflate else 1.0
     freedom = objective.weighted_count() - theta.size
-    scale = float(np.sqrt(max(1.0, base @ base / freedom))) if inflate and \
+    scale = float(np.sqrt(max(1.0, base @ base / kappa / freedom))) if inflate and \
         freedom > 0 else 1.0
-    precision = jacobian.T @ jacobian / (tau * scale**2) + np.diag(
+    precision = jacobian.T @ jacobian / (kappa * tau * scale**2) + np.diag(
         [1.0 / p.spread**2 for p in prior_tuple])
     covariance = np.linalg.inv(precision)
     return Posterior(params, theta, covariance, prior_tuple, tau, int(base.size), scale)
@@ -187,6 +199,15 @@ def _residual_time(objective: Objective, params: ModelParameters) -> float:
         times.extend(integrated_time(residual[:, j]) for j in range(residual.shape[1])
                      if np.isfinite(residual[:, j]).sum() > 3)
     return float(np.mean(times)) if times else 1.0
+
+
+def likelihood_tempering(objective: Objective, params: ModelParameters) -> float:
+    """κ = 1/(τ·S²) ∈ (0, 1] at ``params`` (module docstring): how much of its naive weight
+    the likelihood deserves given the residuals' autocorrelation time τ and Birge ratio S."""
+    residuals = objective.standardised_residuals(params)
+    freedom = max(objective.weighted_count() - len(PARAMETER_NAMES), 1.0)
+    ratio = max(1.0, residuals @ residuals / objective.tempering / freedom)
+    return float(1.0 / (_residual_time(objective, params) * ratio))
 
 
 def fit_map(objective: Objective, start: ModelParameters | None = None,

@@ -42,6 +42,7 @@ from scipy.stats import qmc
 
 from steamtwin.calibration.calibrator import (
     ProgressCallback,
+    apply_tempering,
     check_calibration_result,
     check_common_settings,
     posterior_at,
@@ -83,9 +84,10 @@ class _SurrogateProblem(Problem):
 class SurrogateCalibrator:
     """Calibrate with far fewer model runs: GA on an RBF surrogate with model-run infill.
 
-    Same objective (``priors``, ``sigma``, ``sensor_bias``, window sets), bounds and evaluators as
-    :class:`~steamtwin.calibration.Calibrator`. After :meth:`fit`: ``params_``, ``rmse_`` (K,
-    model-evaluated), ``score_``, ``posterior_``, ``n_evaluations_`` (model runs),
+    Same objective (``priors``, ``sigma``, ``sensor_bias``, ``tempering``, window sets), bounds
+    and evaluators as :class:`~steamtwin.calibration.Calibrator`. After :meth:`fit`:
+    ``params_``, ``rmse_`` (K, model-evaluated), ``score_``, ``posterior_``, ``tempering_``,
+    ``n_evaluations_`` (model runs),
     ``history_`` (per round: model runs so far, best RMSE and fitness, the surrogate's own
     prediction at its optimum, best parameters), ``samples_`` (every model-evaluated point and
     its RMSE).
@@ -104,7 +106,8 @@ class SurrogateCalibrator:
                  min_samples: int = MIN_WINDOW_SAMPLES,
                  priors: Mapping[str, ParameterPrior] | None = DEFAULT_PRIORS,
                  sigma: Mapping[str, float] | None = None,
-                 sensor_bias: str | Mapping[str, float] | None = None) -> None:
+                 sensor_bias: str | Mapping[str, float] | None = None,
+                 tempering: float | str = "auto") -> None:
         self.simulator = simulator
         self.bounds = bounds
         self.sensors = sensors
@@ -125,6 +128,7 @@ class SurrogateCalibrator:
         self.priors = priors
         self.sigma = sigma
         self.sensor_bias = sensor_bias
+        self.tempering = tempering
 
     def _validate(self, n_var: int) -> int:
         """Check every argument, one message each, before any work; the initial design size."""
@@ -164,6 +168,7 @@ class SurrogateCalibrator:
                                      max_input_gap_s=self.max_input_gap_s,
                                      min_samples=self.min_samples, sigma=self.sigma,
                                      priors=self.priors, sensor_bias=self.sensor_bias)
+        self.tempering_ = apply_tempering(problem, self.tempering)
         n_var = problem.n_var
         low, high = np.asarray(problem.xl, float), np.asarray(problem.xu, float)
         random = np.random.default_rng(self.seed)
@@ -242,7 +247,8 @@ class SurrogateCalibrator:
         settings = {"mode": "surrogate", "seed": self.seed,
                     "initial_samples": self.initial_samples,
                     "infill_per_round": self.infill_per_round,
-                    "max_evaluations": self.max_evaluations, "score": self.score_}
+                    "max_evaluations": self.max_evaluations, "score": self.score_,
+                    "tempering": self.tempering_}
         return write_parameters(path, self.params_, self.rmse_, self.sensors,
                                 self.n_evaluations_, settings, self.history_, self.priors,
                                 self.posterior_)
