@@ -123,8 +123,9 @@ def main() -> None:
 def _parameters(calibrator: Calibrator | SurrogateCalibrator, truth: ModelParameters) -> None:
     posterior = calibrator.posterior_
     table = posterior.table()
-    print(f"  Laplace at the MAP: autocorrelation time τ {posterior.autocorrelation_time:.0f} "
-          f"samples, Birge ratio S {posterior.scale_factor:.2f}")
+    print(f"  likelihood tempering κ {calibrator.tempering_:.2e}; Laplace at the MAP: "
+          f"autocorrelation time τ {posterior.autocorrelation_time:.0f} samples, Birge ratio "
+          f"S {posterior.scale_factor:.2f}")
     for name, row in table.iterrows():
         inside = row["low"] <= getattr(truth, name) <= row["high"]
         print(f"  {name}: {row['map']:.4f} [{row['low']:.4f}, {row['high']:.4f}] "

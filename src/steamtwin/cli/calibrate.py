@@ -262,6 +262,8 @@ def calibrate(
     typer.echo(f"parameters: flow {p.flow_coefficient:.4f}, friction "
                f"{p.friction_coefficient:.4f}, heat transfer {p.heat_transfer_coefficient:.4f}")
     if calibrator.posterior_ is not None:
+        typer.echo(f"MAP under the priors, likelihood tempered by κ = {calibrator.tempering_:.3g} "
+                   "(the residuals' autocorrelation and the model's misfit)")
         for name, row in calibrator.posterior_.table().iterrows():
             typer.echo(f"  {name}: {row['map']:.4f}, 95 % interval [{row['low']:.4f}, "
                        f"{row['high']:.4f}] (prior [{row['prior_low']:.3f}, "
