@@ -23,9 +23,11 @@ Posterior score (joint calibration with priors)
     posterior ``NLP = ½ (χ² + Σ_k z_k²)`` with ``χ² = Σ_w ω_w Σ_s w_s Σ_i (T_sim − T_meas)²/σ_s²``
     and ``z_k = (θ_k − m_k)/s_k`` in each prior's normal coordinate θ (x, or ln x for a
     log-normal prior; Gelman et al. 2013, *Bayesian Data Analysis*, §4.1). What the optimisers
-    minimise is the *score* ``sqrt((χ² + Σ z²) / Σ_w ω_w Σ_s w_s n_ws)``, a monotone function of
-    the NLP, so its minimum is the MAP. Without priors and with σ = 1 K the score is the RMSE
-    above (K), the method's own objective. The RMSE itself is reported alongside.
+    minimise is the *score* ``sqrt((χ² + Σ z²/κ) / Σ_w ω_w Σ_s w_s n_ws)``, a monotone function
+    of the NLP with the likelihood tempered by κ ∈ (0, 1] (``Objective.tempering``; 1 = none),
+    ``κχ² + Σz²``, so its minimum is the MAP, on the scale of the σ-normalised RMSE whatever
+    κ. Without priors and with σ = 1 K the score is the RMSE above (K), the method's own
+    objective. The RMSE itself is reported alongside.
 
 Sensor biases (``sensor_bias``)
     A thermocouple's calibration error is constant over a day, not noise: IEC 60584-1 class 1
@@ -398,8 +400,9 @@ class Objective:
         for a, b, inverse in self._bias_sums(parts).values():
             chi2 -= float((b**2 / (a + inverse)).sum())  # the marginalised biases
         rmse = float(np.sqrt(sse / count))
-        score = float(np.sqrt((self.tempering * max(chi2, 0.0)
-                               + (self.prior_terms(x) ** 2).sum()) / count))
+        # (χ² + Σz²/κ)/n: the minimum of κχ² + Σz², on the scale of χ²/n whatever κ is
+        score = float(np.sqrt((max(chi2, 0.0)
+                               + (self.prior_terms(x) ** 2).sum() / self.tempering) / count))
         return Evaluation(rmse, score=score)
 
     def evaluate_many(self, rows: np.ndarray) -> list[Evaluation]:
