@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import json
+
+import numpy as np
 import pandas as pd
 import typer
 from typer.testing import CliRunner
@@ -38,9 +41,10 @@ def test_calibrate_command(plant_run, tmp_path):
     no_window = CliRunner().invoke(app, [
         "calibrate", "--data", str(paths["historian"]), "--tags", str(paths["tag_map"]),
         "--out", str(tmp_path / "p2.json"), "--generations", "2", "--population", "4",
+        "--no-ramps",
     ])
     assert no_window.exit_code == 2
-    assert "steady 2-h window" in no_window.output
+    assert "historian.csv: no steady window of at least 60 min" in no_window.output
 
 
 def test_calibrate_surrogate_with_report(plant_run, tmp_path):
@@ -85,3 +89,45 @@ def test_calibrate_online_command(plant_run, tmp_path):
     last = trajectory.iloc[-1]
     assert live.flow_coefficient == last["flow_coefficient"]
     assert (tmp_path / "online" / "trajectory.png").stat().st_size > 10_000
+
+
+def test_joint_calibration_over_two_files(plant_run, tmp_path):
+    first = write_plant(plant_run, tmp_path / "a", file_format="csv")
+    second = write_plant(plant_run, tmp_path / "b", file_format="csv")
+    text = second["tag_map"].read_text()
+    for name in ("control_stage_temperature", "hp_exhaust_temperature",
+                 "hp_inner_casing_temperature"):  # the second file's map states its noise
+        text = text.replace(f"[signals.{name}]\n", f"[signals.{name}]\nnoise = 0.4\n")
+    second["tag_map"].write_text(text)
+    app = typer.Typer()
+    app.command()(calibrate)
+    app.command("other")(lambda: None)
+    common = ["--out", str(tmp_path / "params.json"), "--population", "4", "--generations",
+              "1", "--workers", "1", "--min-steady-minutes", "5"]
+    result = CliRunner().invoke(app, [
+        "calibrate", "--data", str(first["historian"]), "--data", str(second["historian"]),
+        "--tags", str(first["tag_map"]), "--tags", str(second["tag_map"]), *common,
+        "--prior", "friction_coefficient=lognormal:1.1:0.2", "--report", str(tmp_path / "r")])
+    assert result.exit_code == 0, result.output
+    assert "from 2 file(s)" in result.output and "ramps" in result.output
+    assert "95 % interval" in result.output
+    document = json.loads((tmp_path / "params.json").read_text())
+    assert document["schema_version"] == 2
+    assert document["priors"]["friction_coefficient"]["center"] == 1.1
+    assert set(document["posterior"]["intervals"]) == {
+        "flow_coefficient", "friction_coefficient", "heat_transfer_coefficient"}
+    table6 = pd.read_csv(tmp_path / "r" / "table6_rmse.csv", index_col=0)
+    # σ where a tag map gives it (file b: 0.4 K), NaN where none does (file a)
+    assert "ramps" in table6.index and np.allclose(table6["instrument_error_K"], 0.4)
+    assert (tmp_path / "r" / "table6_parameters.csv").exists()
+
+    missing = tmp_path / "nowhere.csv"
+    bad = CliRunner().invoke(app, [
+        "calibrate", "--data", str(first["historian"]), "--data", str(missing),
+        "--tags", str(first["tag_map"]), *common])
+    assert bad.exit_code == 2 and str(missing) in bad.output
+    counts = CliRunner().invoke(app, [
+        "calibrate", "--data", str(first["historian"]), "--data", str(second["historian"]),
+        "--data", str(second["historian"]), "--tags", str(first["tag_map"]),
+        "--tags", str(second["tag_map"]), *common])
+    assert counts.exit_code == 2 and "one --tags for all 3 --data files" in counts.output

@@ -39,7 +39,7 @@ def test_pool_and_dask_cluster_give_the_serial_result(reference_model, low_load_
     assert serial.n_evaluations_ == dask.n_evaluations_ == 6 * 3
     assert by_address.history_["best_rmse"].iloc[0] == pytest.approx(
         Calibrator(reference_model, workers=1, population=4, generations=1, seed=4)
-        .fit([low_load_window]).rmse_)
+        .fit([low_load_window]).score_)
 
 
 def test_evaluator_choice_and_bad_arguments():

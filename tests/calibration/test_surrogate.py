@@ -33,7 +33,7 @@ def test_surrogate_matches_the_full_ga_with_a_tenth_of_the_runs(reference_model,
     assert surrogate.rmse_ == pytest.approx(
         full_ga.rmse([low_load_window], surrogate.params_), rel=1e-12)
     assert len(surrogate.samples_) == surrogate.n_evaluations_
-    assert surrogate.samples_["rmse"].min() == surrogate.rmse_
+    assert surrogate.samples_["score"].min() == surrogate.score_
     assert (np.diff(surrogate.history_["best_rmse"]) <= 0).all()
     for name in PARAMETER_NAMES:
         assert surrogate.samples_[name].between(*full_ga._problem([low_load_window])

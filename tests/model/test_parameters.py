@@ -50,7 +50,8 @@ def test_files_the_package_writes_read_back(tmp_path):
     written, _ = write_parameters(tmp_path / "calibrated.json", params, 1.5,
                                   ["hp_exhaust_temperature"], 12,
                                   {"mode": "ga", "population": 6, "seed": 0}, history)
-    assert set(json.loads(written.read_text())) == {"parameters", "bounds", "calibration"}
+    assert set(json.loads(written.read_text())) == {"schema_version", "parameters", "bounds",
+                                                    "calibration"}
     assert ModelParameters.from_json(written) == params
     store = ParameterStore(path=tmp_path / "live.json")
     store.swap(params)

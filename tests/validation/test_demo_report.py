@@ -63,7 +63,11 @@ def test_report_numbers_are_the_runs_own(demo):
     parameters = pd.DataFrame(document["tables"]["calibrated_parameters"]["records"])
     calibrated = dict(zip(parameters["parameter"], parameters["calibrated"], strict=True))
     assert calibrated["flow_coefficient"] == pytest.approx(result.params.flow_coefficient)
+    assert (parameters["low_95"] <= parameters["calibrated"]).all()
+    assert (parameters["calibrated"] <= parameters["high_95"]).all()
     saved = json.loads((result.out / "params.json").read_text(encoding="utf-8"))
+    assert saved["posterior"]["intervals"]["flow_coefficient"]["low"] == pytest.approx(
+        parameters.loc[parameters["parameter"] == "flow_coefficient", "low_95"].item())
     assert saved["parameters"]["flow_coefficient"] == pytest.approx(
         result.params.flow_coefficient)
     table8 = pd.DataFrame(document["tables"]["table8_deviation"]["records"])

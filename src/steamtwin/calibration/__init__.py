@@ -1,8 +1,11 @@
 """Calibration of the model parameters against DCS data (Wang et al.'s GA method).
 
 :class:`Calibrator` fits :class:`~steamtwin.model.parameters.ModelParameters` to measured
-windows by minimising the RMSE (K) between simulated and measured temperatures
-(:mod:`~steamtwin.calibration.objective`) with a real-coded GA (:mod:`~steamtwin.calibration.ga`).
+windows — or a :class:`WindowSet` of several files, loads and ramps
+(:mod:`~steamtwin.calibration.windowset`) — by minimising the negative log posterior under the
+parameters' priors (the RMSE in K without them; :mod:`~steamtwin.calibration.objective`) with a
+real-coded GA (:mod:`~steamtwin.calibration.ga`); :class:`Posterior` holds the 95 % intervals
+(:mod:`~steamtwin.calibration.posterior`).
 Errors are ``ValueError`` subclasses: :class:`CalibrationError` when no candidate gave a finite
 RMSE, :class:`CheckpointError` for a checkpoint that cannot resume the run.
 """
@@ -13,20 +16,38 @@ from steamtwin.calibration.ga import RemutationRepair, make_ga
 from steamtwin.calibration.objective import (
     DEFAULT_SENSORS,
     PENALTY_RMSE,
+    THERMOCOUPLE_BIAS,
     CalibrationProblem,
     fitness,
     window_rmse,
+)
+from steamtwin.calibration.posterior import Posterior, fit_map, laplace_posterior
+from steamtwin.calibration.windowset import (
+    CalibrationWindow,
+    WindowSet,
+    WindowSource,
+    find_calibration_windows,
+    joint_window_set,
 )
 
 __all__ = [
     "DEFAULT_SENSORS",
     "PENALTY_RMSE",
+    "THERMOCOUPLE_BIAS",
     "CalibrationError",
     "CalibrationProblem",
+    "CalibrationWindow",
     "Calibrator",
     "CheckpointError",
+    "Posterior",
     "RemutationRepair",
+    "WindowSet",
+    "WindowSource",
+    "find_calibration_windows",
+    "fit_map",
     "fitness",
+    "joint_window_set",
+    "laplace_posterior",
     "make_ga",
     "window_rmse",
 ]

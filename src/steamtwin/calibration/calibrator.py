@@ -1,11 +1,17 @@
-"""Calibrator: fit the three model parameters to measured windows with the method's GA."""
+"""Calibrator: fit the three model parameters to measured windows with the method's GA.
+
+By default the GA minimises the posterior score (the negative log posterior with the default
+priors, :mod:`~steamtwin.calibration.objective`), i.e. it finds the MAP, and the Laplace
+posterior at the result gives 95 % intervals (:mod:`~steamtwin.calibration.posterior`);
+``priors=None`` gives the method's plain RMSE fit.
+"""
 
 from __future__ import annotations
 
 import json
 import math
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import asdict
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -29,9 +35,17 @@ from steamtwin.calibration.objective import (
     PARAMETER_NAMES,
     PENALTY_RMSE,
     CalibrationProblem,
+    Evaluation,
     fitness,
 )
-from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
+from steamtwin.calibration.posterior import Posterior, laplace_posterior, likelihood_tempering
+from steamtwin.model.parameters import (
+    DEFAULT_PRIORS,
+    PARAMETER_BOUNDS,
+    PARAMETERS_SCHEMA_VERSION,
+    ModelParameters,
+    ParameterPrior,
+)
 from steamtwin.model.simulator import Simulator
 
 __all__ = ["HISTORY_COLUMNS", "CalibrationError", "Calibrator", "ProgressCallback",
@@ -43,7 +57,9 @@ ProgressCallback = Callable[[float, str], None]
 HISTORY_COLUMNS: tuple[str, ...] = (
     "generation", "best_rmse", "mean_rmse", "best_fitness", "mean_fitness", *PARAMETER_NAMES,
     "evaluations", "penalised", "remutations")
-"""Columns of a GA history row (``generation`` becomes the index of ``history_``)."""
+"""Columns of a GA history row (``generation`` becomes the index of ``history_``).
+``best_rmse``/``mean_rmse`` are the minimised objective: the RMSE (K) without priors and σ,
+otherwise the posterior score (:mod:`~steamtwin.calibration.objective`)."""
 
 
 class CalibrationError(ValueError):
@@ -99,7 +115,20 @@ class Calibrator:
     input rows, excluded measured samples), ``n_penalised_``, ``repair_counts_``,
     ``population_`` (final GA population) and ``identifiability_`` (per parameter, see
     :mod:`~steamtwin.calibration.identifiability`; an :class:`IdentifiabilityWarning` is issued
-    for each parameter the windows cannot identify).
+    for each parameter the windows cannot identify), ``score_`` (the minimised posterior
+    score) and ``posterior_`` (:class:`~steamtwin.calibration.posterior.Posterior` at the MAP;
+    None without priors).
+
+    ``windows`` of :meth:`fit`: DataFrames, or a
+    :class:`~steamtwin.calibration.windowset.WindowSet` (joint calibration: its load-band
+    weights and per-file σ). ``priors``: name → :class:`ParameterPrior` (default
+    :data:`DEFAULT_PRIORS`; None = plain RMSE, no intervals); ``sigma``: measurement error per
+    sensor (K) for windows without their own (default 1 K); ``sensor_bias``: the sensors'
+    constant biases integrated out (:data:`~steamtwin.calibration.objective.THERMOCOUPLE_BIAS`:
+    class-1 thermocouples; default None: none; see :mod:`~steamtwin.calibration.objective`);
+    ``tempering``: κ ∈ (0, 1] weighting the likelihood, or "auto" (default: 1/(τ·S²) at the
+    priors' centres, :func:`~steamtwin.calibration.posterior.likelihood_tempering`; 1 without
+    priors), set as ``tempering_``.
     Same ``seed`` → same result, whatever evaluates the candidates.
 
     ``workers``: local processes (default every core; 1 = in this process); ``scheduler``: a
@@ -119,7 +148,11 @@ class Calibrator:
                  progress: ProgressCallback | None = None,
                  max_input_gap_s: float = MAX_INPUT_GAP_S,
                  min_samples: int = MIN_WINDOW_SAMPLES, workers: int | None = None,
-                 scheduler: Any = None, checkpoint: str | Path | None = None) -> None:
+                 scheduler: Any = None, checkpoint: str | Path | None = None,
+                 priors: Mapping[str, ParameterPrior] | None = DEFAULT_PRIORS,
+                 sigma: Mapping[str, float] | None = None,
+                 sensor_bias: str | Mapping[str, float] | None = None,
+                 tempering: float | str = "auto") -> None:
         self.simulator = simulator
         self.bounds = bounds
         self.sensors = sensors
@@ -138,6 +171,10 @@ class Calibrator:
         self.workers = workers
         self.scheduler = scheduler
         self.checkpoint = checkpoint
+        self.priors = priors
+        self.sigma = sigma
+        self.sensor_bias = sensor_bias
+        self.tempering = tempering
 
     # -- pieces (seams for parallel evaluation, checkpointing and other modes) ---------------
 
@@ -145,7 +182,8 @@ class Calibrator:
         return CalibrationProblem(self.simulator, windows, bounds=self.bounds,
                                   sensors=self.sensors, weights=self.weights,
                                   max_input_gap_s=self.max_input_gap_s,
-                                  min_samples=self.min_samples)
+                                  min_samples=self.min_samples, sigma=self.sigma,
+                                  priors=self.priors, sensor_bias=self.sensor_bias)
 
     def _algorithm(self, problem: CalibrationProblem) -> tuple[Algorithm, RemutationRepair]:
         repair = RemutationRepair(eta=self.mutation_eta)
@@ -178,7 +216,8 @@ class Calibrator:
         return {name: getattr(self, name) for name in (
             "bounds", "sensors", "weights", "population", "generations",
             "crossover_probability", "crossover_eta", "mutation_probability", "mutation_eta",
-            "tournament_size", "seed", "max_input_gap_s", "min_samples")}
+            "tournament_size", "seed", "max_input_gap_s", "min_samples", "priors", "sigma",
+            "sensor_bias", "tempering")}
 
     def fit(self, windows: Sequence[pd.DataFrame], resume: bool = False) -> Calibrator:
         """Calibrate against measured windows (canonical SI signals); returns self.
@@ -194,6 +233,7 @@ class Calibrator:
         if resume and self.checkpoint is None:
             raise ValueError("resume needs a checkpoint file")
         problem = self._problem(windows)
+        self.tempering_ = apply_tempering(problem, self.tempering)
         fingerprint = run_fingerprint(self._settings(), problem.objective)
         checkpoint = None if self.checkpoint is None else Path(self.checkpoint)
         algorithm, repair = self._algorithm(problem)
@@ -220,15 +260,17 @@ class Calibrator:
                 if self.progress is not None:
                     done = int(rows[-1]["generation"])
                     self.progress(done / self.generations,
-                                  f"generation {done}/{self.generations}: best RMSE "
-                                  f"{rows[-1]['best_rmse']:.3f} K")
+                                  f"generation {done}/{self.generations}: best objective "
+                                  f"{rows[-1]['best_rmse']:.3f}")
         finally:
             problem.evaluator = None
             evaluator.close()
         best = algorithm.opt[0]
-        check_calibration_result(float(best.F[0]), problem)
+        result = problem.objective.evaluate(best.X)
+        check_calibration_result(result.rmse, problem)
         self.params_ = problem.parameters(best.X)
-        self.rmse_ = float(best.F[0])
+        self.rmse_, self.score_ = result.rmse, result.value
+        self.posterior_ = posterior_at(problem, self.params_, result)
         self.history_ = pd.DataFrame(rows).set_index("generation")
         self.n_evaluations_ = problem.n_evaluations
         self.n_penalised_ = problem.n_penalised
@@ -276,22 +318,64 @@ class Calibrator:
         if not hasattr(self, "params_"):
             raise RuntimeError("Calibrator is not fitted; call fit(windows) first")
         settings = {"mode": "ga", "population": self.population,
-                    "generations": self.generations, "seed": self.seed}
+                    "generations": self.generations, "seed": self.seed,
+                    "score": self.score_, "tempering": self.tempering_}
         return write_parameters(path, self.params_, self.rmse_, self.sensors,
-                                self.n_evaluations_, settings, self.history_)
+                                self.n_evaluations_, settings, self.history_,
+                                self.priors, self.posterior_)
+
+
+def apply_tempering(problem: CalibrationProblem, tempering: float | str) -> float:
+    """Set the problem's likelihood tempering κ (a number in (0, 1], or "auto": estimated at
+    the priors' centres; 1 without priors or when the model rejects that point); returns κ."""
+    if tempering == "auto":
+        kappa = 1.0
+        priors = problem.objective.priors
+        if priors is not None:
+            centre = ModelParameters(**{
+                name: float(np.clip(prior.center, *problem.parameter_bounds[name]))
+                for name, prior in zip(PARAMETER_NAMES, priors, strict=True)})
+            try:
+                kappa = likelihood_tempering(problem.objective, centre)
+            except ValueError:
+                kappa = 1.0
+    elif (isinstance(tempering, int | float) and not isinstance(tempering, bool)
+          and 0.0 < tempering <= 1.0):
+        kappa = float(tempering)
+    else:
+        raise ValueError(f"tempering must be a number in (0, 1] or 'auto' (got {tempering!r})")
+    problem.objective = replace(problem.objective, tempering=kappa)
+    return kappa
+
+
+def posterior_at(problem: CalibrationProblem, params: ModelParameters, result: Evaluation
+                 ) -> Posterior | None:
+    """The Laplace posterior at a calibration result (None without priors or if rejected)."""
+    if problem.objective.priors is None or result.penalised:
+        return None
+    return laplace_posterior(problem.objective, params)
 
 
 def write_parameters(path: str | Path, params: ModelParameters, rmse: float,
                      sensors: Sequence[str], evaluations: int, settings: dict[str, object],
-                     history: pd.DataFrame) -> tuple[Path, Path]:
-    """Parameters JSON (``ModelParameters.from_json`` reads it) + ``<stem>.history.csv``."""
+                     history: pd.DataFrame,
+                     priors: Mapping[str, ParameterPrior] | None = None,
+                     posterior: Posterior | None = None) -> tuple[Path, Path]:
+    """Parameters JSON (``ModelParameters.from_json`` reads it; schema version
+    :data:`PARAMETERS_SCHEMA_VERSION`, with the priors and the posterior intervals when given)
+    + ``<stem>.history.csv``."""
     path = Path(path)
-    document = {
+    document: dict[str, object] = {
+        "schema_version": PARAMETERS_SCHEMA_VERSION,
         "parameters": asdict(params),
         "bounds": {name: list(bounds) for name, bounds in PARAMETER_BOUNDS.items()},
         "calibration": {"rmse_K": rmse, "sensors": list(sensors), "evaluations": evaluations,
                         **settings},
     }
+    if priors is not None:
+        document["priors"] = {name: asdict(prior) for name, prior in priors.items()}
+    if posterior is not None:
+        document["posterior"] = posterior.to_dict()
     path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
     history_path = path.with_name(f"{path.stem}.history.csv")
     history.to_csv(history_path)

@@ -94,6 +94,10 @@ def run_fingerprint(settings: dict[str, object], objective: Objective) -> str:
         digest.update(np.ascontiguousarray(window.inputs.to_numpy(dtype=float)).tobytes())
         digest.update(np.ascontiguousarray(window.measured).tobytes())
         digest.update(str(window.inputs.index[0]).encode())
+        digest.update(repr((window.weight, None if window.sigma is None
+                            else window.sigma.tolist(), window.group,
+                            None if window.bias_spread is None
+                            else window.bias_spread.tolist())).encode())
     return digest.hexdigest()
 
 

@@ -16,6 +16,31 @@ Missing inputs (explicit choice)
     dynamics the HP temperatures follow) and counted (``filled_rows``); a longer dropout is a
     ``ValueError`` naming window, signal and time — split the window instead.
 
+Posterior score (joint calibration with priors)
+    With per-sample window weights ω (a :class:`~steamtwin.calibration.windowset.WindowSet`'s
+    load-band weights; 1 for plain frames), the measurement error σ_s per sensor (K; default
+    1 K) and priors per parameter, the Gaussian likelihood and the priors give the negative log
+    posterior ``NLP = ½ (χ² + Σ_k z_k²)`` with ``χ² = Σ_w ω_w Σ_s w_s Σ_i (T_sim − T_meas)²/σ_s²``
+    and ``z_k = (θ_k − m_k)/s_k`` in each prior's normal coordinate θ (x, or ln x for a
+    log-normal prior; Gelman et al. 2013, *Bayesian Data Analysis*, §4.1). What the optimisers
+    minimise is the *score* ``sqrt((χ² + Σ z²/κ) / Σ_w ω_w Σ_s w_s n_ws)``, a monotone function
+    of the NLP with the likelihood tempered by κ ∈ (0, 1] (``Objective.tempering``; 1 = none),
+    ``κχ² + Σz²``, so its minimum is the MAP, on the scale of the σ-normalised RMSE whatever
+    κ. Without priors and with σ = 1 K the score is the RMSE above (K), the method's own
+    objective. The RMSE itself is reported alongside.
+
+Sensor biases (``sensor_bias``)
+    A thermocouple's calibration error is constant over a day, not noise: IEC 60584-1 class 1
+    allows ± max(1.5 K, 0.004·|t|) (t in °C). Counting it as independent noise would let the
+    biases pose as parameter information (and give intervals far too narrow). Each sensor of
+    each instrument set (``group``: one historian file) gets a constant bias b ~ N(0, β²),
+    β = tolerance/√3 (a tolerance bound read as a uniform distribution, GUM JCGM 100:2008
+    §4.3.7), integrated out analytically: per group and sensor, with precisions p = w_s ω/σ²,
+    ``χ² = Σ p r² − (Σ p r)² / (Σ p + 1/β²)`` (the Gaussian integral over b; Kennedy &
+    O'Hagan 2001, *J. R. Stat. Soc. B* 63:425, treat a model–data offset the same way). The
+    calibration then learns from how the temperatures change across loads and time, not from
+    their absolute level, which the thermocouples cannot vouch for.
+
 Infeasible candidates
     When the simulator rejects a candidate (``ValueError``, e.g. the FOM's ``InputError`` for a
     flow coefficient too low to pass rated flow) or returns non-finite temperatures at valid
@@ -27,13 +52,14 @@ Infeasible candidates
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
 from pymoo.core.problem import Problem
 
-from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
+from steamtwin.dcs.signals import SIGNALS
+from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters, ParameterPrior
 from steamtwin.model.simulator import Simulator
 
 __all__ = [
@@ -43,6 +69,7 @@ __all__ = [
     "MIN_WINDOW_SAMPLES",
     "PARAMETER_NAMES",
     "PENALTY_RMSE",
+    "THERMOCOUPLE_BIAS",
     "CalibrationProblem",
     "Evaluation",
     "Objective",
@@ -52,6 +79,7 @@ __all__ = [
     "predict_window",
     "prepare_window",
     "squared_errors",
+    "thermocouple_bias_spread",
     "window_rmse",
 ]
 
@@ -111,7 +139,10 @@ class PreparedWindow:
     (n, n_sensors) measured temperatures (K), NaN where excluded; ``filled_rows``: rows with a
     forward-filled input; ``dropped_rows``: leading rows dropped; ``excluded``: NaN measured
     samples per sensor; ``checked``: the inputs as the simulator's ``check_inputs`` returned
-    them, when it has that fast path (see :func:`predict_window`), else None.
+    them, when it has that fast path (see :func:`predict_window`), else None; ``weight``: the
+    weight ω of each of its samples (dimensionless); ``sigma``: measurement error σ per sensor
+    (K), None for 1 K each; ``group``: its instrument set (windows of one file share the
+    sensors' biases); ``bias_spread``: prior σ β of each sensor's bias (K; 0 or None: none).
     """
 
     inputs: pd.DataFrame
@@ -120,6 +151,10 @@ class PreparedWindow:
     dropped_rows: int
     excluded: tuple[int, ...]
     checked: object = None
+    weight: float = 1.0
+    sigma: np.ndarray | None = None
+    group: int = 0
+    bias_spread: np.ndarray | None = None
 
 
 def _seconds(index: pd.Index) -> np.ndarray:
@@ -237,10 +272,18 @@ def _weights(sensors: Sequence[str], weights: Mapping[str, float] | Sequence[flo
 
 @dataclass(frozen=True)
 class Evaluation:
-    """One candidate's result: ``rmse`` (K; :data:`PENALTY_RMSE` if rejected) and why."""
+    """One candidate's result: ``rmse`` (K; :data:`PENALTY_RMSE` if rejected), why, and the
+    ``score`` the optimisers minimise (the posterior score; equal to ``rmse`` without priors
+    and with σ = 1 K; None = ``rmse``)."""
 
     rmse: float
     error: str = ""
+    score: float | None = None
+
+    @property
+    def value(self) -> float:
+        """What the optimisers minimise: ``score``, or ``rmse`` when no score was set."""
+        return self.rmse if self.score is None else self.score
 
     @property
     def penalised(self) -> bool:
@@ -250,7 +293,11 @@ class Evaluation:
 
 @dataclass(frozen=True)
 class Objective:
-    """What scores a candidate: weighted pooled RMSE (K) of ``simulator`` over ``windows``.
+    """What scores a candidate: weighted pooled RMSE (K) of ``simulator`` over ``windows`` and
+    the posterior score (module docstring) with ``priors`` (one per parameter, in
+    PARAMETER_NAMES order; None = no prior term) and the likelihood tempered by
+    ``tempering`` κ ∈ (0, 1] (χ² counts κ-fold; see
+    :func:`~steamtwin.calibration.posterior.likelihood_tempering`).
 
     Picklable and self-contained: this is what evaluators send to their workers once.
     """
@@ -259,6 +306,73 @@ class Objective:
     windows: tuple[PreparedWindow, ...]
     sensors: tuple[str, ...]
     weights: np.ndarray
+    priors: tuple[ParameterPrior, ...] | None = None
+    tempering: float = 1.0
+
+    def prior_terms(self, x: Sequence[float]) -> np.ndarray:
+        """z_k = (θ_k − m_k)/s_k per parameter (empty without priors)."""
+        if self.priors is None:
+            return np.empty(0)
+        return np.array([(prior.to_internal(float(v)) - prior.mean_internal) / prior.spread
+                         for prior, v in zip(self.priors, x, strict=True)])
+
+    def _residuals(self, params: ModelParameters) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per window: residuals T_sim − T_meas (samples, sensors; K; NaN where not measured)
+        and each sensor's precision w_s·ω/σ_s² (1/K²); raises if the model rejects ``params``."""
+        parts = []
+        for window in self.windows:
+            predicted = predict_window(self.simulator, window, params, self.sensors)
+            valid = ~np.isnan(window.measured)
+            if not np.isfinite(predicted[valid]).all():
+                raise ValueError("the simulator returned non-finite temperatures")
+            sigma = np.ones(len(self.sensors)) if window.sigma is None else window.sigma
+            parts.append((predicted - window.measured, window.weight * self.weights / sigma**2))
+        return parts
+
+    def _bias_sums(self, parts: list[tuple[np.ndarray, np.ndarray]]
+                   ) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """Per instrument group and sensor: A = Σ p, B = Σ p·r over its windows' valid samples
+        and 1/β² (+inf where a sensor has no bias term, so that B²/(A + 1/β²) vanishes)."""
+        sums: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        for window, (residual, precision) in zip(self.windows, parts, strict=True):
+            valid = ~np.isnan(residual)
+            a = precision * valid.sum(axis=0)
+            b = precision * np.where(valid, residual, 0.0).sum(axis=0)
+            spread = np.zeros(len(self.sensors)) if window.bias_spread is None \
+                else window.bias_spread
+            inverse = np.full(len(self.sensors), np.inf)
+            inverse[spread > 0] = 1.0 / spread[spread > 0] ** 2
+            if window.group in sums:
+                a0, b0, _ = sums[window.group]
+                a, b = a + a0, b + b0
+            sums[window.group] = (a, b, inverse)
+        return sums
+
+    def sensor_biases(self, params: ModelParameters) -> dict[int, np.ndarray]:
+        """Per instrument group: each sensor's bias estimate (measured − model, K; its
+        posterior mean given ``params``; 0 where a sensor has no bias term)."""
+        sums = self._bias_sums(self._residuals(params))
+        return {g: -b / (a + inverse) for g, (a, b, inverse) in sums.items()}
+
+    def standardised_residuals(self, params: ModelParameters) -> np.ndarray:
+        """Residuals whose sum of squares is χ² (module docstring): every valid sample's
+        √(w_s ω)·(T_sim − T_meas − b)/σ_s with b the bias estimate of its sensor, then each bias
+        term's b/β, flattened (dimensionless; order fixed by the windows); raises if the model
+        rejects ``params``."""
+        parts = self._residuals(params)
+        sums = self._bias_sums(parts)
+        bias = {g: b / (a + inverse) for g, (a, b, inverse) in sums.items()}
+        flat = [((residual - bias[w.group]) * np.sqrt(precision))[~np.isnan(residual)]
+                for w, (residual, precision) in zip(self.windows, parts, strict=True)]
+        for group, (_, _, inverse) in sums.items():
+            has = np.isfinite(inverse)
+            flat.append(bias[group][has] * np.sqrt(inverse[has]))
+        return np.concatenate(flat) * np.sqrt(self.tempering)
+
+    def weighted_count(self) -> float:
+        """Σ_w ω_w Σ_s w_s n_ws: the number of samples the objective counts."""
+        return float(sum(w.weight * (self.weights * (~np.isnan(w.measured)).sum(axis=0)).sum()
+                         for w in self.windows))
 
     def parameters(self, x: Sequence[float]) -> ModelParameters:
         """The :class:`ModelParameters` of a decision vector (order: PARAMETER_NAMES)."""
@@ -272,13 +386,24 @@ class Objective:
     def evaluate(self, x: Sequence[float]) -> Evaluation:
         """Score one decision vector; a rejected candidate scores :data:`PENALTY_RMSE`."""
         try:
-            parts = self.squared_errors(self.parameters(x))
+            parts = self._residuals(self.parameters(x))
         except ValueError as error:
-            return Evaluation(PENALTY_RMSE, str(error) or type(error).__name__)
-        sse = sum(p[0] for p in parts)
-        count = sum(p[1] for p in parts)
-        return Evaluation(float(np.sqrt((self.weights * sse).sum()
-                                        / (self.weights * count).sum())))
+            reason = str(error) or type(error).__name__
+            return Evaluation(PENALTY_RMSE, reason, PENALTY_RMSE)
+        sse = count = chi2 = 0.0
+        for window, (residual, precision) in zip(self.windows, parts, strict=True):
+            valid = ~np.isnan(residual)
+            squares = (np.where(valid, residual, 0.0) ** 2).sum(axis=0)
+            sse += window.weight * (self.weights * squares).sum()
+            count += window.weight * (self.weights * valid.sum(axis=0)).sum()
+            chi2 += (precision * squares).sum()
+        for a, b, inverse in self._bias_sums(parts).values():
+            chi2 -= float((b**2 / (a + inverse)).sum())  # the marginalised biases
+        rmse = float(np.sqrt(sse / count))
+        # (χ² + Σz²/κ)/n: the minimum of κχ² + Σz², on the scale of χ²/n whatever κ is
+        score = float(np.sqrt((max(chi2, 0.0)
+                               + (self.prior_terms(x) ** 2).sum() / self.tempering) / count))
+        return Evaluation(rmse, score=score)
 
     def evaluate_many(self, rows: np.ndarray) -> list[Evaluation]:
         """Score each row of ``rows`` (n, 3) in order."""
@@ -286,8 +411,15 @@ class Objective:
 
 
 class CalibrationProblem(Problem):
-    """Single-objective pymoo problem: minimise the weighted RMSE (K) over measured windows.
+    """Single-objective pymoo problem: minimise the posterior score over measured windows (the
+    weighted RMSE in K without ``priors`` and ``sigma``; module docstring).
 
+    ``windows``: DataFrames (weight 1 each, one instrument set) or a
+    :class:`~steamtwin.calibration.windowset.WindowSet` (its load-band weights, per-window σ,
+    one instrument set per source file); ``sigma``: measurement error per sensor (K) for
+    windows that do not bring their own (default 1 K); ``priors``: name →
+    :class:`ParameterPrior` for every parameter, or None; ``sensor_bias``: None (no bias
+    terms), :data:`THERMOCOUPLE_BIAS` or sensor → β (K) (module docstring).
     Variables ``x`` = (flow, friction, heat-transfer coefficient), dimensionless, within
     ``bounds`` (default :data:`PARAMETER_BOUNDS`). Each generation's candidates go to
     ``evaluator`` as one batch (see :mod:`steamtwin.calibration.evaluation`; ``None``
@@ -300,9 +432,13 @@ class CalibrationProblem(Problem):
                  sensors: Sequence[str] = DEFAULT_SENSORS,
                  weights: Mapping[str, float] | Sequence[float] | None = None,
                  max_input_gap_s: float = MAX_INPUT_GAP_S, evaluator: object = None,
-                 min_samples: int = MIN_WINDOW_SAMPLES) -> None:
+                 min_samples: int = MIN_WINDOW_SAMPLES,
+                 sigma: Mapping[str, float] | None = None,
+                 priors: Mapping[str, ParameterPrior] | None = None,
+                 sensor_bias: str | Mapping[str, float] | None = None) -> None:
         if isinstance(windows, pd.DataFrame) or len(windows) == 0:
             raise ValueError("windows must be a non-empty list of DataFrames")
+        frames, names, sample_weights, sigmas, groups = _window_parts(windows)
         sensors = tuple(sensors)
         if not sensors or len(set(sensors)) != len(sensors):
             raise ValueError("sensors must be a non-empty list of distinct signal names")
@@ -310,12 +446,17 @@ class CalibrationProblem(Problem):
         if unknown:
             raise ValueError(f"sensor(s) {unknown} are not predicted by the simulator "
                              f"(it predicts {list(simulator.output_signals)})")
-        prepared = tuple(
-            prepare_window(w, simulator, sensors, max_input_gap_s, name=f"window {i}",
-                           min_samples=min_samples)
-            for i, w in enumerate(windows)
-        )
-        self.objective = Objective(simulator, prepared, sensors, _weights(sensors, weights))
+        prepared = [
+            replace(prepare_window(w, simulator, sensors, max_input_gap_s, name=name,
+                                   min_samples=min_samples),
+                    weight=weight, sigma=_sigma(sensors, own if own is not None else sigma,
+                                                name), group=group)
+            for w, name, weight, own, group in zip(frames, names, sample_weights, sigmas,
+                                                   groups, strict=True)
+        ]
+        prepared = tuple(_with_bias_spread(prepared, sensors, sensor_bias))
+        self.objective = Objective(simulator, prepared, sensors, _weights(sensors, weights),
+                                   _priors(priors))
         self.parameter_bounds = check_bounds(bounds)
         self.evaluator = evaluator
         self.n_evaluations = 0
@@ -350,7 +491,8 @@ class CalibrationProblem(Problem):
         return self.objective.parameters(x)
 
     def evaluate_candidates(self, candidates: np.ndarray) -> np.ndarray:
-        """RMSE (K) of each row of ``candidates`` (n, 3), counted, via the evaluator."""
+        """Score of each row of ``candidates`` (n, 3), counted, via the evaluator (the RMSE in
+        K without priors and σ)."""
         rows = np.atleast_2d(np.asarray(candidates, dtype=float))
         if self.evaluator is None:
             results = self.objective.evaluate_many(rows)
@@ -361,15 +503,101 @@ class CalibrationProblem(Problem):
             if result.penalised:
                 self.n_penalised += 1
                 self.last_error = result.error
-        return np.array([result.rmse for result in results])
+        return np.array([result.value for result in results])
+
+    def evaluate_full(self, params: ModelParameters) -> Evaluation:
+        """RMSE (K) and score of ``params``, counted as one evaluation."""
+        x = np.array([getattr(params, name) for name in PARAMETER_NAMES])
+        result = self.objective.evaluate(x)
+        self.n_evaluations += 1
+        if result.penalised:
+            self.n_penalised += 1
+            self.last_error = result.error
+        return result
 
     def rmse(self, params: ModelParameters) -> float:
         """Weighted pooled RMSE (K) of ``params``; :data:`PENALTY_RMSE` if rejected."""
-        x = [getattr(params, name) for name in PARAMETER_NAMES]
-        return float(self.evaluate_candidates(np.array([x]))[0])
+        return self.evaluate_full(params).rmse
+
+    def score(self, params: ModelParameters) -> float:
+        """Posterior score of ``params`` (what the optimisers minimise)."""
+        return self.evaluate_full(params).value
 
     def _evaluate(self, x: np.ndarray, out: dict, *args: object, **kwargs: object) -> None:
         out["F"] = self.evaluate_candidates(x)[:, None]
+
+
+def _window_parts(windows: object) -> tuple[list[pd.DataFrame], list[str], list[float],
+                                             list[Mapping[str, float] | None], list[int]]:
+    """Frames, names, per-sample weights, own σ and instrument group (one per source file) of
+    plain frames (one group) or a WindowSet."""
+    if hasattr(windows, "sample_weights"):
+        weights = list(windows.sample_weights())
+        sources = list(dict.fromkeys(w.source for w in windows))
+        return ([w.data for w in windows], [w.name for w in windows], weights,
+                [w.sigma for w in windows], [sources.index(w.source) for w in windows])
+    frames = list(windows)
+    return (frames, [f"window {i}" for i in range(len(frames))], [1.0] * len(frames),
+            [None] * len(frames), [0] * len(frames))
+
+
+THERMOCOUPLE_BIAS = "thermocouple"
+"""``sensor_bias`` value: β from IEC 60584-1 class 1 for every temperature sensor (module
+docstring)."""
+
+
+def thermocouple_bias_spread(temperature_k: float) -> float:
+    """β (K) of a class-1 thermocouple's bias at ``temperature_k`` (K): the IEC 60584-1
+    class-1 tolerance max(1.5 K, 0.004·|t °C|) read as a uniform bound, divided by √3."""
+    return max(1.5, 0.004 * abs(temperature_k - 273.15)) / np.sqrt(3.0)
+
+
+def _with_bias_spread(windows: list[PreparedWindow], sensors: tuple[str, ...],
+                      sensor_bias: str | Mapping[str, float] | None) -> list[PreparedWindow]:
+    """Set each window's β per sensor: None, the thermocouple rule (from the group's mean
+    measured temperature of each temperature sensor) or a mapping sensor → β (K)."""
+    if sensor_bias is None:
+        return windows
+    if isinstance(sensor_bias, str):
+        if sensor_bias != THERMOCOUPLE_BIAS:
+            raise ValueError(f"sensor_bias must be None, {THERMOCOUPLE_BIAS!r} or a mapping "
+                             f"sensor → β in K (got {sensor_bias!r})")
+        spread: dict[int, np.ndarray] = {}
+        for group in {w.group for w in windows}:
+            measured = np.vstack([w.measured for w in windows if w.group == group])
+            spread[group] = np.array([
+                thermocouple_bias_spread(float(np.nanmean(measured[:, j])))
+                if SIGNALS[name].si_unit == "K" else 0.0 for j, name in enumerate(sensors)])
+        return [replace(w, bias_spread=spread[w.group]) for w in windows]
+    unknown = sorted(set(sensor_bias) - set(sensors))
+    values = np.array([float(sensor_bias.get(name, 0.0)) for name in sensors])
+    if unknown or not (np.isfinite(values).all() and (values >= 0).all()):
+        raise ValueError(f"sensor_bias: expected β ≥ 0 K for selected sensors {list(sensors)} "
+                         f"(got {dict(sensor_bias)})")
+    return [replace(w, bias_spread=values) for w in windows]
+
+
+def _sigma(sensors: Sequence[str], sigma: Mapping[str, float] | None, name: str
+           ) -> np.ndarray | None:
+    """Per-sensor σ (K) in ``sensors`` order; 1 K for a sensor not given; None if none given."""
+    if sigma is None:
+        return None
+    values = np.array([float(sigma.get(s, 1.0)) for s in sensors])
+    if not (np.isfinite(values).all() and (values > 0).all()):
+        raise ValueError(f"{name}: measurement errors σ must be finite numbers > 0 K "
+                         f"(got {dict(zip(sensors, values.tolist(), strict=True))})")
+    return values
+
+
+def _priors(priors: Mapping[str, ParameterPrior] | None) -> tuple[ParameterPrior, ...] | None:
+    if priors is None:
+        return None
+    unknown = sorted(set(priors) - set(PARAMETER_NAMES))
+    missing = [n for n in PARAMETER_NAMES if n not in priors]
+    if unknown or missing:
+        raise ValueError(f"priors: give one per parameter {list(PARAMETER_NAMES)} "
+                         f"(unknown {unknown}, missing {missing})")
+    return tuple(priors[name] for name in PARAMETER_NAMES)
 
 
 def window_rmse(simulator: Simulator, windows: Sequence[pd.DataFrame],

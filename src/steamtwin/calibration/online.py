@@ -35,7 +35,7 @@ from steamtwin.calibration.objective import (
     PENALTY_RMSE,
     CalibrationProblem,
 )
-from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.parameters import ModelParameters, ParameterPrior
 from steamtwin.model.simulator import Simulator
 
 __all__ = ["OnlineCalibrator", "ParameterStore"]
@@ -82,7 +82,11 @@ class OnlineCalibrator:
     warm-started ones. After :meth:`update`/:meth:`run`: ``trajectory_`` (one row per update,
     indexed by the window's end: the three parameters, ``rmse`` (K) of the new set and
     ``rmse_previous`` (K) of the set it replaced on the same window, ``evaluations``,
-    ``error``), ``params_`` (current), ``n_evaluations_``.
+    ``error``), ``params_`` (current), ``n_evaluations_``. ``priors``, ``sigma`` and
+    ``sensor_bias`` as for :class:`~steamtwin.calibration.Calibrator` (default None here: each
+    update fits the plain RMSE, as before; with priors every update is a MAP fit and a
+    parameter the last window cannot see stays near its prior instead of wandering; ``rmse``
+    and ``rmse_previous`` of the trajectory are then the posterior scores the update compared).
     """
 
     def __init__(self, simulator: Simulator, *, window_s: float = 3600.0,
@@ -94,7 +98,10 @@ class OnlineCalibrator:
                  workers: int | None = 1, scheduler: Any = None,
                  store: ParameterStore | None = None, progress: ProgressCallback | None = None,
                  max_input_gap_s: float = MAX_INPUT_GAP_S,
-                 min_samples: int = MIN_WINDOW_SAMPLES) -> None:
+                 min_samples: int = MIN_WINDOW_SAMPLES,
+                 priors: Mapping[str, ParameterPrior] | None = None,
+                 sigma: Mapping[str, float] | None = None,
+                 sensor_bias: str | Mapping[str, float] | None = None) -> None:
         self.simulator = simulator
         self.window_s = window_s
         self.every_s = every_s
@@ -111,6 +118,9 @@ class OnlineCalibrator:
         self.progress = progress
         self.max_input_gap_s = max_input_gap_s
         self.min_samples = min_samples
+        self.priors = priors
+        self.sigma = sigma
+        self.sensor_bias = sensor_bias
 
     # -- state ------------------------------------------------------------------------------
 
@@ -197,7 +207,8 @@ class OnlineCalibrator:
             problem = CalibrationProblem(self.simulator, [data], bounds=self.bounds,
                                          sensors=self.sensors, weights=self.weights,
                                          max_input_gap_s=self.max_input_gap_s,
-                                         min_samples=self.min_samples)
+                                         min_samples=self.min_samples, sigma=self.sigma,
+                                         priors=self.priors, sensor_bias=self.sensor_bias)
         except ValueError as error:
             return {**row, **asdict(current), "rmse": np.nan, "rmse_previous": np.nan,
                     "evaluations": 0, "error": str(error)}
@@ -212,7 +223,7 @@ class OnlineCalibrator:
         evaluator.start(problem.objective)
         problem.evaluator = evaluator
         try:
-            previous = problem.rmse(current)
+            previous = problem.score(current)
             while algorithm.has_next():
                 algorithm.next()
         finally:

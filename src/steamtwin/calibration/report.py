@@ -1,7 +1,9 @@
 """Calibration results as files: the method's Table 6, Table 7, Figure 7 and Figure 8 (CSV + PNG).
 
 * Table 6 — RMSE (K) per condition with the empirical constants (1, 1, 1) and with the calibrated
-  parameters, and the reduction in %.
+  parameters, and the reduction in %; for a joint calibration per load band, against the
+  instruments' own error (:func:`band_rmse_table`), and the parameters' MAP with 95 % posterior
+  and prior intervals (:func:`parameter_table`).
 * Table 7 — sensitivity of the calibrated RMSE to the GA's settings: population P, crossover
   probability p_c and mutation probability p_m, one varied at a time around the base run.
 * Figure 7 — convergence: best and mean RMSE (and fitness 1/(RMSE+ε)) per generation.
@@ -18,11 +20,13 @@ import pandas as pd
 from matplotlib.figure import Figure
 
 from steamtwin.calibration.objective import DEFAULT_SENSORS, window_rmse
+from steamtwin.calibration.posterior import Posterior
+from steamtwin.calibration.windowset import WindowSet
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import Simulator
 
-__all__ = ["convergence_figure", "ga_sensitivity_table", "rmse_table",
-           "temperature_comparison_figure", "trajectory_figure"]
+__all__ = ["band_rmse_table", "convergence_figure", "ga_sensitivity_table", "parameter_table",
+           "rmse_table", "temperature_comparison_figure", "trajectory_figure"]
 
 _LABELS = {"control_stage_temperature": "control-stage steam",
            "hp_exhaust_temperature": "HP-exhaust steam",
@@ -51,6 +55,38 @@ def rmse_table(simulator: Simulator, conditions: Mapping[str, Sequence[pd.DataFr
             row[f"calibrated:{sensor}"] = _pooled(after, f"rmse:{sensor}")
         rows.append(row)
     return pd.DataFrame(rows).set_index("condition")
+
+
+def band_rmse_table(simulator: Simulator, window_set: WindowSet, params: ModelParameters, *,
+                    sensors: Sequence[str] = DEFAULT_SENSORS, min_samples: int = 60
+                    ) -> pd.DataFrame:
+    """Table 6 of a joint calibration: :func:`rmse_table` per load band of ``window_set``
+    plus ``instrument_error_K`` (root mean square of the sensors' measurement σ in K over the
+    band's windows whose tag map gives it; NaN where none does) and
+    ``calibrated_over_instrument`` (the calibrated RMSE as a multiple of it: the issue's
+    acceptance asks ≤ 1.5)."""
+    bands = window_set.bands()
+    conditions: dict[str, list[pd.DataFrame]] = {}
+    sigmas: dict[str, list[float]] = {}
+    for band, window in zip(bands, window_set, strict=True):
+        conditions.setdefault(band, []).append(window.data)
+        given = window.sigma or {}
+        sigmas.setdefault(band, []).extend(
+            float(given[s]) if s in given else np.nan for s in sensors)
+    table = rmse_table(simulator, conditions, params, sensors=sensors, min_samples=min_samples)
+    table["instrument_error_K"] = [
+        float(np.sqrt(np.nanmean(np.square(sigmas[b])))) if np.isfinite(sigmas[b]).any()
+        else np.nan for b in table.index]
+    table["calibrated_over_instrument"] = (table["rmse_calibrated_K"]
+                                           / table["instrument_error_K"])
+    return table
+
+
+def parameter_table(posterior: Posterior) -> pd.DataFrame:
+    """Table 6, parameters: per parameter the MAP, the 95 % posterior interval, its prior's
+    centre and 95 % interval, the shrinkage (posterior σ / prior σ) and the posterior
+    correlations (:meth:`~steamtwin.calibration.posterior.Posterior.table`)."""
+    return posterior.table()
 
 
 def _pooled(table: pd.DataFrame, column: str) -> float:

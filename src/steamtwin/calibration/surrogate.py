@@ -21,7 +21,10 @@ ch. 3 and 7; Regis & Shoemaker 2005 for RBF surrogates):
    ``improvement_tolerance`` for ``patience`` rounds, or ``max_evaluations`` is spent.
 
 The result is always a model-evaluated point, never a surrogate prediction; ``n_evaluations_``
-is what the model was asked for.
+is what the model was asked for. What is minimised is the calibration objective's score — the
+negative log posterior's monotone transform with the default priors (the MAP), the RMSE with
+``priors=None`` (:mod:`~steamtwin.calibration.objective`) — and the Laplace posterior at the
+result gives the intervals, as for the GA.
 """
 
 from __future__ import annotations
@@ -39,8 +42,10 @@ from scipy.stats import qmc
 
 from steamtwin.calibration.calibrator import (
     ProgressCallback,
+    apply_tempering,
     check_calibration_result,
     check_common_settings,
+    posterior_at,
     write_parameters,
 )
 from steamtwin.calibration.evaluation import make_evaluator
@@ -55,6 +60,7 @@ from steamtwin.calibration.objective import (
     CalibrationProblem,
     fitness,
 )
+from steamtwin.model.parameters import DEFAULT_PRIORS, ParameterPrior
 from steamtwin.model.simulator import Simulator
 
 __all__ = ["SurrogateCalibrator"]
@@ -78,8 +84,10 @@ class _SurrogateProblem(Problem):
 class SurrogateCalibrator:
     """Calibrate with far fewer model runs: GA on an RBF surrogate with model-run infill.
 
-    Same objective, bounds and evaluators as :class:`~steamtwin.calibration.Calibrator`. After
-    :meth:`fit`: ``params_``, ``rmse_`` (K, model-evaluated), ``n_evaluations_`` (model runs),
+    Same objective (``priors``, ``sigma``, ``sensor_bias``, ``tempering``, window sets), bounds
+    and evaluators as :class:`~steamtwin.calibration.Calibrator`. After :meth:`fit`:
+    ``params_``, ``rmse_`` (K, model-evaluated), ``score_``, ``posterior_``, ``tempering_``,
+    ``n_evaluations_`` (model runs),
     ``history_`` (per round: model runs so far, best RMSE and fitness, the surrogate's own
     prediction at its optimum, best parameters), ``samples_`` (every model-evaluated point and
     its RMSE).
@@ -95,7 +103,11 @@ class SurrogateCalibrator:
                  generations: int = 100, seed: int = 0, workers: int | None = None,
                  scheduler: Any = None, progress: ProgressCallback | None = None,
                  max_input_gap_s: float = MAX_INPUT_GAP_S,
-                 min_samples: int = MIN_WINDOW_SAMPLES) -> None:
+                 min_samples: int = MIN_WINDOW_SAMPLES,
+                 priors: Mapping[str, ParameterPrior] | None = DEFAULT_PRIORS,
+                 sigma: Mapping[str, float] | None = None,
+                 sensor_bias: str | Mapping[str, float] | None = None,
+                 tempering: float | str = "auto") -> None:
         self.simulator = simulator
         self.bounds = bounds
         self.sensors = sensors
@@ -113,6 +125,10 @@ class SurrogateCalibrator:
         self.progress = progress
         self.max_input_gap_s = max_input_gap_s
         self.min_samples = min_samples
+        self.priors = priors
+        self.sigma = sigma
+        self.sensor_bias = sensor_bias
+        self.tempering = tempering
 
     def _validate(self, n_var: int) -> int:
         """Check every argument, one message each, before any work; the initial design size."""
@@ -150,7 +166,9 @@ class SurrogateCalibrator:
         problem = CalibrationProblem(self.simulator, windows, bounds=self.bounds,
                                      sensors=self.sensors, weights=self.weights,
                                      max_input_gap_s=self.max_input_gap_s,
-                                     min_samples=self.min_samples)
+                                     min_samples=self.min_samples, sigma=self.sigma,
+                                     priors=self.priors, sensor_bias=self.sensor_bias)
+        self.tempering_ = apply_tempering(problem, self.tempering)
         n_var = problem.n_var
         low, high = np.asarray(problem.xl, float), np.asarray(problem.xu, float)
         random = np.random.default_rng(self.seed)
@@ -191,14 +209,17 @@ class SurrogateCalibrator:
             problem.evaluator = None
             evaluator.close()
         best_index = int(np.argmin(values))
-        check_calibration_result(float(values[best_index]), problem)
-        self.params_ = problem.parameters(low + points[best_index] * (high - low))
-        self.rmse_ = float(values[best_index])
+        best_x = low + points[best_index] * (high - low)
+        result = problem.objective.evaluate(best_x)
+        check_calibration_result(result.rmse, problem)
+        self.params_ = problem.parameters(best_x)
+        self.rmse_, self.score_ = result.rmse, result.value
+        self.posterior_ = posterior_at(problem, self.params_, result)
         self.n_evaluations_ = problem.n_evaluations
         self.n_penalised_ = problem.n_penalised
         self.history_ = pd.DataFrame(rows).set_index("round") if rows else pd.DataFrame()
         self.samples_ = pd.DataFrame(low + points * (high - low), columns=list(PARAMETER_NAMES))
-        self.samples_["rmse"] = values
+        self.samples_["score"] = values
         self.identifiability_ = check_identifiability(problem, self.params_, self.rmse_)
         return self
 
@@ -226,9 +247,11 @@ class SurrogateCalibrator:
         settings = {"mode": "surrogate", "seed": self.seed,
                     "initial_samples": self.initial_samples,
                     "infill_per_round": self.infill_per_round,
-                    "max_evaluations": self.max_evaluations}
+                    "max_evaluations": self.max_evaluations, "score": self.score_,
+                    "tempering": self.tempering_}
         return write_parameters(path, self.params_, self.rmse_, self.sensors,
-                                self.n_evaluations_, settings, self.history_)
+                                self.n_evaluations_, settings, self.history_, self.priors,
+                                self.posterior_)
 
 
 def _fit_surrogate(points: np.ndarray, values: np.ndarray) -> RBFInterpolator:

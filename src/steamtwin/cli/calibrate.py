@@ -1,36 +1,58 @@
-"""``steamtwin calibrate``: fit the model parameters to plant historian data with the GA."""
+"""``steamtwin calibrate``: fit the model parameters to plant historian data with the GA.
+
+Several historian files calibrate jointly (``--data A --data B``, one ``--tags`` for all or one
+per file): windows at every steady load and on ramps, weighted by load band
+(:mod:`steamtwin.calibration.windowset`); the fit is the MAP under the parameters' priors with
+95 % intervals (:mod:`steamtwin.calibration.posterior`).
+"""
 
 from __future__ import annotations
 
+import json
 import warnings
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from steamtwin.calibration import CalibrationError, Calibrator
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
+from steamtwin.calibration.objective import THERMOCOUPLE_BIAS
 from steamtwin.calibration.online import OnlineCalibrator, ParameterStore
 from steamtwin.calibration.report import (
+    band_rmse_table,
     convergence_figure,
     ga_sensitivity_table,
-    rmse_table,
+    parameter_table,
     temperature_comparison_figure,
     trajectory_figure,
 )
 from steamtwin.calibration.surrogate import SurrogateCalibrator
+from steamtwin.calibration.windowset import (
+    WindowSet,
+    WindowSource,
+    joint_window_set,
+    measurement_sigma,
+)
 from steamtwin.cli.paths import OutputPathError, prepare_output_file, prepare_output_folder
 from steamtwin.dcs.history import OVERRIDE_OPTION, DataQualityError, History, load_history
 from steamtwin.dcs.readers import HistorianFormatError
 from steamtwin.dcs.tagmap import TagMapError
-from steamtwin.dcs.windows import find_steady_windows, parse_window, select_window
+from steamtwin.dcs.windows import parse_window
 from steamtwin.model.fom import FullOrderModel
-from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.parameters import (
+    DEFAULT_PRIORS,
+    ModelParameters,
+    ParameterError,
+    ParameterPrior,
+    parse_prior,
+    priors_from_dict,
+)
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import SpecError, TurbineSpec, load_spec
+from steamtwin.textfile import read_utf8_text
 
 
 def _read_cleaned(data: Path, tags: Path, accept_errors: bool, console: Console
@@ -39,7 +61,7 @@ def _read_cleaned(data: Path, tags: Path, accept_errors: bool, console: Console
     history = load_history(data, tags, required=INPUT_SIGNALS, accept_errors=accept_errors)
     excluded = {name: n for name, n in history.excluded.items() if n}
     if excluded:
-        console.print(f"data quality: excluded {sum(excluded.values())} sample(s) "
+        console.print(f"{data}: data quality: excluded {sum(excluded.values())} sample(s) "
                       f"({', '.join(f'{name} {n}' for name, n in excluded.items())}); "
                       "'steamtwin dcs check' lists why")
     for finding in history.report.errors:
@@ -47,10 +69,16 @@ def _read_cleaned(data: Path, tags: Path, accept_errors: bool, console: Console
     return history
 
 
-def _model(spec: TurbineSpec, history: History) -> FullOrderModel:
+def _model(spec: TurbineSpec, histories: list[History]) -> FullOrderModel:
     """The FOM, its readings lagged by the sensor time constants the tag map gives (none:
-    the model's temperatures as they are)."""
-    given = history.historian.tag_map.time_constants
+    the model's temperatures as they are); every file's tag map must give the same."""
+    given = histories[0].historian.tag_map.time_constants
+    for other in histories[1:]:
+        if other.historian.tag_map.time_constants != given:
+            raise ValueError(
+                f"the tag maps {histories[0].historian.tag_map.source} and "
+                f"{other.historian.tag_map.source} give different sensor time constants; one "
+                "calibration runs one model: give the files' sensors the same time_constant")
     if not given:
         return FullOrderModel(spec)
     outputs = FullOrderModel(spec).output_signals
@@ -58,33 +86,83 @@ def _model(spec: TurbineSpec, history: History) -> FullOrderModel:
         name: tau for name, tau in given.items() if name in outputs})
 
 
-def _pick_windows(data: pd.DataFrame, window: list[str] | None, rated_load_w: float
-                  ) -> list[pd.DataFrame]:
-    if window:
-        return [select_window(data, *parse_window(text)) for text in window]
-    if "load" not in data.columns:
-        raise ValueError(
-            "no --window given and the data have no 'load' signal, which the automatic search "
-            "for steady 2-h windows needs; map the generator load in the tag map or pass "
-            "--window START/END"
-        )
-    steady = find_steady_windows(data, duration_s=7200.0, rated_load_w=rated_load_w)
-    if not steady:
-        raise ValueError("no steady 2-h window found in the data; pass --window START/END")
-    return [select_window(data, w.start, w.end) for w in steady]
+def _read_sources(data: list[Path], tags: list[Path], accept_errors: bool, console: Console
+                  ) -> list[tuple[History, WindowSource]]:
+    """Every --data file through the quality gate with its tag map; errors name the file."""
+    if len(tags) not in (1, len(data)):
+        raise ValueError(f"give one --tags for all {len(data)} --data files or one per file "
+                         f"in the same order (got {len(tags)})")
+    result = []
+    for k, path in enumerate(data):
+        tag_path = tags[0] if len(tags) == 1 else tags[k]
+        try:
+            history = _read_cleaned(path, tag_path, accept_errors, console)
+        except DataQualityError:
+            raise
+        except (TagMapError, HistorianFormatError, ValueError, KeyError) as error:
+            raise ValueError(f"--data {path} (with --tags {tag_path}): {error}") from None
+        signals = history.historian.tag_map.signals.values()
+        sigma = measurement_sigma({s.signal: s.noise_si for s in signals},
+                                  {s.signal: s.resolution_si for s in signals})
+        result.append((history, WindowSource(str(path), history.data, sigma or None)))
+    return result
+
+
+def _priors(no_priors: bool, priors_file: Path | None, prior: list[str] | None
+            ) -> dict[str, ParameterPrior] | None:
+    """Default priors, overridden by --priors FILE then by each --prior; None for --no-priors."""
+    if no_priors:
+        if priors_file is not None or prior:
+            raise ValueError("--no-priors contradicts --priors/--prior")
+        return None
+    result = dict(DEFAULT_PRIORS)
+    if priors_file is not None:
+        document = json.loads(read_utf8_text(priors_file, "priors file", "JSON", ParameterError))
+        if not isinstance(document, dict) or "priors" not in document:
+            raise ParameterError(f"{priors_file}: expected a JSON object with a 'priors' "
+                                 "section (as calibrate writes into params.json)")
+        result = priors_from_dict(document["priors"], str(priors_file), result)
+    for text in prior or []:
+        name, value = parse_prior(text)
+        result[name] = value
+    return result
 
 
 def calibrate(
-    data: Path = typer.Option(..., help="Historian export: CSV or Parquet, wide or long."),
-    tags: Path = typer.Option(..., help="Tag map (TOML) of the historian export."),
+    data: list[Path] = typer.Option(
+        ..., help="Historian export: CSV or Parquet, wide or long; repeat for a joint "
+        "calibration over several files."),
+    tags: list[Path] = typer.Option(
+        ..., help="Tag map (TOML): one for every --data, or one per --data in the same order."),
     out: Path = typer.Option(..., help="Parameter JSON to write (history CSV alongside)."),
     turbine: str = typer.Option("reference", help="'reference' or a turbine spec TOML."),
     population: int = typer.Option(50, help="GA population size."),
     generations: int = typer.Option(200, help="GA generations."),
     seed: int = typer.Option(0, help="Seed of the GA's random generator."),
     window: list[str] | None = typer.Option(
-        None, help="START/END (ISO 8601) of a window to fit; repeatable. Default: steady 2-h "
-        "windows of 'load'."),
+        None, help="START/END (ISO 8601) of a window to fit, taken from every file covering "
+        "it; repeatable. Default: the steady windows at every load and the load ramps."),
+    min_steady_minutes: float = typer.Option(
+        60.0, min=1.0, help="Shortest steady hold taken as a window (min)."),
+    max_steady_minutes: float = typer.Option(
+        120.0, min=1.0, help="Longest steady window (min; the last part of a longer hold)."),
+    ramps: bool = typer.Option(
+        True, "--ramps/--no-ramps", help="Also fit the load ramps (they show the "
+        "heat-transfer coefficient)."),
+    prior: list[str] | None = typer.Option(
+        None, help="A parameter's prior NAME=normal|lognormal:CENTER:SPREAD, e.g. "
+        "flow_coefficient=normal:1.0:0.03; repeatable; overrides --priors and the defaults."),
+    priors_file: Path | None = typer.Option(
+        None, "--priors", help="JSON file whose 'priors' section overrides the default priors "
+        "(e.g. a params.json calibrate wrote)."),
+    no_priors: bool = typer.Option(
+        False, "--no-priors", help="Plain RMSE fit without priors (the method's original; no "
+        "intervals)."),
+    sensor_bias: bool = typer.Option(
+        False, "--sensor-bias/--no-sensor-bias", help="Integrate out each thermocouple's "
+        "constant bias per file (IEC 60584-1 class 1 tolerance): the fit then learns from how "
+        "the temperatures change with load, not from their level; for a twin that already "
+        "matches the level within a few K."),
     workers: int | None = typer.Option(
         None, min=1, help="Local worker processes evaluating the GA's candidates (default: "
         "every core; 1 = no pool)."),
@@ -129,9 +207,14 @@ def calibrate(
         if report is not None:
             prepare_output_folder(report, "--report")
         spec = load_spec(turbine)
-        history = _read_cleaned(data, tags, accept_quality_errors, console)
-        windows = _pick_windows(history.data, window, spec.design.generator_power)
-        model = _model(spec, history)
+        priors = _priors(no_priors, priors_file, prior)
+        sources = _read_sources(data, tags, accept_quality_errors, console)
+        windows = joint_window_set(
+            [source for _, source in sources], spec.design.generator_power,
+            given=[parse_window(text) for text in window or []], ramps=ramps,
+            min_steady_s=60.0 * min_steady_minutes,
+            max_steady_s=60.0 * max(max_steady_minutes, min_steady_minutes))
+        model = _model(spec, [history for history, _ in sources])
         with console.status("preparing the model (the first run compiles it, ~20 s)"):
             _ = model.design_
         columns = (TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn())
@@ -142,7 +225,8 @@ def calibrate(
                 bar.update(task, completed=fraction, description=message)
 
             settings = {"population": population, "seed": seed, "workers": workers,
-                        "scheduler": scheduler}
+                        "scheduler": scheduler, "priors": priors,
+                        "sensor_bias": THERMOCOUPLE_BIAS if sensor_bias else None}
             if surrogate:
                 calibrator = SurrogateCalibrator(model, max_evaluations=max_evaluations,
                                                  progress=progress, **settings)
@@ -171,33 +255,41 @@ def calibrate(
         typer.echo(f"warning: {warning.message}", err=True)
     params_path, history_path = calibrator.save(out)
     p = calibrator.params_
-    typer.echo(f"windows: {len(windows)} ({sum(len(w) for w in windows)} samples); "
-               f"evaluations: {calibrator.n_evaluations_}")
+    bands = windows.bands()
+    typer.echo(f"windows: {len(windows)} ({sum(len(w.data) for w in windows)} samples) from "
+               f"{len(data)} file(s) in {len(set(bands))} load band(s) "
+               f"({', '.join(sorted(set(bands)))}); evaluations: {calibrator.n_evaluations_}")
     typer.echo(f"parameters: flow {p.flow_coefficient:.4f}, friction "
                f"{p.friction_coefficient:.4f}, heat transfer {p.heat_transfer_coefficient:.4f}")
-    typer.echo(f"RMSE before (empirical 1, 1, 1): {before:.3f} K; after: {calibrator.rmse_:.3f} K")
+    if calibrator.posterior_ is not None:
+        typer.echo(f"MAP under the priors, likelihood tempered by κ = {calibrator.tempering_:.3g} "
+                   "(the residuals' autocorrelation and the model's misfit)")
+        for name, row in calibrator.posterior_.table().iterrows():
+            typer.echo(f"  {name}: {row['map']:.4f}, 95 % interval [{row['low']:.4f}, "
+                       f"{row['high']:.4f}] (prior [{row['prior_low']:.3f}, "
+                       f"{row['prior_high']:.3f}])")
+    typer.echo(f"RMSE before (empirical 1, 1, 1): {before:.3f} K; after: {calibrator.rmse_:.3f} K"
+               " (load-band weighted)")
     typer.echo(f"wrote {params_path} and {history_path}")
     if report is not None:
         typer.echo(f"wrote {', '.join(str(path) for path in written)}")
 
 
-def _condition_name(window: pd.DataFrame, rated_load_w: float, index: int) -> str:
-    if "load" in window.columns and window["load"].notna().any():
-        return f"window {index + 1}: {100 * window['load'].mean() / rated_load_w:.0f} % load"
-    return f"window {index + 1}"
-
-
-def _write_report(folder: Path, model: FullOrderModel, windows: list[pd.DataFrame],
+def _write_report(folder: Path, model: FullOrderModel, window_set: WindowSet,
                   calibrator: Calibrator | SurrogateCalibrator, sensitivity: bool,
                   settings: dict[str, object], console: Console) -> list[Path]:
-    """Table 6, Figures 7 and 8, identifiability (and Table 7) into ``folder``."""
+    """Table 6 (per load band, with the instruments' error; parameter intervals), Figures 7
+    and 8, identifiability (and Table 7) into ``folder``."""
     folder.mkdir(parents=True, exist_ok=True)
     rated = model.spec.design.generator_power
-    names = [_condition_name(w, rated, i) for i, w in enumerate(windows)]
-    table6 = rmse_table(model, {n: [w] for n, w in zip(names, windows, strict=True)},
-                        calibrator.params_)
+    windows = [w.data for w in window_set]
+    names = [f"window {i + 1}: {w.name}" for i, w in enumerate(window_set)]
+    table6 = band_rmse_table(model, window_set, calibrator.params_)
     written = [folder / "table6_rmse.csv"]
     table6.to_csv(written[-1])
+    if calibrator.posterior_ is not None:
+        written.append(folder / "table6_parameters.csv")
+        parameter_table(calibrator.posterior_).to_csv(written[-1])
     if isinstance(calibrator, Calibrator):
         written.append(convergence_figure(calibrator.history_, folder / "figure7_convergence.png"))
     loads = [abs(float(w["load"].mean()) / rated - 0.5) if "load" in w.columns else 0.0
@@ -212,7 +304,7 @@ def _write_report(folder: Path, model: FullOrderModel, windows: list[pd.DataFram
     if sensitivity:
         with console.status("Table 7: GA settings varied"):
             table7 = ga_sensitivity_table(
-                lambda s: Calibrator(model, **s).fit(windows), settings)
+                lambda s: Calibrator(model, **s).fit(window_set), settings)
         written.append(folder / "table7_ga_sensitivity.csv")
         table7.to_csv(written[-1], index=False)
     return written
@@ -249,7 +341,7 @@ def calibrate_online(
         prepare_output_folder(out, "--out")
         spec = load_spec(turbine)
         history = _read_cleaned(data, tags, accept_quality_errors, console)
-        model = _model(spec, history)
+        model = _model(spec, [history])
         with console.status("preparing the model (the first run compiles it, ~20 s)"):
             _ = model.design_
         columns = (TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn())

@@ -17,14 +17,33 @@ All three are dimensionless multipliers on a design correlation:
 
 The defaults (1, 1, 1) are the "empirical constants": the correlations as published, the values a
 designer uses before any calibration.
+
+Priors (:data:`DEFAULT_PRIORS`, what a calibration assumes before it sees data): each
+coefficient's design value 1 with a spread read from the same sources, so that the physical
+bounds above are about the prior's 95 % range (± 2 σ):
+
+* flow coefficient — normal, σ = 0.05: ± 10 % (the bounds) is 2 σ, the range reported for
+  deposits and erosion of HP blading (Cotton 1998, ch. 9);
+* friction coefficient — log-normal, σ_ln = ln 2 / 2 ≈ 0.35: a factor 2 either way (0.5–2.0)
+  is 2 σ; a multiplier on a loss is positive and its uncertainty a factor, hence log-normal
+  (Traupel 2001 quotes loss correlations to within a factor, not a difference);
+* heat-transfer coefficient — log-normal, σ_ln ≈ 0.35 likewise: ± 25 % scatter of turbulent
+  pipe correlations in their own range (Incropera & DeWitt) and "greatly varying" rotor/casing
+  formulas (ASME POWER2014-32004) make a factor 2 the 95 % range.
+
+A parameter file may override them (key ``priors``, see :func:`priors_from_dict`) and carries
+the calibration's posterior (key ``posterior``); :data:`PARAMETERS_SCHEMA_VERSION` versions the
+file (files without ``schema_version`` are version 1 and still load).
 """
 
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, fields
 from pathlib import Path
+from statistics import NormalDist
 from typing import Any
 
 from steamtwin.keys import unknown_key_message
@@ -36,12 +55,132 @@ PARAMETER_BOUNDS: dict[str, tuple[float, float]] = {
     "heat_transfer_coefficient": (0.5, 2.0),
 }
 #: Informational keys a parameter file may carry next to the coefficients (what the package's
-#: writers add); their content is not read — the bounds applied are always PARAMETER_BOUNDS.
-METADATA_KEYS = frozenset({"bounds", "calibration"})
+#: writers add); their content is not read here — the bounds applied are always
+#: PARAMETER_BOUNDS; ``priors`` is read by :func:`priors_from_dict` when a calibration asks.
+METADATA_KEYS = frozenset({"bounds", "calibration", "priors", "posterior"})
+
+PARAMETERS_SCHEMA_VERSION = 2
+"""Version of the parameter-file format: 1 = coefficients (+ bounds, calibration); 2 adds
+``schema_version``, ``priors`` and ``posterior`` (intervals)."""
+
+PRIOR_DISTRIBUTIONS = ("normal", "lognormal")
+"""Prior families: ``normal`` (``center`` ± ``spread``, both in the parameter's unit) and
+``lognormal`` (median ``center``, ``spread`` = σ of ln x)."""
 
 
 class ParameterError(ValueError):
     """A parameter value is missing, not a number or outside its physical bounds."""
+
+
+@dataclass(frozen=True)
+class ParameterPrior:
+    """Prior of one coefficient: ``distribution`` (one of :data:`PRIOR_DISTRIBUTIONS`),
+    ``center`` (design value; the median for log-normal) and ``spread`` (σ; of ln x for
+    log-normal). Dimensionless, as the coefficients are. ``source`` says where it comes from."""
+
+    distribution: str
+    center: float
+    spread: float
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        if self.distribution not in PRIOR_DISTRIBUTIONS:
+            raise ParameterError(f"prior distribution {self.distribution!r}: expected one of "
+                                 f"{', '.join(PRIOR_DISTRIBUTIONS)}")
+        for name in ("center", "spread"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float) or not (
+                    0.0 < value < float("inf")):
+                raise ParameterError(f"prior {name} = {value!r}: expected a finite number > 0")
+
+    def to_internal(self, value: float) -> float:
+        """The coordinate in which this prior is normal: x, or ln x for log-normal."""
+        return value if self.distribution == "normal" else math.log(value)
+
+    def from_internal(self, theta: float) -> float:
+        """Inverse of :meth:`to_internal`."""
+        return theta if self.distribution == "normal" else math.exp(theta)
+
+    @property
+    def mean_internal(self) -> float:
+        """The prior's mean in the internal (normal) coordinate."""
+        return self.to_internal(self.center)
+
+    def interval(self, probability: float = 0.95) -> tuple[float, float]:
+        """Central prior interval holding ``probability`` (in the parameter's unit)."""
+        z = _normal_quantile(0.5 + probability / 2.0)
+        return (self.from_internal(self.mean_internal - z * self.spread),
+                self.from_internal(self.mean_internal + z * self.spread))
+
+
+def _normal_quantile(p: float) -> float:
+    """Standard-normal quantile (inverse CDF)."""
+    return NormalDist().inv_cdf(p)
+
+
+DEFAULT_PRIORS: dict[str, ParameterPrior] = {
+    "flow_coefficient": ParameterPrior(
+        "normal", 1.0, 0.05, "±10 % (bounds) = 2σ: deposits/erosion of HP blading, Cotton 1998"),
+    "friction_coefficient": ParameterPrior(
+        "lognormal", 1.0, math.log(2.0) / 2.0,
+        "factor 2 = 2σ: loss correlations to within a factor, Traupel 2001"),
+    "heat_transfer_coefficient": ParameterPrior(
+        "lognormal", 1.0, math.log(2.0) / 2.0,
+        "factor 2 = 2σ: Incropera & DeWitt ±25 % in range, ASME POWER2014-32004 beyond"),
+}
+"""Default prior per coefficient (see the module docstring for the reasoning)."""
+
+
+def parse_prior(text: str, option: str = "--prior") -> tuple[str, ParameterPrior]:
+    """``NAME=DISTRIBUTION:CENTER:SPREAD`` (e.g. ``flow_coefficient=normal:1.0:0.03``) →
+    (name, prior); ParameterError naming ``option`` and the expected form."""
+    name, sep, rest = text.partition("=")
+    parts = rest.split(":")
+    form = "NAME=normal|lognormal:CENTER:SPREAD, e.g. flow_coefficient=normal:1.0:0.03"
+    if not sep or len(parts) != 3:
+        raise ParameterError(f"{option} {text!r}: expected {form}")
+    if name not in PARAMETER_BOUNDS:
+        raise ParameterError(f"{option} {text!r}: unknown parameter {name!r}; known: "
+                             f"{', '.join(PARAMETER_BOUNDS)}")
+    try:
+        center, spread = float(parts[1]), float(parts[2])
+    except ValueError:
+        raise ParameterError(f"{option} {text!r}: CENTER and SPREAD must be numbers ({form})"
+                             ) from None
+    try:
+        return name, ParameterPrior(parts[0], center, spread, f"{option} {text}")
+    except ParameterError as error:
+        raise ParameterError(f"{option} {text!r}: {error}") from None
+
+
+def priors_from_dict(document: Any, source: str = "<priors>",
+                     base: Mapping[str, ParameterPrior] | None = None
+                     ) -> dict[str, ParameterPrior]:
+    """Priors from ``{name: {"distribution": ..., "center": ..., "spread": ...}}`` (a parameter
+    file's ``priors``), each over ``base`` (default :data:`DEFAULT_PRIORS`); a coefficient not
+    given keeps its base prior. Errors name ``source`` and the key."""
+    result = dict(DEFAULT_PRIORS if base is None else base)
+    if not isinstance(document, Mapping):
+        raise ParameterError(f"{source}: priors must be a JSON object, got "
+                             f"{type(document).__name__}")
+    message = unknown_key_message(document, PARAMETER_BOUNDS, "priors", source, "parameter file")
+    if message is not None:
+        raise ParameterError(message)
+    for name, entry in document.items():
+        where = f"{source}: priors.{name}"
+        if not isinstance(entry, Mapping):
+            raise ParameterError(f"{where}: expected an object with distribution, center, "
+                                 "spread")
+        message = unknown_key_message(entry, {"distribution", "center", "spread", "source"},
+                                      f"priors.{name}", source, "parameter file")
+        if message is not None:
+            raise ParameterError(message)
+        merged = {**asdict(result[name]), "source": "", **entry}
+        try:
+            result[name] = ParameterPrior(**merged)
+        except ParameterError as error:
+            raise ParameterError(f"{where}: {error}") from None
+    return result
 
 
 def _reject_duplicate_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
@@ -110,10 +249,15 @@ class ModelParameters:
         if not isinstance(document, Mapping):
             raise ParameterError(f"{source}: expected a JSON object with "
                                  f"{', '.join(PARAMETER_BOUNDS)}, got {type(document).__name__}")
-        message = unknown_key_message(document, {"parameters", *METADATA_KEYS,
-                                                 *PARAMETER_BOUNDS}, "", source, "parameter file")
+        message = unknown_key_message(document, {"parameters", "schema_version",
+                                                 *METADATA_KEYS, *PARAMETER_BOUNDS}, "", source,
+                                      "parameter file")
         if message is not None:
             raise ParameterError(message)
+        version = document.get("schema_version", 1)
+        if isinstance(version, bool) or version not in range(1, PARAMETERS_SCHEMA_VERSION + 1):
+            raise ParameterError(f"{source}: schema_version = {version!r}: expected an integer "
+                                 f"1…{PARAMETERS_SCHEMA_VERSION} (this steamtwin reads those)")
         for key in METADATA_KEYS & set(document):
             if not isinstance(document[key], Mapping):
                 raise ParameterError(f"{source}: {key} must be a JSON object (informational "

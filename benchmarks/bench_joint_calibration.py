@@ -1,0 +1,157 @@
+"""Benchmark: joint calibration across loads (issue 18, items 1–2) on the virtual plant.
+
+Run: python benchmarks/bench_joint_calibration.py [--quick] [--seed N] — on the plant's ``day``
+(24 h of load following: holds at 30/50/75/100 % and the ramps between them, 1-s data, as the
+DCS recorded it):
+
+1. **Joint MAP** over every steady window and every ramp the window search finds
+   (:func:`~steamtwin.calibration.windowset.find_calibration_windows`, load-band weights), by
+   the surrogate mode with the default priors, the thermocouples' class-1 biases integrated
+   out (the default) and σ per sensor = the standard deviation of measured − true temperature
+   on the day (noise, lag, quantisation: what a tag map's ``noise`` would state; the bias is
+   the separate term): RMSE per load band against the instruments' error on that band (RMS of
+   measured − true: bias included, what a perfect model would score), the parameters with
+   their 95 % intervals against the plant's twin-equivalent truth, wall time and model runs.
+2. **Timing and surrogate check** on two 2-h windows jointly (the 30 % and the evening 100 %
+   holds): the method's GA (P 50 × G 200; ``--quick``: P 20 × G 20) on the local pool (target
+   ≤ 5 min) and the surrogate mode (target: within 0.1 K of the GA with ≤ 10 % of its runs).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+import warnings
+
+import numpy as np
+import pandas as pd
+
+from steamtwin.calibration import Calibrator
+from steamtwin.calibration.identifiability import IdentifiabilityWarning
+from steamtwin.calibration.objective import (
+    DEFAULT_SENSORS,
+    THERMOCOUPLE_BIAS,
+    CalibrationProblem,
+)
+from steamtwin.calibration.surrogate import SurrogateCalibrator
+from steamtwin.calibration.windowset import CalibrationWindow, WindowSet, find_calibration_windows
+from steamtwin.dcs.plant import run_plant
+from steamtwin.model.fom import FullOrderModel
+from steamtwin.model.parameters import DEFAULT_PRIORS, ModelParameters
+from steamtwin.spec import load_spec
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--quick", action="store_true")
+    parser.add_argument("--seed", type=int, default=0, help="instruments' seed of the day")
+    parser.add_argument("--skip-ga", action="store_true", help="only the joint MAP (part 1)")
+    arguments = parser.parse_args()
+    warnings.simplefilter("ignore", IdentifiabilityWarning)
+    population, generations = (20, 20) if arguments.quick else (50, 200)
+    spec = load_spec("reference")
+    model = FullOrderModel(spec)
+    _ = model.design_
+    rated = spec.design.generator_power
+    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python "
+          f"{platform.python_version()}; plant 'day', instruments seed {arguments.seed}")
+    start = time.perf_counter()
+    run = run_plant("day", seed=arguments.seed)
+    print(f"plant day: {time.perf_counter() - start:.0f} s, {len(run.measured)} samples")
+    measured, true = run.measured, run.true_outputs
+    sigma = {s: float(np.nanstd((measured[s] - true[s]).to_numpy())) for s in DEFAULT_SENSORS}
+    biases = {s: float(np.nanmean((measured[s] - true[s]).to_numpy())) for s in DEFAULT_SENSORS}
+    print("instruments: σ (likelihood) / bias per sensor: " + ", ".join(
+        f"{s} {sigma[s]:.3f} / {biases[s]:+.2f} K" for s in DEFAULT_SENSORS))
+    truth = run.truth.twin_equivalent
+    windows = WindowSet(tuple(find_calibration_windows(measured, rated, sigma=sigma)))
+    summary = windows.summary()
+    print(f"\n1. joint MAP over {len(windows)} windows ({int(summary['samples'].sum())} "
+          f"samples) in bands {sorted(set(summary['band']))}")
+    print(summary[["kind", "band", "load_pct", "samples", "weight"]].to_string(
+        float_format=lambda v: f"{v:.2f}"))
+    start = time.perf_counter()
+    joint = SurrogateCalibrator(model, seed=0, max_evaluations=150 if arguments.quick else 400,
+                                sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS).fit(windows)
+    joint_time = time.perf_counter() - start
+    print(f"surrogate: {joint_time:.0f} s wall, {joint.n_evaluations_} model runs; "
+          f"weighted RMSE {joint.rmse_:.3f} K (empirical "
+          f"{Calibrator(model).rmse(windows, ModelParameters()):.3f} K)")
+    _parameters(joint, truth)
+    problem = CalibrationProblem(model, windows, sigma=sigma, priors=DEFAULT_PRIORS,
+                                 sensor_bias=THERMOCOUPLE_BIAS)
+    estimated = problem.objective.sensor_biases(joint.params_)[0]
+    print("  thermocouple biases estimated / true: " + ", ".join(
+        f"{s} {b:+.2f} / {biases[s]:+.2f} K"
+        for s, b in zip(DEFAULT_SENSORS, estimated, strict=True)))
+    _bands(model, windows, joint.params_, true)
+    if arguments.skip_ga:
+        return
+
+    holds = [w for w in windows if w.kind == "steady"]
+    pair = [min(holds, key=lambda w: abs(w.load_fraction - 0.3)),
+            max(holds, key=lambda w: (round(w.load_fraction, 2), w.data.index[0]))]
+    pair_set = WindowSet(tuple(CalibrationWindow(w.data.iloc[-7200:], w.kind, w.load_fraction,
+                                                 w.source, w.sigma) for w in pair))
+    loads = ", ".join(f"{100 * w.load_fraction:.0f} %" for w in pair_set)
+    print(f"\n2. two 2-h windows jointly ({loads}), GA P = {population}, G = {generations} on "
+          "the local pool")
+    start = time.perf_counter()
+    ga = Calibrator(model, population=population, generations=generations, seed=0,
+                    sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS).fit(pair_set)
+    ga_time = time.perf_counter() - start
+    print(f"GA: {ga_time:.0f} s wall ({'✓' if ga_time <= 300 else '✗'} ≤ 300 s), "
+          f"{ga.n_evaluations_} runs ({ga_time / ga.n_evaluations_ * 1e3:.0f} ms each); "
+          f"RMSE {ga.rmse_:.3f} K, score {ga.score_:.4f}")
+    _parameters(ga, truth)
+    start = time.perf_counter()
+    surrogate = SurrogateCalibrator(model, seed=0, sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS,
+                                    max_evaluations=min(
+        1000, ga.n_evaluations_ // 10)).fit(pair_set)
+    surrogate_time = time.perf_counter() - start
+    share = surrogate.n_evaluations_ / ga.n_evaluations_
+    difference = surrogate.rmse_ - ga.rmse_
+    print(f"surrogate: {surrogate_time:.0f} s, {surrogate.n_evaluations_} runs "
+          f"({100 * share:.1f} % of the GA's {'✓' if share <= 0.1 else '✗'}); RMSE "
+          f"{surrogate.rmse_:.3f} K ({difference:+.3f} K against the GA "
+          f"{'✓' if abs(difference) <= 0.1 else '✗'}), score {surrogate.score_:.4f}")
+    _parameters(surrogate, truth)
+
+
+def _parameters(calibrator: Calibrator | SurrogateCalibrator, truth: ModelParameters) -> None:
+    posterior = calibrator.posterior_
+    table = posterior.table()
+    print(f"  likelihood tempering κ {calibrator.tempering_:.2e}; Laplace at the MAP: "
+          f"autocorrelation time τ {posterior.autocorrelation_time:.0f} samples, Birge ratio "
+          f"S {posterior.scale_factor:.2f}")
+    for name, row in table.iterrows():
+        inside = row["low"] <= getattr(truth, name) <= row["high"]
+        print(f"  {name}: {row['map']:.4f} [{row['low']:.4f}, {row['high']:.4f}] "
+              f"(truth {getattr(truth, name):.4f} {'inside' if inside else 'OUTSIDE'}; "
+              f"error {row['map'] - getattr(truth, name):+.4f}; shrinkage "
+              f"{row['shrinkage']:.2f})")
+
+
+def _bands(model: FullOrderModel, windows: WindowSet, params: ModelParameters,
+           true: pd.DataFrame) -> None:
+    """RMSE per band, empirical and calibrated, against the instruments' error there."""
+    bands = windows.bands()
+    print("  band | windows | RMSE empirical → calibrated | instrument error | ratio")
+    for band in sorted(set(bands)):
+        frames = [w.data for w, b in zip(windows, bands, strict=True) if b == band]
+        before, after = (Calibrator(model).rmse(frames, p) for p in (ModelParameters(), params))
+        floor = _instrument_error(frames, true, DEFAULT_SENSORS)
+        print(f"  {band} | {len(frames)} | {before:.3f} → {after:.3f} K | {floor:.3f} K | "
+              f"{after / floor:.2f} {'✓' if after <= 1.5 * floor else '✗'}")
+
+
+def _instrument_error(frames: list[pd.DataFrame], true: pd.DataFrame, sensors) -> float:
+    """RMS (K) of measured − true temperature over ``sensors`` and ``frames``."""
+    errors = [(f[s] - true.loc[f.index, s]).to_numpy() for f in frames for s in sensors]
+    return float(np.sqrt(np.nanmean(np.concatenate(errors) ** 2)))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,324 @@
+"""MAP and Laplace intervals on synthetic data from a small model with known parameters."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import replace
+
+import numpy as np
+import pandas as pd
+import pytest
+from scipy.signal import lfilter
+
+from steamtwin.calibration.calibrator import Calibrator, write_parameters
+from steamtwin.calibration.objective import (
+    PARAMETER_NAMES,
+    THERMOCOUPLE_BIAS,
+    CalibrationProblem,
+    thermocouple_bias_spread,
+)
+from steamtwin.calibration.posterior import (
+    fit_map,
+    laplace_posterior,
+    likelihood_tempering,
+    metropolis,
+)
+from steamtwin.calibration.windowset import CalibrationWindow, WindowSet
+from steamtwin.model.parameters import (
+    DEFAULT_PRIORS,
+    ModelParameters,
+    ParameterError,
+    parse_prior,
+    priors_from_dict,
+)
+from steamtwin.model.simulator import INPUT_SIGNALS
+
+SENSORS = ("control_stage_temperature", "hp_exhaust_temperature",
+           "hp_inner_casing_temperature")
+RATED_FLOW = 500.0  # kg/s
+TRUTH = ModelParameters(1.03, 1.25, 1.4)
+SIGMA = {name: 0.5 for name in SENSORS}  # K
+
+
+class LagSimulator:
+    """Small model in which heat transfer acts only through the metal's lag.
+
+    Control stage: T0 − 60 − 80·φ·(1.2 − f); exhaust: T0 − 250 + 15·ψ·√f + 5·φ (f = flow /
+    rated); casing metal: the exhaust steam through a first-order lag of time constant
+    900 s / h (exact discretisation), started in equilibrium — on constant inputs the metal
+    equals the steam and h is invisible.
+    """
+
+    input_signals = INPUT_SIGNALS
+    output_signals = SENSORS
+
+    def check_inputs(self, inputs: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, float]:
+        step = (inputs.index[1] - inputs.index[0]).total_seconds()  # uniform sampling
+        return (inputs["main_steam_temperature"].to_numpy(dtype=float),
+                inputs["main_steam_flow"].to_numpy(dtype=float) / RATED_FLOW, step)
+
+    def simulate_checked(self, checked: tuple[np.ndarray, np.ndarray, float],
+                         params: ModelParameters, signals: tuple[str, ...]) -> np.ndarray:
+        t0, f, step = checked
+        control = t0 - 60.0 - 80.0 * params.flow_coefficient * (1.2 - f)
+        exhaust = (t0 - 250.0 + 15.0 * params.friction_coefficient * np.sqrt(f)
+                   + 5.0 * params.flow_coefficient)
+        a = math.exp(-step / (900.0 / params.heat_transfer_coefficient))
+        metal, _ = lfilter([1.0 - a], [1.0, -a], exhaust, zi=[a * exhaust[0]])
+        outputs = dict(zip(SENSORS, (control, exhaust, metal), strict=True))
+        return np.column_stack([outputs[name] for name in signals])
+
+    def simulate(self, inputs: pd.DataFrame, params: ModelParameters) -> pd.DataFrame:
+        values = self.simulate_checked(self.check_inputs(inputs), params, SENSORS)
+        return pd.DataFrame(values, columns=list(SENSORS), index=inputs.index)
+
+
+def _inputs(load: np.ndarray, start: str) -> pd.DataFrame:
+    index = pd.date_range(start, periods=load.size, freq="10s", tz="UTC")
+    return pd.DataFrame({"main_steam_pressure": 16.0e6 * load, "main_steam_temperature": 810.0,
+                         "main_steam_flow": RATED_FLOW * load, "hp_exhaust_pressure": 3.5e6,
+                         "load": 600.0e6 * load}, index=index)
+
+
+def _measured(inputs: pd.DataFrame, random: np.random.Generator) -> pd.DataFrame:
+    truth = LagSimulator().simulate(inputs, TRUTH)
+    return pd.concat([inputs, truth + random.normal(0.0, 0.5, truth.shape)], axis=1)
+
+
+def _steady(load: float, start: str, n: int = 90) -> pd.DataFrame:
+    return _inputs(np.full(n, load), start)
+
+
+def _ramp(start: str) -> pd.DataFrame:
+    """10 min at 50 %, a 20-min ramp to 100 %, 30 min at 100 % (10-s samples)."""
+    load = np.concatenate([np.full(60, 0.5), np.linspace(0.5, 1.0, 120), np.full(180, 1.0)])
+    return _inputs(load, start)
+
+
+STEADY = [(0.3, "2026-01-01"), (0.5, "2026-01-02"), (0.75, "2026-01-03"), (1.0, "2026-01-04")]
+
+
+def _window_set(random: np.random.Generator, ramp: bool = True) -> WindowSet:
+    frames = [(_measured(_steady(load, day), random), "steady", load) for load, day in STEADY]
+    if ramp:
+        frames.append((_measured(_ramp("2026-01-05"), random), "ramp", 0.75))
+    return WindowSet(tuple(CalibrationWindow(f, kind, load, "synthetic", SIGMA)
+                           for f, kind, load in frames))
+
+
+def _objective(windows: WindowSet):
+    return CalibrationProblem(LagSimulator(), windows, sensors=SENSORS, priors=DEFAULT_PRIORS,
+                              min_samples=30).objective
+
+
+def test_map_recovers_the_parameters_and_the_intervals_cover_the_truth():
+    covered = dict.fromkeys(PARAMETER_NAMES, 0)
+    draws = 20
+    errors = []
+    for seed in range(draws):
+        objective = _objective(_window_set(np.random.default_rng(seed)))
+        estimate = fit_map(objective)
+        table = laplace_posterior(objective, estimate).table()
+        assert abs(estimate.flow_coefficient - TRUTH.flow_coefficient) < 0.01
+        assert abs(estimate.friction_coefficient - TRUTH.friction_coefficient) < 0.1
+        errors.append([(getattr(estimate, n) - getattr(TRUTH, n))
+                       / (table.loc[n, "high"] - table.loc[n, "low"]) for n in PARAMETER_NAMES])
+        for name in PARAMETER_NAMES:
+            covered[name] += table.loc[name, "low"] <= getattr(TRUTH, name) <= \
+                table.loc[name, "high"]
+            assert table.loc[name, "shrinkage"] < 0.5  # the ramp identifies all three
+    for name in PARAMETER_NAMES:
+        assert covered[name] >= 0.9 * draws, (name, covered)
+    # not vacuous: the intervals are as wide as the scatter of the estimates, not wider
+    # (a 95 % interval spans ≈ 4 σ; the estimates' spread is σ)
+    spread = np.std(errors, axis=0)
+    assert ((spread > 0.12) & (spread < 0.45)).all(), spread
+
+
+def test_heat_transfer_unseen_on_steady_windows_stays_at_its_prior():
+    objective = _objective(_window_set(np.random.default_rng(3), ramp=False))
+    estimate = fit_map(objective)
+    table = laplace_posterior(objective, estimate).table()
+    prior = DEFAULT_PRIORS["heat_transfer_coefficient"]
+    assert estimate.heat_transfer_coefficient == pytest.approx(prior.center, abs=1e-3)
+    row = table.loc["heat_transfer_coefficient"]
+    assert row["shrinkage"] == pytest.approx(1.0, abs=1e-3)
+    assert (row["low"], row["high"]) == pytest.approx(prior.interval(), rel=1e-3)
+    # the seen ones are still recovered and narrow
+    assert abs(estimate.flow_coefficient - TRUTH.flow_coefficient) < 0.01
+    assert table.loc["flow_coefficient", "shrinkage"] < 0.1
+
+
+def test_duplicating_a_loads_windows_changes_nothing():
+    random = np.random.default_rng(5)
+    base = _window_set(random)
+    fifty = base.windows[1]
+    doubled = WindowSet((*base.windows, fifty, fifty))
+    weights = doubled.sample_weights()
+    bands = doubled.bands()
+    n = np.array([len(w.data) for w in doubled])
+    per_band = {b: sum(w * k for w, k, lab in zip(weights, n, bands, strict=True) if lab == b)
+                for b in set(bands)}
+    assert len(set(np.round(list(per_band.values()), 9))) == 1  # every band weighs the same
+    one, two = _objective(base), _objective(doubled)
+    for x in ([1.0, 1.0, 1.0], [1.05, 0.8, 1.6], [0.95, 1.7, 0.6]):
+        assert two.evaluate(x).value == pytest.approx(one.evaluate(x).value, rel=1e-12)
+        assert two.evaluate(x).rmse == pytest.approx(one.evaluate(x).rmse, rel=1e-12)
+    map_one, map_two = fit_map(one), fit_map(two)
+    for name in PARAMETER_NAMES:
+        assert getattr(map_two, name) == pytest.approx(getattr(map_one, name), rel=1e-6)
+    unweighted = CalibrationProblem(LagSimulator(), [w.data for w in doubled], sensors=SENSORS,
+                                    priors=DEFAULT_PRIORS, min_samples=30).objective
+    assert unweighted.evaluate([1.05, 0.8, 1.6]).value != pytest.approx(
+        one.evaluate([1.05, 0.8, 1.6]).value, rel=1e-6)  # without band weights it would
+
+
+def test_metropolis_agrees_with_laplace():
+    objective = _objective(_window_set(np.random.default_rng(11)))
+    estimate = fit_map(objective)
+    posterior = laplace_posterior(objective, estimate, inflate=False)
+    priors = [DEFAULT_PRIORS[name] for name in PARAMETER_NAMES]
+
+    def log_posterior(theta: np.ndarray) -> float:
+        x = [p.from_internal(t) for p, t in zip(priors, theta, strict=True)]
+        try:
+            params = ModelParameters(*x)
+        except ParameterError:
+            return -math.inf
+        residuals = objective.standardised_residuals(params)
+        return -0.5 * (residuals @ residuals + (objective.prior_terms(x) ** 2).sum())
+
+    chain = metropolis(log_posterior, posterior.theta, posterior.covariance, 2000, seed=1)[400:]
+    laplace_std = np.sqrt(np.diag(posterior.covariance))
+    np.testing.assert_array_less(np.abs(chain.mean(axis=0) - posterior.theta), 0.3 * laplace_std)
+    np.testing.assert_allclose(chain.std(axis=0), laplace_std, rtol=0.3)
+
+
+def test_parameter_file_carries_priors_and_intervals_and_old_files_load(tmp_path):
+    objective = _objective(_window_set(np.random.default_rng(2)))
+    estimate = fit_map(objective)
+    posterior = laplace_posterior(objective, estimate)
+    path, _ = write_parameters(tmp_path / "p.json", estimate, 0.5, SENSORS, 10, {},
+                               pd.DataFrame({"generation": [1]}), DEFAULT_PRIORS, posterior)
+    document = json.loads(path.read_text())
+    assert document["schema_version"] == 2
+    interval = document["posterior"]["intervals"]["flow_coefficient"]
+    assert interval["low"] < estimate.flow_coefficient < interval["high"]
+    assert ModelParameters.from_json(path) == estimate
+    assert priors_from_dict(document["priors"]) == {
+        name: prior for name, prior in DEFAULT_PRIORS.items()}
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps({"parameters": {"flow_coefficient": 1.0,
+                                              "friction_coefficient": 1.0,
+                                              "heat_transfer_coefficient": 1.0}}))
+    assert ModelParameters.from_json(old) == ModelParameters()
+    newer = tmp_path / "newer.json"
+    newer.write_text(json.dumps({**document, "schema_version": 3}))
+    with pytest.raises(ParameterError, match="schema_version"):
+        ModelParameters.from_json(newer)
+
+
+def test_prior_overrides_are_checked():
+    name, prior = parse_prior("flow_coefficient=normal:1.0:0.03")
+    assert (name, prior.spread) == ("flow_coefficient", 0.03)
+    with pytest.raises(ParameterError, match="unknown parameter"):
+        parse_prior("flow=normal:1:0.1")
+    with pytest.raises(ParameterError, match="expected NAME="):
+        parse_prior("flow_coefficient=normal:1")
+    with pytest.raises(ParameterError, match="> 0"):
+        parse_prior("flow_coefficient=normal:1:-0.1")
+    with pytest.raises(ParameterError, match=r"priors\.friction_coefficient"):
+        priors_from_dict({"friction_coefficient": {"distribution": "uniform"}}, "p.json")
+    with pytest.raises(ParameterError, match="did you mean"):
+        priors_from_dict({"flow_coefficent": {"spread": 0.1}}, "p.json")
+
+
+def _biased(seed: int) -> tuple[WindowSet, dict[str, float]]:
+    """A window set whose thermocouples carry class-1 biases drawn uniformly in ± tolerance."""
+    random = np.random.default_rng(100 + seed)
+    windows = _window_set(random)
+    bias = {}
+    for sensor in SENSORS:
+        level = np.mean(np.concatenate([w.data[sensor].to_numpy() for w in windows]))
+        tolerance = thermocouple_bias_spread(level) * math.sqrt(3.0)
+        bias[sensor] = random.uniform(-tolerance, tolerance)
+    return WindowSet(tuple(
+        CalibrationWindow(w.data.assign(**{s: w.data[s] + bias[s] for s in SENSORS}), w.kind,
+                          w.load_fraction, w.source, w.sigma) for w in windows)), bias
+
+
+def test_thermocouple_biases_are_integrated_out_and_intervals_stay_honest():
+    covered = {mode: dict.fromkeys(PARAMETER_NAMES, 0) for mode in (THERMOCOUPLE_BIAS, None)}
+    draws = 20
+    for seed in range(draws):
+        windows, bias = _biased(seed)
+        for mode in covered:
+            objective = CalibrationProblem(LagSimulator(), windows, sensors=SENSORS,
+                                           priors=DEFAULT_PRIORS, min_samples=30,
+                                           sensor_bias=mode).objective
+            estimate = fit_map(objective)
+            table = laplace_posterior(objective, estimate).table()
+            for name in PARAMETER_NAMES:
+                covered[mode][name] += table.loc[name, "low"] <= getattr(TRUTH, name) <= \
+                    table.loc[name, "high"]
+            if mode is not None:
+                # χ² is the sum of squares of the profiled residuals (the Gauss–Newton form)
+                x = [getattr(estimate, n) for n in PARAMETER_NAMES]
+                result = objective.evaluate(x)
+                residuals = objective.standardised_residuals(estimate)
+                assert result.value**2 * objective.weighted_count() == pytest.approx(
+                    residuals @ residuals + (objective.prior_terms(x) ** 2).sum(), rel=1e-9)
+                estimated = objective.sensor_biases(estimate)[0]
+                np.testing.assert_allclose(estimated, [bias[s] for s in SENSORS], atol=0.15)
+    assert all(n >= 0.9 * draws for n in covered[THERMOCOUPLE_BIAS].values()), covered
+    # counted as noise, the biases pose as information: the intervals miss the truth
+    assert all(n <= 0.5 * draws for n in covered[None].values()), covered
+
+
+def test_a_model_missing_the_data_by_more_than_sigma_widens_the_intervals():
+    """σ stated 3× too small (as when the twin's own error exceeds the instruments'): the
+    Birge ratio restores coverage; without it the intervals are 3× too narrow."""
+    covered = {True: 0, False: 0}
+    draws = 20
+    understated = {name: 0.5 / 3.0 for name in SENSORS}
+    for seed in range(draws):
+        windows = _window_set(np.random.default_rng(200 + seed))
+        windows = WindowSet(tuple(CalibrationWindow(w.data, w.kind, w.load_fraction, w.source,
+                                                    understated) for w in windows))
+        objective = _objective(windows)
+        estimate = fit_map(objective)
+        for inflate in covered:
+            row = laplace_posterior(objective, estimate, inflate=inflate).table().loc[
+                "flow_coefficient"]
+            covered[inflate] += row["low"] <= TRUTH.flow_coefficient <= row["high"]
+        assert laplace_posterior(objective, estimate).scale_factor == pytest.approx(3.0, rel=0.1)
+    assert covered[True] >= 0.9 * draws and covered[False] <= 0.7 * draws, covered
+
+
+def test_likelihood_tempering_is_one_for_honest_residuals_and_shrinks_otherwise():
+    honest = _objective(_window_set(np.random.default_rng(7)))
+    assert likelihood_tempering(honest, TRUTH) == pytest.approx(1.0, abs=0.35)
+    windows = WindowSet(tuple(CalibrationWindow(w.data, w.kind, w.load_fraction, w.source,
+                                                {s: 0.5 / 3.0 for s in SENSORS})
+                              for w in _window_set(np.random.default_rng(7))))
+    understated = _objective(windows)
+    kappa = likelihood_tempering(understated, TRUTH)
+    assert kappa == pytest.approx(1.0 / 9.0, rel=0.35)
+    # a tempered objective gives the same interval (κ is taken out and put back as 1/(τ S²))
+    tempered = replace(understated, tempering=kappa)
+    plain = laplace_posterior(understated, TRUTH).table()
+    again = laplace_posterior(tempered, TRUTH).table()
+    np.testing.assert_allclose(again["std"], plain["std"], rtol=1e-6)
+
+
+def test_calibrator_tempering_setting(tmp_path):
+    windows = _window_set(np.random.default_rng(8))
+    fitted = Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=2,
+                        workers=1, min_samples=30).fit(windows)
+    assert 0.0 < fitted.tempering_ <= 1.0
+    assert Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=1, workers=1,
+                      min_samples=30, priors=None).fit(windows).tempering_ == 1.0
+    with pytest.raises(ValueError, match="tempering must be"):
+        Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=1, workers=1,
+                   min_samples=30, tempering=2.0).fit(windows)
