@@ -171,14 +171,20 @@ def temperature_comparison_figure(simulator: Simulator, window: pd.DataFrame,
 
 def trajectory_figure(trajectory: pd.DataFrame, path: str | Path,
                       truth: pd.DataFrame | None = None) -> Path:
-    """Online calibration: each parameter and the RMSE per update over time (``truth``, if
-    given, holds true parameter columns on a time index to draw alongside)."""
+    """Online calibration: each parameter (with its 95 % band where the trajectory has
+    ``<name>_low``/``_high``, as the tracker's does) and the RMSE per update (where given) over
+    time (``truth``, if given, holds true parameter columns on a time index to draw
+    alongside)."""
     path = Path(path)
-    names = ["flow_coefficient", "friction_coefficient", "heat_transfer_coefficient", "rmse"]
-    figure = Figure(figsize=(10, 8))
-    axes = figure.subplots(len(names), 1, sharex=True)
+    names = [name for name in ("flow_coefficient", "friction_coefficient",
+                               "heat_transfer_coefficient", "rmse") if name in trajectory]
+    figure = Figure(figsize=(10, 2 * len(names)))
+    axes = np.atleast_1d(figure.subplots(len(names), 1, sharex=True))
     for ax, name in zip(axes, names, strict=True):
         ax.plot(trajectory.index, trajectory[name], marker="o", lw=1, label="online")
+        if f"{name}_low" in trajectory and f"{name}_high" in trajectory:
+            ax.fill_between(trajectory.index, trajectory[f"{name}_low"],
+                            trajectory[f"{name}_high"], alpha=0.2, label="95 % interval")
         if truth is not None and name in truth.columns:
             ax.plot(truth.index, truth[name], color="0.4", lw=1, label="truth")
             ax.legend(fontsize=8)

@@ -30,6 +30,7 @@ from steamtwin.calibration.report import (
     trajectory_figure,
 )
 from steamtwin.calibration.surrogate import SurrogateCalibrator
+from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
 from steamtwin.calibration.windowset import (
     WindowSet,
     WindowSource,
@@ -50,6 +51,7 @@ from steamtwin.model.parameters import (
     parse_prior,
     priors_from_dict,
 )
+from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import SpecError, TurbineSpec, load_spec
 from steamtwin.textfile import read_utf8_text
@@ -70,20 +72,18 @@ def _read_cleaned(data: Path, tags: Path, accept_errors: bool, console: Console
 
 
 def _model(spec: TurbineSpec, histories: list[History]) -> FullOrderModel:
-    """The FOM, its readings lagged by the sensor time constants the tag map gives (none:
-    the model's temperatures as they are); every file's tag map must give the same."""
-    given = histories[0].historian.tag_map.time_constants
-    for other in histories[1:]:
-        if other.historian.tag_map.time_constants != given:
+    """The FOM read through the plant's sensors as every mode reads it
+    (:func:`~steamtwin.model.sensor_setup.sensor_setup`: the tag map's time constants and
+    thermocouple depth, typical thermowells' otherwise); every file's tag map must agree."""
+    setups = [sensor_setup(spec, history.historian.tag_map) for history in histories]
+    for history, setup in zip(histories[1:], setups[1:], strict=True):
+        if setup != setups[0]:
             raise ValueError(
                 f"the tag maps {histories[0].historian.tag_map.source} and "
-                f"{other.historian.tag_map.source} give different sensor time constants; one "
-                "calibration runs one model: give the files' sensors the same time_constant")
-    if not given:
-        return FullOrderModel(spec)
-    outputs = FullOrderModel(spec).output_signals
-    return FullOrderModel(spec, sensor_time_constants={
-        name: tau for name, tau in given.items() if name in outputs})
+                f"{history.historian.tag_map.source} give different sensor time constants or "
+                "thermocouple depths; one calibration runs one model: give the files' sensors "
+                "the same time_constant and depth")
+    return setups[0].model(spec)
 
 
 def _read_sources(data: list[Path], tags: list[Path], accept_errors: bool, console: Console
@@ -326,13 +326,21 @@ def calibrate_online(
     accept_quality_errors: bool = typer.Option(
         False, OVERRIDE_OPTION, help="Go on despite error-level data-quality findings; the "
         "bad samples stay excluded."),
+    method: str = typer.Option(
+        "ga", help="'ga': refit a sliding window with the GA; 'track': follow the flow and "
+        "friction coefficients step by step with a recursive Bayesian filter "
+        "(calibration.tracking; every --every-minutes of new data, the control-stage pressure "
+        "used as the flow coefficient's witness)."),
 ) -> None:
-    """Keep the parameters current: recalibrate on a sliding window as the data stream in.
+    """Keep the parameters current as the data stream in.
 
-    The export is replayed in one-minute chunks. Every --every-minutes of data the GA refits the
-    last --window-minutes, warm-started from the previous population; the live parameter file is
-    replaced atomically and every update is logged (parameters, RMSE before/after, reason if it
-    could not run).
+    The export is replayed in one-minute chunks. With --method ga, every --every-minutes of
+    data the GA refits the last --window-minutes, warm-started from the previous population.
+    With --method track, every --every-minutes of new data updates a recursive filter (a
+    random-walk state, the step's MAP and Laplace covariance), which follows a step of a few
+    per cent of the flow coefficient within half an hour. The live parameter file is replaced
+    atomically and every update is logged (parameters, RMSE or interval, reason if it could not
+    run); the trajectory's times are in the data's own time zone.
 
     Example: steamtwin calibrate-online --data day/historian.parquet --tags day/tags.toml --out online --every-minutes 30
     """  # noqa: E501
@@ -345,17 +353,26 @@ def calibrate_online(
         with console.status("preparing the model (the first run compiles it, ~20 s)"):
             _ = model.design_
         columns = (TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn())
-        with Progress(*columns, console=console, transient=True) as bar:
-            task = bar.add_task("online calibration", total=1.0)
-            online = OnlineCalibrator(
-                model, window_s=window_minutes * 60.0, every_s=every_minutes * 60.0,
-                population=population, generations=generations,
-                first_generations=first_generations, seed=seed, workers=workers,
-                scheduler=scheduler, store=ParameterStore(path=out / "params.json"),
-                progress=lambda f, m: bar.update(task, completed=f, description=m))
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", IdentifiabilityWarning)
-                online.run(history.data)
+        if method not in ("ga", "track"):
+            raise ValueError(f"--method {method!r}: expected 'ga' or 'track'")
+        tag_map = history.historian.tag_map
+        if method == "track":
+            with console.status("tracking the coefficients step by step"):
+                online = ParameterTracker(
+                    model, sigma=tracking_sigma(tag_map), step_s=every_minutes * 60.0,
+                    store=ParameterStore(path=out / "params.json")).run(history.data)
+        else:
+            with Progress(*columns, console=console, transient=True) as bar:
+                task = bar.add_task("online calibration", total=1.0)
+                online = OnlineCalibrator(
+                    model, window_s=window_minutes * 60.0, every_s=every_minutes * 60.0,
+                    population=population, generations=generations,
+                    first_generations=first_generations, seed=seed, workers=workers,
+                    scheduler=scheduler, store=ParameterStore(path=out / "params.json"),
+                    progress=lambda f, m: bar.update(task, completed=f, description=m))
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore", IdentifiabilityWarning)
+                    online.run(history.data)
     except DataQualityError as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=1) from None
@@ -368,12 +385,14 @@ def calibrate_online(
         typer.echo(f"error: the data span less than one window ({window_minutes:g} min)",
                    err=True)
         raise typer.Exit(code=2)
+    if tag_map.time_zone:  # the trajectory in the data's own time zone
+        trajectory = trajectory.set_axis(trajectory.index.tz_convert(tag_map.time_zone))
     trajectory.to_csv(out / "trajectory.csv")
     figure = trajectory_figure(trajectory, out / "trajectory.png")
     failed = int((trajectory["error"] != "").sum())
     p = online.params_
-    typer.echo(f"updates: {len(trajectory)} ({failed} could not run); model runs: "
-               f"{online.n_evaluations_}")
+    runs = f"; model runs: {online.n_evaluations_}" if method == "ga" else ""
+    typer.echo(f"updates: {len(trajectory)} ({failed} could not run){runs}")
     typer.echo(f"live parameters: flow {p.flow_coefficient:.4f}, friction "
                f"{p.friction_coefficient:.4f}, heat transfer {p.heat_transfer_coefficient:.4f}")
     typer.echo(f"wrote {out / 'params.json'}, {out / 'trajectory.csv'} and {figure}")

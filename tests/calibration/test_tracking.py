@@ -1,0 +1,113 @@
+"""Online tracking (issue 18, item 6): the recursive filter follows a −2 % step of the flow
+coefficient within 30 min, holds still on a constant plant across loads, and keeps parameters
+the data cannot see near their prior."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+import pytest
+from typer.testing import CliRunner
+
+from steamtwin.calibration.tracking import ParameterTracker
+from steamtwin.cli.main import app
+from steamtwin.dcs.plant import plant_tag_map
+from steamtwin.dcs.signals import SIGNALS
+from steamtwin.dcs.tagmap import write_tag_map
+from steamtwin.model.fom import FullOrderModel
+from steamtwin.model.operating import load_profile_inputs
+from steamtwin.units import convert
+
+STEP_S = 2.0
+# instrument errors: thermocouples ±0.3 K, the control-stage pressure transmitter 0.1 % of ~9 MPa
+SIGMA = {"control_stage_temperature": 0.3, "hp_exhaust_temperature": 0.3,
+         "hp_inner_casing_temperature": 0.3, "control_stage_pressure": 9.0e3}
+
+
+def _plant(spec, loads: np.ndarray, flow_coefficient: np.ndarray, seed: int) -> pd.DataFrame:
+    """The model itself with a time-varying flow coefficient, read with white noise."""
+    model = FullOrderModel(spec)
+    inputs = load_profile_inputs(spec, loads, step_seconds=STEP_S)
+    parameters = pd.DataFrame({"flow_coefficient": flow_coefficient,
+                               "friction_coefficient": 1.1,
+                               "heat_transfer_coefficient": 1.0}, index=inputs.index)
+    outputs = model.simulate_varying(inputs, parameters).outputs
+    rng = np.random.default_rng(seed)
+    data = inputs.copy()
+    for name, sigma in SIGMA.items():
+        data[name] = outputs[name].to_numpy() + rng.normal(0.0, sigma, len(outputs))
+    return data
+
+
+def test_a_two_percent_step_is_tracked_within_half_an_hour(reference_spec):
+    samples = int(3 * 3600 / STEP_S)
+    loads = np.full(samples, 0.5)
+    truth = np.where(np.arange(samples) < samples // 2, 0.99, 0.97)  # −2 % at 1.5 h
+    data = _plant(reference_spec, loads, truth, seed=1)
+    tracker = ParameterTracker(FullOrderModel(reference_spec), sigma=SIGMA).run(data)
+    track = tracker.trajectory_
+    assert (track["error"] == "").all()
+    step_time = data.index[samples // 2]
+    before = track[track.index <= step_time]["flow_coefficient"]
+    after = track[track.index >= step_time + pd.Timedelta(minutes=30)]["flow_coefficient"]
+    assert abs(before.iloc[-1] - 0.99) < 0.005
+    assert np.abs(after - 0.97).max() < 0.005
+    # the 95 % band holds the truth after the step has been followed
+    late = track[track.index >= step_time + pd.Timedelta(minutes=30)]
+    covered = (late["flow_coefficient_low"] <= 0.97) & (late["flow_coefficient_high"] >= 0.97)
+    assert covered.mean() >= 0.8
+    # the heat transfer is not tracked by default: it stays at its prior (the calibration's)
+    assert (track["heat_transfer_coefficient"] == 1.0).all()
+    assert abs(track["friction_coefficient"].iloc[-1] - 1.1) < 0.05
+    assert tracker.params_.flow_coefficient == pytest.approx(track["flow_coefficient"].iloc[-1])
+
+
+def test_a_constant_plant_is_tracked_still_across_loads(reference_spec):
+    """30 % for 1.5 h, a ramp, 100 % for 1.5 h: the tracked flow coefficient stays put."""
+    hold = int(1.5 * 3600 / STEP_S)
+    ramp = np.linspace(0.3, 1.0, int(1200 / STEP_S))
+    loads = np.concatenate([np.full(hold, 0.3), ramp, np.full(hold, 1.0)])
+    data = _plant(reference_spec, loads, np.full(loads.size, 0.985), seed=2)
+    track = ParameterTracker(FullOrderModel(reference_spec), sigma=SIGMA).run(data).trajectory_
+    settled = track.iloc[2:]["flow_coefficient"]
+    assert settled.max() - settled.min() < 0.005
+    assert abs(settled.mean() - 0.985) < 0.003
+
+
+def test_bad_settings_are_refused(reference_spec):
+    model = FullOrderModel(reference_spec)
+    with pytest.raises(ValueError, match="step_s must be a positive number"):
+        ParameterTracker(model, sigma=SIGMA, step_s=0).run(pd.DataFrame(
+            {"x": [1.0]}, index=pd.DatetimeIndex(["2026-01-01"], tz="UTC")))
+    with pytest.raises(ValueError, match="sigma names none of the sensors"):
+        ParameterTracker(model, sigma={"load": 1.0})._start()
+    with pytest.raises(ValueError, match=r"drift_per_hour\['flow'\]"):
+        ParameterTracker(model, sigma=SIGMA, drift_per_hour={"flow": 0.1})._start()
+
+
+def test_calibrate_online_tracks_from_the_cli(tmp_path, reference_spec):
+    """`calibrate-online --method track` on a historian file: the trajectory in the data's
+    zone (+08:00), the live parameters written."""
+    samples = int(3600 / STEP_S)
+    data = _plant(reference_spec, np.full(samples, 0.6), np.full(samples, 0.98), seed=3)
+    full = plant_tag_map("wide")
+    tag_map = dataclasses.replace(full, signals={name: spec for name, spec in
+                                                 full.signals.items() if name in data})
+    historian = pd.DataFrame({"Timestamp": data.index.tz_convert("Asia/Shanghai")
+                              .tz_localize(None)})
+    for name, spec in tag_map.signals.items():
+        historian[spec.column] = convert(data[name].to_numpy(), SIGNALS[name].si_unit,
+                                         spec.unit)
+    historian.to_csv(tmp_path / "day.csv", index=False)
+    write_tag_map(tag_map, tmp_path / "tags.toml")
+    result = CliRunner().invoke(app, ["calibrate-online", "--data", str(tmp_path / "day.csv"),
+                                      "--tags", str(tmp_path / "tags.toml"), "--out",
+                                      str(tmp_path / "online"), "--method", "track",
+                                      "--every-minutes", "10"])
+    assert result.exit_code == 0, result.output
+    track = pd.read_csv(tmp_path / "online" / "trajectory.csv", index_col=0)
+    assert track.index[0].endswith("+08:00")
+    assert abs(track["flow_coefficient"].iloc[-1] - 0.98) < 0.01
+    assert (tmp_path / "online" / "params.json").is_file()
