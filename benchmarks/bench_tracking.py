@@ -89,6 +89,11 @@ def main() -> None:
         print(f"before noon: max abs error {np.abs(early - equivalent).max():.4f}")
         print(f"from 30 min after the step: max abs error {np.abs(late - after).max():.4f}, "
               f"median {np.median(np.abs(late - after)):.4f} (target <= 0.005)")
+        settled = track[track.index >= noon + pd.Timedelta(minutes=30)]
+        inside = ((settled["flow_coefficient_low"] <= after)
+                  & (after <= settled["flow_coefficient_high"])).mean()
+        print(f"95 % intervals (flow meter's uncertainty included) holding the twin-equivalent "
+              f"truth after the step: {inside:.0%}")
     print(f"wall time {time.perf_counter() - started:.0f} s")
 
 

@@ -58,6 +58,10 @@ def test_a_two_percent_step_is_tracked_within_half_an_hour(reference_spec):
     late = track[track.index >= step_time + pd.Timedelta(minutes=30)]
     covered = (late["flow_coefficient_low"] <= 0.97) & (late["flow_coefficient_high"] >= 0.97)
     assert covered.mean() >= 0.8
+    # ... which carries the flow meter's ±1.5 % (95 %) beside the filter's own few 1e-4
+    width = late["flow_coefficient_high"] - late["flow_coefficient_low"]
+    assert np.all(width > 2 * 1.96 * 0.97 * 0.015 / 1.96 * 0.99)
+    assert (late["flow_coefficient_std"] < 0.002).all()
     # the heat transfer is not tracked by default: it stays at its prior (the calibration's)
     assert (track["heat_transfer_coefficient"] == 1.0).all()
     assert abs(track["friction_coefficient"].iloc[-1] - 1.1) < 0.05

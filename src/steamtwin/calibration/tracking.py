@@ -77,6 +77,14 @@ TRACKED_PARAMETERS: tuple[str, ...] = ("flow_coefficient", "friction_coefficient
 #: Prior spread (normal coordinate) that holds an untracked parameter in a step's fit.
 _HELD_SPREAD = 1e-9
 MIN_STEP_SAMPLES = 60
+#: Relative standard uncertainty of the main-steam flow measurement: a flow nozzle with its DP
+#: transmitter, ±1.5 % of reading at 95 % (ISO 5167-3 nozzle discharge coefficient ±0.8-1.2 %
+#: plus the transmitter; the virtual plant's instrument, dcs.sensors). With the control-stage
+#: pressure as the witness (p1 ∝ m/φ, Stodola's cone law) a flow reading biased by b is a flow
+#: coefficient biased by b, so the data fix φ·(1 + b), not φ: the reported interval of the flow
+#: coefficient carries this constant uncertainty beside the filter's own (the state does not:
+#: a constant bias is no random walk, and the filter follows φ·(1 + b) as precisely as ever).
+FLOW_MEASUREMENT_UNCERTAINTY = 0.015 / 1.96
 #: Instrument error where the tag map states none (SI): a class-1 thermocouple's tolerance is
 #: ±1.5 K up to 375 °C and ±0.004·|t| above (IEC 60584-1:2013, Table 1; ~±2 K at 500 °C),
 #: taken as the 95 % limit, σ ≈ 1 K; a pressure transmitter of accuracy class 0.1 % on a
@@ -106,10 +114,14 @@ class ParameterTracker:
     ``simulator``: the model (read through its sensors); ``sigma``: instrument error per sensor
     (SI: K, Pa) — give the control-stage pressure's, else it is not used; ``priors``: the start
     state (default :data:`~steamtwin.model.parameters.DEFAULT_PRIORS`, or a calibration's
-    posterior); ``step_s``: seconds of data per update; ``drift_per_hour``: q per parameter.
-    After :meth:`run`/:meth:`update`: ``trajectory_`` (one row per step, indexed by the step's
-    end: each coefficient, its ``<name>_std`` (normal coordinate) and 95 % ``<name>_low`` /
-    ``_high``, ``samples``, ``error``) and ``params_`` (current).
+    posterior); ``step_s``: seconds of data per update; ``drift_per_hour``: q per parameter;
+    ``tracked``: the coefficients followed (:data:`TRACKED_PARAMETERS`), the others stay at
+    their prior's centre; ``flow_uncertainty``: the flow measurement's relative standard
+    uncertainty, in the flow coefficient's reported interval
+    (:data:`FLOW_MEASUREMENT_UNCERTAINTY`). After :meth:`run`/:meth:`update`: ``trajectory_``
+    (one row per step, indexed by the step's end: each coefficient, its ``<name>_std`` (the
+    filter's, normal coordinate) and 95 % ``<name>_low`` / ``_high``, ``samples``, ``error``)
+    and ``params_`` (current).
     """
 
     def __init__(self, simulator: Simulator, *, sigma: Mapping[str, float],
@@ -117,6 +129,7 @@ class ParameterTracker:
                  drift_per_hour: Mapping[str, float] | None = None,
                  sensors: Sequence[str] = TRACKING_SENSORS,
                  tracked: Sequence[str] = TRACKED_PARAMETERS,
+                 flow_uncertainty: float = FLOW_MEASUREMENT_UNCERTAINTY,
                  store: ParameterStore | None = None,
                  max_input_gap_s: float = MAX_INPUT_GAP_S) -> None:
         self.simulator = simulator
@@ -126,6 +139,7 @@ class ParameterTracker:
         self.drift_per_hour = drift_per_hour
         self.sensors = sensors
         self.tracked = tracked
+        self.flow_uncertainty = flow_uncertainty
         self.store = store
         self.max_input_gap_s = max_input_gap_s
 
@@ -251,8 +265,10 @@ class ParameterTracker:
         row["error"] = error
         row.update(asdict(self._params()))
         for i, name in enumerate(PARAMETER_NAMES):
-            std = math.sqrt(self._variance[i])
-            row[f"{name}_std"] = std
-            low = self._prior(i, self._variance[i]).interval(0.95)
-            row[f"{name}_low"], row[f"{name}_high"] = low
+            variance = self._variance[i]
+            row[f"{name}_std"] = math.sqrt(variance)
+            if name == "flow_coefficient":  # the flow meter's bias (FLOW_MEASUREMENT_UNCERTAINTY)
+                scale = self._prior(i, variance).center if self._kinds[name] == "normal" else 1.0
+                variance += (scale * self.flow_uncertainty) ** 2
+            row[f"{name}_low"], row[f"{name}_high"] = self._prior(i, variance).interval(0.95)
         return row
