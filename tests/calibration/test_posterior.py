@@ -322,3 +322,22 @@ def test_calibrator_tempering_setting(tmp_path):
     with pytest.raises(ValueError, match="tempering must be"):
         Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=1, workers=1,
                    min_samples=30, tempering=2.0).fit(windows)
+
+
+def test_the_flow_coefficients_interval_carries_the_flow_measurement():
+    """A flow-meter bias b is a flow-coefficient bias b (p1 ∝ m/φ): the flow coefficient's 95 %
+    interval widens to z·sqrt(σ_fit² + (φ·σ_m)²); the other intervals and the MAP stay."""
+    objective = _objective(_window_set(np.random.default_rng(3), ramp=True))
+    posterior = laplace_posterior(objective, fit_map(objective))
+    plain = posterior.table()
+    carried = replace(posterior, flow_uncertainty=0.01).table()
+    phi = plain.loc["flow_coefficient", "map"]
+    fit_std = plain.loc["flow_coefficient", "std"]
+    expected = 1.959964 * np.hypot(fit_std, phi * 0.01)
+    row = carried.loc["flow_coefficient"]
+    assert (row["high"] - row["low"]) / 2 == pytest.approx(expected, rel=1e-4)
+    assert row["map"] == plain.loc["flow_coefficient", "map"]
+    others = ["friction_coefficient", "heat_transfer_coefficient"]
+    assert carried.loc[others, ["low", "high"]].equals(plain.loc[others, ["low", "high"]])
+    assert replace(posterior, flow_uncertainty=0.01).to_dict()[
+        "flow_measurement_uncertainty"] == 0.01

@@ -38,7 +38,12 @@ from steamtwin.calibration.objective import (
     Evaluation,
     fitness,
 )
-from steamtwin.calibration.posterior import Posterior, laplace_posterior, likelihood_tempering
+from steamtwin.calibration.posterior import (
+    FLOW_MEASUREMENT_UNCERTAINTY,
+    Posterior,
+    laplace_posterior,
+    likelihood_tempering,
+)
 from steamtwin.model.parameters import (
     DEFAULT_PRIORS,
     PARAMETER_BOUNDS,
@@ -350,10 +355,13 @@ def apply_tempering(problem: CalibrationProblem, tempering: float | str) -> floa
 
 def posterior_at(problem: CalibrationProblem, params: ModelParameters, result: Evaluation
                  ) -> Posterior | None:
-    """The Laplace posterior at a calibration result (None without priors or if rejected)."""
+    """The Laplace posterior at a calibration result (None without priors or if rejected); the
+    flow coefficient's interval carries the flow measurement's uncertainty
+    (:data:`~steamtwin.calibration.posterior.FLOW_MEASUREMENT_UNCERTAINTY`)."""
     if problem.objective.priors is None or result.penalised:
         return None
-    return laplace_posterior(problem.objective, params)
+    return replace(laplace_posterior(problem.objective, params),
+                   flow_uncertainty=FLOW_MEASUREMENT_UNCERTAINTY)
 
 
 def write_parameters(path: str | Path, params: ModelParameters, rmse: float,

@@ -66,11 +66,22 @@ from steamtwin.model.parameters import (
     ParameterPrior,
 )
 
-__all__ = ["INTERVAL_PROBABILITY", "Posterior", "fit_map", "laplace_posterior",
-           "likelihood_tempering", "metropolis"]
+__all__ = ["FLOW_MEASUREMENT_UNCERTAINTY", "INTERVAL_PROBABILITY", "Posterior", "fit_map",
+           "laplace_posterior", "likelihood_tempering", "metropolis"]
 
 INTERVAL_PROBABILITY = 0.95
 """Probability of the reported central posterior intervals."""
+
+FLOW_MEASUREMENT_UNCERTAINTY = 0.015 / 1.96
+"""Relative standard uncertainty of the main-steam flow measurement: a flow nozzle with its DP
+transmitter, ±1.5 % of reading at 95 % (ISO 5167-3 nozzle discharge coefficient ±0.8-1.2 %
+plus the transmitter; the virtual plant's instrument, :mod:`steamtwin.dcs.sensors`). The
+measured flow is a model input, and by Stodola's cone law the control-stage pressure and the
+expansion depend on m/φ: a flow reading biased by b is a flow coefficient biased by b, so the
+data fix φ·(1 + b), not φ. The reported interval of the flow coefficient carries this constant
+uncertainty beside the fit's own (measured on the virtual plant: its flow meter reads +1.06 %
+high and both the joint calibration and the tracker sit +0.010…0.015 above the twin-equivalent
+truth; docs/benchmarks.md)."""
 
 _STEP = 1e-4  # central-difference step in θ (a fraction of a per cent of any parameter)
 
@@ -80,7 +91,9 @@ class Posterior:
     """Laplace posterior at ``map`` (:class:`ModelParameters`): ``theta`` (MAP in the priors'
     normal coordinates), ``covariance`` (in θ), ``priors`` (PARAMETER_NAMES order),
     ``autocorrelation_time`` (samples, τ), ``samples`` (residuals used), ``scale_factor``
-    (the Birge ratio S, ≥ 1)."""
+    (the Birge ratio S, ≥ 1), ``flow_uncertainty`` (relative standard uncertainty of the
+    measured main-steam flow that the flow coefficient's interval carries; see
+    :data:`FLOW_MEASUREMENT_UNCERTAINTY`)."""
 
     map: ModelParameters
     theta: np.ndarray
@@ -89,6 +102,7 @@ class Posterior:
     autocorrelation_time: float
     samples: int
     scale_factor: float = 1.0
+    flow_uncertainty: float = 0.0
 
     def table(self, probability: float = INTERVAL_PROBABILITY) -> pd.DataFrame:
         """One row per parameter: ``map``, ``low``/``high`` (central interval, clipped to the
@@ -103,11 +117,14 @@ class Posterior:
         for i, (name, prior) in enumerate(zip(PARAMETER_NAMES, self.priors, strict=True)):
             low, high = PARAMETER_BOUNDS[name]
             prior_low, prior_high = prior.interval(probability)
+            half = z * std[i]
+            if name == "flow_coefficient" and self.flow_uncertainty > 0.0:
+                scale = getattr(self.map, name) if prior.distribution == "normal" else 1.0
+                half = z * float(np.hypot(std[i], scale * self.flow_uncertainty))
             row: dict[str, object] = {
                 "parameter": name, "map": getattr(self.map, name),
-                "low": float(np.clip(prior.from_internal(self.theta[i] - z * std[i]), low, high)),
-                "high": float(np.clip(prior.from_internal(self.theta[i] + z * std[i]), low,
-                                      high)),
+                "low": float(np.clip(prior.from_internal(self.theta[i] - half), low, high)),
+                "high": float(np.clip(prior.from_internal(self.theta[i] + half), low, high)),
                 "std": float(std[i]), "distribution": prior.distribution,
                 "prior_center": prior.center, "prior_low": prior_low, "prior_high": prior_high,
                 "shrinkage": float(std[i] / prior.spread),
@@ -126,6 +143,7 @@ class Posterior:
             "schema_version": PARAMETERS_SCHEMA_VERSION, "method": "laplace",
             "probability": probability, "autocorrelation_time_samples": self.autocorrelation_time,
             "scale_factor": self.scale_factor, "samples": self.samples,
+            "flow_measurement_uncertainty": self.flow_uncertainty,
             "intervals": {name: {"map": float(row["map"]), "low": float(row["low"]),
                                  "high": float(row["high"]), "std": float(row["std"]),
                                  "shrinkage": float(row["shrinkage"])}

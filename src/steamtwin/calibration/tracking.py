@@ -42,7 +42,11 @@ from steamtwin.calibration.objective import (
     CalibrationProblem,
 )
 from steamtwin.calibration.online import ParameterStore
-from steamtwin.calibration.posterior import fit_map, laplace_posterior
+from steamtwin.calibration.posterior import (
+    FLOW_MEASUREMENT_UNCERTAINTY,
+    fit_map,
+    laplace_posterior,
+)
 from steamtwin.calibration.windowset import measurement_sigma
 from steamtwin.dcs.tagmap import TagMap
 from steamtwin.model.parameters import (
@@ -77,14 +81,6 @@ TRACKED_PARAMETERS: tuple[str, ...] = ("flow_coefficient", "friction_coefficient
 #: Prior spread (normal coordinate) that holds an untracked parameter in a step's fit.
 _HELD_SPREAD = 1e-9
 MIN_STEP_SAMPLES = 60
-#: Relative standard uncertainty of the main-steam flow measurement: a flow nozzle with its DP
-#: transmitter, ±1.5 % of reading at 95 % (ISO 5167-3 nozzle discharge coefficient ±0.8-1.2 %
-#: plus the transmitter; the virtual plant's instrument, dcs.sensors). With the control-stage
-#: pressure as the witness (p1 ∝ m/φ, Stodola's cone law) a flow reading biased by b is a flow
-#: coefficient biased by b, so the data fix φ·(1 + b), not φ: the reported interval of the flow
-#: coefficient carries this constant uncertainty beside the filter's own (the state does not:
-#: a constant bias is no random walk, and the filter follows φ·(1 + b) as precisely as ever).
-FLOW_MEASUREMENT_UNCERTAINTY = 0.015 / 1.96
 #: Instrument error where the tag map states none (SI): a class-1 thermocouple's tolerance is
 #: ±1.5 K up to 375 °C and ±0.004·|t| above (IEC 60584-1:2013, Table 1; ~±2 K at 500 °C),
 #: taken as the 95 % limit, σ ≈ 1 K; a pressure transmitter of accuracy class 0.1 % on a
