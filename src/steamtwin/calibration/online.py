@@ -38,7 +38,7 @@ from steamtwin.calibration.objective import (
 from steamtwin.model.parameters import ModelParameters, ParameterPrior
 from steamtwin.model.simulator import Simulator
 
-__all__ = ["OnlineCalibrator", "ParameterStore"]
+__all__ = ["OnlineCalibrator", "ParameterStore", "append_chunk", "replay_chunks"]
 
 
 class ParameterStore:
@@ -72,6 +72,34 @@ class ParameterStore:
                                      encoding="utf-8")
                 os.replace(temporary, self.path)
             self._params = params
+
+
+def append_chunk(buffer: pd.DataFrame, chunk: pd.DataFrame) -> pd.DataFrame:
+    """``buffer`` with a newly arrived ``chunk`` (DatetimeIndex, strictly after the buffer's
+    last sample) appended; ValueError otherwise. An empty chunk leaves the buffer as it is."""
+    if not isinstance(chunk, pd.DataFrame) or not isinstance(chunk.index, pd.DatetimeIndex):
+        raise ValueError("each chunk must be a DataFrame with a DatetimeIndex")
+    if chunk.empty:
+        return buffer
+    if not buffer.empty and chunk.index[0] <= buffer.index[-1]:
+        raise ValueError(f"chunk starting {chunk.index[0]} does not follow the data so far "
+                         f"(last {buffer.index[-1]}); chunks must arrive in order")
+    return pd.concat([buffer, chunk]) if not buffer.empty else chunk
+
+
+def replay_chunks(data: pd.DataFrame | Iterable[pd.DataFrame], chunk_s: float
+                  ) -> tuple[Iterable[pd.DataFrame], float]:
+    """``data`` as a stream: a long frame cut into ``chunk_s``-second chunks (with its span in
+    s), or an iterable of chunks as it is (span NaN)."""
+    if not (isinstance(chunk_s, int | float) and np.isfinite(chunk_s) and chunk_s > 0):
+        raise ValueError(f"chunk_s must be a positive number of seconds (got {chunk_s!r})")
+    if not isinstance(data, pd.DataFrame):
+        return data, float("nan")
+    if not isinstance(data.index, pd.DatetimeIndex) or data.empty:
+        raise ValueError("data must be a non-empty DataFrame with a DatetimeIndex")
+    keys = ((data.index - data.index[0]).total_seconds() // chunk_s).astype(int)
+    return ((part for _, part in data.groupby(keys, sort=True)),
+            float((data.index[-1] - data.index[0]).total_seconds()))
 
 
 class OnlineCalibrator:
@@ -150,14 +178,9 @@ class OnlineCalibrator:
         update that has come due. Returns the trajectory rows added by this call."""
         if not hasattr(self, "_buffer"):
             self._start()
-        if not isinstance(chunk, pd.DataFrame) or not isinstance(chunk.index, pd.DatetimeIndex):
-            raise ValueError("each chunk must be a DataFrame with a DatetimeIndex")
-        if chunk.empty:
+        self._buffer = append_chunk(self._buffer, chunk)
+        if self._buffer.empty:
             return pd.DataFrame()
-        if not self._buffer.empty and chunk.index[0] <= self._buffer.index[-1]:
-            raise ValueError(f"chunk starting {chunk.index[0]} does not follow the data so far "
-                             f"(last {self._buffer.index[-1]}); chunks must arrive in order")
-        self._buffer = pd.concat([self._buffer, chunk]) if not self._buffer.empty else chunk
         window = pd.Timedelta(seconds=self.window_s)
         if self._next_due is None:
             self._next_due = self._buffer.index[0] + window
@@ -177,17 +200,8 @@ class OnlineCalibrator:
             ) -> OnlineCalibrator:
         """Replay ``data`` — a long frame, cut into ``chunk_s``-second chunks, or an iterable of
         chunks (a stream) — through :meth:`update`; returns self."""
-        if not (isinstance(chunk_s, int | float) and np.isfinite(chunk_s) and chunk_s > 0):
-            raise ValueError(f"chunk_s must be a positive number of seconds (got {chunk_s!r})")
+        chunks, total = replay_chunks(data, chunk_s)
         self._start()
-        if isinstance(data, pd.DataFrame):
-            if not isinstance(data.index, pd.DatetimeIndex) or data.empty:
-                raise ValueError("data must be a non-empty DataFrame with a DatetimeIndex")
-            keys = ((data.index - data.index[0]).total_seconds() // chunk_s).astype(int)
-            chunks: Iterable[pd.DataFrame] = (part for _, part in data.groupby(keys, sort=True))
-            total = float((data.index[-1] - data.index[0]).total_seconds())
-        else:
-            chunks, total = data, float("nan")
         for chunk in chunks:
             self.update(chunk)
             if self.progress is not None and np.isfinite(total) and total > 0:

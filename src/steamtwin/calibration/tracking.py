@@ -41,7 +41,7 @@ from steamtwin.calibration.objective import (
     PARAMETER_NAMES,
     CalibrationProblem,
 )
-from steamtwin.calibration.online import ParameterStore
+from steamtwin.calibration.online import ParameterStore, append_chunk, replay_chunks
 from steamtwin.calibration.posterior import (
     FLOW_MEASUREMENT_UNCERTAINTY,
     fit_map,
@@ -193,14 +193,9 @@ class ParameterTracker:
         that has come due. Returns the trajectory rows added."""
         if not hasattr(self, "_buffer"):
             self._start()
-        if not isinstance(chunk, pd.DataFrame) or not isinstance(chunk.index, pd.DatetimeIndex):
-            raise ValueError("each chunk must be a DataFrame with a DatetimeIndex")
-        if chunk.empty:
+        self._buffer = append_chunk(self._buffer, chunk)
+        if self._buffer.empty:
             return pd.DataFrame()
-        if not self._buffer.empty and chunk.index[0] <= self._buffer.index[-1]:
-            raise ValueError(f"chunk starting {chunk.index[0]} does not follow the data so far "
-                             f"(last {self._buffer.index[-1]}); chunks must arrive in order")
-        self._buffer = pd.concat([self._buffer, chunk]) if not self._buffer.empty else chunk
         if self._step_start is None:
             self._step_start = self._buffer.index[0]
         step = pd.Timedelta(seconds=self.step_s)
@@ -221,13 +216,9 @@ class ParameterTracker:
             ) -> ParameterTracker:
         """Replay ``data`` (a frame cut into ``chunk_s``-second chunks, or an iterable of
         chunks) through :meth:`update`; returns self."""
+        chunks, _ = replay_chunks(data, chunk_s)
         self._start()
-        if isinstance(data, pd.DataFrame):
-            if not isinstance(data.index, pd.DatetimeIndex) or data.empty:
-                raise ValueError("data must be a non-empty DataFrame with a DatetimeIndex")
-            keys = ((data.index - data.index[0]).total_seconds() // chunk_s).astype(int)
-            data = (part for _, part in data.groupby(keys, sort=True))
-        for chunk in data:
+        for chunk in chunks:
             self.update(chunk)
         return self
 
