@@ -162,6 +162,40 @@ def test_day_profile() -> None:
     assert short.size < demand.size
 
 
+def test_second_day_holds_other_loads() -> None:
+    """'day-2' holds loads the 'day' never holds (for judging a twin calibrated on the 'day'),
+    within the same 30–100 % range and the 5 %/min ramp limit."""
+    demand = load_demand(SCENARIOS["day-2"])
+    assert demand.size == 24 * 3600 + 1
+    assert demand.min() == pytest.approx(0.35) and demand.max() == pytest.approx(1.0)
+    assert np.abs(np.diff(demand)).max() * 100.0 * 60.0 <= 5.0 + 1e-9
+    held = {round(100 * target) for target, _, hold in SCENARIOS["day-2"].segments if hold}
+    day = {round(100 * target) for target, _, hold in SCENARIOS["day"].segments if hold}
+    assert held - {100} and not (held - {100}) & day
+
+
+def test_same_instruments_on_another_day() -> None:
+    """``instruments`` keeps an earlier run's calibration errors and drift rates and draws the
+    noise anew; without it, the seed decides everything as before."""
+    first = run_plant("deep-peak-30", hours=0.02, seed=11)
+    again = run_plant("deep-peak-30", hours=0.02, seed=12, instruments=first.injected.sensors)
+    other = run_plant("deep-peak-30", hours=0.02, seed=12)
+    columns = ["bias_fraction", "drift_rate"]
+    pd.testing.assert_frame_equal(again.injected.sensors[columns],
+                                  first.injected.sensors[columns])
+    assert not (again.injected.sensors["bias_fraction"]
+                == other.injected.sensors["bias_fraction"]).any()
+    noise = (again.measured - other.measured).drop(columns="load", errors="ignore")
+    bias = again.injected.sensors["bias"] - other.injected.sensors["bias"]
+    # signals whose accuracy class is a constant offset here (of span; 1.5 K below 375 °C)
+    for name in ("main_steam_pressure", "hp_exhaust_temperature"):  # same noise, other bias
+        offset = noise[name].to_numpy()
+        resolution = float(other.injected.sensors.loc[name, "resolution"])
+        assert np.ptp(offset) <= 2 * resolution + 1e-9 * abs(offset).max()
+        assert np.median(offset) == pytest.approx(bias[name], abs=0.05 * abs(bias[name])
+                                                  + resolution)
+
+
 def test_errors() -> None:
     with pytest.raises(KeyError, match="deep-peak-30, deep-peak-50, day"):
         run_plant("nope")

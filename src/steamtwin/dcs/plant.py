@@ -581,6 +581,25 @@ SCENARIOS: dict[str, Scenario] = {
         long_hold=3,
         scale_holds=True,
     ),
+    "day-2": Scenario(
+        name="day-2",
+        description="another 24 h at other loads and rates: night at 40 %, morning ramp to "
+        "90 %, peak at 100 %, deep-peak valley at 35 % (4 %/min down), 60 % shoulder, evening "
+        "95 %, 65 % and 45 % — loads the 'day' never holds, for judging a twin calibrated on it",
+        start_load=0.4,
+        segments=(
+            (0.40, 1.0, 5.0 * 3600),    # night
+            (0.90, 2.0, 1.0 * 3600),    # morning ramp-up, shoulder
+            (1.00, 1.0, 1.5 * 3600),    # morning peak
+            (0.35, 4.0, 3.0 * 3600),    # deep-peak valley
+            (0.60, 1.5, 2.0 * 3600),    # afternoon shoulder
+            (0.95, 2.5, 2.5 * 3600),    # evening peak
+            (0.65, 1.0, 1.5 * 3600),    # late evening
+            (0.45, 1.0, 0.0),           # back to night load
+        ),
+        long_hold=3,
+        scale_holds=True,
+    ),
 }
 """Built-in scenarios by name."""
 
@@ -786,11 +805,14 @@ def plant_sensor_models(truth: PlantTruth) -> dict[str, SensorModel]:
 
 def run_plant(scenario: str, *, hours: float | None = None, seed: int = 0,
               truth: PlantTruth = PlantTruth(), progress: ProgressCallback | None = None,
-              ramp_rate: float | None = None) -> PlantRun:
+              ramp_rate: float | None = None,
+              instruments: pd.DataFrame | None = None) -> PlantRun:
     """Run the virtual plant through ``scenario`` (a key of :data:`SCENARIOS`).
 
     ``hours`` overrides the long hold (h); ``seed`` seeds the instruments' generator;
-    ``ramp_rate`` (%/min, 1–5) overrides the scenario's ramps. Raises ``KeyError`` listing the
+    ``ramp_rate`` (%/min, 1–5) overrides the scenario's ramps; ``instruments``: an earlier
+    run's ``injected.sensors`` — the same instruments (calibration errors and drift rates) on
+    another day, with noise and faults drawn from ``seed``. Raises ``KeyError`` listing the
     scenarios for an unknown name.
     """
     if scenario not in SCENARIOS:
@@ -821,7 +843,7 @@ def run_plant(scenario: str, *, hours: float | None = None, seed: int = 0,
     sensed = [name for name in KKS_TAGS if name in spec.sensors]
     true_frame = inputs.join(outputs)[sensed]
     measurement = measure(true_frame, plant_sensor_models(truth), np.random.default_rng(seed),
-                          faults=truth.faults)
+                          faults=truth.faults, instruments=instruments)
     report(1.0, "done")
     return PlantRun(true_inputs=true_inputs, true_outputs=outputs,
                     measured=measurement.measured, injected=measurement.injected, truth=truth,

@@ -336,12 +336,16 @@ def measure(
     *,
     faults: FaultConfig = FaultConfig(),
     hold: Hold = "linear",
+    instruments: pd.DataFrame | None = None,
 ) -> Measurement:
     """Record ``true_frame`` (SI, uniform DatetimeIndex) as the DCS would; see the module doc.
 
     Columns with a model are measured; other columns are passed through unchanged; models of
     absent columns are ignored. The true signals of modelled columns must be finite. ``hold``
-    is the lag discretisation (:func:`first_order_lag`).
+    is the lag discretisation (:func:`first_order_lag`). ``instruments``: the ``sensors``
+    record of an earlier measurement (:class:`Injected`) — the same instruments on another day:
+    each listed signal keeps that record's ``bias_fraction`` and ``drift_rate`` (its noise and
+    faults are drawn anew from ``rng``, which is consumed exactly as without the record).
     """
     if not isinstance(true_frame.index, pd.DatetimeIndex):
         raise TypeError("true_frame needs a DatetimeIndex")
@@ -368,6 +372,9 @@ def measure(
         bias_fraction = float(child.uniform(-1.0, 1.0))
         drift_rate = float(child.uniform(-1.0, 1.0)) * model.drift_per_year / SECONDS_PER_YEAR
         noise = child.standard_normal(n) * model.noise_sigma
+        if instruments is not None and name in instruments.index:
+            bias_fraction = float(instruments.loc[name, "bias_fraction"])
+            drift_rate = float(instruments.loc[name, "drift_rate"])
 
         lagged = first_order_lag(x, dt_s, model.time_constant_s, hold=hold)
         tolerance = model.tolerance(lagged)
