@@ -67,16 +67,18 @@ SAMPLE_POINTS = 30_000
 #: SegmentationSettings`).
 NEIGHBOURS = 20
 #: Normals farther than this from perpendicular to the axis are left out of the side's scatter
-#: (cap-like; the twist and taper of a blade tilt side normals by up to ~15°).
+#: (cap-like): halfway between side and cap, room for twist and taper to tilt side normals.
 SIDE_ANGLE = math.radians(45.0)
 #: A normal within this of perpendicular to (side) or parallel to (cap) a candidate axis counts
-#: as explained by it.
+#: as explained by it (scores the starts; a wrong axis, e.g. the chord, leaves the leading and
+#: trailing edges' normals unexplained).
 FIT_ANGLE = math.radians(15.0)
 #: Normals within this of the axis are cap-like (segmentation's caps use the same 20°).
 CAP_ANGLE = math.radians(20.0)
 #: Cap points are looked for within this share of the span from each end.
 CAP_BAND = 0.1
-#: Fewest cap-like points that make a planar end patch.
+#: Fewest cap-like points that make a planar end patch (a plane's three parameters, ten times
+#: over).
 MIN_CAP_POINTS = 30
 #: The end planes must be parallel, and agree with the side's axis, within this angle to give
 #: the axis (the twist and taper of our rows tilt the side normals' axis by up to 2.3°, hp5).
@@ -97,6 +99,7 @@ KEEP_ANGLE = math.radians(0.5)
 SLAB_SPACINGS = 8.0
 #: Hub-end overrides: the hub at the end towards which the given scan axis points.
 HUB_ENDS = ("+x", "-x", "+y", "-y", "+z", "-z")
+#: Sides of the suction face in the blade frame (handedness rule, module docstring).
 SUCTION_SIDES = ("+y", "-y")
 
 
@@ -126,14 +129,17 @@ class BladeFrame:
 
     @property
     def x_axis(self) -> np.ndarray:
+        """The blade's x axis in scan coordinates (unit)."""
         return self.rotation[0]
 
     @property
     def y_axis(self) -> np.ndarray:
+        """The blade's y axis in scan coordinates (unit)."""
         return self.rotation[1]
 
     @property
     def z_axis(self) -> np.ndarray:
+        """The blade's z axis (hub to tip) in scan coordinates (unit)."""
         return self.rotation[2]
 
     @property
@@ -270,7 +276,7 @@ def estimate_blade_frame(points: np.ndarray, *, hub_end: str | None = None,
     given scan axis points towards; ``suction_side`` (``"+y"`` or ``"-y"``, see the module
     docstring) lets the handedness decide hub and tip of an untapered, cambered blade;
     ``keep_scan_frame`` keeps a scan frame that is already a blade frame (see the module
-    docstring). Raises
+    docstring); ``rng`` draws the :data:`SAMPLE_POINTS` whose normals are estimated. Raises
     :class:`~steamtwin.geometry.segmentation.ReconstructionError` naming the problem (bad
     cloud, no planar end faces).
     """
