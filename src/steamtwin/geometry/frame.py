@@ -92,7 +92,8 @@ BLUNTNESS_MARGIN = 0.1
 #: counts as uncambered (no handedness).
 CAMBER_MARGIN = 0.005
 #: The scan frame is kept when the span axis is within this angle of its +z (hub at the low
-#: end): 10× the largest span-axis error measured on nominal clouds in a random pose.
+#: end): 20× the largest span-axis error on our rows in random poses (0.026°,
+#: benchmarks/bench_frame.py), far below any tilt a reconstruction in the scan frame would need.
 KEEP_ANGLE = math.radians(0.5)
 #: Section slabs are this many nearest-neighbour distances thick (~4 mean point spacings: a
 #: few hundred points round a section).
