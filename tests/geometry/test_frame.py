@@ -3,6 +3,7 @@ and stray points) in random rigid poses, against the pose that put them there.""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -135,7 +136,9 @@ def test_hub_and_tip_of_an_untapered_blade_are_ambiguous_without_more(clouds) ->
     scan = points @ rotation.T
     frame = estimate_blade_frame(scan)
     assert frame.hub_tip_ambiguous and frame.rules["hub_tip"].startswith("ambiguous")
-    assert frame.as_dict()["hub_tip_ambiguous"] is True
+    report = json.loads(json.dumps(frame.as_dict()))  # JSON-able as it is
+    assert report["hub_tip_ambiguous"] is True and report["kept_scan_frame"] is False
+    np.testing.assert_allclose(report["matrix_scan_to_blade_m"], frame.matrix)
     # the hub end given as the scan axis pointing towards it decides
     hub_towards = rotation @ -EZ
     largest = int(np.argmax(np.abs(hub_towards)))

@@ -401,8 +401,8 @@ def estimate_blade_frame(points: np.ndarray, *, hub_end: str | None = None,
     rotation = np.array([x_axis, y_axis, z_axis])
     translation = -rotation @ origin
     span_axis = z_axis.copy()
-    kept = keep_scan_frame and _angle(span_axis, np.array([0.0, 0.0, 1.0])) < KEEP_ANGLE \
-        and span_axis[2] > 0.0
+    kept = bool(keep_scan_frame and _angle(span_axis, np.eye(3)[2]) < KEEP_ANGLE
+                and span_axis[2] > 0.0)
     if kept:
         rotation, translation = np.eye(3), np.zeros(3)
         rules["frame"] = (f"the scan frame, already a blade frame (span axis "
