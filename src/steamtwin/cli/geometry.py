@@ -3,10 +3,12 @@ blade meshes."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 from typing import NoReturn
 
+import numpy as np
 import typer
 
 from steamtwin.cli.paths import prepare_output_file, prepare_output_folder
@@ -15,6 +17,12 @@ geometry_app = typer.Typer(
     help="Blade geometry: virtual scans, scan preprocessing, reconstruction, simulation meshes.",
     no_args_is_help=True,
 )
+
+
+#: Largest RMS of the best fit to a row's nominal blade (m) for the cloud to count as that
+#: row's blade: 20× the handheld scanner's ±0.05 mm bound (VDI/VDE 2634-2); a blade of another
+#: row or design fits to millimetres (hp1's nominal to a foreign blade: 205 mm, issue 19).
+MAX_BEST_FIT_RMS = 1.0e-3
 
 
 def _fail(message: str) -> NoReturn:
@@ -191,25 +199,40 @@ def reconstruct(
                                                   ".png deviation map (needs the row)."),
     row: str | None = typer.Option(None, help="Row of the blade (default: from scan.json). "
                                               "With a row the cloud is best-fitted to its "
-                                              "nominal blade; without, it must already be in "
-                                              "the blade frame."),
+                                              "nominal blade; without, it is reconstructed in "
+                                              "a blade frame found from the data."),
     turbine: str = typer.Option("reference", help="Turbine of the nominal blade."),
     target_points: int | None = typer.Option(
         None, help="Points kept by preprocessing (scan folders). Default: 8/15 of the scanned "
                    "blade points (the method's 150k → 80k)."),
     tolerance: float = typer.Option(0.02, help="RMS fit residual aimed at by knot insertion, "
                                                "mm."),
+    frame: str = typer.Option(
+        "blade", help="Frame of the STL: 'blade' (default: z along the span, the frame the mesh "
+                      "command, the FEM and the reports use; the nominal row's frame with a "
+                      "row, else the frame from the data) or 'scan' (the cloud's own frame, to "
+                      "overlay the STL on the scan)."),
+    hub_end: str | None = typer.Option(
+        None, help="The hub end, as the scan axis pointing towards it (+x, -x, +y, -y, +z, -z), "
+                   "when the data cannot tell hub from tip (an untapered blade)."),
 ) -> None:
     """Reconstruct a watertight blade surface (STL) from a scan folder or a fused cloud.
 
-    A scan folder is preprocessed first (as 'geometry preprocess'). The cloud is segmented by
-    region growing into root, tip, pressure side, suction side, leading and trailing edge; the
-    side is fitted by a periodic B-spline surface refined by knot insertion, the caps by planes.
-    With --report: deviation from the nominal blade and row metrics at hub, mid and tip.
+    A scan folder is preprocessed first (as 'geometry preprocess'). The blade frame is found
+    from the data (span axis from the side and end-face normals, hub at the longer end section,
+    chord from the leading to the trailing edge at mid span) and printed; with a row the cloud
+    is then best-fitted to the row's nominal blade (refused when it does not match it). The
+    cloud is segmented by region growing into root, tip, pressure side, suction side, leading
+    and trailing edge; the side is fitted by a periodic B-spline surface refined by knot
+    insertion, the caps by planes. With --report: deviation from the nominal blade, row metrics
+    at hub, mid and tip, and the transformations.
 
     Example: steamtwin geometry reconstruct scan-hp1 --out hp1.stl --report hp1-reconstruction
+    Example: steamtwin geometry reconstruct foreign.ply --out foreign.stl --frame scan
+    Example: steamtwin geometry reconstruct prismatic.ply --out prismatic.stl --hub-end -z
     """
     from steamtwin.geometry.fidelity import align_to_nominal
+    from steamtwin.geometry.frame import HUB_ENDS, estimate_blade_frame, nominal_starts
     from steamtwin.geometry.pointcloud import PointCloudError, read_point_cloud
     from steamtwin.geometry.preprocess import preprocess_views, transform
     from steamtwin.geometry.profile import GeometryError, make_blade
@@ -225,6 +248,10 @@ def reconstruct(
 
     if not 0.0 < tolerance <= 1.0:
         _fail(f"--tolerance must lie within (0, 1] mm (got {tolerance})")
+    if frame not in ("blade", "scan"):
+        _fail(f"--frame must be 'blade' or 'scan' (got {frame!r})")
+    if hub_end is not None and hub_end not in HUB_ENDS:
+        _fail(f"--hub-end must be one of {', '.join(HUB_ENDS)} (got {hub_end!r})")
     prepare_output_file(out, "--out")
     if report is not None:
         for suffix in (".json", ".csv", ".png"):
@@ -254,15 +281,40 @@ def reconstruct(
             cloud = read_point_cloud(source)
         except (PointCloudError, OSError) as error:
             _fail(str(error))
+    frames: dict = {"stl_frame": frame}
     if row is not None:
-        pose, fit_rms = align_to_nominal(cloud, blade)
+        try:
+            starts = nominal_starts(cloud, blade, hub_end=hub_end)
+        except ReconstructionError as error:  # the principal axes alone start the best fit
+            typer.echo(f"no blade frame from the data ({error}); best fit from the principal "
+                       "axes alone")
+            starts = []
+        pose, fit_rms = align_to_nominal(cloud, blade, starts=starts)
+        if fit_rms > MAX_BEST_FIT_RMS:
+            _fail(f"the cloud does not match row {row}'s nominal blade (best fit RMS "
+                  f"{fit_rms * 1e3:.4g} mm); leave out --row to reconstruct in a frame from "
+                  "the data")
         cloud = transform(cloud, pose)
         typer.echo(f"best fit to the nominal blade {row}: RMS {fit_rms * 1e3:.4f} mm")
+        frames["best_fit_scan_to_blade_m"] = pose.tolist()
+    else:
+        try:
+            found = estimate_blade_frame(cloud, hub_end=hub_end)
+        except ReconstructionError as error:
+            _fail(str(error))
+        _echo_frame(found)
+        pose = found.matrix
+        cloud = found.to_blade(cloud)
+        frames["estimated"] = found.as_dict()
     try:
         result = reconstruct_blade(cloud, ReconstructionSettings(tolerance=tolerance * 1e-3))
     except ReconstructionError as error:
         _fail(str(error))
-    write_stl(result, out)
+    if frame == "scan":
+        scan_vertices = transform(result.vertices, np.linalg.inv(pose))
+        write_stl(dataclasses.replace(result, vertices=scan_vertices), out)
+    else:
+        write_stl(result, out)
     summary = result.summary()
     counts = ", ".join(f"{k} {v}" for k, v in summary["patch_points"].items())
     typer.echo(f"wrote {out}: {summary['triangles']} triangles, watertight, volume "
@@ -273,7 +325,8 @@ def reconstruct(
                f"{summary['side_fit_max_mm']:.4f} mm, {summary['breakpoints']} knots round "
                "the profile")
     if report is not None:
-        extra = {"reconstruction": summary, "best_fit_rms_mm": fit_rms * 1e3}
+        extra = {"reconstruction": summary, "best_fit_rms_mm": fit_rms * 1e3,
+                 "frame": frames}
         fidelity = reconstruction_fidelity(blade, result.vertices, result.triangles,
                                            extra=extra)
         json_path, csv_path = write_reconstruction_report(fidelity, report)
@@ -291,6 +344,25 @@ def reconstruct(
                                for m in section["metrics"])
             typer.echo(f"  {section['section']} ({section['radius_mm']:.1f} mm): {errors}")
         typer.echo(f"  reports {json_path}, {csv_path}, {png_path}")
+
+
+def _echo_frame(found) -> None:  # found: steamtwin.geometry.frame.BladeFrame
+    """Print a blade frame from the data: axes, transformation, the rule behind each choice."""
+    def vector(v) -> str:
+        return "(" + ", ".join(f"{c:+.5f}" for c in v) + ")"
+
+    typer.echo(f"blade frame from the data: span axis (hub → tip) {vector(found.span_axis)}, "
+               f"chord (leading → trailing edge) {vector(found.chord_direction)}, span "
+               f"{found.span * 1e3:.3f} mm")
+    for name, rule in found.rules.items():
+        typer.echo(f"  {name}: {rule}")
+    typer.echo("  scan → blade: rotation " + ", ".join(vector(r) for r in found.rotation)
+               + f", translation {vector(found.translation * 1e3)} mm")
+    if found.hub_tip_ambiguous:
+        typer.echo("  hub and tip AMBIGUOUS: the data cannot tell them apart; check, or give "
+                   "--hub-end")
+    if found.edges_ambiguous:
+        typer.echo("  leading and trailing edge AMBIGUOUS: the section's ends are alike")
 
 
 @geometry_app.command()

@@ -13,6 +13,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -141,13 +142,15 @@ def surface_deviation(blade: Blade, points: np.ndarray, vertices: np.ndarray | N
 # --- best fit to the nominal blade -----------------------------------------------------------
 
 
-def align_to_nominal(points: np.ndarray, blade: Blade, distance: float = 1.0e-3
-                     ) -> tuple[np.ndarray, float]:
+def align_to_nominal(points: np.ndarray, blade: Blade, distance: float = 1.0e-3,
+                     starts: Sequence[np.ndarray] = ()) -> tuple[np.ndarray, float]:
     """Rigid transformation (4×4) taking a complete measured cloud onto the nominal blade, and
     the RMS point-to-plane residual (m) of the fit.
 
     Coarse: principal axes of the cloud onto those of the nominal surface, trying the four
-    proper sign choices; fine: point-to-plane ICP against the nominal; the lowest residual wins.
+    proper sign choices, and the given ``starts`` (4×4 poses, e.g. the blade frames from the
+    data, :func:`~steamtwin.geometry.frame.nominal_starts`); fine: point-to-plane ICP against
+    the nominal; the lowest residual wins.
     """
     from steamtwin.geometry.preprocess import degeneracy_aware_icp, transform
 
@@ -164,7 +167,7 @@ def align_to_nominal(points: np.ndarray, blade: Blade, distance: float = 1.0e-3
 
     c_meas, v_meas = axes(sub)
     c_nom, v_nom = axes(nominal)
-    best = None
+    guesses = []
     for signs in ((1, 1, 1), (1, -1, -1), (-1, 1, -1), (-1, -1, 1)):
         rotation = v_nom @ np.diag(signs) @ v_meas.T
         if np.linalg.det(rotation) < 0.0:
@@ -172,7 +175,9 @@ def align_to_nominal(points: np.ndarray, blade: Blade, distance: float = 1.0e-3
         guess = np.eye(4)
         guess[:3, :3] = rotation
         guess[:3, 3] = c_nom - rotation @ c_meas
-        pose = guess
+        guesses.append(guess)
+    best = None
+    for pose in [*guesses, *starts]:
         for scale in (8.0, 4.0, 2.0, 1.0):
             pose, _, rms, _ = degeneracy_aware_icp(sub, nominal, nominal_normals, pose,
                                                          scale * distance, stability=0.0)

@@ -1,7 +1,8 @@
 """Surface reconstruction of a scanned blade: patches → B-spline surfaces → watertight STL.
 
 Input: a fused, cleaned cloud in the blade frame (m; x axial, y tangential, z = radius; a fused
-scan is brought there by :func:`~steamtwin.geometry.fidelity.align_to_nominal`). Steps:
+scan is brought there by :func:`~steamtwin.geometry.fidelity.align_to_nominal`, a cloud of a
+blade without a nominal by :func:`~steamtwin.geometry.frame.estimate_blade_frame`). Steps:
 
 1. :func:`~steamtwin.geometry.segmentation.segment_blade`: normals, curvature, region growing,
    labels root/tip/pressure_side/suction_side/leading_edge/trailing_edge.
