@@ -19,6 +19,7 @@ from steamtwin.calibration.objective import (
     thermocouple_bias_spread,
 )
 from steamtwin.calibration.posterior import (
+    InputUncertainty,
     fit_map,
     laplace_posterior,
     likelihood_tempering,
@@ -324,20 +325,39 @@ def test_calibrator_tempering_setting(tmp_path):
                    min_samples=30, tempering=2.0).fit(windows)
 
 
-def test_the_flow_coefficients_interval_carries_the_flow_measurement():
-    """A flow-meter bias b is a flow-coefficient bias b (p1 ∝ m/φ): the flow coefficient's 95 %
-    interval widens to z·sqrt(σ_fit² + (φ·σ_m)²); the other intervals and the MAP stay."""
-    objective = _objective(_window_set(np.random.default_rng(3), ramp=True))
-    posterior = laplace_posterior(objective, fit_map(objective))
-    plain = posterior.table()
-    carried = replace(posterior, flow_uncertainty=0.01).table()
-    phi = plain.loc["flow_coefficient", "map"]
-    fit_std = plain.loc["flow_coefficient", "std"]
-    expected = 1.959964 * np.hypot(fit_std, phi * 0.01)
-    row = carried.loc["flow_coefficient"]
-    assert (row["high"] - row["low"]) / 2 == pytest.approx(expected, rel=1e-4)
-    assert row["map"] == plain.loc["flow_coefficient", "map"]
-    others = ["friction_coefficient", "heat_transfer_coefficient"]
-    assert carried.loc[others, ["low", "high"]].equals(plain.loc[others, ["low", "high"]])
-    assert replace(posterior, flow_uncertainty=0.01).to_dict()[
-        "flow_measurement_uncertainty"] == 0.01
+def test_a_biased_input_moves_the_map_as_the_propagated_uncertainty_says():
+    """Implicit-function theorem: refitting on inputs moved by an input's standard uncertainty
+    u shifts the MAP by g = H⁻¹Jᵀ(∂r/∂u)u, whose outer product the posterior adds; the shift
+    of a real refit on biased data matches √diag of that term in size and the intervals
+    widen by it."""
+    windows = _window_set(np.random.default_rng(3), ramp=True)
+    objective = _objective(windows)
+    estimate = fit_map(objective)
+    flow = {"main_steam_flow": InputUncertainty("relative", 0.01, "test: 1 % of reading")}
+    plain = laplace_posterior(objective, estimate, inflate=False)
+    carried = laplace_posterior(objective, estimate, inflate=False, inputs=flow)
+    np.testing.assert_array_equal(carried.covariance, plain.covariance)
+    biased = WindowSet(tuple(replace(w, data=w.data.assign(
+        main_steam_flow=w.data["main_steam_flow"] * 1.01)) for w in windows))
+    refit = fit_map(_objective(biased), start=estimate)
+    table, spread = carried.table(), np.sqrt(np.diag(carried.input_covariance))
+    for i, name in enumerate(PARAMETER_NAMES):
+        prior = DEFAULT_PRIORS[name]
+        shift = prior.to_internal(getattr(refit, name)) - prior.to_internal(getattr(estimate,
+                                                                                      name))
+        assert abs(shift) == pytest.approx(spread[i], rel=0.05, abs=1e-4 * prior.spread), name
+        assert table.loc[name, "input_std"] == pytest.approx(spread[i])
+    assert spread[0] > 0.005  # the toy's φ·f term: a 1 % flow error is ≈ 1 % of φ
+    assert table.loc["flow_coefficient", "std"] > plain.table().loc["flow_coefficient", "std"]
+    document = carried.to_dict()
+    assert document["input_uncertainties"] == {"main_steam_flow": "test: 1 % of reading"}
+    assert document["intervals"]["flow_coefficient"]["input_std"] == pytest.approx(spread[0])
+
+
+def test_inputs_the_model_does_not_take_are_not_propagated():
+    objective = _objective(_window_set(np.random.default_rng(4), ramp=False))
+    estimate = fit_map(objective)
+    other = {"reheat_pressure": InputUncertainty("relative", 0.01, "not an input")}
+    posterior = laplace_posterior(objective, estimate, inputs=other)
+    assert posterior.input_sources == ()
+    np.testing.assert_array_equal(posterior.total_covariance, posterior.covariance)

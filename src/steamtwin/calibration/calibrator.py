@@ -39,7 +39,7 @@ from steamtwin.calibration.objective import (
     fitness,
 )
 from steamtwin.calibration.posterior import (
-    FLOW_MEASUREMENT_UNCERTAINTY,
+    INPUT_UNCERTAINTIES,
     Posterior,
     laplace_posterior,
     likelihood_tempering,
@@ -356,12 +356,11 @@ def apply_tempering(problem: CalibrationProblem, tempering: float | str) -> floa
 def posterior_at(problem: CalibrationProblem, params: ModelParameters, result: Evaluation
                  ) -> Posterior | None:
     """The Laplace posterior at a calibration result (None without priors or if rejected); the
-    flow coefficient's interval carries the flow measurement's uncertainty
-    (:data:`~steamtwin.calibration.posterior.FLOW_MEASUREMENT_UNCERTAINTY`)."""
+    intervals carry the measured inputs' calibration errors
+    (:data:`~steamtwin.calibration.posterior.INPUT_UNCERTAINTIES`)."""
     if problem.objective.priors is None or result.penalised:
         return None
-    return replace(laplace_posterior(problem.objective, params),
-                   flow_uncertainty=FLOW_MEASUREMENT_UNCERTAINTY)
+    return laplace_posterior(problem.objective, params, inputs=INPUT_UNCERTAINTIES)
 
 
 def write_parameters(path: str | Path, params: ModelParameters, rmse: float,

@@ -75,6 +75,7 @@ __all__ = [
     "Objective",
     "PreparedWindow",
     "check_bounds",
+    "checked_inputs",
     "fitness",
     "predict_window",
     "prepare_window",
@@ -208,10 +209,10 @@ def prepare_window(window: pd.DataFrame, simulator: Simulator, sensors: Sequence
         raise ValueError(f"{name}: sensor(s) {empty} have no valid measured sample")
     return PreparedWindow(inputs=inputs, measured=values, filled_rows=filled_rows,
                           dropped_rows=first, excluded=excluded,
-                          checked=_checked_inputs(simulator, inputs))
+                          checked=checked_inputs(simulator, inputs))
 
 
-def _checked_inputs(simulator: Simulator, inputs: pd.DataFrame) -> object:
+def checked_inputs(simulator: Simulator, inputs: pd.DataFrame) -> object:
     """The simulator's checked form of ``inputs`` (None without the fast path, or when it
     rejects them: every evaluation then reports the rejection through ``simulate``)."""
     check = getattr(simulator, "check_inputs", None)

@@ -35,6 +35,19 @@ Tempered likelihood (:func:`likelihood_tempering`)
     centres, before the search (``tempering="auto"``): residuals there are at least as large
     as at the MAP, so κ errs towards the prior.
 
+Measured inputs (:data:`INPUT_UNCERTAINTIES`)
+    The model runs on the DCS's measured boundary conditions, and each input instrument has a
+    calibration error that stays put over the data (the plant's flow nozzle may read 1 % high
+    for years). Such an error moves the MAP as a parameter would; the data cannot tell them
+    apart. By the implicit-function theorem the MAP moves by
+    ``δθ = −H⁻¹ Jᵀ (∂r/∂u) δu`` for an input error δu (H the posterior precision, J = ∂r/∂θ),
+    and an input error of standard uncertainty u_i adds ``g_i g_iᵀ`` with ``g_i = H⁻¹ Jᵀ
+    (∂r/∂u_i) u_i`` to the covariance (GUM, JCGM 100:2008 §5.1, the law of propagation of
+    uncertainty; the input errors independent). ∂r/∂u_i comes from central differences of
+    ±u_i on every window's input (the output thermocouples' own biases are integrated out as
+    before, so an input error that only shifts a temperature's level is absorbed there).
+    The intervals report the total ``C + Σ g_i g_iᵀ``; params.json keeps both parts.
+
 MAP by Gauss–Newton (:func:`fit_map`)
     ``scipy.optimize.least_squares`` (trust-region reflective) on the stacked vector
     [r(θ); (θ − m)/s], whose half sum of squares is the negative log posterior: the cheap local
@@ -50,7 +63,7 @@ MCMC check (:func:`metropolis`)
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from statistics import NormalDist
 
 import numpy as np
@@ -58,7 +71,13 @@ import pandas as pd
 from scipy.optimize import least_squares
 
 from steamtwin.calibration.identifiability import integrated_time
-from steamtwin.calibration.objective import PARAMETER_NAMES, Objective, predict_window
+from steamtwin.calibration.objective import (
+    PARAMETER_NAMES,
+    Objective,
+    checked_inputs,
+    predict_window,
+    thermocouple_bias_spread,
+)
 from steamtwin.model.parameters import (
     PARAMETER_BOUNDS,
     PARAMETERS_SCHEMA_VERSION,
@@ -66,8 +85,9 @@ from steamtwin.model.parameters import (
     ParameterPrior,
 )
 
-__all__ = ["FLOW_MEASUREMENT_UNCERTAINTY", "INTERVAL_PROBABILITY", "Posterior", "fit_map",
-           "laplace_posterior", "likelihood_tempering", "metropolis"]
+__all__ = ["FLOW_MEASUREMENT_UNCERTAINTY", "INPUT_UNCERTAINTIES", "INTERVAL_PROBABILITY",
+           "InputUncertainty", "Posterior", "fit_map", "input_covariance", "laplace_posterior",
+           "likelihood_tempering", "metropolis"]
 
 INTERVAL_PROBABILITY = 0.95
 """Probability of the reported central posterior intervals."""
@@ -81,7 +101,45 @@ expansion depend on m/φ: a flow reading biased by b is a flow coefficient biase
 data fix φ·(1 + b), not φ. The reported interval of the flow coefficient carries this constant
 uncertainty beside the fit's own (measured on the virtual plant: its flow meter reads +1.06 %
 high and both the joint calibration and the tracker sit +0.010…0.015 above the twin-equivalent
-truth; docs/benchmarks.md)."""
+truth; docs/benchmarks.md). The tracker adds it to φ directly; the joint calibration propagates
+it with the other inputs' (:data:`INPUT_UNCERTAINTIES`)."""
+
+
+
+@dataclass(frozen=True)
+class InputUncertainty:
+    """Standard uncertainty of a measured input's calibration error: ``kind`` "relative"
+    (``value`` a fraction of the reading), or "thermocouple" (IEC 60584-1 class 1 at the
+    window's mean reading, read as a uniform bound: ``value`` unused); ``source`` says where
+    it comes from."""
+
+    kind: str
+    value: float
+    source: str
+
+    def at(self, reading: np.ndarray) -> np.ndarray:
+        """Standard uncertainty (SI) at each reading (SI)."""
+        if self.kind == "relative":
+            return self.value * np.abs(reading)
+        return np.full_like(reading, thermocouple_bias_spread(float(np.mean(reading))))
+
+
+INPUT_UNCERTAINTIES: dict[str, InputUncertainty] = {
+    "main_steam_flow": InputUncertainty(
+        "relative", FLOW_MEASUREMENT_UNCERTAINTY,
+        "flow nozzle + DP transmitter, ±1.5 % of reading at 95 % (ISO 5167-3)"),
+    "main_steam_temperature": InputUncertainty(
+        "thermocouple", 0.0, "type K thermocouple, IEC 60584-1 class 1, uniform bound / √3"),
+    "main_steam_pressure": InputUncertainty(
+        "relative", 0.001 / np.sqrt(3.0),
+        "smart pressure transmitter, ±0.1 % (IEC 60770-1 accuracy class 0.1, of a span taken "
+        "as the reading), uniform bound / √3"),
+    "hp_exhaust_pressure": InputUncertainty(
+        "relative", 0.001 / np.sqrt(3.0),
+        "smart pressure transmitter, ±0.1 % (IEC 60770-1 accuracy class 0.1, of a span taken "
+        "as the reading), uniform bound / √3"),
+}
+"""The model inputs' calibration errors the intervals carry (module docstring), by signal."""
 
 _STEP = 1e-4  # central-difference step in θ (a fraction of a per cent of any parameter)
 
@@ -91,9 +149,9 @@ class Posterior:
     """Laplace posterior at ``map`` (:class:`ModelParameters`): ``theta`` (MAP in the priors'
     normal coordinates), ``covariance`` (in θ), ``priors`` (PARAMETER_NAMES order),
     ``autocorrelation_time`` (samples, τ), ``samples`` (residuals used), ``scale_factor``
-    (the Birge ratio S, ≥ 1), ``flow_uncertainty`` (relative standard uncertainty of the
-    measured main-steam flow that the flow coefficient's interval carries; see
-    :data:`FLOW_MEASUREMENT_UNCERTAINTY`)."""
+    (the Birge ratio S, ≥ 1), ``input_covariance`` (θ; what the measured inputs' calibration
+    errors add, :func:`input_covariance`; None: not propagated) and ``input_sources`` (signal
+    → the uncertainty it carried)."""
 
     map: ModelParameters
     theta: np.ndarray
@@ -102,7 +160,14 @@ class Posterior:
     autocorrelation_time: float
     samples: int
     scale_factor: float = 1.0
-    flow_uncertainty: float = 0.0
+    input_covariance: np.ndarray | None = None
+    input_sources: tuple[tuple[str, str], ...] = ()
+
+    @property
+    def total_covariance(self) -> np.ndarray:
+        """Covariance in θ the intervals report: the fit's plus the inputs'."""
+        return self.covariance if self.input_covariance is None \
+            else self.covariance + self.input_covariance
 
     def table(self, probability: float = INTERVAL_PROBABILITY) -> pd.DataFrame:
         """One row per parameter: ``map``, ``low``/``high`` (central interval, clipped to the
@@ -111,23 +176,23 @@ class Posterior:
         ``shrinkage`` (posterior σ / prior σ in θ: ≈ 1 = the data add nothing) and the
         posterior correlations ``corr:<name>``."""
         z = NormalDist().inv_cdf(0.5 + probability / 2.0)
-        std = np.sqrt(np.diag(self.covariance))
-        correlation = self.covariance / np.outer(std, std)
+        total = self.total_covariance
+        std = np.sqrt(np.diag(total))
+        fit_std = np.sqrt(np.diag(self.covariance))
+        correlation = total / np.outer(std, std)
         rows = []
         for i, (name, prior) in enumerate(zip(PARAMETER_NAMES, self.priors, strict=True)):
             low, high = PARAMETER_BOUNDS[name]
             prior_low, prior_high = prior.interval(probability)
             half = z * std[i]
-            if name == "flow_coefficient" and self.flow_uncertainty > 0.0:
-                scale = getattr(self.map, name) if prior.distribution == "normal" else 1.0
-                half = z * float(np.hypot(std[i], scale * self.flow_uncertainty))
             row: dict[str, object] = {
                 "parameter": name, "map": getattr(self.map, name),
                 "low": float(np.clip(prior.from_internal(self.theta[i] - half), low, high)),
                 "high": float(np.clip(prior.from_internal(self.theta[i] + half), low, high)),
                 "std": float(std[i]), "distribution": prior.distribution,
                 "prior_center": prior.center, "prior_low": prior_low, "prior_high": prior_high,
-                "shrinkage": float(std[i] / prior.spread),
+                "shrinkage": float(fit_std[i] / prior.spread),
+                "input_std": float(np.sqrt(max(total[i, i] - self.covariance[i, i], 0.0))),
             }
             for j, other in enumerate(PARAMETER_NAMES):
                 if j != i:
@@ -143,9 +208,10 @@ class Posterior:
             "schema_version": PARAMETERS_SCHEMA_VERSION, "method": "laplace",
             "probability": probability, "autocorrelation_time_samples": self.autocorrelation_time,
             "scale_factor": self.scale_factor, "samples": self.samples,
-            "flow_measurement_uncertainty": self.flow_uncertainty,
+            "input_uncertainties": dict(self.input_sources),
             "intervals": {name: {"map": float(row["map"]), "low": float(row["low"]),
                                  "high": float(row["high"]), "std": float(row["std"]),
+                                 "input_std": float(row["input_std"]),
                                  "shrinkage": float(row["shrinkage"])}
                           for name, row in table.iterrows()},
             "correlation": {name: {other: float(row[f"corr:{other}"])
@@ -181,10 +247,13 @@ def _theta_bounds(priors: tuple[ParameterPrior, ...]) -> tuple[np.ndarray, np.nd
 
 def laplace_posterior(objective: Objective, params: ModelParameters,
                       priors: Mapping[str, ParameterPrior] | None = None, *,
-                      inflate: bool = True) -> Posterior:
+                      inflate: bool = True,
+                      inputs: Mapping[str, InputUncertainty] | None = None) -> Posterior:
     """Laplace posterior at ``params`` (the MAP; module docstring). ``priors`` default to the
     objective's; ``inflate=False`` takes τ = S = 1 (independent residuals of the stated
-    σ). Costs 1 + 2·3 model runs per window."""
+    σ); ``inputs``: the measured inputs' calibration errors to propagate (e.g.
+    :data:`INPUT_UNCERTAINTIES`; those the model does not take are skipped). Costs 1 + 2·3
+    model runs per window, and 2 per propagated input."""
     prior_tuple = _priors(objective, priors)
     theta = np.array([p.to_internal(getattr(params, n))
                       for n, p in zip(PARAMETER_NAMES, prior_tuple, strict=True)])
@@ -205,7 +274,54 @@ def laplace_posterior(objective: Objective, params: ModelParameters,
     precision = jacobian.T @ jacobian / (kappa * tau * scale**2) + np.diag(
         [1.0 / p.spread**2 for p in prior_tuple])
     covariance = np.linalg.inv(precision)
-    return Posterior(params, theta, covariance, prior_tuple, tau, int(base.size), scale)
+    posterior = Posterior(params, theta, covariance, prior_tuple, tau, int(base.size), scale)
+    if not inputs:
+        return posterior
+    gain = covariance @ jacobian.T / (kappa * tau * scale**2)  # δθ = −gain·δr
+    used = {name: u for name, u in inputs.items()
+            if name in objective.simulator.input_signals}
+    return replace(posterior, input_covariance=input_covariance(objective, params, gain, used),
+                   input_sources=tuple((name, u.source) for name, u in used.items()))
+
+
+def input_covariance(objective: Objective, params: ModelParameters, gain: np.ndarray,
+                     inputs: Mapping[str, InputUncertainty]) -> np.ndarray:
+    """Σ_i g_i g_iᵀ (θ units): the covariance the inputs' calibration errors add (module
+    docstring), with ``gain`` = H⁻¹Jᵀ of the standardised residuals at ``params`` and g_i the
+    MAP's shift for each input moved by its standard uncertainty (central differences; one
+    side where the model rejects the other). ValueError naming the input when the model
+    rejects both."""
+    total = np.zeros((gain.shape[0], gain.shape[0]))
+    for name, uncertainty in inputs.items():
+        shifted = []
+        for sign in (1.0, -1.0):
+            try:
+                moved = replace(objective, windows=tuple(
+                    _moved_input(objective, window, name, sign * uncertainty.at(
+                        window.inputs[name].to_numpy(dtype=float)))
+                    for window in objective.windows))
+                shifted.append((sign, moved.standardised_residuals(params)))
+            except ValueError:
+                continue
+        if not shifted:
+            raise ValueError(f"the model rejects the inputs with {name} moved by its "
+                             f"calibration uncertainty ({uncertainty.source}) either way")
+        if len(shifted) == 2:
+            difference = (shifted[0][1] - shifted[1][1]) / 2.0
+        else:
+            sign, residuals = shifted[0]
+            difference = sign * (residuals - objective.standardised_residuals(params))
+        g = gain @ difference
+        total += np.outer(g, g)
+    return total
+
+
+def _moved_input(objective: Objective, window, name: str, offset: np.ndarray):
+    """``window`` with input ``name`` moved by ``offset`` (SI, per sample), checked anew."""
+    inputs = window.inputs.copy()
+    inputs[name] = inputs[name].to_numpy(dtype=float) + offset
+    return replace(window, inputs=inputs,
+                   checked=checked_inputs(objective.simulator, inputs))
 
 
 def _residual_time(objective: Objective, params: ModelParameters) -> float:
