@@ -80,7 +80,7 @@ NACA4_AREA = 10.0 * (0.2969 * 2.0 / 3.0 - 0.1260 / 2.0 - 0.3516 / 3.0 + 0.2843 /
                      - 0.1015 / 5.0)
 KINDS = ("naca4", "naca65", "dca", "turbine")
 #: Parameter ranges of a section spec: stagger, camber (deg), thickness / chord, chord (m).
-STAGGER_RANGE, CAMBER_RANGE = (-1.0, 71.0), (0.0, 120.0)
+STAGGER_RANGE, CAMBER_RANGE = (0.0, 70.0), (0.0, 120.0)
 
 
 def naca4_half_thickness(x: np.ndarray, thickness: float) -> np.ndarray:
@@ -224,14 +224,12 @@ def _fillet(spec: SectionSpec, radius: float, trailing: bool,
             f"no {edge}-edge circle of radius {radius * spec.chord * 1e3:.3g} mm tangent to both "
             f"sides of the {spec.kind} section: the radius must exceed the side's own radius of "
             "curvature there (native nose) and the edge's half thickness")
-    centre = _side_frame(spec, np.array([u_up]), 0)[0][0] - radius * _side_frame(
-        spec, np.array([u_up]), 0)[1][0]
-    return float(u_up), float(u_low), centre
+    point, normal = _side_frame(spec, np.array([u_up]), 0)
+    return float(u_up), float(u_low), point[0] - radius * normal[0]
 
 
-#: Share of the section parameter t of each piece, counter-clockwise from the trailing edge:
-#: trailing-edge arc (lower → upper tangent point), upper side (TE → LE), leading-edge arc,
-#: lower side (LE → TE).
+#: The pieces of a section, counter-clockwise from the trailing edge: trailing-edge arc (lower →
+#: upper tangent point), upper side (TE → LE), leading-edge arc, lower side (LE → TE).
 PIECES = ("trailing_edge", "upper", "leading_edge", "lower")
 
 
@@ -248,8 +246,7 @@ class Section:
         gamma = math.radians(spec.stagger_deg)
         self.rotation = np.array([[math.cos(gamma), -math.sin(gamma)],
                                   [math.sin(gamma), math.cos(gamma)]])
-        reference = np.array([0.5, float(spec.camber(np.array([0.5]))[0][0])])
-        self.reference = reference
+        self.reference = np.array([0.5, float(spec.camber(np.array([0.5]))[0][0])])
         self.offset = np.zeros(2) if offset is None else np.asarray(offset, float)
 
     def guesses(self) -> tuple:
@@ -462,6 +459,7 @@ class ForeignBlade:
 
     @cached_property
     def ring_size(self) -> int:
+        """Vertices per ring."""
         return sum(len(w) for w in self.grid.values())
 
     @cached_property
@@ -527,17 +525,6 @@ class ForeignBlade:
                                                     rel_tol=1e-9)):
             raise ValueError("the cap strip does not tile the section")
         return triangles
-
-    def exact_points(self, eta: np.ndarray, piece: str, w: np.ndarray) -> np.ndarray:
-        """Exact side points (n, 3, m) at span fractions ``eta`` and piece parameters ``w``
-        (equal-length arrays)."""
-        out = np.empty((len(eta), 3))
-        for value in np.unique(eta):
-            on = eta == value
-            out[on, :2] = self.section(float(value), self.sections[0].guesses()).piece(
-                piece, w[on])
-            out[on, 2] = self.height(value)
-        return out
 
     def mesh_sag(self) -> float:
         """Largest distance (m) from the mesh of exact side points at the middle of every ring
