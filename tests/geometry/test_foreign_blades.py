@@ -297,11 +297,13 @@ def test_cloud_is_area_uniform_over_sides_and_caps(cloud, blades):
     mesh = blade.mesh
     cap_area = mesh.area_faces[blade.side_faces:].sum()
     share = cap_area / mesh.area
-    z = cloud.points[~cloud.outliers, 2]
-    on_caps = np.mean((np.abs(z - blade.height(0.0)) < 0.1e-3)
-                      | (np.abs(z - blade.height(1.0)) < 0.1e-3))
+    on_caps = np.abs(cloud.normals[~cloud.outliers, 2]) > 1.0 - 1e-12  # drawn from a cap
     n = int((~cloud.outliers).sum())
-    assert on_caps == pytest.approx(share, abs=4 * math.sqrt(share * (1 - share) / n) + 0.002)
+    assert on_caps.mean() == pytest.approx(share, abs=4 * math.sqrt(share * (1 - share) / n))
+    # and the cap points lie in the cap planes (to the noise)
+    z = cloud.points[~cloud.outliers][on_caps, 2]
+    plane = np.where(z < blade.height(0.5), blade.height(0.0), blade.height(1.0))
+    assert np.abs(z - plane).max() < 6 * 0.017e-3
 
 
 def test_clouds_are_seeded(blades):
