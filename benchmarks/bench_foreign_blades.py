@@ -12,9 +12,10 @@ watertight STL more than 0.5 mm off, the outcome the issue rules out; a refusal 
 pipeline's message.
 
 Run: python benchmarks/bench_foreign_blades.py [--quick] [--members NAME ...]
-     [--points 40000 80000] [--seeds N] [--pose blade] [--out DIR]
-(--quick: 40k points, one seed.) Prints a table; writes foreign_blades.csv and .json to --out
-(default: the temporary directory, steamtwin-bench/foreign_blades).
+     [--points 40000 80000 planned] [--seeds N] [--pose blade] [--out DIR]
+(--quick: 40k points, one seed; "planned": 4.5 points on the smallest edge's half circle.)
+Prints a table; writes foreign_blades.csv and .json to --out (default: the temporary
+directory, steamtwin-bench/foreign_blades).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import math
 import sys
 import tempfile
 import time
@@ -37,11 +39,22 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "geometry
 from foreign_blades import FAMILY, compare_with_exact, family_blade, laser_cloud
 
 from steamtwin.geometry.reconstruct import reconstruct_blade
+from steamtwin.geometry.scanner import EDGE_SAMPLES
 from steamtwin.geometry.segmentation import ReconstructionError
 
 LIMITS_MM = {"rms": 0.02, "max": 0.1, "worst": 0.5}
 """The issue's limits (mm): RMS and max of a passing STL; a watertight STL beyond ``worst``
 must never be written."""
+
+
+def planned_points(member: str) -> int:
+    """Fused-cloud points that put EDGE_SAMPLES (4.5) points on the half circle π·r of the
+    member's smallest edge radius at the mean spacing: N = A·4.5² / (π·r)² (the scanner's
+    ``planned_points`` rule, docs/geometry.md "Scan density", for a cloud already fused)."""
+    spec = FAMILY[member]
+    radius = min(spec.root.le_radius, spec.root.te_radius, spec.tip.le_radius,
+                 spec.tip.te_radius)
+    return math.ceil(family_blade(member).mesh.area * EDGE_SAMPLES**2 / (math.pi * radius) ** 2)
 
 
 def blade_frame(points: np.ndarray, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -95,13 +108,14 @@ def _cell(value: object) -> str:
     return f"{value:.4f}" if isinstance(value, float) else str(value)
 
 
-def main(members: list[str], sizes: list[int], seeds: int, pose: str, out: Path) -> list[dict]:
+def main(members: list[str], sizes: list[str], seeds: int, pose: str, out: Path) -> list[dict]:
     rows = []
     header = ("member", "points", "seed", "outcome", "watertight", "rms_mm", "max_mm",
               "back_max_mm", "worst_at", "seconds", "refused")
     print(" | ".join(header))
     for member in members:
-        for points in sizes:
+        for size in sizes:
+            points = planned_points(member) if size == "planned" else int(size)
             for seed in range(seeds):
                 row = run_case(member, points, seed, pose)
                 rows.append(row)
@@ -124,11 +138,12 @@ if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="40k points, one seed")
     parser.add_argument("--members", nargs="+", default=list(FAMILY), choices=list(FAMILY))
-    parser.add_argument("--points", nargs="+", type=int, default=[40_000, 80_000])
+    parser.add_argument("--points", nargs="+", default=["40000", "80000"],
+                        help='cloud sizes: numbers of points or "planned" (planned_points)')
     parser.add_argument("--seeds", type=int, default=2)
     parser.add_argument("--pose", default="blade", choices=list(POSES))
     parser.add_argument("--out", type=Path,
                         default=Path(tempfile.gettempdir()) / "steamtwin-bench" / "foreign_blades")
     args = parser.parse_args()
-    sizes, seeds = ([40_000], 1) if args.quick else (args.points, args.seeds)
+    sizes, seeds = (["40000"], 1) if args.quick else (args.points, args.seeds)
     main(args.members, sizes, seeds, args.pose, args.out)
