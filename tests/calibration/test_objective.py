@@ -141,3 +141,21 @@ def test_fast_path_scores_as_the_protocol_does(reference_model, low_load_window)
     assert rejected.windows[0].checked is None
     evaluation = rejected.objective.evaluate([1.0, 1.0, 1.0])
     assert evaluation.rmse == PENALTY_RMSE and "main_steam_flow" in evaluation.error
+
+
+def test_a_pressure_or_power_witness_counts_in_the_score_not_in_the_rmse(linear_simulator):
+    """The RMSE (K) is over the temperatures; a witness in other units (here the power, W)
+    enters the posterior score through its own σ, and a calibration needs a temperature."""
+    window = small_window().assign(hp_power=1.0e8 + 3.0e5)  # 0.3 MW off
+    sensors = ["hp_inner_casing_temperature", "hp_power"]
+    sigma = {"hp_inner_casing_temperature": 1.0, "hp_power": 1.0e5}
+    problem = CalibrationProblem(linear_simulator, [window], sensors=sensors, sigma=sigma,
+                                 min_samples=1)
+    alone = CalibrationProblem(linear_simulator, [window],
+                               sensors=["hp_inner_casing_temperature"], min_samples=1)
+    params = ModelParameters()
+    assert problem.rmse(params) == pytest.approx(alone.rmse(params), rel=1e-12)
+    chi2 = 2.0 + 6 * 3.0**2  # casing: 2 K² at σ 1 K; power: six samples 3σ off
+    assert problem.score(params) == pytest.approx(np.sqrt(chi2 / 12), rel=1e-12)
+    with pytest.raises(ValueError, match="at least one temperature"):
+        CalibrationProblem(linear_simulator, [window], sensors=["hp_power"], min_samples=1)

@@ -391,20 +391,29 @@ class Objective:
         except ValueError as error:
             reason = str(error) or type(error).__name__
             return Evaluation(PENALTY_RMSE, reason, PENALTY_RMSE)
-        sse = count = chi2 = 0.0
+        sse = count = counted = chi2 = 0.0
+        kelvin = self.weights * self.temperature_mask  # the RMSE is over temperatures (K)
         for window, (residual, precision) in zip(self.windows, parts, strict=True):
             valid = ~np.isnan(residual)
             squares = (np.where(valid, residual, 0.0) ** 2).sum(axis=0)
-            sse += window.weight * (self.weights * squares).sum()
-            count += window.weight * (self.weights * valid.sum(axis=0)).sum()
+            sse += window.weight * (kelvin * squares).sum()
+            count += window.weight * (kelvin * valid.sum(axis=0)).sum()
+            counted += window.weight * (self.weights * valid.sum(axis=0)).sum()
             chi2 += (precision * squares).sum()
         for a, b, inverse in self._bias_sums(parts).values():
             chi2 -= float((b**2 / (a + inverse)).sum())  # the marginalised biases
         rmse = float(np.sqrt(sse / count))
         # (χ² + Σz²/κ)/n: the minimum of κχ² + Σz², on the scale of χ²/n whatever κ is
         score = float(np.sqrt((max(chi2, 0.0)
-                               + (self.prior_terms(x) ** 2).sum() / self.tempering) / count))
+                               + (self.prior_terms(x) ** 2).sum() / self.tempering) / counted))
         return Evaluation(rmse, score=score)
+
+    @property
+    def temperature_mask(self) -> np.ndarray:
+        """1 for each temperature sensor (K), 0 for a pressure or other witness: the RMSE (K)
+        is over the temperatures; every sensor counts in the score through its own σ."""
+        return np.array([1.0 if s in SIGNALS and SIGNALS[s].si_unit == "K" else 0.0
+                         for s in self.sensors])
 
     def evaluate_many(self, rows: np.ndarray) -> list[Evaluation]:
         """Score each row of ``rows`` (n, 3) in order."""
@@ -447,6 +456,9 @@ class CalibrationProblem(Problem):
         if unknown:
             raise ValueError(f"sensor(s) {unknown} are not predicted by the simulator "
                              f"(it predicts {list(simulator.output_signals)})")
+        if not any(s in SIGNALS and SIGNALS[s].si_unit == "K" for s in sensors):
+            raise ValueError(f"sensors {list(sensors)}: give at least one temperature; a "
+                             "pressure is a witness beside them, not the calibration's target")
         prepared = [
             replace(prepare_window(w, simulator, sensors, max_input_gap_s, name=name,
                                    min_samples=min_samples),
