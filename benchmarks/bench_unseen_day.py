@@ -40,10 +40,9 @@ import pandas as pd
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
 from steamtwin.calibration.objective import (
     DEFAULT_SENSORS,
-    THERMOCOUPLE_BIAS,
     CalibrationProblem,
-    prepare_window,
     predict_window,
+    prepare_window,
     thermocouple_bias_spread,
 )
 from steamtwin.calibration.surrogate import SurrogateCalibrator
@@ -154,7 +153,8 @@ def _draw(spec, rated: float, seed: int, sensors: tuple[str, ...], quick: bool) 
                  - pd.Series({s: offsets[s] for s in DEFAULT_SENSORS}))
         floor = frame.loc[index, list(DEFAULT_SENSORS)] - unseen_true.loc[index,
                                                                           list(DEFAULT_SENSORS)]
-        band = f"{10 * int(10 * hold.mean_load_fraction)}–{10 * int(10 * hold.mean_load_fraction) + 10} %"
+        decade = 10 * int(10 * hold.mean_load_fraction)
+        band = f"{decade}–{decade + 10} %"
         rmse = float(np.sqrt(np.nanmean(error.to_numpy() ** 2)))
         instrument = float(np.sqrt(np.nanmean(floor.to_numpy() ** 2)))
         ratios[band] = round(rmse / instrument, 3)
