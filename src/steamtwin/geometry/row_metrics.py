@@ -20,10 +20,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from steamtwin.geometry.fidelity import chord_line, section_metrics
+from steamtwin.geometry.profile import Blade
 
 #: Span fractions of the measured sections (as the reconstruction report's hub, mid, tip).
 SPAN_SECTIONS = (("hub", 0.05), ("mid", 0.5), ("tip", 0.95))
@@ -188,3 +190,71 @@ def blade_row_metrics(vertices: np.ndarray, triangles: np.ndarray,
         polygon = section_loops(vertices, triangles, z)[0][0]
         result.append(row_section(polygon, name, z, at))
     return result
+
+
+# --- reports -------------------------------------------------------------------------------------
+
+#: Columns of the report CSV (as :func:`~steamtwin.geometry.fidelity.write_report`'s).
+CSV_FIELDS = ["metric", "unit", "truth", "measured", "error"]
+
+
+def design_edge_rows(blade: Blade, vertices: np.ndarray, triangles: np.ndarray
+                     ) -> list[dict[str, float | str]]:
+    """Leading- and trailing-edge radii (mm) of a reconstructed triangulation (m, blade frame)
+    against the exact sections of ``blade``, at the reconstruction report's sections
+    (``<metric>@<section>`` rows: truth, measured, error)."""
+    from steamtwin.geometry.fidelity import truth_section
+    from steamtwin.geometry.reconstruct import METRIC_SECTIONS, section_loops
+
+    rows = []
+    for name, fraction in METRIC_SECTIONS:
+        radius = blade.design.hub_radius + fraction * blade.design.span
+        truth = truth_section(blade, radius)
+        measured = section_loops(vertices, triangles, radius)[0][0]
+        for metric, end in (("le_radius", "leading"), ("te_radius", "trailing")):
+            t = edge_circle(truth, end).radius * 1e3
+            m = edge_circle(measured, end).radius * 1e3
+            rows.append({"metric": f"{metric}@{name}", "unit": "mm", "truth": t,
+                         "measured": m, "error": m - t})
+    return rows
+
+
+def write_row_metrics(sections: list[RowSection], path: str | Path, extra: dict | None = None
+                      ) -> tuple[Path, Path]:
+    """Write the metrics of a blade without a nominal row as ``<path>.json`` (``row_metrics``
+    per section, plus ``extra``) and ``<path>.csv`` (``<metric>@<section>`` rows, measured
+    only; mm, deg)."""
+    import csv
+    import json
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    json_path, csv_path = path.with_suffix(".json"), path.with_suffix(".csv")
+    document = {"row": None, "row_metrics": [
+        {"section": s.name, "radius_mm": s.radius * 1e3,
+         "metrics": {r["metric"]: r["measured"] for r in s.rows()}} for s in sections],
+        **(extra or {})}
+    json_path.write_text(json.dumps(document, indent=2, default=float), encoding="utf-8")
+    with csv_path.open("w", newline="", encoding="utf-8") as handle:
+        writer = csv.DictWriter(handle, fieldnames=CSV_FIELDS)
+        writer.writeheader()
+        for section in sections:
+            for row in section.rows():
+                writer.writerow({"metric": f"{row['metric']}@{section.name}",
+                                 "unit": row["unit"], "truth": "",
+                                 "measured": row["measured"], "error": ""})
+    return json_path, csv_path
+
+
+def append_report_rows(json_path: Path, csv_path: Path, key: str,
+                       rows: list[dict[str, float | str]]) -> None:
+    """Add ``rows`` (``CSV_FIELDS``) to a written report: under ``key`` in the JSON and at the
+    end of the CSV."""
+    import csv
+    import json
+
+    document = json.loads(json_path.read_text(encoding="utf-8"))
+    document[key] = rows
+    json_path.write_text(json.dumps(document, indent=2, default=float), encoding="utf-8")
+    with csv_path.open("a", newline="", encoding="utf-8") as handle:
+        csv.DictWriter(handle, fieldnames=CSV_FIELDS).writerows(rows)
