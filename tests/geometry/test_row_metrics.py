@@ -129,3 +129,31 @@ def test_blade_row_metrics_on_an_extruded_section() -> None:
     assert all(math.isnan(s.throat) for s in alone)
     with pytest.raises(ValueError, match="blade_count or pitch"):
         blade_row_metrics(vertices, triangles, blade_count=60, pitch=0.05)
+
+
+def test_design_edge_radii_of_the_exact_hp1_blade(hp1_blade, tmp_path) -> None:
+    """On the exact blade's own triangulation the measured edge radii equal the design's
+    (Pritchard's radii scaled with the chord at each section), and the report gets them."""
+    import csv
+    import json
+
+    from steamtwin.geometry.reconstruct import METRIC_SECTIONS
+    from steamtwin.geometry.row_metrics import append_report_rows, design_edge_rows
+
+    # 0.05 mm along the profile: chord sag 0.4 µm on the 0.82 mm trailing edge
+    vertices, triangles, _ = hp1_blade.surface_mesh(0.05e-3, span_count=8)
+    rows = {row["metric"]: row for row in design_edge_rows(hp1_blade, vertices, triangles)}
+    params, design = hp1_blade.profile.params, hp1_blade.design
+    for name, fraction in METRIC_SECTIONS:
+        scale = float(design.chord_scale(design.hub_radius + fraction * design.span))
+        le, te = rows[f"le_radius@{name}"], rows[f"te_radius@{name}"]
+        assert le["truth"] == pytest.approx(params.leading_edge_radius * scale * 1e3, rel=2e-3)
+        assert te["truth"] == pytest.approx(params.trailing_edge_radius * scale * 1e3, rel=2e-3)
+        assert abs(le["error"]) < 1e-3 and abs(te["error"]) < 1e-3  # mm; measured < 0.2 µm
+    json_path, csv_path = tmp_path / "r.json", tmp_path / "r.csv"
+    json_path.write_text("{}")
+    csv_path.write_text("metric,unit,truth,measured,error\n")
+    append_report_rows(json_path, csv_path, "edge_radii", list(rows.values()))
+    assert len(json.loads(json_path.read_text())["edge_radii"]) == 6
+    with csv_path.open() as handle:
+        assert [r["metric"] for r in csv.DictReader(handle)][::6] == ["le_radius@hub"]
