@@ -80,12 +80,13 @@ def test_edge_radii_of_exact_sections(le: float, te: float, upper: float, lower:
                                       stagger: float) -> None:
     polygon = lens_section(le, te, upper, lower, stagger=stagger)
     leading, trailing = edge_circle(polygon, "leading"), edge_circle(polygon, "trailing")
-    # the polygon is exact (600 points round each edge): 0.1 %
-    assert leading.radius == pytest.approx(le, rel=1e-3)
-    assert trailing.radius == pytest.approx(te, rel=1e-3)
-    assert np.linalg.norm(leading.centre) < 1e-3 * le
+    # the polygon is exact (600 points round each edge): 0.3 % or 2 µm (the arc's overrun
+    # past the tangent points, trimmed by an estimate, for a 5 µm RMS allowance)
+    assert leading.radius == pytest.approx(le, rel=3e-3, abs=2e-6)
+    assert trailing.radius == pytest.approx(te, rel=3e-3, abs=2e-6)
+    assert np.linalg.norm(leading.centre) < max(3e-3 * le, 2e-6)
     far = 40e-3 * np.array([math.cos(stagger), math.sin(stagger)])
-    assert np.linalg.norm(trailing.centre - far) < 1e-3 * te
+    assert np.linalg.norm(trailing.centre - far) < max(3e-3 * te, 2e-6)
 
 
 def test_section_metrics_without_and_with_a_pitch() -> None:
@@ -149,7 +150,7 @@ def test_design_edge_radii_of_the_exact_hp1_blade(hp1_blade, tmp_path) -> None:
         le, te = rows[f"le_radius@{name}"], rows[f"te_radius@{name}"]
         assert le["truth"] == pytest.approx(params.leading_edge_radius * scale * 1e3, rel=2e-3)
         assert te["truth"] == pytest.approx(params.trailing_edge_radius * scale * 1e3, rel=2e-3)
-        assert abs(le["error"]) < 1e-3 and abs(te["error"]) < 1e-3  # mm; measured < 0.2 µm
+        assert abs(le["error"]) < 1e-3 and abs(te["error"]) < 1e-3  # mm
     json_path, csv_path = tmp_path / "r.json", tmp_path / "r.csv"
     json_path.write_text("{}")
     csv_path.write_text("metric,unit,truth,measured,error\n")
