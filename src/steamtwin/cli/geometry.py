@@ -334,8 +334,11 @@ def reconstruct(
             errors = ", ".join(f"{m['metric']} {m['error']:+.4f} {m['unit']}"
                                for m in section["metrics"])
             typer.echo(f"  {section['section']} ({section['radius_mm']:.1f} mm): {errors}")
-        append_report_rows(json_path, csv_path, "edge_radii",
-                           design_edge_rows(blade, result.vertices, result.triangles))
+        try:
+            edges = design_edge_rows(blade, result.vertices, result.triangles)
+        except ValueError as error:
+            _fail(f"--report: edge radii: {error}")
+        append_report_rows(json_path, csv_path, "edge_radii", edges)
         typer.echo(f"  reports {json_path}, {csv_path}, {png_path}")
 
 
