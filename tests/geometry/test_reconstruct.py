@@ -3,6 +3,7 @@ blade, against the exact Pritchard ground truth."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -261,9 +262,23 @@ def test_cli_reconstruct_and_mesh(clean_hp1, tmp_path) -> None:
     assert sorted(np.unique(read_volume_mesh(out).boundary_regions)) == list(range(6))
     result = runner.invoke(geometry_app, ["reconstruct", "--help"])
     assert result.exit_code == 0 and "Example:" in result.output
-    result = runner.invoke(geometry_app, ["reconstruct", str(cloud), "--out", str(stl),
-                                          "--report", str(tmp_path / "r")])
-    assert result.exit_code == 2 and "--report needs the row" in result.output
+    # the STL as a fused-mesh source, exported for CAD, with row metrics but no row
+    again, step, iges = tmp_path / "again.stl", tmp_path / "blade.step", tmp_path / "blade.igs"
+    result = runner.invoke(geometry_app, ["reconstruct", str(stl), "--out", str(again),
+                                          "--step", str(step), "--iges", str(iges),
+                                          "--report", str(tmp_path / "r"),
+                                          "--blade-count", "120"])
+    assert result.exit_code == 0, result.output
+    assert "sampled 80000 points" in result.output and "a solid, 3 faces" in result.output
+    assert step.stat().st_size > 0 and iges.stat().st_size > 0
+    document = json.loads((tmp_path / "r.json").read_text())
+    assert document["row"] is None
+    assert [s["section"] for s in document["row_metrics"]] == ["hub", "mid", "tip"]
+    assert all(math.isfinite(s["metrics"]["throat"]) for s in document["row_metrics"])
+    assert "le_radius@mid" in (tmp_path / "r.csv").read_text()
+    result = runner.invoke(geometry_app, ["reconstruct", str(stl), "--out", str(again),
+                                          "--step", str(tmp_path / "blade.igs")])
+    assert result.exit_code == 2 and "expected a STEP file name" in result.output
     flat = tmp_path / "flat.xyz"
     rng = np.random.default_rng(0)
     write_point_cloud(np.column_stack([rng.uniform(0, 0.05, (3000, 2)), np.full(3000, 0.5)]),

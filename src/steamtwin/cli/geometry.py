@@ -191,12 +191,14 @@ def preprocess(
 
 @geometry_app.command()
 def reconstruct(
-    source: Path = typer.Argument(..., help="Scan folder ('geometry scan') or fused cloud "
-                                           "(.ply, .pcd, .xyz; m)."),
+    source: Path = typer.Argument(..., help="Scan folder ('geometry scan'), fused cloud "
+                                           "(.ply, .pcd, .xyz) or fused mesh (.stl, .obj, "
+                                           ".ply with faces); m unless --unit-scale."),
     out: Path = typer.Option(..., help="Watertight blade STL (binary, m; the region of each "
                                        "triangle in its attribute word)."),
     report: Path | None = typer.Option(None, help="Report base path: writes .json, .csv and a "
-                                                  ".png deviation map (needs the row)."),
+                                                  ".png deviation map (against the nominal "
+                                                  "blade with a row, else the fit residuals)."),
     row: str | None = typer.Option(None, help="Row of the blade (default: from scan.json). "
                                               "With a row the cloud is best-fitted to its "
                                               "nominal blade; without, it is reconstructed in "
@@ -215,24 +217,43 @@ def reconstruct(
     hub_end: str | None = typer.Option(
         None, help="The hub end, as the scan axis pointing towards it (+x, -x, +y, -y, +z, -z), "
                    "when the data cannot tell hub from tip (an untapered blade)."),
+    unit_scale: float = typer.Option(1.0, help="Factor from the cloud's or mesh's unit to "
+                                               "metres (1e-3 for a file in mm)."),
+    mesh_samples: int = typer.Option(80_000, help="Points sampled uniformly over a mesh source "
+                                                  "(.stl, .obj, .ply with faces)."),
+    mesh_vertices: bool = typer.Option(False, help="Add a mesh source's vertices to its "
+                                                   "samples."),
+    step: Path | None = typer.Option(None, help="Also write the B-spline side and the cap "
+                                                "planes as a STEP solid (mm, blade frame)."),
+    iges: Path | None = typer.Option(None, help="Also write them as IGES surfaces (mm, blade "
+                                                "frame)."),
+    blade_count: int | None = typer.Option(None, help="Blades in the row, for the throat "
+                                                      "(2πr/N) when there is no --row."),
 ) -> None:
-    """Reconstruct a watertight blade surface (STL) from a scan folder or a fused cloud.
+    """Reconstruct a watertight blade surface (STL) from a scan folder, a fused cloud or mesh.
 
-    A scan folder is preprocessed first (as 'geometry preprocess'). The blade frame is found
-    from the data (span axis from the side and end-face normals, hub at the longer end section,
-    chord from the leading to the trailing edge at mid span) and printed; with a row the cloud
-    is then best-fitted to the row's nominal blade (refused when it does not match it). The
-    cloud is segmented by region growing into root, tip, pressure side, suction side, leading
-    and trailing edge; the side is fitted by a periodic B-spline surface refined by knot
-    insertion, the caps by planes. With --report: deviation from the nominal blade, row metrics
-    at hub, mid and tip, and the transformations.
+    A scan folder is preprocessed first (as 'geometry preprocess'); a fused mesh (.stl, .obj,
+    .ply with faces) is sampled into a cloud. The blade frame is found from the data (span
+    axis from the side and end-face normals, hub at the longer end section, chord from the
+    leading to the trailing edge at mid span) and printed; with a row the cloud is then
+    best-fitted to the row's nominal blade (refused when it does not match it). The cloud is
+    segmented by region growing into root, tip, pressure side, suction side, leading and
+    trailing edge; the side is fitted by a periodic B-spline surface refined by knot
+    insertion, the caps by planes. --step/--iges export those surfaces for CAD. With --report:
+    deviation from the nominal blade, row metrics at hub, mid and tip and the transformations;
+    with no row, the row metrics alone (chord, stagger, thickness, edge radii; the throat with
+    --blade-count).
 
     Example: steamtwin geometry reconstruct scan-hp1 --out hp1.stl --report hp1-reconstruction
     Example: steamtwin geometry reconstruct foreign.ply --out foreign.stl --frame scan
     Example: steamtwin geometry reconstruct prismatic.ply --out prismatic.stl --hub-end -z
+    Example: steamtwin geometry reconstruct fused-mm.stl --unit-scale 1e-3 --out blade.stl
+             --step blade.step --iges blade.igs --report blade --blade-count 60
     """
+    from steamtwin.geometry.cad_export import CAD_SUFFIXES, CadExportError, write_cad
     from steamtwin.geometry.fidelity import align_to_nominal
     from steamtwin.geometry.frame import HUB_ENDS, estimate_blade_frame, nominal_starts
+    from steamtwin.geometry.mesh_input import is_mesh_file, read_mesh_cloud
     from steamtwin.geometry.pointcloud import PointCloudError, read_point_cloud
     from steamtwin.geometry.preprocess import preprocess_views, transform
     from steamtwin.geometry.profile import GeometryError, make_blade
@@ -244,6 +265,7 @@ def reconstruct(
         write_reconstruction_report,
         write_stl,
     )
+    from steamtwin.geometry.row_metrics import append_report_rows, design_edge_rows
     from steamtwin.geometry.segmentation import ReconstructionError
 
     if not 0.0 < tolerance <= 1.0:
@@ -256,11 +278,18 @@ def reconstruct(
     if report is not None:
         for suffix in (".json", ".csv", ".png"):
             prepare_output_file(report.with_suffix(suffix), "--report")
+    cad = [p for p in (step, iges) if p is not None]
+    for path, option, kind in ((step, "--step", "STEP"), (iges, "--iges", "IGES")):
+        if path is not None:
+            if CAD_SUFFIXES.get(path.suffix.lower()) != kind:
+                _fail(f"{option} {path}: expected a {kind} file name ("
+                      f"{', '.join(k for k, v in CAD_SUFFIXES.items() if v == kind)})")
+            prepare_output_file(path, option)
+    if blade_count is not None and blade_count < 1:
+        _fail(f"--blade-count must be a positive count (got {blade_count})")
     scan = _read_scan(source) if source.is_dir() else None
     if scan is not None:
         row = row or scan[1].get("row")
-    if report is not None and row is None:
-        _fail("--report needs the row of the blade (--row, or a scan folder)")
     if row is not None:
         try:
             blade = make_blade(_spec(turbine), row)
@@ -278,7 +307,15 @@ def reconstruct(
                    f"{len(cloud)} points")
     else:
         try:
-            cloud = read_point_cloud(source)
+            if is_mesh_file(source):
+                cloud, sampling = read_mesh_cloud(source, mesh_samples, mesh_vertices,
+                                                  unit_scale)
+                typer.echo(f"sampled {sampling.samples} points over the {sampling.triangles} "
+                           f"triangles of {source} ({sampling.area * 1e6:.1f} mm², "
+                           f"{sampling.degenerate} degenerate left out, "
+                           f"{sampling.vertices_added} vertices added)")
+            else:
+                cloud = read_point_cloud(source, unit_scale)
         except (PointCloudError, OSError) as error:
             _fail(str(error))
     frames: dict = {"stl_frame": frame}
@@ -324,7 +361,19 @@ def reconstruct(
     typer.echo(f"  side fit: RMS {summary['side_fit_rms_mm']:.4f} mm, max "
                f"{summary['side_fit_max_mm']:.4f} mm, {summary['breakpoints']} knots round "
                "the profile")
-    if report is not None:
+    if cad:
+        try:
+            exported = write_cad(result.surface, result.root, result.tip, cad)
+        except CadExportError as error:
+            _fail(str(error))
+        shape = "a solid" if exported.solid else "surfaces only (the kernel did not close them)"
+        typer.echo(f"  CAD: {', '.join(str(p) for p in cad)}: {shape}, {exported.faces} faces, "
+                   f"{exported.control_points[0]}×{exported.control_points[1]} control points "
+                   f"(mm, blade frame)")
+    if report is not None and row is None:
+        _report_without_row(result, report, blade_count, {"reconstruction": summary,
+                                                          "frame": frames})
+    if report is not None and row is not None:
         extra = {"reconstruction": summary, "best_fit_rms_mm": fit_rms * 1e3,
                  "frame": frames}
         fidelity = reconstruction_fidelity(blade, result.vertices, result.triangles,
@@ -343,6 +392,11 @@ def reconstruct(
             errors = ", ".join(f"{m['metric']} {m['error']:+.4f} {m['unit']}"
                                for m in section["metrics"])
             typer.echo(f"  {section['section']} ({section['radius_mm']:.1f} mm): {errors}")
+        try:
+            edges = design_edge_rows(blade, result.vertices, result.triangles)
+        except ValueError as error:
+            _fail(f"--report: edge radii: {error}")
+        append_report_rows(json_path, csv_path, "edge_radii", edges)
         typer.echo(f"  reports {json_path}, {csv_path}, {png_path}")
 
 
@@ -363,6 +417,27 @@ def _echo_frame(found) -> None:  # found: steamtwin.geometry.frame.BladeFrame
                    "--hub-end")
     if found.edges_ambiguous:
         typer.echo("  leading and trailing edge AMBIGUOUS: the section's ends are alike")
+
+
+def _report_without_row(result, report: Path, blade_count: int | None,  # a Reconstruction
+                        extra: dict) -> None:
+    """Row metrics (json/csv) and the fit-residual map (png) of a blade with no nominal row."""
+    import math
+
+    from steamtwin.geometry.reconstruct import write_deviation_map
+    from steamtwin.geometry.row_metrics import blade_row_metrics, write_row_metrics
+
+    try:
+        sections = blade_row_metrics(result.vertices, result.triangles, blade_count=blade_count)
+    except ValueError as error:
+        _fail(f"--report: {error}")
+    json_path, csv_path = write_row_metrics(sections, report, extra)
+    png_path = write_deviation_map(result, report.with_suffix(".png"))
+    for section in sections:
+        values = ", ".join(f"{r['metric']} {r['measured']:.4f} {r['unit']}"
+                           for r in section.rows() if math.isfinite(r["measured"]))
+        typer.echo(f"  {section.name} ({section.radius * 1e3:.1f} mm): {values}")
+    typer.echo(f"  reports {json_path}, {csv_path}, {png_path}")
 
 
 @geometry_app.command()

@@ -261,9 +261,10 @@ def _farthest_pair(hull: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return near_i[a], near_j[b]
 
 
-def section_metrics(polygon: np.ndarray, pitch: float) -> SectionMetrics:
+def section_metrics(polygon: np.ndarray, pitch: float | None) -> SectionMetrics:
     """Row metrics of a closed section polyline (n, 2) in the unrolled x (axial) - y
-    (tangential) plane, with the neighbouring blade ``pitch`` (m) away in +y.
+    (tangential) plane, with the neighbouring blade ``pitch`` (m) away in +y (None: unknown,
+    the throat is NaN).
 
     The chord line is the bitangent on the pressure side (:func:`chord_line`); stagger is its
     angle from the axial direction, the normal of the cascade front (rad, positive towards +y;
@@ -295,7 +296,7 @@ def section_metrics(polygon: np.ndarray, pitch: float) -> SectionMetrics:
     result = minimize(lambda c: -tree.query(c)[0], start, method="Nelder-Mead",
                       options={"xatol": 1e-8, "fatol": 1e-10})
     thickness = 2.0 * float(-result.fun)
-    throat = _throat(dense, tree, pitch)
+    throat = float("nan") if pitch is None else _throat(dense, tree, pitch)
     return SectionMetrics(chord=chord, stagger=stagger, max_thickness=thickness, throat=throat)
 
 
