@@ -377,7 +377,7 @@ def cap_patch_minimum(points: np.ndarray, spacing: float) -> int:
 def _caps(points: np.ndarray, normals: np.ndarray, segments: np.ndarray
           ) -> tuple[CapPlane, CapPlane]:
     """Planes of the root and tip caps: the large segments whose mean normal is within 20° of
-    −z (below mid-span) or +z (above)."""
+    the z axis (either way), below mid-span (root) or above (tip)."""
     count = int(segments.max()) + 1 if np.any(segments >= 0) else 0
     big = segments >= 0
     mean_normal = np.zeros((count, 3))
@@ -389,11 +389,13 @@ def _caps(points: np.ndarray, normals: np.ndarray, segments: np.ndarray
     along = math.cos(math.radians(20.0))
     planes = []
     for name, sign, side in (("root", -1.0, mean_z < middle), ("tip", 1.0, mean_z > middle)):
-        chosen = np.flatnonzero((sign * mean_normal[:, 2] > along) & side)
+        # either orientation: on a long blade the propagation can cross the rim's blended
+        # normals and turn a whole cap inward (issue 19: a 250 mm blade)
+        chosen = np.flatnonzero((np.abs(mean_normal[:, 2]) > along) & side)
         if chosen.size == 0:
             raise ReconstructionError(
-                f"no {name} cap found: no smooth patch with normals along "
-                f"{'-' if sign < 0 else '+'}z at the {'low' if sign < 0 else 'high'} end of the "
+                f"no {name} cap found: no smooth patch with normals along z at the "
+                f"{'low' if sign < 0 else 'high'} end of the "
                 "span (is the cloud in the blade frame, z along the span, and are both end "
                 "faces scanned?)")
         planes.append(fit_cap_plane(points[np.isin(segments, chosen)]))
