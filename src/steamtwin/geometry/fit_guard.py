@@ -2,33 +2,35 @@
 
 The fit's residuals measure one way, the cloud points far from the fitted surface. A beak
 beyond a thin trailing edge or a spike at a leading-edge nose is the other way: surface where
-there are no points, which no residual sees. This module measures it (Hausdorff's distance
-taken from the surface side, as in Cignoni, Rocchini & Scopigno 1998, "Metro: measuring error
-on simplified surfaces", CGF 17:167, but against the surface the points define, not the points
-themselves, so that a scan hole the fit bridges is not mistaken for a defect):
+there are no points, which no residual sees. This module measures it (the surface side of the
+Hausdorff distance, as in Cignoni, Rocchini & Scopigno 1998, "Metro: measuring error on
+simplified surfaces", CGF 17:167, but against the surface the points define, not the points
+themselves, so that a scan hole the fit bridges is not taken for a defect):
 
-- every vertex of the triangulation is a sample (the triangulation is piecewise linear, so its
-  distance from a locally smooth surface peaks at vertices);
-- the surface the cloud defines near a vertex is the least-squares quadric height field over
-  the plane of its k nearest cloud points (principal component analysis of the neighbours,
-  Hoppe et al. 1992; the quadric as in the osculating jets of Cazals & Pouget 2005, "Estimating
-  differential quantities using polynomial fitting of osculating jets", CAGD 22:121);
-- the neighbours' extent is the disc √2 × their RMS distance from their centroid in that plane
-  (a uniformly sampled disc of radius R has RMS radius R/√2); the *excursion* of the vertex is
-  its height above the quadric at its position pulled back onto that disc, combined (root sum of
-  squares) with how far beyond the disc it lies. In a scan hole the nearest points surround
-  the vertex (no overshoot) and the quadric bridges the hole tangentially; a beak or spike
-  stands off the quadric, or beyond the points' extent.
+- every vertex of the side grid is a sample (the triangulation is piecewise linear, so its
+  distance from a smooth surface peaks at vertices);
+- its candidates are the side points the fit kept that lie nearest to it in the surface's
+  parameters (``s`` unrolled round the perimeter, and z): the points of its own face, never
+  the opposite face of a thin part; normals are the fitted surface's, consistently outward;
+- the *envelope* is the :data:`ENVELOPE` candidates nearest to the vertex's normal line (of
+  those whose normals are within :data:`FACING` of its own), each raised by l·tan(θ/2), the
+  drop of a circular arc from the vertex to a point l off its normal line whose normal is
+  turned by θ; the *excursion* is how far the vertex stands outside all of them, combined (root
+  sum of squares) with how far it lies beyond the extent of its nearest cloud points in its
+  tangent plane (all of them on one side). In a scan hole the nearest points surround the
+  vertex and the surface bridges them tangentially: no excursion. Inward dips are the other
+  direction, seen by the residuals (the points lie outside a dipped surface).
 
-Limit (stated rule): an excursion is a defect beyond ``max(noise_factor × σ, spacing_factor ×
-h, floor)``, σ the measured noise (1.4826 × the median absolute residual of the side points
-the fit kept, the normal-consistent scale of the median absolute deviation), h the median
-point spacing: the quadric of k noisy points is off by a few σ, and on the sharpest features
-(edge circles a few spacings round, cap rims) by a fraction of a spacing; the floor keeps the
-limit above the quadric's own rounding on noise-free clouds.
+Limit (stated rule): a vertex is a defect beyond ``max(noise_factor × σ, spacing_factor × h,
+floor)`` plus its allowance — σ the measured noise (1.4826 × the median absolute residual of
+the side points the fit kept, the normal-consistent scale of the median absolute deviation), h
+the median point spacing, the allowance the largest arc drop of its envelope (the drop is
+trusted to its own size: where the points lie a spacing off the normal line on a sharp edge
+the vertex is judged only to what they allow). Vertices within ``rim_spacings`` × h of a cap
+rim are measured but not judged (the side data end there).
 
-Defects are the connected groups of offending vertices; each is named by its patch (leading
-or trailing edge, side, cap), its span range (% from the root) and its size (mm). Where an
+Defects are the connected groups of offending vertices, named by their patch (leading or
+trailing edge, suction or pressure side), span range (% from the root) and size (mm). Where an
 edge carries few points, :func:`edge_sampling` measures the points per millimetre across the
 edge's half circle and what :data:`~steamtwin.geometry.scanner.EDGE_SAMPLES` needs there.
 """
@@ -128,7 +130,9 @@ class GuardReport:
 
 def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.ndarray,
                     cloud_normals: np.ndarray, neighbours: int = 20,
-                    extent_points: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                    extent_points: np.ndarray | None = None,
+                    keys: tuple[np.ndarray, np.ndarray] | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
     """Distance (m) of every sample (n, 3; m, unit normals (n, 3)) from the cloud's surface
     (module docstring): among the 3 × ``neighbours`` nearest cloud points whose normals are
     within :data:`FACING` of the sample's, the :data:`ENVELOPE` nearest to the sample's normal
@@ -141,6 +145,12 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
     on one side of it in its tangent plane. A sample with fewer than :data:`ENVELOPE` facing
     points (a gap across a thin edge) is judged by the extent alone.
 
+    ``keys`` (samples' and cloud's, m) are the coordinates in which the candidates are the
+    nearest (default: the positions); the guard passes the surface parameters unrolled, so
+    that the candidates of a vertex are the points of its own face — never the opposite face
+    of a thin part, whose nearness and k-NN normals (flipped there by the propagation) would
+    otherwise pass for the surface below it.
+
     Returns the excursion and its allowance (m): the largest drop added, by which k-NN normals
     (blends on a sharp edge) may leave the envelope too low — a sample
     with its envelope points right on its normal line is judged to the noise, one across a gap
@@ -151,7 +161,8 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
     candidates = min(3 * neighbours, len(cloud))
     if candidates < ENVELOPE:
         raise ValueError(f"the guard needs at least {ENVELOPE} cloud points, got {len(cloud)}")
-    _, index = cKDTree(cloud).query(samples, k=candidates)
+    sample_keys, cloud_keys = keys if keys is not None else (samples, cloud)
+    _, index = cKDTree(cloud_keys).query(sample_keys, k=candidates)
     extent_points = cloud if extent_points is None else extent_points
     _, extent_index = cKDTree(extent_points).query(samples, k=min(neighbours,
                                                                   len(extent_points)))
@@ -166,8 +177,7 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
         lateral = offset - height[:, :, None] * normal[:, None, :]
         spread = np.linalg.norm(lateral, axis=2)
         # the envelope: the facing points nearest to the normal line
-        key = np.where(facing, spread, np.inf)
-        nearest = np.argsort(key, axis=1)[:, :ENVELOPE]
+        nearest = np.argsort(np.where(facing, spread, np.inf), axis=1)[:, :ENVELOPE]
         envelope = np.take_along_axis(height, nearest, axis=1)
         # the drop of a circular arc from the sample to a point l off its normal line whose
         # normal is turned by θ: l·tan(θ/2) (the chord bisects the turn)
@@ -203,8 +213,9 @@ def guard_surface(reconstruction: Reconstruction, settings: GuardSettings | None
                   ) -> GuardReport:
     """Excursions of the reconstruction's vertices from its cloud, the limit and the defects.
 
-    The cloud is the points the segmentation assigned to a patch (isolated strays left out);
-    σ comes from the residuals of the side points the fit kept.
+    A vertex is checked against the side points the fit kept nearest to it in the surface's
+    parameters (its own face) and against the extent of all points the segmentation assigned
+    to a patch (isolated strays left out); σ comes from the residuals of the kept side points.
     """
     settings = settings or GuardSettings()
     segmentation = reconstruction.segmentation
@@ -214,11 +225,24 @@ def guard_surface(reconstruction: Reconstruction, settings: GuardSettings | None
     s = np.tile(reconstruction.ring_parameters, len(reconstruction.vertices) // columns)
     vertex_normals = np.column_stack([surface.outward_normals(s, reconstruction.vertices[:, 2]),
                                       np.zeros(len(s))])
-    excursion, allowance = local_excursion(reconstruction.vertices, vertex_normals,
-                                reconstruction.points[side], _flat(segmentation.normals[side]),
-                                settings.neighbours,
-                                reconstruction.points[segmentation.labels >= 0])
-    kept = side & reconstruction.inliers
+    # the side points the fit kept, with the fitted surface's normals at their parameters
+    # (consistently outward), looked up by parameter: s unrolled onto a circle as long as
+    # the section's perimeter, and z
+    kept = side & reconstruction.inliers & ~np.isnan(reconstruction.parameters)
+    cloud = reconstruction.points[kept]
+    cloud_s = reconstruction.parameters[kept]
+    cloud_normals = np.column_stack([surface.outward_normals(cloud_s, cloud[:, 2]),
+                                     np.zeros(len(cloud))])
+    radius = float(np.nanmedian(segmentation.perimeter)) / (2.0 * math.pi)
+
+    def unrolled(parameter: np.ndarray, z: np.ndarray) -> np.ndarray:
+        turn = 2.0 * math.pi * parameter
+        return np.column_stack([radius * np.cos(turn), radius * np.sin(turn), z])
+
+    excursion, allowance = local_excursion(
+        reconstruction.vertices, vertex_normals, cloud, cloud_normals, settings.neighbours,
+        reconstruction.points[segmentation.labels >= 0],
+        keys=(unrolled(s, reconstruction.vertices[:, 2]), unrolled(cloud_s, cloud[:, 2])))
     noise = MAD_SCALE * float(np.median(np.abs(reconstruction.residuals[kept])))
     spacing = segmentation.spacing
     limit = max(settings.noise_factor * noise, settings.spacing_factor * spacing,
