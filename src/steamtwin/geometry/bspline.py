@@ -218,7 +218,9 @@ class AdaptiveSurfaceFit:
     the profile; points farther than ``outlier_distance`` (m) and 5 robust standard deviations
     from the surface are trimmed; ``corrections`` is the number of fit/projection rounds per
     knot vector; ``max_rounds`` bounds the refinement rounds; a span is split only when it
-    holds twice ``min_span_points`` and twice 2 × the z basis functions. After :meth:`fit`:
+    holds twice ``min_span_points`` and twice 2 × the z basis functions; ``penalty_factor``
+    multiplies the penalty throughout (a repair refit, :mod:`~steamtwin.geometry.fit_guard`).
+    After :meth:`fit`:
     ``surface_``, ``parameters_`` (corrected s), ``residuals_`` (signed, m), ``inliers_`` (mask
     of the points kept by trimming) and ``history_`` (breakpoints, RMS, ``folded`` and the
     penalty factor ``smoothing`` of every round).
@@ -232,6 +234,7 @@ class AdaptiveSurfaceFit:
     min_span_points: int = 8
     history_: list[dict] = field(default_factory=list, init=False, repr=False)
     _split_points: int = field(default=16, init=False, repr=False)
+    penalty_factor: float = 1.0
 
     def fit(self, s: np.ndarray, z: np.ndarray, xy: np.ndarray, breaks: np.ndarray,
             z_knots: np.ndarray) -> AdaptiveSurfaceFit:
@@ -310,7 +313,7 @@ class AdaptiveSurfaceFit:
         inliers = np.ones(len(s), dtype=bool)
         for _ in range(self.corrections):
             surface = fit_periodic_surface(s, z, xy, breaks, z_knots, inliers.astype(float),
-                                           smoothing * PENALTY)
+                                           smoothing * self.penalty_factor * PENALTY)
             s = surface.project(xy, z, s)
             residual = surface.residuals(xy, z, s)
             inliers = self._trim(breaks, s, residual, inliers, distance)

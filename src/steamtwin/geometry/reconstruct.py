@@ -32,13 +32,14 @@ that do not know this ignore it.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from steamtwin.geometry.bspline import AdaptiveSurfaceFit, PeriodicSurface, clamped_knots
 from steamtwin.geometry.fidelity import FidelityReport
+from steamtwin.geometry.fit_guard import GuardReport, GuardSettings, guard_surface, refusal_message
 from steamtwin.geometry.profile import Blade
 from steamtwin.geometry.segmentation import (
     SIDE_REGIONS,
@@ -66,7 +67,10 @@ class ReconstructionSettings:
     ``outlier_distance`` (and 5 robust standard deviations) from their surface are left out of
     the fits; ``max_breaks`` bounds the knots round the profile; ``side_knot_spacing`` and
     ``edge_knot_spans`` set the starting knots, ``spanwise_knot_spacing`` the knots along the
-    span; ``chordwise_spacing``, ``sag`` and ``span_spacing`` control the triangulation.
+    span; ``chordwise_spacing``, ``sag`` and ``span_spacing`` control the triangulation;
+    ``guard`` checks the surface against the cloud (None: not checked,
+    :mod:`~steamtwin.geometry.fit_guard`); ``penalty_factor`` multiplies the fit's smoothing
+    penalty (the guard's repairs raise it).
     """
 
     segmentation: SegmentationSettings = field(default_factory=SegmentationSettings)
@@ -79,6 +83,8 @@ class ReconstructionSettings:
     chordwise_spacing: float = 0.5e-3
     sag: float = 1e-6
     span_spacing: float = 1e-3
+    guard: GuardSettings | None = field(default_factory=GuardSettings)
+    penalty_factor: float = 1.0
 
 
 @dataclass(frozen=True)
@@ -92,7 +98,8 @@ class Reconstruction:
     ``inliers`` the points the fits kept; ``parameters`` the side points' ``s`` (NaN
     elsewhere); ``boundaries`` the ``s`` where the side patches meet; ``fit_history`` the
     refinement rounds of the side; ``ring_parameters`` the ``s`` of the vertices of every ring
-    (the vertices are the rings of the side grid, root to tip; the caps reuse the end rings).
+    (the vertices are the rings of the side grid, root to tip; the caps reuse the end rings);
+    ``guard`` the two-way check of the surface against the cloud (None when not checked).
     """
 
     vertices: np.ndarray
@@ -109,6 +116,7 @@ class Reconstruction:
     boundaries: dict[str, float]
     fit_history: list[dict]
     ring_parameters: np.ndarray
+    guard: GuardReport | None = None
 
     @property
     def volume(self) -> float:
@@ -136,18 +144,21 @@ class Reconstruction:
                             for h in self.fit_history],
             "triangles": len(self.triangles),
             "volume_cm3": self.volume * 1e6,
+            **(self.guard.summary() if self.guard is not None else {}),
         }
 
 
-def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | None = None
-                      ) -> Reconstruction:
+def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | None = None,
+                      segmentation: Segmentation | None = None) -> Reconstruction:
     """Reconstruct a watertight blade from a cloud in the blade frame (m).
 
     Raises :class:`~steamtwin.geometry.segmentation.ReconstructionError` naming the problem
-    (empty, too small or flat cloud; missing caps or edges; a surface that does not close).
+    (empty, too small or flat cloud; missing caps or edges; a surface that does not close; a
+    surface that stands off the cloud, :func:`guarded`). ``segmentation``: the cloud's, when
+    already computed.
     """
     settings = settings or ReconstructionSettings()
-    segmentation = segment_blade(points, settings.segmentation)
+    segmentation = segmentation or segment_blade(points, settings.segmentation)
     points = np.asarray(points, dtype=np.float64)
     labels = segmentation.labels
     have = np.isin(labels, [REGIONS.index(name) for name in SIDE_REGIONS])
@@ -161,7 +172,8 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
     interior = max(0, math.ceil((z_hi - z_lo) / settings.spanwise_knot_spacing) - 1)
     z_knots = clamped_knots(z_lo, z_hi, interior)
     fit = AdaptiveSurfaceFit(tolerance=settings.tolerance, max_breaks=settings.max_breaks,
-                             outlier_distance=settings.outlier_distance)
+                             outlier_distance=settings.outlier_distance,
+                             penalty_factor=settings.penalty_factor)
     fit.fit(s0[have], z, points[have, :2], breaks, z_knots)
     surface = fit.surface_
     check_side_fit(fit)
@@ -178,11 +190,34 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
         inliers[on] = np.abs(residuals[on]) <= max(5.0 * plane.rms, settings.outlier_distance)
     vertices, triangles, regions, ring_s = triangulate(surface, root, tip, boundaries, settings)
     check_closed(vertices, triangles)
-    return Reconstruction(vertices=vertices, triangles=triangles, regions=regions,
-                          points=points, segmentation=segmentation, surface=surface, root=root,
-                          tip=tip, residuals=residuals, inliers=inliers, parameters=parameters,
-                          boundaries=boundaries, fit_history=fit.history_,
-                          ring_parameters=ring_s)
+    return guarded(Reconstruction(vertices=vertices, triangles=triangles, regions=regions,
+                                  points=points, segmentation=segmentation, surface=surface,
+                                  root=root, tip=tip, residuals=residuals, inliers=inliers,
+                                  parameters=parameters, boundaries=boundaries,
+                                  fit_history=fit.history_, ring_parameters=ring_s), settings)
+
+
+def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings) -> Reconstruction:
+    """The reconstruction with its guard report (:func:`~steamtwin.geometry.fit_guard.
+    guard_surface`); a surface standing off the cloud is refitted with the guard's stronger
+    penalties in turn (a beak or spike is an overshoot of the spline where few points hold
+    it) and refused with :class:`ReconstructionError` naming where and how far when none
+    passes."""
+    if settings.guard is None:
+        return reconstruction
+    report = guard_surface(reconstruction, settings.guard)
+    if not report.defects:
+        return replace(reconstruction, guard=replace(report, repairs=settings.penalty_factor))
+    stronger = [f for f in settings.guard.penalty_factors if f > settings.penalty_factor]
+    if stronger:
+        try:
+            return reconstruct_blade(reconstruction.points,
+                                     replace(settings, penalty_factor=stronger[0]),
+                                     reconstruction.segmentation)
+        except ReconstructionError:
+            pass  # the stronger penalty misses the cloud: refuse with the defect found
+    raise ReconstructionError(refusal_message(report, reconstruction.points,
+                                              reconstruction.segmentation))
 
 
 # --- parameters and knots ------------------------------------------------------------------------

@@ -1,0 +1,390 @@
+"""Two-way check of a reconstructed blade against its cloud: surface far from the data.
+
+The fit's residuals measure one way, the cloud points far from the fitted surface. A beak
+beyond a thin trailing edge or a spike at a leading-edge nose is the other way: surface where
+there are no points, which no residual sees. This module measures it (the surface side of the
+Hausdorff distance, as in Cignoni, Rocchini & Scopigno 1998, "Metro: measuring error on
+simplified surfaces", CGF 17:167, but against the surface the points define, not the points
+themselves, so that a scan hole the fit bridges is not taken for a defect):
+
+- every vertex of the side grid is a sample (the triangulation is piecewise linear, so its
+  distance from a smooth surface peaks at vertices);
+- its candidates are the side points the fit kept that lie nearest to it in the surface's
+  parameters (``s`` unrolled round the perimeter, and z): the points of its own face, never
+  the opposite face of a thin part; normals are the fitted surface's, consistently outward;
+- the *envelope* is the :data:`ENVELOPE` candidates nearest to the vertex's normal line (of
+  those whose normals are within :data:`FACING` of its own), each raised by l·tan(θ/2), the
+  drop of a circular arc from the vertex to a point l off its normal line whose normal is
+  turned by θ; the *excursion* is how far the vertex stands outside all of them, combined (root
+  sum of squares) with how far it lies beyond the extent of its nearest cloud points in its
+  tangent plane (all of them on one side). In a scan hole the nearest points surround the
+  vertex and the surface bridges them tangentially: no excursion. Inward dips are the other
+  direction, seen by the residuals (the points lie outside a dipped surface).
+
+Limit (stated rule): a vertex is a defect beyond ``max(noise_factor × σ, spacing_factor × h,
+floor)`` plus its allowance — σ the measured noise (1.4826 × the median absolute residual of
+the side points the fit kept, the normal-consistent scale of the median absolute deviation), h
+the median point spacing, the allowance the largest arc drop of its envelope (the drop is
+trusted to its own size: where the points lie a spacing off the normal line on a sharp edge
+the vertex is judged only to what they allow). Vertices within ``rim_spacings`` × h of a cap
+rim are measured but not judged (the side data end there).
+
+Defects are the connected groups of offending vertices, named by their patch (leading or
+trailing edge, suction or pressure side), span range (% from the root) and size (mm). Where an
+edge carries few points, :func:`edge_sampling` measures the points per millimetre across the
+edge's half circle and what :data:`~steamtwin.geometry.scanner.EDGE_SAMPLES` needs there.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from steamtwin.geometry.segmentation import SIDE_REGIONS, Segmentation
+from steamtwin.geometry.volume_mesh import REGIONS
+
+if TYPE_CHECKING:
+    from steamtwin.geometry.reconstruct import Reconstruction
+
+#: Normal-consistent scale of the median absolute deviation (Gaussian: σ = 1.4826 × MAD).
+MAD_SCALE = 1.4826
+#: Largest angle (rad) between a sample's normal and those of the cloud points that define the
+#: surface at it: 60° keeps a third of an edge circle and none of the opposite face.
+FACING = math.radians(60.0)
+#: Facing points nearest to a sample's normal line that make the envelope it is checked against.
+ENVELOPE = 4
+#: Span bands in which edges are measured: fifths of the span.
+SPAN_BANDS = 5
+
+
+@dataclass(frozen=True)
+class GuardSettings:
+    """Hyper-parameters of :func:`guard_surface` (lengths in m).
+
+    ``neighbours`` cloud points define the local surface at each vertex; a vertex is a defect
+    beyond ``max(noise_factor × σ, spacing_factor × h, floor)`` (σ measured noise, h point
+    spacing, module docstring); ``penalty_factors`` are the penalty multipliers of the repair
+    refits tried in turn after the first fit (empty: refuse at once); vertices within
+    ``rim_spacings`` point spacings of a cap rim are measured but not judged (the side data end
+    there and the neighbourhoods straddle the crease, as in the segmentation's rim zone).
+    """
+
+    neighbours: int = 20
+    noise_factor: float = 6.0
+    spacing_factor: float = 0.35
+    floor: float = 0.03e-3
+    penalty_factors: tuple[float, ...] = (10.0, 100.0)
+    rim_spacings: float = 4.0
+
+
+@dataclass(frozen=True)
+class Defect:
+    """Connected vertices of the fitted surface beyond the limit: the patch they lie on, their
+    span range (fractions from the root), the largest excursion (m) and the vertex count."""
+
+    region: str
+    span_from: float
+    span_to: float
+    size: float
+    vertices: int
+
+    def describe(self) -> str:
+        """e.g. "0.37 mm at the trailing edge at 60–80 % span (12 vertices)"."""
+        place = self.region.replace("_", " ")
+        lo, hi = round(self.span_from * 100), round(self.span_to * 100)
+        span = f"{lo} %" if lo == hi else f"{lo}–{hi} %"
+        return f"{self.size * 1e3:.2f} mm at the {place} at {span} span ({self.vertices} vertices)"
+
+
+@dataclass(frozen=True)
+class GuardReport:
+    """Result of :func:`guard_surface`: per-vertex ``excursion`` (m), the ``limit`` (m), the
+    measured ``noise`` σ and ``spacing`` h (m), ``defects`` (largest first), ``judged`` the
+    vertices held to the limit (off the rim zones), the per-vertex ``allowance`` (m) added to
+    the limit (:func:`local_excursion`) and ``repairs``, the penalty factor of the
+    fit that passed (1 = the first fit)."""
+
+    excursion: np.ndarray
+    limit: float
+    noise: float
+    spacing: float
+    defects: list[Defect] = field(default_factory=list)
+    judged: np.ndarray | None = None
+    allowance: np.ndarray | None = None
+    repairs: float = 1.0
+
+    def summary(self) -> dict:
+        """Figures in report units (mm)."""
+        judged = self.excursion if self.judged is None else self.excursion[self.judged]
+        return {"guard_limit_mm": self.limit * 1e3,
+                "guard_max_excursion_mm": float(judged.max()) * 1e3,
+                "guard_p99_excursion_mm": float(np.percentile(judged, 99.0)) * 1e3,
+                "guard_rim_max_excursion_mm": float(self.excursion.max()) * 1e3,
+                "guard_noise_mm": self.noise * 1e3,
+                "guard_defects": [d.describe() for d in self.defects],
+                "guard_penalty_factor": self.repairs}
+
+
+def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.ndarray,
+                    cloud_normals: np.ndarray, neighbours: int = 20,
+                    extent_points: np.ndarray | None = None,
+                    keys: tuple[np.ndarray, np.ndarray] | None = None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Distance (m) of every sample (n, 3; m, unit normals (n, 3)) from the cloud's surface
+    (module docstring): among the 3 × ``neighbours`` nearest cloud points whose normals are
+    within :data:`FACING` of the sample's, the :data:`ENVELOPE` nearest to the sample's normal
+    line say how far the sample stands outside all of them, each raised by the drop l·tan(θ/2)
+    of a circular arc from the sample to it (l its distance from the normal line, θ the turn
+    between the two normals) — on a convex edge a point l off the normal line lies that far
+    below the tangent plane, so a sample on the edge is not taken for a beak; the sample
+    lies beyond the data by the gap to the nearest of the ``neighbours`` nearest
+    ``extent_points`` (default: the cloud; all patches, caps included) when all of them lie
+    on one side of it in its tangent plane. A sample with fewer than :data:`ENVELOPE` facing
+    points (a gap across a thin edge) is judged by the extent alone.
+
+    ``keys`` (samples' and cloud's, m) are the coordinates in which the candidates are the
+    nearest (default: the positions); the guard passes the surface parameters unrolled, so
+    that the candidates of a vertex are the points of its own face — never the opposite face
+    of a thin part, whose nearness and k-NN normals (flipped there by the propagation) would
+    otherwise pass for the surface below it.
+
+    Returns the excursion and its allowance (m): the largest drop added, by which k-NN normals
+    (blends on a sharp edge) may leave the envelope too low — a sample
+    with its envelope points right on its normal line is judged to the noise, one across a gap
+    in the points on an edge only to what the gap allows.
+    """
+    from scipy.spatial import cKDTree
+
+    candidates = min(3 * neighbours, len(cloud))
+    if candidates < ENVELOPE:
+        raise ValueError(f"the guard needs at least {ENVELOPE} cloud points, got {len(cloud)}")
+    sample_keys, cloud_keys = keys if keys is not None else (samples, cloud)
+    _, index = cKDTree(cloud_keys).query(sample_keys, k=candidates)
+    extent_points = cloud if extent_points is None else extent_points
+    _, extent_index = cKDTree(extent_points).query(samples, k=min(neighbours,
+                                                                  len(extent_points)))
+    excursion = np.empty(len(samples))
+    allowance = np.zeros(len(samples))
+    for start in range(0, len(samples), 20_000):  # bounded memory
+        sl = slice(start, start + 20_000)
+        normal = sample_normals[sl]
+        facing = np.einsum("mki,mi->mk", cloud_normals[index[sl]], normal) > math.cos(FACING)
+        offset = cloud[index[sl]] - samples[sl, None, :]  # (m, c, 3)
+        height = np.einsum("mki,mi->mk", offset, normal)
+        lateral = offset - height[:, :, None] * normal[:, None, :]
+        spread = np.linalg.norm(lateral, axis=2)
+        # the envelope: the facing points nearest to the normal line
+        nearest = np.argsort(np.where(facing, spread, np.inf), axis=1)[:, :ENVELOPE]
+        envelope = np.take_along_axis(height, nearest, axis=1)
+        # the drop of a circular arc from the sample to a point l off its normal line whose
+        # normal is turned by θ: l·tan(θ/2) (the chord bisects the turn)
+        turn = np.take_along_axis(np.einsum("mki,mi->mk", cloud_normals[index[sl]], normal),
+                                  nearest, axis=1)
+        half = np.sqrt(np.clip((1.0 - turn) / (1.0 + turn), 0.0, None))  # tan(θ/2)
+        sagitta = np.take_along_axis(spread, nearest, axis=1) * half
+        envelope = envelope + sagitta
+        top = np.argmax(envelope, axis=1)
+        above = -envelope[np.arange(len(top)), top]  # > 0: the sample stands outside them all
+        # the extent: whether every one of the nearest points of the whole cloud lies on the
+        # side of their centroid, seen from the sample, in the sample's tangent plane
+        apart = extent_points[extent_index[sl]] - samples[sl, None, :]
+        apart -= np.einsum("mki,mi->mk", apart, normal)[:, :, None] * normal[:, None, :]
+        centre = apart.mean(axis=1)
+        towards = centre / np.maximum(np.linalg.norm(centre, axis=1, keepdims=True), 1e-300)
+        beyond = np.maximum(np.einsum("mki,mi->mk", apart, towards).min(axis=1), 0.0)
+        # too few facing points (a gap across a thin edge): the extent alone
+        enough = facing.sum(axis=1) >= ENVELOPE
+        stands = np.where(enough, above, 0.0)
+        excursion[sl] = np.hypot(np.maximum(stands, 0.0), beyond)
+        allowance[sl] = np.where(enough, sagitta.max(axis=1), 0.0)
+    return excursion, allowance
+
+
+def _flat(normals: np.ndarray) -> np.ndarray:
+    """Unit normals (n, 3) turned into the section plane z = const (their x-y part)."""
+    flat = np.column_stack([normals[:, :2], np.zeros(len(normals))])
+    return flat / np.maximum(np.linalg.norm(flat, axis=1, keepdims=True), 1e-12)
+
+
+def guard_surface(reconstruction: Reconstruction, settings: GuardSettings | None = None
+                  ) -> GuardReport:
+    """Excursions of the reconstruction's vertices from its cloud, the limit and the defects.
+
+    A vertex is checked against the side points the fit kept nearest to it in the surface's
+    parameters (its own face) and against the extent of all points the segmentation assigned
+    to a patch (isolated strays left out); σ comes from the residuals of the kept side points.
+    """
+    settings = settings or GuardSettings()
+    segmentation = reconstruction.segmentation
+    side = np.isin(segmentation.labels, [REGIONS.index(name) for name in SIDE_REGIONS])
+    surface = reconstruction.surface
+    columns = len(reconstruction.ring_parameters)
+    s = np.tile(reconstruction.ring_parameters, len(reconstruction.vertices) // columns)
+    vertex_normals = np.column_stack([surface.outward_normals(s, reconstruction.vertices[:, 2]),
+                                      np.zeros(len(s))])
+    # the side points the fit kept, with the fitted surface's normals at their parameters
+    # (consistently outward), looked up by parameter: s unrolled onto a circle as long as
+    # the section's perimeter, and z
+    kept = side & reconstruction.inliers & ~np.isnan(reconstruction.parameters)
+    cloud = reconstruction.points[kept]
+    cloud_s = reconstruction.parameters[kept]
+    cloud_normals = np.column_stack([surface.outward_normals(cloud_s, cloud[:, 2]),
+                                     np.zeros(len(cloud))])
+    radius = float(np.nanmedian(segmentation.perimeter)) / (2.0 * math.pi)
+
+    def unrolled(parameter: np.ndarray, z: np.ndarray) -> np.ndarray:
+        turn = 2.0 * math.pi * parameter
+        return np.column_stack([radius * np.cos(turn), radius * np.sin(turn), z])
+
+    excursion, allowance = local_excursion(
+        reconstruction.vertices, vertex_normals, cloud, cloud_normals, settings.neighbours,
+        reconstruction.points[segmentation.labels >= 0],
+        keys=(unrolled(s, reconstruction.vertices[:, 2]), unrolled(cloud_s, cloud[:, 2])))
+    noise = MAD_SCALE * float(np.median(np.abs(reconstruction.residuals[kept])))
+    spacing = segmentation.spacing
+    limit = max(settings.noise_factor * noise, settings.spacing_factor * spacing,
+                settings.floor)
+    rings = reconstruction.vertices.reshape(-1, columns, 3)
+    fraction = np.linspace(0.0, 1.0, len(rings))[:, None]
+    height = rings[-1, :, 2] - rings[0, :, 2]
+    from_rim = (np.minimum(fraction, 1.0 - fraction) * height[None, :]).ravel()
+    judged = from_rim >= settings.rim_spacings * spacing
+    defects = _defects(reconstruction, np.where(judged, excursion, 0.0), limit + allowance)
+    return GuardReport(excursion=excursion, limit=limit, noise=noise, spacing=spacing,
+                       defects=defects, judged=judged, allowance=allowance)
+
+
+def _defects(reconstruction: Reconstruction, excursion: np.ndarray, limit: np.ndarray
+             ) -> list[Defect]:
+    """Connected groups (over the triangle edges) of the vertices beyond their ``limit``."""
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import connected_components
+
+    bad = excursion > limit
+    if not np.any(bad):
+        return []
+    vertices, triangles = reconstruction.vertices, reconstruction.triangles
+    region = np.full(len(vertices), -1)
+    region[triangles.ravel()] = np.repeat(reconstruction.regions, 3)
+    edges = triangles[:, [[0, 1], [1, 2], [2, 0]]].reshape(-1, 2)
+    edges = edges[bad[edges[:, 0]] & bad[edges[:, 1]]]
+    graph = coo_array((np.ones(len(edges)), (edges[:, 0], edges[:, 1])),
+                      shape=(len(vertices), len(vertices)))
+    _, component = connected_components(graph, directed=False)
+    z = vertices[:, 2]
+    lo, hi = float(z.min()), float(z.max())
+    defects = []
+    for label in np.unique(component[bad]):
+        members = np.flatnonzero(bad & (component == label))
+        worst = members[np.argmax(excursion[members])]
+        span = (z[members] - lo) / (hi - lo)
+        defects.append(Defect(region=REGIONS[region[worst]], span_from=float(span.min()),
+                              span_to=float(span.max()), size=float(excursion[worst]),
+                              vertices=len(members)))
+    return sorted(defects, key=lambda d: -d.size)
+
+
+@dataclass(frozen=True)
+class EdgeSampling:
+    """Points on an edge in one span band: ``radius`` (m) of its circle, ``per_mm`` points per
+    millimetre across its half circle, ``needed`` per millimetre for
+    :data:`~steamtwin.geometry.scanner.EDGE_SAMPLES` on the half circle π·r."""
+
+    edge: str
+    span_from: float
+    span_to: float
+    radius: float
+    per_mm: float
+    needed: float
+
+    def describe(self) -> str:
+        """e.g. "trailing edge at 60–80 % span: 3.1 points per mm across its 0.63 mm half
+        circle, needs ≥ 7.1 (a denser scan there)"."""
+        return (f"{self.edge.replace('_', ' ')} at {self.span_from * 100:.0f}–"
+                f"{self.span_to * 100:.0f} % span: {self.per_mm:.1f} points per mm across its "
+                f"{math.pi * self.radius * 1e3:.2f} mm half circle, needs ≥ {self.needed:.1f} "
+                "(a denser scan there)")
+
+
+def fit_circle(xy: np.ndarray) -> tuple[np.ndarray, float]:
+    """Centre (2,) and radius of the algebraic least-squares circle through ``xy`` (n, 2; m):
+    x² + y² = 2ax + 2by + c (Kåsa 1976, IEEE Trans. Instrum. Meas. 25:8), in coordinates
+    centred on the points for conditioning."""
+    mean = xy.mean(axis=0)
+    p = xy - mean
+    design = np.column_stack([2.0 * p, np.ones(len(p))])
+    (a, b, c), *_ = np.linalg.lstsq(design, np.sum(p * p, axis=1), rcond=None)
+    return mean + np.array([a, b]), float(math.sqrt(max(c + a * a + b * b, 0.0)))
+
+
+def edge_radius(xy: np.ndarray, rounds: int = 4) -> float:
+    """Radius (m) of an edge circle from its patch's points ``xy`` (n, 2; m) in one section:
+    :func:`fit_circle`, refitted ``rounds`` times to the points within a quarter radius of
+    the circle — the patch also holds points of the flanks, which leave the circle along its
+    tangents and pull a single fit to a larger radius."""
+    centre, radius = fit_circle(xy)
+    for _ in range(rounds):
+        keep = np.abs(np.linalg.norm(xy - centre, axis=1) - radius) < 0.25 * radius
+        if keep.sum() < 5:
+            break
+        centre, radius = fit_circle(xy[keep])
+    return radius
+
+
+def edge_sampling(points: np.ndarray, segmentation: Segmentation, edge: str,
+                  bands: int = SPAN_BANDS) -> list[EdgeSampling]:
+    """Sampling of the ``edge`` ("leading_edge" or "trailing_edge") patch in ``bands`` span
+    bands: the radius is the median of circles (:func:`edge_radius`) through its points in
+    slabs three spacings high; the points per millimetre across the half circle are √ρ, ρ the
+    patch's points over its area π·r × the band's height. Bands with fewer than 12 edge points
+    are skipped."""
+    from steamtwin.geometry.scanner import EDGE_SAMPLES
+
+    on = segmentation.labels == REGIONS.index(edge)
+    side = segmentation.labels >= 0
+    z_all = points[side, 2]
+    lo, hi = float(z_all.min()), float(z_all.max())
+    slab = 3.0 * segmentation.spacing
+    result = []
+    for k in range(bands):
+        a, b = lo + k * (hi - lo) / bands, lo + (k + 1) * (hi - lo) / bands
+        members = points[on & (points[:, 2] >= a) & (points[:, 2] < b)]
+        if len(members) < 12:
+            continue
+        radii = []
+        for start in np.arange(a, b, slab):
+            xy = members[(members[:, 2] >= start) & (members[:, 2] < start + slab), :2]
+            if len(xy) >= 5:
+                radii.append(edge_radius(xy))
+        if not radii:
+            continue
+        radius = float(np.median(radii))
+        height = float(np.ptp(members[:, 2])) or (b - a)
+        density = len(members) / (math.pi * radius * height)  # points per m²
+        per_mm = math.sqrt(density) * 1e-3
+        needed = EDGE_SAMPLES / (math.pi * radius * 1e3)
+        result.append(EdgeSampling(edge=edge, span_from=k / bands, span_to=(k + 1) / bands,
+                                   radius=radius, per_mm=per_mm, needed=needed))
+    return result
+
+
+def refusal_message(report: GuardReport, points: np.ndarray, segmentation: Segmentation) -> str:
+    """The error of a surface that stays beyond the limit after the repairs: the defects and,
+    for those at an edge band sampled below what it needs, the density needed there."""
+    lines = [f"the fitted surface stands off the cloud by more than {report.limit * 1e3:.3g} mm "
+             f"(from σ = {report.noise * 1e3:.2g} mm of noise and a {report.spacing * 1e3:.2g}"
+             " mm point spacing): " + "; ".join(d.describe() for d in report.defects[:3])]
+    sparse = []
+    for edge in ("leading_edge", "trailing_edge"):
+        hit = [d for d in report.defects if d.region == edge]
+        for band in edge_sampling(points, segmentation, edge):
+            overlaps = any(d.span_from <= band.span_to and d.span_to >= band.span_from
+                           for d in hit)
+            if overlaps and band.per_mm < band.needed:
+                sparse.append(band.describe())
+    if sparse:
+        lines.append("too few points on the edge: " + "; ".join(sparse))
+    return "; ".join(lines) + " — not written as a watertight surface"
