@@ -3,8 +3,9 @@
 For each family member (tests/geometry/foreign_blades.py: independent NACA 4-digit, 65-series,
 double-circular-arc and thick turbine sections, twisted, tapered, leaned and swept) × cloud
 size × seed: a fused-scan cloud (σ 0.017 mm along the normal, 1 % outliers 0.2–2 mm off, ten
-2 mm holes) → pose step (``--pose``; "blade": the cloud stays in the blade frame) →
-``reconstruct_blade`` → the STL against the exact surface both ways: reconstruction samples
+2 mm holes) → pose step (``--pose``; "blade": the cloud stays in the blade frame and goes to
+``reconstruct_blade``; "random": a random rigid pose, reconstructed in the frame found from the
+data by ``reconstruct_in_any_pose``) → the STL against the exact surface both ways: reconstruction samples
 and vertices → exact surface (RMS, max: spikes, beaks) and exact-surface samples →
 reconstruction (max: missing or cut-off parts), and where the worse maximum lies. Pass =
 watertight, RMS ≤ 0.02 mm and max ≤ 0.1 mm (the larger of the two maxima); "WORST" flags a
@@ -12,7 +13,7 @@ watertight STL more than 0.5 mm off, the outcome the issue rules out; a refusal 
 pipeline's message.
 
 Run: python benchmarks/bench_foreign_blades.py [--quick] [--members NAME ...]
-     [--points 40000 80000 planned] [--seeds N] [--pose blade] [--out DIR]
+     [--points 40000 80000 planned] [--seeds N] [--pose blade|random] [--out DIR]
 (--quick: 40k points, one seed; "planned": 4.5 points on the smallest edge's half circle.)
 Prints a table; writes foreign_blades.csv and .json to --out (default: the temporary
 directory, steamtwin-bench/foreign_blades).
@@ -36,9 +37,10 @@ import trimesh
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "geometry"))
 
-from foreign_blades import FAMILY, compare_with_exact, family_blade, laser_cloud
+from foreign_blades import FAMILY, compare_with_exact, family_blade, laser_cloud, random_pose
 
-from steamtwin.geometry.reconstruct import reconstruct_blade
+from steamtwin.geometry.frame import reconstruct_in_any_pose
+from steamtwin.geometry.reconstruct import Reconstruction, reconstruct_blade
 from steamtwin.geometry.scanner import EDGE_SAMPLES
 from steamtwin.geometry.segmentation import ReconstructionError
 
@@ -57,15 +59,28 @@ def planned_points(member: str) -> int:
     return math.ceil(family_blade(member).mesh.area * EDGE_SAMPLES**2 / (math.pi * radius) ** 2)
 
 
-def blade_frame(points: np.ndarray, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """The cloud as generated (blade frame) and the 4×4 transform blade ← pipeline frame."""
-    return points, np.eye(4)
+def in_blade_frame(points: np.ndarray, seed: int) -> tuple[Reconstruction, np.ndarray]:
+    """The cloud as generated (blade frame) reconstructed; its vertices in the blade frame."""
+    result = reconstruct_blade(points)
+    return result, result.vertices
 
 
-#: Pose steps: cloud (blade frame) and seed → the cloud handed to the pipeline and the transform
-#: that brings the pipeline's output back into the blade frame for measuring.
-POSES: dict[str, Callable[[np.ndarray, int], tuple[np.ndarray, np.ndarray]]] = {
-    "blade": blade_frame,
+def in_random_pose(points: np.ndarray, seed: int) -> tuple[Reconstruction, np.ndarray]:
+    """The cloud in a random rigid pose (the scan's frame), reconstructed in the blade frame
+    found from the data (:func:`~steamtwin.geometry.frame.reconstruct_in_any_pose`); its
+    vertices taken back through the scan frame into the generator's blade frame."""
+    scan, scan_from_blade = random_pose(points, seed + 1000)
+    result, frame = reconstruct_in_any_pose(scan)
+    in_scan = frame.to_scan(result.vertices)
+    rotation, translation = scan_from_blade[:3, :3], scan_from_blade[:3, 3]
+    return result, (in_scan - translation) @ rotation
+
+
+#: Pose steps: cloud (blade frame) and seed → the reconstruction and its vertices in the
+#: generator's blade frame, for measuring.
+POSES: dict[str, Callable[[np.ndarray, int], tuple[Reconstruction, np.ndarray]]] = {
+    "blade": in_blade_frame,
+    "random": in_random_pose,
 }
 
 
@@ -73,7 +88,6 @@ def run_case(member: str, points: int, seed: int, pose: str = "blade") -> dict:
     """One member × cloud size × seed: reconstruct and measure; figures in mm and s."""
     blade = family_blade(member)
     cloud = laser_cloud(blade, points=points, seed=seed)
-    given, blade_from_given = POSES[pose](cloud.points, seed)
     row: dict = {"member": member, "points": points, "seed": seed, "pose": pose,
                  "watertight": False, "rms_mm": None, "max_mm": None, "back_max_mm": None,
                  "worst_at": "", "refused": "", "seconds": None, "outcome": "refused"}
@@ -81,13 +95,12 @@ def run_case(member: str, points: int, seed: int, pose: str = "blade") -> dict:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            result = reconstruct_blade(given)
+            result, vertices = POSES[pose](cloud.points, seed)
     except ReconstructionError as error:
         row["seconds"] = time.perf_counter() - start
         row["refused"] = str(error)
         return row
     row["seconds"] = time.perf_counter() - start
-    vertices = result.vertices @ blade_from_given[:3, :3].T + blade_from_given[:3, 3]
     row["watertight"] = bool(trimesh.Trimesh(vertices, result.triangles,
                                              process=False).is_watertight)
     figures = compare_with_exact(blade, vertices, result.triangles, seed=seed)
