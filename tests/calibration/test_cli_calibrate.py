@@ -131,3 +131,34 @@ def test_joint_calibration_over_two_files(plant_run, tmp_path):
         "--data", str(second["historian"]), "--tags", str(first["tag_map"]),
         "--tags", str(second["tag_map"]), *common])
     assert counts.exit_code == 2 and "one --tags for all 3 --data files" in counts.output
+
+
+def test_calibrate_with_the_control_stage_pressure_as_witness(plant_run, tmp_path):
+    """--pressure-witness fits the control-stage pressure beside the temperatures (σ typical
+    25 kPa, the tag map states none), with a transmitter bias under --sensor-bias: the params
+    record it among the sensors and the RMSE stays a temperature RMSE (K)."""
+    paths = write_plant(plant_run, tmp_path / "plant", file_format="csv")
+    app = typer.Typer()
+    app.command()(calibrate)
+    app.command("other")(lambda: None)
+    start, end = plant_run.measured.index[-600], plant_run.measured.index[-1]
+    arguments = ["calibrate", "--data", str(paths["historian"]), "--tags",
+                 str(paths["tag_map"]), "--surrogate", "--max-evaluations", "40",
+                 "--window", f"{start.isoformat()}/{end.isoformat()}", "--workers", "1",
+                 "--sensor-bias"]
+    result = CliRunner().invoke(app, [*arguments, "--out", str(tmp_path / "p.json"),
+                                      "--pressure-witness"])
+    assert result.exit_code == 0, result.output
+    document = json.loads((tmp_path / "p.json").read_text())
+    assert document["calibration"]["sensors"][-1] == "control_stage_pressure"
+    assert 0.0 < document["calibration"]["rmse_K"] < 5.0
+    tags = paths["tag_map"].read_text().replace(
+        '[signals.control_stage_pressure]\ncolumn = "10MAA10CP001"\nunit = "MPa"\n'
+        'range = [0.0, 20.0]\n', "")
+    assert "control_stage_pressure" not in tags
+    (tmp_path / "no-p1.toml").write_text(tags)
+    missing = CliRunner().invoke(app, [*arguments[:4], str(tmp_path / "no-p1.toml"),
+                                       *arguments[5:], "--out", str(tmp_path / "q.json"),
+                                       "--pressure-witness"])
+    assert missing.exit_code == 2
+    assert "--pressure-witness" in missing.output and "control_stage_pressure" in missing.output

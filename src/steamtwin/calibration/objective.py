@@ -556,13 +556,29 @@ def _window_parts(windows: object) -> tuple[list[pd.DataFrame], list[str], list[
 
 THERMOCOUPLE_BIAS = "thermocouple"
 """``sensor_bias`` value: β from IEC 60584-1 class 1 for every temperature sensor (module
-docstring)."""
+docstring), and a pressure transmitter's (:data:`TRANSMITTER_BIAS_FRACTION`) for a pressure."""
 
 
 def thermocouple_bias_spread(temperature_k: float) -> float:
     """β (K) of a class-1 thermocouple's bias at ``temperature_k`` (K): the IEC 60584-1
     class-1 tolerance max(1.5 K, 0.004·|t °C|) read as a uniform bound, divided by √3."""
     return max(1.5, 0.004 * abs(temperature_k - 273.15)) / np.sqrt(3.0)
+
+
+#: β of a pressure transmitter's calibration error as a fraction of its reading: IEC 60770-1
+#: accuracy class 0.1 (±0.1 %, of a span taken as the reading) read as a uniform bound, /√3.
+TRANSMITTER_BIAS_FRACTION = 0.001 / np.sqrt(3.0)
+
+
+def _bias_spread(name: str, mean_reading: float) -> float:
+    """β of a sensor's bias under the :data:`THERMOCOUPLE_BIAS` rule: a thermocouple's
+    (K), a pressure transmitter's (Pa), none for anything else."""
+    unit = SIGNALS[name].si_unit if name in SIGNALS else ""
+    if unit == "K":
+        return thermocouple_bias_spread(mean_reading)
+    if unit == "Pa":
+        return TRANSMITTER_BIAS_FRACTION * abs(mean_reading)
+    return 0.0
 
 
 def _with_bias_spread(windows: list[PreparedWindow], sensors: tuple[str, ...],
@@ -579,8 +595,8 @@ def _with_bias_spread(windows: list[PreparedWindow], sensors: tuple[str, ...],
         for group in {w.group for w in windows}:
             measured = np.vstack([w.measured for w in windows if w.group == group])
             spread[group] = np.array([
-                thermocouple_bias_spread(float(np.nanmean(measured[:, j])))
-                if SIGNALS[name].si_unit == "K" else 0.0 for j, name in enumerate(sensors)])
+                _bias_spread(name, float(np.nanmean(measured[:, j])))
+                for j, name in enumerate(sensors)])
         return [replace(w, bias_spread=spread[w.group]) for w in windows]
     unknown = sorted(set(sensor_bias) - set(sensors))
     values = np.array([float(sensor_bias.get(name, 0.0)) for name in sensors])

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import warnings
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -19,7 +20,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from steamtwin.calibration import CalibrationError, Calibrator
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
-from steamtwin.calibration.objective import THERMOCOUPLE_BIAS
+from steamtwin.calibration.objective import DEFAULT_SENSORS, THERMOCOUPLE_BIAS
 from steamtwin.calibration.online import OnlineCalibrator, ParameterStore
 from steamtwin.calibration.report import (
     band_rmse_table,
@@ -30,7 +31,11 @@ from steamtwin.calibration.report import (
     trajectory_figure,
 )
 from steamtwin.calibration.surrogate import SurrogateCalibrator
-from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
+from steamtwin.calibration.tracking import (
+    TYPICAL_INSTRUMENT_ERROR,
+    ParameterTracker,
+    tracking_sigma,
+)
 from steamtwin.calibration.windowset import (
     WindowSet,
     WindowSource,
@@ -55,6 +60,9 @@ from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import SpecError, TurbineSpec, load_spec
 from steamtwin.textfile import read_utf8_text
+
+PRESSURE_WITNESS = "control_stage_pressure"
+"""The pressure ``--pressure-witness`` adds to the fitted temperatures."""
 
 
 def _read_cleaned(data: Path, tags: Path, accept_errors: bool, console: Console
@@ -106,6 +114,22 @@ def _read_sources(data: list[Path], tags: list[Path], accept_errors: bool, conso
                                   {s.signal: s.resolution_si for s in signals})
         result.append((history, WindowSource(str(path), history.data, sigma or None)))
     return result
+
+
+def _with_pressure_witness(sources: list[tuple[History, WindowSource]]
+                           ) -> tuple[tuple[str, ...], list[tuple[History, WindowSource]]]:
+    """The sensors with the control-stage pressure added, and each file's σ with the
+    pressure's (its tag map's noise and resolution, else the typical transmitter's,
+    :data:`~steamtwin.calibration.tracking.TYPICAL_INSTRUMENT_ERROR`); ValueError naming a
+    file that lacks the pressure."""
+    for history, source in sources:
+        if PRESSURE_WITNESS not in source.data.columns:
+            raise ValueError(f"--pressure-witness: {source.name} has no {PRESSURE_WITNESS} "
+                             f"(map it in {history.historian.tag_map.source})")
+    typical = {PRESSURE_WITNESS: TYPICAL_INSTRUMENT_ERROR[PRESSURE_WITNESS]}
+    return (*DEFAULT_SENSORS, PRESSURE_WITNESS), [
+        (history, replace(source, sigma={**typical, **(source.sigma or {})}))
+        for history, source in sources]
 
 
 def _priors(no_priors: bool, priors_file: Path | None, prior: list[str] | None
@@ -163,6 +187,12 @@ def calibrate(
         "constant bias per file (IEC 60584-1 class 1 tolerance): the fit then learns from how "
         "the temperatures change with load, not from their level; for a twin that already "
         "matches the level within a few K."),
+    pressure_witness: bool | None = typer.Option(
+        None, "--pressure-witness/--no-pressure-witness", help="Also fit the control-stage "
+        "pressure (σ from the tag map's noise, else 25 kPa), the flow coefficient's most "
+        "direct witness (Stodola's cone law); on the virtual plant's unseen day it put the "
+        "flow coefficient within 0.011 of the truth against 0.020 without "
+        "(docs/benchmarks.md). Default: when every file maps it."),
     workers: int | None = typer.Option(
         None, min=1, help="Local worker processes evaluating the GA's candidates (default: "
         "every core; 1 = no pool)."),
@@ -209,6 +239,15 @@ def calibrate(
         spec = load_spec(turbine)
         priors = _priors(no_priors, priors_file, prior)
         sources = _read_sources(data, tags, accept_quality_errors, console)
+        if pressure_witness is None:
+            pressure_witness = all(PRESSURE_WITNESS in source.data.columns
+                                   for _, source in sources)
+            if not pressure_witness:
+                console.print(f"no {PRESSURE_WITNESS} in the data: the temperatures alone are "
+                              "fitted")
+        sensors = DEFAULT_SENSORS
+        if pressure_witness:
+            sensors, sources = _with_pressure_witness(sources)
         windows = joint_window_set(
             [source for _, source in sources], spec.design.generator_power,
             given=[parse_window(text) for text in window or []], ramps=ramps,
@@ -225,7 +264,7 @@ def calibrate(
                 bar.update(task, completed=fraction, description=message)
 
             settings = {"population": population, "seed": seed, "workers": workers,
-                        "scheduler": scheduler, "priors": priors,
+                        "scheduler": scheduler, "priors": priors, "sensors": sensors,
                         "sensor_bias": THERMOCOUPLE_BIAS if sensor_bias else None}
             if surrogate:
                 calibrator = SurrogateCalibrator(model, max_evaluations=max_evaluations,
