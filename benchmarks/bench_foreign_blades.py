@@ -5,12 +5,12 @@ double-circular-arc and thick turbine sections, twisted, tapered, leaned and swe
 size × seed: a fused-scan cloud (σ 0.017 mm along the normal, 1 % outliers 0.2–2 mm off, ten
 2 mm holes) → pose step (``--pose``; "blade": the cloud stays in the blade frame and goes to
 ``reconstruct_blade``; "random": a random rigid pose, reconstructed in the frame found from the
-data by ``reconstruct_in_any_pose``) → the STL against the exact surface both ways: reconstruction samples
-and vertices → exact surface (RMS, max: spikes, beaks) and exact-surface samples →
-reconstruction (max: missing or cut-off parts), and where the worse maximum lies. Pass =
-watertight, RMS ≤ 0.02 mm and max ≤ 0.1 mm (the larger of the two maxima); "WORST" flags a
-watertight STL more than 0.5 mm off, the outcome the issue rules out; a refusal records the
-pipeline's message.
+data by ``reconstruct_in_any_pose``) → the STL against the exact surface both ways:
+reconstruction samples and vertices → exact surface (RMS, max: spikes, beaks) and
+exact-surface samples → reconstruction (max: missing or cut-off parts), and where the worse
+maximum lies. Pass = watertight, RMS ≤ 0.02 mm and max ≤ 0.1 mm (the larger of the two
+maxima); "WORST" flags a watertight STL more than 0.5 mm off, the outcome the issue rules out;
+a refusal records the pipeline's message.
 
 Run: python benchmarks/bench_foreign_blades.py [--quick] [--members NAME ...]
      [--points 40000 80000 planned] [--seeds N] [--pose blade|random] [--out DIR]

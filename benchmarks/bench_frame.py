@@ -21,7 +21,7 @@ import time
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from steamtwin.geometry.fidelity import chord_line, truth_section
+from steamtwin.geometry.fidelity import chord_line, sample_triangles, truth_section
 from steamtwin.geometry.frame import estimate_blade_frame
 from steamtwin.geometry.profile import ROWS, make_blade, reference_surface
 from steamtwin.spec import load_spec
@@ -30,19 +30,11 @@ from steamtwin.spec import load_spec
 def fused_like_cloud(blade, count: int, rng: np.random.Generator) -> np.ndarray:
     """Exact surface points with the issue's noise and stray points (m, blade frame)."""
     vertices, triangles, _ = reference_surface(blade)
-    corners = vertices[triangles]
-    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    area = 0.5 * np.linalg.norm(cross, axis=1)
-    pick = rng.choice(len(triangles), size=count, p=area / area.sum())
-    u, v = rng.random(count), rng.random(count)
-    flip = u + v > 1.0
-    u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
-    a, b, c = corners[pick, 0], corners[pick, 1], corners[pick, 2]
-    normals = cross[pick] / np.linalg.norm(cross[pick], axis=1, keepdims=True)
+    points, _, normals = sample_triangles(vertices, triangles, count, rng)
     offset = rng.normal(0.0, 0.017e-3, count)
     stray = rng.random(count) < 0.01
     offset[stray] = rng.uniform(0.2e-3, 2e-3, stray.sum())
-    return a + u[:, None] * (b - a) + v[:, None] * (c - a) + offset[:, None] * normals
+    return points + offset[:, None] * normals
 
 
 def degrees(a: np.ndarray, b: np.ndarray) -> float:

@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from steamtwin.geometry.fidelity import surface_samples
+from steamtwin.geometry.fidelity import sample_triangles, surface_samples
 from steamtwin.geometry.fit_guard import (
     GuardSettings,
     edge_sampling,
@@ -88,17 +88,8 @@ def noisy_cloud(vertices: np.ndarray, triangles: np.ndarray, count: int, sigma: 
     """``count`` points spread uniformly over the mesh, moved by Gaussian noise ``sigma`` (m)
     along the face normal."""
     rng = np.random.default_rng(seed)
-    corners = vertices[triangles]
-    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    area = 0.5 * np.linalg.norm(cross, axis=1)
-    pick = rng.choice(len(triangles), size=count, p=area / area.sum())
-    u, v = rng.random(count), rng.random(count)
-    flip = u + v > 1.0
-    u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
-    a, b, c = corners[pick, 0], corners[pick, 1], corners[pick, 2]
-    normal = cross[pick] / np.linalg.norm(cross[pick], axis=1, keepdims=True)
-    return (a + u[:, None] * (b - a) + v[:, None] * (c - a)
-            + rng.normal(0.0, sigma, count)[:, None] * normal)
+    points, _, normal = sample_triangles(vertices, triangles, count, rng)
+    return points + rng.normal(0.0, sigma, count)[:, None] * normal
 
 
 # --- the guard on planted defects --------------------------------------------------------------

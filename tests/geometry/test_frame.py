@@ -19,6 +19,7 @@ from steamtwin.geometry.fidelity import (
     blade_distance,
     chord_line,
     distances_to_mesh,
+    sample_triangles,
     surface_samples,
     truth_section,
 )
@@ -46,19 +47,11 @@ def noisy_cloud(blade: Blade, count: int, seed: int = 0) -> np.ndarray:
     issue's fused clouds), with 1 % stray points 0.2–2 mm off the surface."""
     vertices, triangles, _ = reference_surface(blade)
     rng = np.random.default_rng(seed)
-    corners = vertices[triangles]
-    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    area = 0.5 * np.linalg.norm(cross, axis=1)
-    pick = rng.choice(len(triangles), size=count, p=area / area.sum())
-    u, v = rng.random(count), rng.random(count)
-    flip = u + v > 1.0
-    u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
-    a, b, c = corners[pick, 0], corners[pick, 1], corners[pick, 2]
-    normals = cross[pick] / np.linalg.norm(cross[pick], axis=1, keepdims=True)
+    points, _, normals = sample_triangles(vertices, triangles, count, rng)
     offset = rng.normal(0.0, 0.017e-3, count)
     stray = rng.random(count) < 0.01
     offset[stray] = rng.uniform(0.2e-3, 2e-3, stray.sum())
-    return a + u[:, None] * (b - a) + v[:, None] * (c - a) + offset[:, None] * normals
+    return points + offset[:, None] * normals
 
 
 def mid_chord(blade: Blade) -> np.ndarray:

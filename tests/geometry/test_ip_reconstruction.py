@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from steamtwin.geometry.fidelity import truth_section
+from steamtwin.geometry.fidelity import sample_triangles, truth_section
 from steamtwin.geometry.profile import Blade, make_blade, reference_surface
 from steamtwin.geometry.reconstruct import (
     initial_parameters,
@@ -34,16 +34,7 @@ def noisy_samples(blade: Blade, count: int, noise: float, seed: int = 2
     ±``noise`` (m), and the region each was drawn from."""
     vertices, triangles, regions = reference_surface(blade)
     rng = np.random.default_rng(seed)
-    corners = vertices[triangles]
-    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    area = 0.5 * np.linalg.norm(cross, axis=1)
-    pick = rng.choice(len(triangles), size=count, p=area / area.sum())
-    u, v = rng.random(count), rng.random(count)
-    flip = u + v > 1.0
-    u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
-    a, b, c = corners[pick, 0], corners[pick, 1], corners[pick, 2]
-    normals = cross[pick] / np.linalg.norm(cross[pick], axis=1, keepdims=True)
-    points = a + u[:, None] * (b - a) + v[:, None] * (c - a)
+    points, pick, normals = sample_triangles(vertices, triangles, count, rng)
     return points + normals * rng.uniform(-noise, noise, count)[:, None], regions[pick]
 
 

@@ -16,6 +16,7 @@ from steamtwin.geometry.bspline import AdaptiveSurfaceFit, clamped_knots
 from steamtwin.geometry.fidelity import (
     align_to_nominal,
     blade_distance,
+    sample_triangles,
     section_metrics,
     section_pitch,
     truth_section,
@@ -48,17 +49,8 @@ def sample_surface(blade, count: int, seed: int = 0
     """Points spread uniformly over the exact surface, the region each was drawn from (the
     Pritchard segment or cap: the ground-truth label) and the outward normal there."""
     vertices, triangles, regions = reference_surface(blade)
-    rng = np.random.default_rng(seed)
-    corners = vertices[triangles]
-    cross = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
-    area = 0.5 * np.linalg.norm(cross, axis=1)
-    pick = rng.choice(len(triangles), size=count, p=area / area.sum())
-    u, v = rng.random(count), rng.random(count)
-    flip = u + v > 1.0
-    u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
-    a, b, c = corners[pick, 0], corners[pick, 1], corners[pick, 2]
-    points = a + u[:, None] * (b - a) + v[:, None] * (c - a)
-    normals = cross[pick] / np.linalg.norm(cross[pick], axis=1, keepdims=True)
+    points, pick, normals = sample_triangles(vertices, triangles, count,
+                                             np.random.default_rng(seed))
     return points, regions[pick], normals
 
 

@@ -106,14 +106,26 @@ def blade_distance(blade: Blade, points: np.ndarray) -> np.ndarray:
 def surface_samples(vertices: np.ndarray, triangles: np.ndarray, count: int,
                     rng: np.random.Generator) -> np.ndarray:
     """``count`` points uniformly distributed over a triangle mesh's area."""
+    return sample_triangles(vertices, triangles, count, rng)[0]
+
+
+def sample_triangles(vertices: np.ndarray, triangles: np.ndarray, count: int,
+                     rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``count`` points (m) uniformly distributed over a triangle mesh's area, the triangle
+    each lies on and that triangle's unit normal (by the vertex order: outward on a
+    consistently wound closed mesh). Triangle by area, then uniform barycentric coordinates
+    with the reflection trick (Turk 1990, *Graphics Gems* I, "Generating random points in
+    triangles")."""
     p = vertices[triangles]
-    area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+    cross = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    area = 0.5 * np.linalg.norm(cross, axis=1)
     pick = rng.choice(len(triangles), size=count, p=area / area.sum())
     u, v = rng.random(count), rng.random(count)
     flip = u + v > 1.0
     u[flip], v[flip] = 1.0 - u[flip], 1.0 - v[flip]
     a, b, c = p[pick, 0], p[pick, 1], p[pick, 2]
-    return a + u[:, None] * (b - a) + v[:, None] * (c - a)
+    normals = cross[pick] / np.linalg.norm(cross[pick], axis=1, keepdims=True)
+    return a + u[:, None] * (b - a) + v[:, None] * (c - a), pick, normals
 
 
 def surface_deviation(blade: Blade, points: np.ndarray, vertices: np.ndarray | None = None,
