@@ -361,3 +361,26 @@ def test_inputs_the_model_does_not_take_are_not_propagated():
     posterior = laplace_posterior(objective, estimate, inputs=other)
     assert posterior.input_sources == ()
     np.testing.assert_array_equal(posterior.total_covariance, posterior.covariance)
+
+
+class PickySimulator(LagSimulator):
+    """LagSimulator that refuses a flow outside (0, 1.5 × rated)."""
+
+    def check_inputs(self, inputs: pd.DataFrame) -> tuple[np.ndarray, np.ndarray, float]:
+        flow = inputs["main_steam_flow"].to_numpy(dtype=float)
+        if not ((flow > 0.0) & (flow < 1.5 * RATED_FLOW)).all():
+            raise ValueError("main_steam_flow outside what the valves pass")
+        return super().check_inputs(inputs)
+
+
+def test_an_input_the_model_rejects_moved_either_way_is_said_not_propagated():
+    windows = _window_set(np.random.default_rng(5), ramp=False)
+    objective = CalibrationProblem(PickySimulator(), windows, sensors=SENSORS,
+                                   priors=DEFAULT_PRIORS, min_samples=30).objective
+    estimate = fit_map(objective)
+    huge = {"main_steam_flow": InputUncertainty("relative", 2.0, "test: 200 %")}
+    posterior = laplace_posterior(objective, estimate, inputs=huge)
+    assert posterior.input_sources[0][1].startswith("not propagated")
+    np.testing.assert_array_equal(posterior.total_covariance, posterior.covariance)
+    with pytest.raises(ValueError, match="kind must be"):
+        InputUncertainty("absolute", 1.0, "no such kind")

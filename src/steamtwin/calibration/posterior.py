@@ -117,6 +117,12 @@ class InputUncertainty:
     value: float
     source: str
 
+    def __post_init__(self) -> None:
+        if self.kind not in ("relative", "thermocouple") or not (
+                np.isfinite(self.value) and self.value >= 0.0):
+            raise ValueError(f"InputUncertainty: kind must be 'relative' or 'thermocouple' and "
+                             f"value a finite number ≥ 0 (got {self.kind!r}, {self.value!r})")
+
     def at(self, reading: np.ndarray) -> np.ndarray:
         """Standard uncertainty (SI) at each reading (SI)."""
         if self.kind == "relative":
@@ -280,18 +286,21 @@ def laplace_posterior(objective: Objective, params: ModelParameters,
     gain = covariance @ jacobian.T / (kappa * tau * scale**2)  # δθ = −gain·δr
     used = {name: u for name, u in inputs.items()
             if name in objective.simulator.input_signals}
-    return replace(posterior, input_covariance=input_covariance(objective, params, gain, used),
-                   input_sources=tuple((name, u.source) for name, u in used.items()))
+    covariance_in, rejected = input_covariance(objective, params, gain, used)
+    return replace(posterior, input_covariance=covariance_in, input_sources=tuple(
+        (name, f"not propagated: the model rejects the inputs with {name} moved by ±{u.source}"
+         if name in rejected else u.source) for name, u in used.items()))
 
 
 def input_covariance(objective: Objective, params: ModelParameters, gain: np.ndarray,
-                     inputs: Mapping[str, InputUncertainty]) -> np.ndarray:
+                     inputs: Mapping[str, InputUncertainty]) -> tuple[np.ndarray, list[str]]:
     """Σ_i g_i g_iᵀ (θ units): the covariance the inputs' calibration errors add (module
     docstring), with ``gain`` = H⁻¹Jᵀ of the standardised residuals at ``params`` and g_i the
     MAP's shift for each input moved by its standard uncertainty (central differences; one
-    side where the model rejects the other). ValueError naming the input when the model
-    rejects both."""
+    side where the model rejects the other); and the inputs the model rejects moved either
+    way (not propagated: the caller says so)."""
     total = np.zeros((gain.shape[0], gain.shape[0]))
+    rejected: list[str] = []
     for name, uncertainty in inputs.items():
         shifted = []
         for sign in (1.0, -1.0):
@@ -304,8 +313,8 @@ def input_covariance(objective: Objective, params: ModelParameters, gain: np.nda
             except ValueError:
                 continue
         if not shifted:
-            raise ValueError(f"the model rejects the inputs with {name} moved by its "
-                             f"calibration uncertainty ({uncertainty.source}) either way")
+            rejected.append(name)
+            continue
         if len(shifted) == 2:
             difference = (shifted[0][1] - shifted[1][1]) / 2.0
         else:
@@ -313,7 +322,7 @@ def input_covariance(objective: Objective, params: ModelParameters, gain: np.nda
             difference = sign * (residuals - objective.standardised_residuals(params))
         g = gain @ difference
         total += np.outer(g, g)
-    return total
+    return total, rejected
 
 
 def _moved_input(objective: Objective, window, name: str, offset: np.ndarray):
