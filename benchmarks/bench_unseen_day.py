@@ -40,7 +40,6 @@ import pandas as pd
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
 from steamtwin.calibration.objective import (
     DEFAULT_SENSORS,
-    CalibrationProblem,
     predict_window,
     prepare_window,
     thermocouple_bias_spread,
@@ -50,7 +49,6 @@ from steamtwin.calibration.windowset import WindowSet, find_calibration_windows
 from steamtwin.dcs.plant import run_plant
 from steamtwin.dcs.quality import clean
 from steamtwin.dcs.windows import find_steady_windows, select_window
-from steamtwin.model.parameters import DEFAULT_PRIORS
 from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.spec import load_spec
 
@@ -112,9 +110,7 @@ def _draw(spec, rated: float, seed: int, sensors: tuple[str, ...], quick: bool) 
                                      sensors=sensors, sigma=sigma, sensor_bias=spread)
     calibrator.fit(windows)
     params = calibrator.params_
-    problem = CalibrationProblem(model, windows, sensors=sensors, sigma=sigma,
-                                 priors=DEFAULT_PRIORS, sensor_bias=spread)
-    offsets = dict(zip(sensors, problem.objective.sensor_biases(params)[0], strict=True))
+    offsets = calibrator.sensor_offsets_  # what params.json carries for validate
     truth = day.truth.twin_equivalent
     table = calibrator.posterior_.table()
     result: dict[str, object] = {"seed": seed, "windows": len(windows),

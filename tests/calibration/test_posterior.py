@@ -32,6 +32,7 @@ from steamtwin.model.parameters import (
     ParameterError,
     parse_prior,
     priors_from_dict,
+    sensor_offsets_from_json,
 )
 from steamtwin.model.simulator import INPUT_SIGNALS
 
@@ -384,3 +385,32 @@ def test_an_input_the_model_rejects_moved_either_way_is_said_not_propagated():
     np.testing.assert_array_equal(posterior.total_covariance, posterior.covariance)
     with pytest.raises(ValueError, match="kind must be"):
         InputUncertainty("absolute", 1.0, "no such kind")
+
+
+def test_sensor_offsets_recover_the_sensors_biases_and_reach_the_parameter_file(tmp_path):
+    """Windows whose thermocouples read +0.8 / −1.1 / +0.3 K off: the pooled offsets at the
+    true parameters are those biases (within the noise's 0.5 K/√n and the prior's pull), the
+    calibrators write them into params.json and sensor_offsets_from_json reads them back."""
+    bias = {"control_stage_temperature": 0.8, "hp_exhaust_temperature": -1.1,
+            "hp_inner_casing_temperature": 0.3}
+    windows = WindowSet(tuple(replace(w, data=w.data.assign(**{
+        name: w.data[name] + value for name, value in bias.items()}))
+        for w in _window_set(np.random.default_rng(6), ramp=True)))
+    problem = CalibrationProblem(LagSimulator(), windows, sensors=SENSORS, priors=DEFAULT_PRIORS,
+                                 min_samples=30, sensor_bias=THERMOCOUPLE_BIAS)
+    offsets = problem.objective.sensor_offsets(TRUTH)
+    assert offsets.keys() == bias.keys()
+    for name, value in bias.items():
+        assert offsets[name] == pytest.approx(value, abs=0.1)
+    assert CalibrationProblem(LagSimulator(), windows, sensors=SENSORS, min_samples=30
+                              ).objective.sensor_offsets(TRUTH) == {}
+    calibrator = Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=2,
+                            workers=1, min_samples=30, sensor_bias=THERMOCOUPLE_BIAS).fit(windows)
+    path, _ = calibrator.save(tmp_path / "params.json")
+    assert sensor_offsets_from_json(path) == pytest.approx(calibrator.sensor_offsets_)
+    assert set(calibrator.sensor_offsets_) == set(bias)
+    document = json.loads(path.read_text())
+    document["sensor_offsets"]["hp_exhaust_temperature"] = 40.0
+    (tmp_path / "bad.json").write_text(json.dumps(document))
+    with pytest.raises(ParameterError, match=r"sensor_offsets\.hp_exhaust_temperature = 40"):
+        sensor_offsets_from_json(tmp_path / "bad.json")

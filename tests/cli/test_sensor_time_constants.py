@@ -57,8 +57,12 @@ def test_validate_lags_the_model_by_the_tag_maps_time_constants(reference_spec):
     signals["hp_exhaust_temperature"] = dataclasses.replace(
         signals["hp_exhaust_temperature"], time_constant_s=45.5)
     tag_map = dataclasses.replace(tag_map, signals=signals)
-    model = _monitoring_model(reference_spec, "fom", True, tag_map)
+    model = _monitoring_model(reference_spec, "fom", True, tag_map, {})
     assert model.sensor_time_constants["hp_exhaust_temperature"] == 45.5
     assert model.sensor_time_constants["control_stage_temperature"] == (
         TYPICAL_TIME_CONSTANTS_S["control_stage_temperature"])
-    assert _monitoring_model(reference_spec, "fom", False, tag_map).sensor_time_constants is None
+    unlagged = _monitoring_model(reference_spec, "fom", False, tag_map, {})
+    assert unlagged.sensor_time_constants is None and unlagged.sensor_offsets is None
+    offsets = {"hp_exhaust_temperature": -1.2}
+    assert _monitoring_model(reference_spec, "fom", True, tag_map, offsets).sensor_offsets == (
+        offsets)

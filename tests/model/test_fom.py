@@ -382,6 +382,26 @@ def test_superheat_screen_agrees_with_the_row_by_row_check(rows):
         _validated_inputs(frame)
 
 
+def test_sensor_offsets_add_to_what_the_sensors_read(reference_spec):
+    """An offset (measured − model, K) is added to its sensor's reading, after the lag, and
+    to nothing else; an offset for a signal the model does not predict is refused."""
+    from steamtwin.model.fom import FullOrderModel
+
+    lags = {"hp_exhaust_temperature": 20.0}
+    plain = FullOrderModel(reference_spec, sensor_time_constants=lags)
+    offset = FullOrderModel(reference_spec, sensor_time_constants=lags,
+                            sensor_offsets={"hp_exhaust_temperature": -1.25})
+    frame = load_profile_inputs(reference_spec, ramp_profile(1.0, 0.6, 0.05, 30.0, 60.0))
+    before, after = plain.simulate(frame), offset.simulate(frame)
+    np.testing.assert_array_equal(after["hp_exhaust_temperature"].to_numpy(),
+                                  before["hp_exhaust_temperature"].to_numpy() - 1.25)
+    others = [name for name in plain.output_signals if name != "hp_exhaust_temperature"]
+    pd.testing.assert_frame_equal(after[others], before[others])
+    wrong = FullOrderModel(reference_spec, sensor_offsets={"main_steam_flow": 1.0})
+    with pytest.raises(ValueError, match="sensor_offsets for"):
+        wrong.simulate(frame)
+
+
 def test_checked_inputs_run_as_simulate_does(reference_spec):
     """The calibration's fast path (inputs checked once, array out) equals ``simulate``,
     sensor lags included, and the check still names the column and row."""

@@ -121,8 +121,9 @@ class Calibrator:
     ``population_`` (final GA population) and ``identifiability_`` (per parameter, see
     :mod:`~steamtwin.calibration.identifiability`; an :class:`IdentifiabilityWarning` is issued
     for each parameter the windows cannot identify), ``score_`` (the minimised posterior
-    score) and ``posterior_`` (:class:`~steamtwin.calibration.posterior.Posterior` at the MAP;
-    None without priors).
+    score), ``posterior_`` (:class:`~steamtwin.calibration.posterior.Posterior` at the MAP;
+    None without priors) and ``sensor_offsets_`` (sensor → its estimated bias, measured −
+    model, SI, with ``sensor_bias``; empty without).
 
     ``windows`` of :meth:`fit`: DataFrames, or a
     :class:`~steamtwin.calibration.windowset.WindowSet` (joint calibration: its load-band
@@ -276,6 +277,7 @@ class Calibrator:
         self.params_ = problem.parameters(best.X)
         self.rmse_, self.score_ = result.rmse, result.value
         self.posterior_ = posterior_at(problem, self.params_, result)
+        self.sensor_offsets_ = problem.objective.sensor_offsets(self.params_)
         self.history_ = pd.DataFrame(rows).set_index("generation")
         self.n_evaluations_ = problem.n_evaluations
         self.n_penalised_ = problem.n_penalised
@@ -327,7 +329,7 @@ class Calibrator:
                     "score": self.score_, "tempering": self.tempering_}
         return write_parameters(path, self.params_, self.rmse_, self.sensors,
                                 self.n_evaluations_, settings, self.history_,
-                                self.priors, self.posterior_)
+                                self.priors, self.posterior_, self.sensor_offsets_)
 
 
 def apply_tempering(problem: CalibrationProblem, tempering: float | str) -> float:
@@ -367,10 +369,11 @@ def write_parameters(path: str | Path, params: ModelParameters, rmse: float,
                      sensors: Sequence[str], evaluations: int, settings: dict[str, object],
                      history: pd.DataFrame,
                      priors: Mapping[str, ParameterPrior] | None = None,
-                     posterior: Posterior | None = None) -> tuple[Path, Path]:
+                     posterior: Posterior | None = None,
+                     sensor_offsets: Mapping[str, float] | None = None) -> tuple[Path, Path]:
     """Parameters JSON (``ModelParameters.from_json`` reads it; schema version
-    :data:`PARAMETERS_SCHEMA_VERSION`, with the priors and the posterior intervals when given)
-    + ``<stem>.history.csv``."""
+    :data:`PARAMETERS_SCHEMA_VERSION`, with the priors, the posterior intervals and the sensor
+    offsets (measured − model, SI) when given) + ``<stem>.history.csv``."""
     path = Path(path)
     document: dict[str, object] = {
         "schema_version": PARAMETERS_SCHEMA_VERSION,
@@ -383,6 +386,8 @@ def write_parameters(path: str | Path, params: ModelParameters, rmse: float,
         document["priors"] = {name: asdict(prior) for name, prior in priors.items()}
     if posterior is not None:
         document["posterior"] = posterior.to_dict()
+    if sensor_offsets:
+        document["sensor_offsets"] = dict(sensor_offsets)
     path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
     history_path = path.with_name(f"{path.stem}.history.csv")
     history.to_csv(history_path)

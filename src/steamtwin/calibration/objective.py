@@ -355,6 +355,18 @@ class Objective:
         sums = self._bias_sums(self._residuals(params))
         return {g: -b / (a + inverse) for g, (a, b, inverse) in sums.items()}
 
+    def sensor_offsets(self, params: ModelParameters) -> dict[str, float]:
+        """Each biased sensor's offset (measured − model, SI) pooled over every instrument
+        group — the posterior mean of one constant bias per sensor given ``params``, as if all
+        files came from the same instruments (one plant): what validate and predict add to
+        the model's readings. Empty without bias terms."""
+        sums = list(self._bias_sums(self._residuals(params)).values())
+        a = sum(part[0] for part in sums)
+        b = sum(part[1] for part in sums)
+        inverse = np.mean([part[2] for part in sums], axis=0)
+        return {name: float(-b[j] / (a[j] + inverse[j])) for j, name in enumerate(self.sensors)
+                if np.isfinite(inverse[j])}
+
     def standardised_residuals(self, params: ModelParameters) -> np.ndarray:
         """Residuals whose sum of squares is χ² (module docstring): every valid sample's
         √(w_s ω)·(T_sim − T_meas − b)/σ_s with b the bias estimate of its sensor, then each bias

@@ -86,7 +86,9 @@ class SurrogateCalibrator:
 
     Same objective (``priors``, ``sigma``, ``sensor_bias``, ``tempering``, window sets), bounds
     and evaluators as :class:`~steamtwin.calibration.Calibrator`. After :meth:`fit`:
-    ``params_``, ``rmse_`` (K, model-evaluated), ``score_``, ``posterior_``, ``tempering_``,
+    ``params_``, ``rmse_`` (K, model-evaluated), ``score_``, ``posterior_``,
+    ``sensor_offsets_`` (as :class:`~steamtwin.calibration.calibrator.Calibrator`'s),
+    ``tempering_``,
     ``n_evaluations_`` (model runs),
     ``history_`` (per round: model runs so far, best RMSE and fitness, the surrogate's own
     prediction at its optimum, best parameters), ``samples_`` (every model-evaluated point and
@@ -215,6 +217,7 @@ class SurrogateCalibrator:
         self.params_ = problem.parameters(best_x)
         self.rmse_, self.score_ = result.rmse, result.value
         self.posterior_ = posterior_at(problem, self.params_, result)
+        self.sensor_offsets_ = problem.objective.sensor_offsets(self.params_)
         self.n_evaluations_ = problem.n_evaluations
         self.n_penalised_ = problem.n_penalised
         self.history_ = pd.DataFrame(rows).set_index("round") if rows else pd.DataFrame()
@@ -251,7 +254,7 @@ class SurrogateCalibrator:
                     "tempering": self.tempering_}
         return write_parameters(path, self.params_, self.rmse_, self.sensors,
                                 self.n_evaluations_, settings, self.history_, self.priors,
-                                self.posterior_)
+                                self.posterior_, self.sensor_offsets_)
 
 
 def _fit_surrogate(points: np.ndarray, values: np.ndarray) -> RBFInterpolator:

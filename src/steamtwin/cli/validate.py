@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import time
 import warnings
 from pathlib import Path
@@ -18,7 +19,11 @@ from steamtwin.dcs.readers import HistorianFormatError
 from steamtwin.dcs.tagmap import TagMap, TagMapError, load_tag_map
 from steamtwin.dcs.windows import find_steady_windows, parse_window, select_window
 from steamtwin.model.fom import FullOrderModel
-from steamtwin.model.parameters import ModelParameters, ParameterError
+from steamtwin.model.parameters import (
+    ModelParameters,
+    ParameterError,
+    sensor_offsets_from_json,
+)
 from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.rom.estimator import ExtrapolationWarning
@@ -51,7 +56,13 @@ def validate(
         "FOM). Default: the spec the ROM was built from; one that differs is refused."),
     params: Path | None = typer.Option(
         None, help="Parameter JSON, checked to hold the parameters the ROM was built with "
-        "(refused if they differ); the twin always runs with the ROM's own."),
+        "(refused if they differ); the twin always runs with the ROM's own. Its sensor "
+        "offsets (a calibration with --sensor-bias writes them) are added to what the "
+        "monitoring model's sensors read, unless --no-sensor-offsets."),
+    sensor_offsets: bool = typer.Option(
+        True, "--sensor-offsets/--no-sensor-offsets", help="With --params and --monitor fom: "
+        "read the model through the sensors' offsets the calibration estimated (the same "
+        "plant's instruments; leave them out after the thermocouples were recalibrated)."),
     monitor: str = typer.Option(
         "fom", help="What monitors the steam-path temperatures: 'fom' (the full-order model of "
         "--turbine with the ROM's parameters; metal dynamics included) or 'rom' (the ROM's "
@@ -95,9 +106,12 @@ def validate(
         bundle = load_rom(rom)
         spec = resolve_spec(bundle, None if turbine is None else load_spec(turbine),
                             f"--turbine {turbine}", rom)
+        offsets: dict[str, float] = {}
         if params is not None:
             check_parameters(bundle, ModelParameters.from_json(params), f"--params {params}",
                              rom)
+            if sensor_offsets and monitor == "fom":
+                offsets = sensor_offsets_from_json(params)
         timings["load ROM and turbine"] = time.perf_counter() - clock
         clock = time.perf_counter()
         tag_map = load_tag_map(tags)
@@ -126,6 +140,9 @@ def validate(
                 f"steady load (± {STEADY_TOLERANCE:.0%} of rated {rated_mw:g} MW) over "
                 f"≥ {hours:g} h, the last {hours:g} h of each span"),
             "samples read": len(signals),
+            "sensor offsets (measured − model)": ", ".join(
+                f"{name} {value:+.2f} K" for name, value in offsets.items())
+            or "none (--params without sensor_offsets, or not given)",
         }
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ExtrapolationWarning)
@@ -133,7 +150,8 @@ def validate(
                 result = run_validation(bundle, windows, report, settings=settings,
                                         timings=timings, field_check=reference,
                                         simulator=_monitoring_model(spec, monitor,
-                                                                    sensor_lag, tag_map),
+                                                                    sensor_lag, tag_map,
+                                                                    offsets),
                                         time_zone=tag_map.time_zone,
                                         extra_sections=[quality_section(
                                             quality, "Data quality of the export (whole "
@@ -161,16 +179,17 @@ def validate(
                f"{len(result.tables)} CSV tables, figures)")
 
 
-def _monitoring_model(spec: TurbineSpec, monitor: str, sensor_lag: bool, tag_map: TagMap
-                      ) -> FullOrderModel | None:
+def _monitoring_model(spec: TurbineSpec, monitor: str, sensor_lag: bool, tag_map: TagMap,
+                      offsets: dict[str, float]) -> FullOrderModel | None:
     """The FOM that monitors the steam path (None: the ROM does), read through the plant's
     sensors as every mode reads it (:func:`~steamtwin.model.sensor_setup.sensor_setup`: the
-    tag map's time constants and thermocouple depth, typical thermowells' otherwise)."""
+    tag map's time constants and thermocouple depth, typical thermowells' otherwise) and the
+    calibration's sensor ``offsets`` (K)."""
     if monitor != "fom":
         return None
-    setup = sensor_setup(spec, tag_map)
+    setup = dataclasses.replace(sensor_setup(spec, tag_map), offsets=offsets)
     if not sensor_lag:
-        return FullOrderModel(setup.spec_for(spec))
+        return FullOrderModel(setup.spec_for(spec), sensor_offsets=offsets or None)
     return setup.model(spec)
 
 

@@ -141,7 +141,9 @@ class FullOrderModel:
     ``sensor_time_constants`` (output → τ in s, e.g.
     :data:`~steamtwin.model.measurement.TYPICAL_TIME_CONSTANTS_S`): those outputs become what
     their thermocouples read, a first-order lag of the computed temperature (``measurement``);
-    the diagnostics keep the computed values. Default: no lag.
+    the diagnostics keep the computed values. Default: no lag. ``sensor_offsets`` (output →
+    K, measured − model, e.g. a calibration's thermocouple-bias estimates): added to what those
+    sensors read. Default: none.
     """
 
     input_signals = INPUT_SIGNALS
@@ -149,11 +151,13 @@ class FullOrderModel:
     def __init__(self, spec: TurbineSpec, *,
                  pressure_tolerance: float = kernel.PRESSURE_TOLERANCE,
                  enthalpy_tolerance: float = kernel.ENTHALPY_TOLERANCE,
-                 sensor_time_constants: Mapping[str, float] | None = None) -> None:
+                 sensor_time_constants: Mapping[str, float] | None = None,
+                 sensor_offsets: Mapping[str, float] | None = None) -> None:
         self.spec = spec
         self.pressure_tolerance = pressure_tolerance
         self.enthalpy_tolerance = enthalpy_tolerance
         self.sensor_time_constants = sensor_time_constants
+        self.sensor_offsets = sensor_offsets
 
     @property
     def output_signals(self) -> tuple[str, ...]:
@@ -355,10 +359,17 @@ class FullOrderModel:
                   ) -> np.ndarray:
         """Columns of the kernel's ``results`` for ``signals``, lagged where a sensor lags."""
         lags = check_time_constants(self.sensor_time_constants, self.output_signals)
+        offsets = dict(self.sensor_offsets or {})
+        unknown = sorted(set(offsets) - set(self.output_signals))
+        if unknown:
+            raise ValueError(f"sensor_offsets for {unknown}, which the model does not predict "
+                             f"(it predicts {list(self.output_signals)})")
         readings = np.empty((results.shape[0], len(signals)))
         for j, name in enumerate(signals):
             values = results[:, kernel.RESULT_COLUMNS.index(name)]
             readings[:, j] = lag(values, time_step, lags[name]) if name in lags else values
+            if name in offsets:
+                readings[:, j] += offsets[name]
         return readings
 
     def _solve(self, constants: kernel.KernelConstants, checked: CheckedInputs,

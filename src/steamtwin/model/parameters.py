@@ -56,8 +56,13 @@ PARAMETER_BOUNDS: dict[str, tuple[float, float]] = {
 }
 #: Informational keys a parameter file may carry next to the coefficients (what the package's
 #: writers add); their content is not read here — the bounds applied are always
-#: PARAMETER_BOUNDS; ``priors`` is read by :func:`priors_from_dict` when a calibration asks.
-METADATA_KEYS = frozenset({"bounds", "calibration", "priors", "posterior"})
+#: PARAMETER_BOUNDS; ``priors`` is read by :func:`priors_from_dict` when a calibration asks,
+#: ``sensor_offsets`` by :func:`sensor_offsets_from_json` when validate or predict asks.
+METADATA_KEYS = frozenset({"bounds", "calibration", "priors", "posterior", "sensor_offsets"})
+
+#: Largest sensor offset a parameter file may state, K: three times the IEC 60584-1 class-2
+#: thermocouple tolerance at 600 °C (±4.5 K); beyond it the sensor is faulty, not offset.
+MAX_SENSOR_OFFSET_K = 13.5
 
 PARAMETERS_SCHEMA_VERSION = 2
 """Version of the parameter-file format: 1 = coefficients (+ bounds, calibration); 2 adds
@@ -299,3 +304,25 @@ class ModelParameters:
             "bounds": {name: list(bounds) for name, bounds in PARAMETER_BOUNDS.items()},
         }
         Path(path).write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
+
+
+def sensor_offsets_from_json(path: str | Path) -> dict[str, float]:
+    """The ``sensor_offsets`` section of a parameter file (signal → measured − model, K, as a
+    joint calibration with sensor biases estimated them; empty when the file has none).
+    ParameterError naming the file and key for a value that is not a finite number within
+    ±:data:`MAX_SENSOR_OFFSET_K`."""
+    text = read_utf8_text(path, "parameter file", "JSON", ParameterError)
+    try:
+        document = json.loads(text, object_pairs_hook=_reject_duplicate_keys)
+    except (ValueError, RecursionError) as error:
+        raise ParameterError(f"{path}: not valid JSON: {error}") from None
+    ModelParameters.from_dict(document, str(path))
+    offsets = document.get("sensor_offsets", {})
+    result = {}
+    for name, value in offsets.items():
+        if (isinstance(value, bool) or not isinstance(value, int | float)
+                or not abs(value) <= MAX_SENSOR_OFFSET_K):
+            raise ParameterError(f"{path}: sensor_offsets.{name} = {value!r}: expected a "
+                                 f"number of K within ±{MAX_SENSOR_OFFSET_K:g}")
+        result[str(name)] = float(value)
+    return result

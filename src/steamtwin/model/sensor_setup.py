@@ -69,12 +69,16 @@ class TimeConstantEstimate:
 @dataclass(frozen=True)
 class SensorSetup:
     """How the twin reads its temperatures: ``time_constants`` (output → τ, s), each one's
-    ``sources`` entry (text), and the casing thermocouple's depth (m; None: the spec's)."""
+    ``sources`` entry (text), the casing thermocouple's depth (m; None: the spec's) and
+    ``offsets`` (output → measured − model, K: a calibration's estimate of each sensor's
+    calibration error, for validate and predict; never for a calibration, which estimates
+    them)."""
 
     time_constants: dict[str, float]
     sources: dict[str, str]
     casing_thermocouple_depth: float | None = None
     depth_source: str = "the spec's metal.casing_thermocouple_depth"
+    offsets: dict[str, float] = dataclasses.field(default_factory=dict)
 
     def spec_for(self, spec: TurbineSpec) -> TurbineSpec:
         """``spec`` with the casing thermocouple at this setup's depth (m)."""
@@ -84,7 +88,8 @@ class SensorSetup:
 
     def model(self, spec: TurbineSpec) -> FullOrderModel:
         """The full-order model of ``spec`` read through these sensors."""
-        return FullOrderModel(self.spec_for(spec), sensor_time_constants=self.time_constants)
+        return FullOrderModel(self.spec_for(spec), sensor_time_constants=self.time_constants,
+                              sensor_offsets=self.offsets or None)
 
     def describe(self) -> list[str]:
         """One line per sensor: its τ or depth and where it comes from."""
@@ -93,6 +98,8 @@ class SensorSetup:
         if self.casing_thermocouple_depth is not None:
             lines.append(f"{METAL_THERMOCOUPLE}: depth {self.casing_thermocouple_depth * 1e3:g} mm"
                          f" ({self.depth_source})")
+        lines += [f"{name}: offset {value:+.2f} K (the calibration's estimate of its bias)"
+                  for name, value in self.offsets.items()]
         return lines
 
 
