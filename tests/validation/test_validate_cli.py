@@ -314,3 +314,28 @@ def test_window_names_and_figure_labels_are_in_the_datas_zone():
               pd.DataFrame({"load": 300e6}, index=index + pd.Timedelta(days=1))]
     assert list(_named(frames, 600e6)) == ["50 % load, 2026-03-01 08:00",
                                            "50 % load, 2026-03-02 08:00"]
+
+
+def test_the_calibrations_sensor_offsets_move_the_deviation_by_themselves(
+        tmp_path, rom_file, measured):
+    """--params with sensor_offsets (what calibrate --sensor-bias writes): the FOM reads each
+    sensor through its offset, so Table 8's mean deviation of that sensor moves by exactly the
+    offset and nothing else changes; --no-sensor-offsets gives the run without them."""
+    data, tags = _write(measured, plant_tag_map("wide"), tmp_path / "data", "parquet")
+    window = ("--window", "2026-03-01T00:30:00Z/2026-03-01T00:40:00Z")
+    own = load_rom(rom_file).provenance["model_parameters"]
+    params = tmp_path / "params.json"
+    params.write_text(json.dumps({"parameters": own,
+                                  "sensor_offsets": {"hp_exhaust_temperature": 1.5}}))
+    tables = {}
+    for name, extra in (("plain", ()), ("offset", ("--params", str(params))),
+                        ("off", ("--params", str(params), "--no-sensor-offsets"))):
+        result = _run(rom_file, data, tags, tmp_path / name, *window, *extra)
+        assert result.exit_code == 0, result.output
+        tables[name] = pd.read_csv(tmp_path / name / "table8_deviation.csv").set_index("signal")
+    shift = tables["offset"]["mean_deviation"] - tables["plain"]["mean_deviation"]
+    assert abs(shift["hp_exhaust_temperature"]) == pytest.approx(1.5, abs=1e-6)
+    assert shift.drop("hp_exhaust_temperature").abs().max() < 1e-9
+    pd.testing.assert_frame_equal(tables["off"], tables["plain"])
+    settings = _report(tmp_path / "offset")["settings"]
+    assert "+1.50 K" in settings["sensor offsets (measured − model)"]
