@@ -13,6 +13,7 @@ from steamtwin.calibration.windowset import (
     find_calibration_windows,
     joint_window_set,
     measurement_sigma,
+    split_at_input_dropouts,
 )
 
 RATED = 600.0e6  # W
@@ -78,3 +79,24 @@ def test_measurement_sigma_adds_quantisation():
     sigma = measurement_sigma({"a": 0.3, "b": None, "c": None}, {"a": 0.4, "b": 1.2, "c": None})
     assert sigma["a"] == pytest.approx(np.sqrt(0.09 + 0.16 / 12))
     assert sigma["b"] == pytest.approx(1.2 / np.sqrt(12)) and "c" not in sigma
+
+
+def test_windows_are_cut_around_input_dropouts_the_calibration_cannot_fill():
+    """A 5-min main-steam-pressure dropout (an instrument fault the quality gate made NaN)
+    inside a 2-h hold: the hold comes as two windows around it, neither holding a gap longer
+    than the 60 s a calibration fills forward; a 30-s dropout stays inside (filled, counted)."""
+    index = pd.date_range("2026-05-01T00:00+08:00", periods=3 * 3600, freq="1s")
+    data = pd.DataFrame({"load": np.full(index.size, 0.5 * RATED),
+                         "main_steam_pressure": 16.0e6, "main_steam_temperature": 810.0,
+                         "main_steam_flow": 300.0, "hp_exhaust_pressure": 3.5e6}, index=index)
+    data.iloc[7000:7300, data.columns.get_loc("main_steam_pressure")] = np.nan
+    data.iloc[9000:9030, data.columns.get_loc("main_steam_flow")] = np.nan
+    windows = find_calibration_windows(data, RATED, source="day.csv")
+    assert [w.kind for w in windows] == ["steady", "steady"]
+    first, second = (w.data for w in windows)
+    assert first.index[-1] == index[6999] and second.index[0] == index[7300]
+    assert second["main_steam_flow"].isna().sum() == 30
+    assert len(first) + len(second) == 7200 - 300
+    short = data.iloc[6990:7400]  # 10 valid rows before the dropout: too short to keep
+    pieces = split_at_input_dropouts(short)
+    assert [len(p) for p in pieces] == [100]

@@ -35,10 +35,21 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from steamtwin.calibration.objective import MAX_INPUT_GAP_S, MIN_WINDOW_SAMPLES
 from steamtwin.dcs.windows import find_steady_windows, select_window
+from steamtwin.model.simulator import INPUT_SIGNALS
 
-__all__ = ["RAMP_BAND", "CalibrationWindow", "WindowSet", "WindowSource",
-           "find_calibration_windows", "given_windows", "joint_window_set", "measurement_sigma"]
+__all__ = [
+    "RAMP_BAND",
+    "CalibrationWindow",
+    "WindowSet",
+    "WindowSource",
+    "find_calibration_windows",
+    "given_windows",
+    "joint_window_set",
+    "measurement_sigma",
+    "split_at_input_dropouts",
+]
 
 RAMP_BAND = "ramps"
 """Band label of every ramp window."""
@@ -162,7 +173,8 @@ def find_calibration_windows(
         start = max(pd.Timestamp(span.start),
                     pd.Timestamp(span.end) - pd.Timedelta(seconds=max_steady_s))
         frame = select_window(data, start, span.end)
-        result.append(CalibrationWindow(frame, "steady", span.mean_load_fraction, source, sigma))
+        result.extend(CalibrationWindow(piece, "steady", span.mean_load_fraction, source, sigma)
+                      for piece in split_at_input_dropouts(frame))
     edges = [data.index[0], *[t for s in steady for t in (pd.Timestamp(s.start),
                                                           pd.Timestamp(s.end))], None]
     for gap_start, gap_end in zip(edges[0::2], edges[1::2], strict=True):
@@ -174,10 +186,41 @@ def find_calibration_windows(
             continue
         start = max(gap.index[0] - pd.Timedelta(seconds=ramp_before_s), data.index[0])
         end = min(gap.index[-1] + pd.Timedelta(seconds=ramp_after_s), data.index[-1])
-        frame = data.loc[start:end]
-        result.append(CalibrationWindow(frame, "ramp", _load_fraction(frame, rated_load_w),
-                                        source, sigma))
+        result.extend(CalibrationWindow(piece, "ramp", _load_fraction(piece, rated_load_w),
+                                        source, sigma)
+                      for piece in split_at_input_dropouts(data.loc[start:end]))
     return sorted(result, key=lambda w: w.data.index[0])
+
+
+def split_at_input_dropouts(frame: pd.DataFrame, max_gap_s: float = MAX_INPUT_GAP_S,
+                            min_samples: int = MIN_WINDOW_SAMPLES) -> list[pd.DataFrame]:
+    """``frame`` cut around every stretch in which a model input (the quality gate's NaN) is
+    missing for longer than ``max_gap_s`` (s) — what a calibration cannot fill forward
+    (:data:`~steamtwin.calibration.objective.MAX_INPUT_GAP_S`) — keeping the pieces of at
+    least ``min_samples`` rows (a calibration window's least); shorter dropouts stay for the
+    calibration to fill and count. A frame without such a dropout comes back whole."""
+    inputs = [name for name in INPUT_SIGNALS if name in frame.columns]
+    if frame.empty or not inputs:
+        return [frame]
+    missing = frame[inputs].isna().any(axis=1).to_numpy()
+    seconds = (frame.index - frame.index[0]) / pd.Timedelta(seconds=1)
+    seconds = np.asarray(seconds, dtype=float)
+    cut = np.zeros(len(frame), dtype=bool)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], missing.astype(np.int8), [0]])))
+    for first, stop in zip(edges[0::2], edges[1::2], strict=True):
+        # as the calibration measures a dropout: its last row against the last valid one
+        # (leading missing rows the calibration drops itself, and counts)
+        if first > 0 and seconds[stop - 1] - seconds[first - 1] > max_gap_s:
+            cut[first:stop] = True
+    if not cut.any():
+        return [frame]
+    pieces = []
+    labels = np.cumsum(np.diff(np.concatenate([[True], cut])) != 0)
+    for label in np.unique(labels[~cut]):
+        piece = frame.iloc[np.flatnonzero((labels == label) & ~cut)]
+        if len(piece) >= min_samples:
+            pieces.append(piece)
+    return pieces
 
 
 def measurement_sigma(noise: Mapping[str, float | None], resolution: Mapping[str, float | None]
