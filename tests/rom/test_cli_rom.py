@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import meshio
+import numpy as np
 import pandas as pd
 import pytest
 from typer.testing import CliRunner
@@ -54,6 +56,32 @@ def test_build_info_predict(tmp_path, plant_files, reference_model):
     assert table.loc[valid, "blade_leading_edge [degC]"].between(400, 560).all()
     files = sorted((tmp_path / "vtu").glob("*.vtu"))
     assert files and "temperature_K" in meshio.read(files[0]).point_data
+
+    # issue 18, item 3: the sensors are read as calibrate and validate read them — the tag
+    # map's thermocouple lags and the calibration's sensor offsets; --steady-values without
+    params = tmp_path / "params.json"
+    params.write_text(json.dumps({"flow_coefficient": 1.0, "friction_coefficient": 1.0,
+                                  "heat_transfer_coefficient": 1.0,
+                                  "sensor_offsets": {"hp_exhaust_temperature": 1.5}}))
+    steady_out, offset_out = tmp_path / "steady.csv", tmp_path / "offset.csv"
+    common = ["predict", "--rom", str(rom_path), "--data", str(paths["historian"]),
+              "--tags", str(paths["tag_map"])]
+    steady = runner.invoke(rom_app, [*common, "--out", str(steady_out), "--steady-values"])
+    offset = runner.invoke(rom_app, [*common, "--out", str(offset_out), "--params",
+                                     str(params)])
+    assert steady.exit_code == 0 and offset.exit_code == 0, steady.output + offset.output
+    assert "offset +1.50 K" in offset.output
+    steady_table = pd.read_csv(steady_out, index_col="time")
+    offset_table = pd.read_csv(offset_out, index_col="time")
+    exhaust = "hp_exhaust_temperature [degC]"
+    ok = ~steady_table["rom_invalid_input"]
+    difference = (offset_table.loc[ok, exhaust] - table.loc[ok, exhaust]).to_numpy()
+    assert np.allclose(difference, 1.5, atol=1e-9)  # same lag, plus the offset
+    lagged = table.loc[ok, exhaust] - steady_table.loc[ok, exhaust]
+    assert lagged.abs().max() > 1e-3  # the thermocouple's lag is applied by default
+    pressure = "control_stage_pressure [MPa]"
+    assert np.array_equal(table[pressure].to_numpy(), steady_table[pressure].to_numpy(),
+                          equal_nan=True)
 
     # issue 16, finding 3: the tag map's valid range applies to predict (the quality gate)
     measured = run.measured["main_steam_temperature"] - 273.15

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import warnings
 from pathlib import Path
@@ -18,7 +19,8 @@ from steamtwin.dcs.history import OVERRIDE_OPTION, DataQualityError, load_histor
 from steamtwin.dcs.readers import HistorianFormatError
 from steamtwin.dcs.tagmap import TagMapError
 from steamtwin.model.fom import InputError
-from steamtwin.model.parameters import ModelParameters, ParameterError
+from steamtwin.model.parameters import ModelParameters, ParameterError, sensor_offsets_from_json
+from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.rom.estimator import ExtrapolationWarning
 from steamtwin.rom.provenance import check_parameters, resolve_spec
 from steamtwin.rom.reconstruction import (
@@ -181,6 +183,11 @@ def predict(
     accept_quality_errors: bool = typer.Option(
         False, OVERRIDE_OPTION, help="Go on despite error-level data-quality findings; the "
         "bad samples stay excluded."),
+    readings: bool = typer.Option(
+        True, "--readings/--steady-values", help="Write the temperature sensors as the DCS "
+        "reads them (each thermocouple's lag from the tag map, else typical, and with "
+        "--params the sensor offsets the calibration estimated) or the ROM's steady "
+        "steam and metal values."),
 ) -> None:
     """Predict steam-path sensors and blade temperatures for every sample of DCS data.
 
@@ -192,11 +199,14 @@ def predict(
     snapshots), are flagged (rom_invalid_input, rom_out_of_domain) and left empty; samples
     outside the snapshots' range but within the limit are flagged (rom_extrapolated) with
     their distance. A --turbine or --params other than those the ROM was built from is
-    refused (exit 2).
+    refused (exit 2). The temperature sensors are written as the DCS reads them, through
+    the same sensor models calibrate and validate use: each thermocouple's first-order lag
+    (tag map time constant, else typical) and, when --params holds a joint calibration's
+    sensor_offsets, that offset (--steady-values: the ROM's values as they are).
 
     Example: steamtwin rom predict --rom rom.npz --data plant-data/historian.parquet --tags plant-data/tags.toml --out monitored.csv --fields-every 600 --vtu-dir fields
     """  # noqa: E501
-    from steamtwin.rom.reconstruction import predict_series, write_vtu
+    from steamtwin.rom.reconstruction import predict_series, read_through, write_vtu
 
     if (fields_every is None) != (vtu_dir is None):
         typer.echo("error: --fields-every and --vtu-dir go together", err=True)
@@ -206,17 +216,22 @@ def predict(
         if vtu_dir is not None:
             prepare_output_folder(vtu_dir, "--vtu-dir")
         bundle = load_rom(rom)
-        if turbine is not None:
-            resolve_spec(bundle, load_spec(turbine), f"--turbine {turbine}", rom)
+        spec = resolve_spec(bundle, None if turbine is None else load_spec(turbine),
+                            f"--turbine {turbine}", rom)
+        offsets: dict[str, float] = {}
         if params is not None:
             check_parameters(bundle, ModelParameters.from_json(params), f"--params {params}",
                              rom)
+            offsets = sensor_offsets_from_json(params)
         history = load_history(data, tags, required=[str(n) for n in bundle.rom.input_names_],
                                accept_errors=accept_quality_errors)
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", ExtrapolationWarning)
             result = predict_series(bundle, history.data, fields_every=fields_every,
                                     max_extrapolation=max_extrapolation)
+        setup = dataclasses.replace(sensor_setup(spec, history.historian.tag_map),
+                                    offsets=offsets)
+        table = read_through(result.sensors, setup) if readings else result.sensors
     except DataQualityError as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=1) from None
@@ -231,7 +246,8 @@ def predict(
                    + "); 'steamtwin dcs check' lists why", err=True)
     for warning in caught:
         typer.echo(f"warning: {warning.message}", err=True)
-    table = result.sensors
+    if readings:
+        typer.echo("sensors as read: " + "; ".join(setup.describe()), err=True)
     wire = pd.DataFrame(index=table.index)
     for name in table.columns:
         if name in (FLAG_INVALID, FLAG_OUT_OF_DOMAIN, FLAG_EXTRAPOLATED, DISTANCE):

@@ -12,6 +12,13 @@ outside the snapshots (:meth:`PodRbfRom.extrapolation_distance`, in units of eac
 snapshot span). Those samples are also flagged ``rom_out_of_domain``; samples outside the
 snapshots' range but within the limit are predicted, flagged ``rom_extrapolated`` with their
 distance, and one :class:`ExtrapolationWarning` sums them up.
+
+The ROM is quasi-steady: its steam-path sensors are the steam's (or metal's) steady values.
+:func:`read_through` gives what the DCS reads of them — each thermocouple's first-order lag
+(:func:`steamtwin.model.measurement.lag`, the discretisation the full-order model's readings
+use) and the offset a joint calibration estimated for it — from the same
+:class:`~steamtwin.model.sensor_setup.SensorSetup` that calibrate and validate use (issue 18,
+item 3). A run of invalid samples interrupts a reading: the sensor restarts steady after it.
 """
 
 from __future__ import annotations
@@ -26,6 +33,8 @@ import numpy as np
 import pandas as pd
 
 from steamtwin.blade.mesh import SolidMesh
+from steamtwin.model.measurement import check_time_constants, lag
+from steamtwin.model.sensor_setup import SensorSetup
 from steamtwin.rom.estimator import ExtrapolationWarning
 from steamtwin.rom.romfile import BladeRom
 from steamtwin.steam.tables import lower_boundary_temperature
@@ -125,6 +134,47 @@ def predict_series(bundle: BladeRom, signals: pd.DataFrame, fields_every: int | 
             if progress is not None:
                 progress((k + 1) / chosen.size)
     return SeriesPrediction(table, fields)
+
+
+def read_through(sensors: pd.DataFrame, setup: SensorSetup) -> pd.DataFrame:
+    """``sensors`` (a :attr:`SeriesPrediction.sensors` table, SI, on a time index) as the DCS
+    reads them: each column in ``setup.time_constants`` (τ in s) lagged over every run of
+    finite values, from a steady start at the run's first sample, then ``setup.offsets`` (K)
+    added. Columns not named in ``setup`` (pressures, power, blade probes, flags) are left as
+    they are. ValueError for a time constant or offset of a signal the table does not hold,
+    or for a table whose index is not increasing time."""
+    names = tuple(str(name) for name in sensors.columns)
+    lags = check_time_constants(
+        {name: tau for name, tau in setup.time_constants.items() if name in names}, names)
+    unknown = sorted(set(setup.offsets) - set(names))
+    if unknown:
+        raise ValueError(f"sensor offsets for {unknown}, which the ROM does not predict (it "
+                         f"predicts {list(names)})")
+    if not lags and not setup.offsets:
+        return sensors.copy()
+    if not isinstance(sensors.index, pd.DatetimeIndex) or not (
+            sensors.index.is_monotonic_increasing and sensors.index.is_unique):
+        raise ValueError("the sensors' index must be increasing, unique timestamps to lag "
+                         "the readings")
+    seconds = (sensors.index - sensors.index[0]).total_seconds().to_numpy(dtype=float)
+    steps = np.diff(seconds, prepend=seconds[:1])
+    read = sensors.copy()
+    for name, tau in lags.items():
+        values = sensors[name].to_numpy(dtype=float)
+        reading = np.full_like(values, np.nan)
+        for start, stop in _finite_runs(values):
+            reading[start:stop] = lag(values[start:stop], steps[start:stop], tau)
+        read[name] = reading
+    for name, offset in setup.offsets.items():
+        read[name] = read[name] + float(offset)
+    return read
+
+
+def _finite_runs(values: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of each run of consecutive finite values."""
+    finite = np.concatenate(([False], np.isfinite(values), [False]))
+    edges = np.flatnonzero(np.diff(finite.astype(np.int8)))
+    return list(zip(edges[::2].tolist(), edges[1::2].tolist(), strict=True))
 
 
 def _physical(names: tuple[str, ...], inputs: np.ndarray) -> np.ndarray:
