@@ -280,6 +280,18 @@ def test_library_validate_without_exhaust_and_with_extra_sections(tmp_path, rom_
                                                   "control_stage_pressure"]]}, tmp_path)
     with pytest.raises(ValueError, match="lacks the ROM input"):
         monitor_windows(bundle, {"hold": window.drop(columns="control_stage_pressure")})
+    # issue 18, item 3: ROM monitoring reads its steady values through the sensors
+    from steamtwin.model.sensor_setup import SensorSetup
+    from steamtwin.rom.reconstruction import read_through
+
+    setup = SensorSetup({"hp_exhaust_temperature": 30.0}, {"hp_exhaust_temperature": "test"},
+                        offsets={"control_stage_temperature": 0.75})
+    read = monitor_windows(bundle, {"hold": window}, sensors=setup)["hold"]
+    pd.testing.assert_frame_equal(read, read_through(monitored, setup))
+    assert np.allclose(read["control_stage_temperature"] - monitored["control_stage_temperature"],
+                       0.75, equal_nan=True)
+    with pytest.raises(ValueError, match="reads through its own"):
+        monitor_windows(bundle, {"hold": window}, simulator=object(), sensors=setup)
 
 
 def test_fom_monitoring_takes_the_roms_parameters_and_flags_missing_inputs(

@@ -23,10 +23,16 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from steamtwin.calibration.objective import prepare_window
+from steamtwin.model.sensor_setup import SensorSetup
 from steamtwin.model.simulator import Simulator
 from steamtwin.rom.figure import field_comparison_figure
 from steamtwin.rom.provenance import rom_parameters
-from steamtwin.rom.reconstruction import FLAG_INVALID, predict_field, predict_series
+from steamtwin.rom.reconstruction import (
+    FLAG_INVALID,
+    predict_field,
+    predict_series,
+    read_through,
+)
 from steamtwin.rom.romfile import BladeRom
 from steamtwin.rom.snapshots import SnapshotSet
 from steamtwin.units import convert
@@ -74,7 +80,8 @@ _DEFINITIONS = (
 
 
 def monitor_windows(bundle: BladeRom, windows: Mapping[str, pd.DataFrame],
-                    simulator: Simulator | None = None) -> dict[str, pd.DataFrame]:
+                    simulator: Simulator | None = None,
+                    sensors: SensorSetup | None = None) -> dict[str, pd.DataFrame]:
     """Monitored values (SI) with their flags for every sample of every window.
 
     Each frame is :attr:`SeriesPrediction.sensors` of
@@ -89,22 +96,31 @@ def monitor_windows(bundle: BladeRom, windows: Mapping[str, pd.DataFrame],
     takes the HP-exhaust pressure, which the ROM's steady map from (p0, T0, p1) cannot. Its
     inputs are gap-filled as in calibration (≤ 60 s held, longer gaps raise); rows before the
     first complete input row are flagged ``rom_invalid_input``.
+
+    ``sensors`` (ROM monitoring only; a ``simulator`` reads through its own): the ROM's steady
+    temperatures read as the DCS reads them — each thermocouple's lag and the calibration's
+    offsets (:func:`~steamtwin.rom.reconstruction.read_through`).
     """
+    if simulator is not None and sensors is not None:
+        raise ValueError("sensors apply to ROM monitoring; a simulator reads through its own "
+                         "sensor models")
     params = rom_parameters(bundle) if simulator is not None else None
     monitored = {}
     for name, frame in windows.items():
         missing = [str(s) for s in bundle.rom.input_names_ if s not in frame.columns]
         if missing:
             raise ValueError(f"window {name!r} lacks the ROM input signal(s) {missing}")
-        sensors = predict_series(bundle, frame).sensors
+        predicted = predict_series(bundle, frame).sensors
+        if sensors is not None:
+            predicted = read_through(predicted, sensors)
         if simulator is not None:
             prepared = prepare_window(frame, simulator, (), name=f"window {name!r}",
                                       min_samples=1)
             outputs = simulator.simulate(prepared.inputs, params)
             for column in simulator.output_signals:
-                sensors[column] = outputs[column].reindex(sensors.index)
-            sensors[FLAG_INVALID] |= ~sensors.index.isin(outputs.index)
-        monitored[name] = sensors
+                predicted[column] = outputs[column].reindex(predicted.index)
+            predicted[FLAG_INVALID] |= ~predicted.index.isin(outputs.index)
+        monitored[name] = predicted
     return monitored
 
 
@@ -116,6 +132,7 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
              field_check: SnapshotSet | None = None,
              extra_sections: Sequence[Section] = (),
              simulator: Simulator | None = None,
+             sensors: SensorSetup | None = None,
              time_zone: str | None = None) -> ValidationReport:
     """Compare the ROM with measured windows and write the report into ``out_dir``.
 
@@ -124,6 +141,7 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
     caller head the report; ``field_check`` (FOM fields, e.g. from
     :func:`~steamtwin.rom.snapshots.generate_snapshots` on the ROM's mesh) adds Figure 9 per
     field with a table of its errors; ``extra_sections`` follow the validation's own.
+    ``simulator`` / ``sensors``: see :func:`monitor_windows`.
     ``time_zone`` (IANA name, e.g. "Asia/Shanghai"; the tag map's ``historian.time_zone``):
     the zone the report's times are given in (default: the windows' own).
     Writes ``report.html``, ``report.json``, the CSV tables, the per-sample series
@@ -140,7 +158,7 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
     out_dir.mkdir(parents=True, exist_ok=True)
     stages = dict(timings or {})
     clock = time.perf_counter()
-    monitored = monitor_windows(bundle, windows, simulator)
+    monitored = monitor_windows(bundle, windows, simulator, sensors)
     stages["ROM prediction over the windows"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
