@@ -14,6 +14,8 @@ from functools import lru_cache
 import numpy as np
 import pint
 
+from steamtwin.errors import DataError
+
 # pint's expression parser lets these through on malformed unit text, past its own error
 # types: "1 m)" (TokenError), "1 MPa/" (AssertionError), "1 m/0" (ZeroDivisionError),
 # "1 adegC" (OffsetUnitCalculusError, a TypeError), "1 ma^0^2" (KeyError) — found by fuzzing
@@ -32,7 +34,7 @@ def unit_registry() -> pint.UnitRegistry:
     return registry
 
 
-class UnitError(ValueError):
+class UnitError(DataError):
     """A value has no unit, an unknown unit or a unit of the wrong kind."""
 
 

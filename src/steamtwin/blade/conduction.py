@@ -36,6 +36,7 @@ from skfem import Basis, BilinearForm, ElementTetP1
 from skfem.helpers import dot, grad
 
 from steamtwin.blade.mesh import REGIONS, SolidMesh, checked_mesh, to_skfem
+from steamtwin.errors import SteamtwinError
 from steamtwin.spec.turbine import Material
 
 RegionConvection = tuple[np.ndarray | float, np.ndarray | float]
@@ -43,7 +44,7 @@ RegionConvection = tuple[np.ndarray | float, np.ndarray | float]
 Convection = Mapping[str, RegionConvection]
 
 
-class SolverError(RuntimeError):
+class SolverError(SteamtwinError, RuntimeError):
     """The iterative solver did not reach its tolerance."""
 
 

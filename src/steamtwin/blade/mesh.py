@@ -16,12 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 from skfem import MeshTet
 
+from steamtwin.errors import MeshError
+
 REGIONS = ("root", "tip", "pressure_side", "suction_side", "leading_edge", "trailing_edge")
 """Boundary regions of a blade, the order of the geometry package's ``VolumeMesh``."""
 
-
-class MeshError(ValueError):
-    """A volume mesh is malformed (shapes, indices, orientation, regions)."""
 
 
 @dataclass(frozen=True)

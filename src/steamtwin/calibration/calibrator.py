@@ -44,6 +44,7 @@ from steamtwin.calibration.posterior import (
     laplace_posterior,
     likelihood_tempering,
 )
+from steamtwin.errors import CalibrationAreaError
 from steamtwin.model.parameters import (
     DEFAULT_PRIORS,
     PARAMETER_BOUNDS,
@@ -67,7 +68,7 @@ HISTORY_COLUMNS: tuple[str, ...] = (
 otherwise the posterior score (:mod:`~steamtwin.calibration.objective`)."""
 
 
-class CalibrationError(ValueError):
+class CalibrationError(CalibrationAreaError):
     """A calibration that found no usable result (no candidate gave a finite RMSE)."""
 
 

@@ -46,6 +46,7 @@ from pymoo.util.optimum import filter_optimum
 
 from steamtwin.calibration.ga import RemutationRepair
 from steamtwin.calibration.objective import Objective
+from steamtwin.errors import CalibrationAreaError
 
 __all__ = ["CHECKPOINT_FORMAT", "CheckpointError", "CheckpointState", "load_checkpoint",
            "restore_algorithm", "run_fingerprint", "save_checkpoint"]
@@ -60,7 +61,7 @@ _PCG64_STATE_LIMIT = 2**128  # PCG64's state and increment are 128-bit integers
 _UINT32_LIMIT = 2**32
 
 
-class CheckpointError(ValueError):
+class CheckpointError(CalibrationAreaError):
     """A checkpoint file that cannot resume this run; the message names file and field."""
 
 

@@ -11,10 +11,12 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+from steamtwin.errors import SteamtwinError
+
 __all__ = ["OutputPathError", "prepare_output_file", "prepare_output_folder"]
 
 
-class OutputPathError(ValueError):
+class OutputPathError(SteamtwinError, ValueError):
     """An output path cannot be written; the message names the option and the path."""
 
 

@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from steamtwin.dcs.signals import SIGNALS
+from steamtwin.errors import DataError
 from steamtwin.units import convert
 
 # An ISO 8601 time of day followed by its UTC offset: 'Z' or ±hh[[:]mm].
@@ -30,7 +31,7 @@ _FIXED_OFFSET = re.compile(r"([+-])(\d{2}):?(\d{2})")
 _MAX_OFFSET = timedelta(hours=14)  # UTC−12 … UTC+14 are the offsets in civil use (IANA tz)
 
 
-class CsvFormatError(ValueError):
+class CsvFormatError(DataError):
     """A canonical CSV file is malformed; the message names file, column and row."""
 
 

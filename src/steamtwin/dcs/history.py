@@ -27,6 +27,7 @@ import pandas as pd
 from steamtwin.dcs.quality import Flag, QualityReport, clean
 from steamtwin.dcs.readers import HistorianData, read_historian
 from steamtwin.dcs.tagmap import TagMap, load_tag_map
+from steamtwin.errors import DataError
 
 __all__ = ["DataQualityError", "History", "load_history", "quality_options"]
 
@@ -34,7 +35,7 @@ OVERRIDE_OPTION = "--accept-quality-errors"
 """The CLI option that lets a command go on past error-level findings."""
 
 
-class DataQualityError(ValueError):
+class DataQualityError(DataError):
     """The data have error-level quality findings and the caller did not accept them."""
 
     def __init__(self, report: QualityReport) -> None:

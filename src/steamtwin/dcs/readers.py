@@ -57,6 +57,7 @@ import pandas as pd
 
 from steamtwin.dcs.signals import SIGNALS
 from steamtwin.dcs.tagmap import QUALITY_CLASSES, TagMap
+from steamtwin.errors import DataError
 from steamtwin.units import convert
 
 _ISO_EXAMPLE = "ISO 8601, e.g. '2026-03-01 10:00:00' or '2026-03-01T10:00:00+08:00'"
@@ -81,7 +82,7 @@ _COMMA_NUMBER = re.compile(r"[+-]?\d+,\d+(?:[eE][+-]?\d+)?")
 _DOT_NUMBER = re.compile(r"[+-]?\d*\.\d+(?:[eE][+-]?\d+)?")
 
 
-class HistorianFormatError(ValueError):
+class HistorianFormatError(DataError):
     """A historian export is malformed; the message names file, column/tag, row and format."""
 
 

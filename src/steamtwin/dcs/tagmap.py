@@ -67,6 +67,7 @@ from typing import Any
 import pint
 
 from steamtwin.dcs.signals import SIGNALS
+from steamtwin.errors import DataError
 from steamtwin.keys import unknown_key_message
 from steamtwin.textfile import read_utf8_text
 from steamtwin.units import UnitError, convert, parse_quantity, unit_registry
@@ -99,7 +100,7 @@ _INTEGER_TEXT = re.compile(r"[+-]?\d{1,18}(?:\.0*)?")  # integer text (".0" allo
 _OPC_DA_QUALITY_BITS = {0b11: "good", 0b01: "uncertain", 0b00: "bad"}
 
 
-class TagMapError(ValueError):
+class TagMapError(DataError):
     """A tag map is missing a field, has a bad value or is inconsistent (names file and field)."""
 
 

@@ -31,6 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
+from steamtwin.errors import GeometryAreaError
 from steamtwin.geometry.bspline import DEGREE, PeriodicSurface, periodic_knots
 from steamtwin.geometry.segmentation import CapPlane
 
@@ -40,7 +41,7 @@ CAD_SUFFIXES = {".step": "STEP", ".stp": "STEP", ".igs": "IGES", ".iges": "IGES"
 MM_PER_M = 1e3
 
 
-class CadExportError(ValueError):
+class CadExportError(GeometryAreaError):
     """A CAD file that cannot be written; the message names the file and the problem."""
 
 

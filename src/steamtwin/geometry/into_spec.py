@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from steamtwin.errors import GeometryAreaError
 from steamtwin.geometry.fidelity import section_pitch, section_throat, truth_section
 from steamtwin.geometry.profile import HP_ROWS, ROWS, GeometryError, make_blade
 from steamtwin.geometry.uncertainty import CONTROL_STAGE_ROTOR, throat_area
@@ -33,7 +34,7 @@ PLAUSIBLE_RATIO = (0.8, 1.2)
 DESIGN_AREA_TOLERANCE = 0.005
 
 
-class ScanUpdateError(ValueError):
+class ScanUpdateError(GeometryAreaError):
     """A reconstruction report that cannot go into the spec; the message names the file."""
 
 

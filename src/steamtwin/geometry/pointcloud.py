@@ -21,6 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
+from steamtwin.errors import GeometryAreaError
+
 SUFFIXES = (".ply", ".pcd", ".xyz")
 #: Plausible bounding-box diagonal of a scanned turbine part, m (a 1 mm chip to a 10 m casing).
 MIN_EXTENT, MAX_EXTENT = 1e-3, 10.0
@@ -38,7 +40,7 @@ PCD_TYPES = {("F", 4): "f4", ("F", 8): "f8", ("I", 1): "i1", ("I", 2): "i2", ("I
 AXES = ("x", "y", "z")
 
 
-class PointCloudError(ValueError):
+class PointCloudError(GeometryAreaError):
     """An unreadable, short, empty, non-finite, degenerate or implausibly scaled point cloud."""
 
 

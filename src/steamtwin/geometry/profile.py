@@ -27,6 +27,7 @@ import numpy as np
 from scipy.optimize import brentq
 from scipy.spatial import cKDTree
 
+from steamtwin.errors import GeometryAreaError
 from steamtwin.spec import TurbineSpec
 
 #: Profile segments, in the order they are walked (suction side first, clockwise in x-y).
@@ -35,7 +36,7 @@ SEGMENTS = ("suction_cubic", "suction_arc", "trailing_edge", "pressure_side", "l
 SEGMENT_REGION = ("suction_side", "suction_side", "trailing_edge", "pressure_side", "leading_edge")
 
 
-class GeometryError(ValueError):
+class GeometryError(GeometryAreaError):
     """Blade parameters that do not give a valid profile, or an unknown row."""
 
 

@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from steamtwin.errors import GeometryAreaError
 from steamtwin.geometry.pointcloud import PointCloudError, check_point_cloud
 from steamtwin.geometry.volume_mesh import REGIONS
 
@@ -57,7 +58,7 @@ GRAPH_NEIGHBOURS = 8
 SMOOTHING_PASSES = 3
 
 
-class ReconstructionError(ValueError):
+class ReconstructionError(GeometryAreaError):
     """A cloud that cannot be segmented or reconstructed; the message names the problem."""
 
 

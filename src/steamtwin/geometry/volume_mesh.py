@@ -14,13 +14,12 @@ from pathlib import Path
 
 import numpy as np
 
+from steamtwin.errors import MeshError
+
 REGIONS = ("root", "tip", "pressure_side", "suction_side", "leading_edge", "trailing_edge")
 #: Physical-group tags in .msh files: 1-6 for REGIONS (2-D), 7 for the blade volume (3-D).
 VOLUME_TAG = len(REGIONS) + 1
 
-
-class MeshError(ValueError):
-    """An invalid volume mesh or mesh file (the message names the file when there is one)."""
 
 
 @dataclass(frozen=True)

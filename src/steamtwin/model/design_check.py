@@ -16,6 +16,7 @@ from typing import cast
 import numpy as np
 import pandas as pd
 
+from steamtwin.errors import ModelError
 from steamtwin.model.fom import FullOrderModel, InputError
 from steamtwin.model.operating import operating_point
 from steamtwin.model.parameters import ModelParameters
@@ -71,7 +72,7 @@ _DESIGN_FAILURES = (
 )
 
 
-class DesignError(ValueError):
+class DesignError(ModelError):
     """The model cannot run a spec's design point or off-design line; the message says why and
     names the spec fields involved."""
 

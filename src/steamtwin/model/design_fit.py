@@ -28,6 +28,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
+from steamtwin.errors import ModelError
 from steamtwin.model.fom import FullOrderModel, InputError
 from steamtwin.spec import SpecError, TurbineSpec
 from steamtwin.spec.heat_balance import HeatBalance, HeatBalancePoint
@@ -56,7 +57,7 @@ _DIFF_STEP = 1e-4
 _RANK_TOLERANCE = 1e-3
 
 
-class DesignFitError(ValueError):
+class DesignFitError(ModelError):
     """The design fit cannot run: too few or bad heat-balance points, unknown parameters, or
     a point the model cannot solve; the message names the point and field."""
 

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from steamtwin.errors import ModelError
 from steamtwin.model import kernel
 from steamtwin.model.design import (
     EFFICIENCY_SCALE_RANGE,
@@ -73,7 +74,7 @@ _STATUS_TEXT = {
 }
 
 
-class InputError(ValueError):
+class InputError(ModelError):
     """Model inputs are missing, not finite, or outside the model's validity.
 
     When one sample is at fault the error says where, so that a caller can re-word it in its

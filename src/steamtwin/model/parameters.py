@@ -46,6 +46,7 @@ from pathlib import Path
 from statistics import NormalDist
 from typing import Any
 
+from steamtwin.errors import ModelError
 from steamtwin.keys import unknown_key_message
 from steamtwin.textfile import read_utf8_text
 
@@ -73,7 +74,7 @@ PRIOR_DISTRIBUTIONS = ("normal", "lognormal")
 ``lognormal`` (median ``center``, ``spread`` = σ of ln x)."""
 
 
-class ParameterError(ValueError):
+class ParameterError(ModelError):
     """A parameter value is missing, not a number or outside its physical bounds."""
 
 

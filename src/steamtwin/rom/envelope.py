@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from steamtwin.errors import RomError
 from steamtwin.model.design_check import valve_openings
 from steamtwin.model.fom import FullOrderModel, InputError
 from steamtwin.model.operating import hp_exhaust_pressure, operating_point
@@ -78,7 +79,7 @@ ANCHOR_SPAN = 6.3
 STEADY_STEP_S = 1e12  # s between samples of one run: implicit Euler at Δt → ∞ is steady
 
 
-class EnvelopeError(ValueError):
+class EnvelopeError(RomError):
     """The envelope cannot be met by the model at the given parameters; the message names the
     parameter and the plant limit."""
 

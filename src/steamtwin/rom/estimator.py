@@ -25,6 +25,7 @@ from numba import njit
 from scipy.interpolate import RBFInterpolator
 from scipy.spatial import Delaunay, QhullError, cKDTree
 
+from steamtwin.errors import SteamtwinError
 from steamtwin.rom.features import ControlStageFeatures
 from steamtwin.rom.pod import SVD_METHODS, pod
 
@@ -35,7 +36,7 @@ SENSITIVITY_FLOOR = 0.2  # smallest input weight of the "sensitivity" scaling
 DEFAULT_INPUTS = ("main_steam_pressure", "main_steam_temperature", "control_stage_pressure")
 
 
-class NotFittedError(RuntimeError):
+class NotFittedError(SteamtwinError, RuntimeError):
     """The model is used before ``fit``."""
 
 

@@ -20,6 +20,7 @@ import hashlib
 from pathlib import Path
 from typing import Any
 
+from steamtwin.errors import RomError
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.rom.romfile import BladeRom
 from steamtwin.spec import SpecError, TurbineSpec, parse_spec
@@ -29,7 +30,7 @@ __all__ = ["ProvenanceError", "check_parameters", "parameters_source", "resolve_
            "rom_parameters", "spec_provenance"]
 
 
-class ProvenanceError(ValueError):
+class ProvenanceError(RomError):
     """A spec or parameter file differs from the one the ROM was built from, or the ROM does
     not record what a command needs."""
 

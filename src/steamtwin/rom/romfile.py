@@ -29,6 +29,7 @@ import numpy as np
 import pandas as pd
 
 from steamtwin.blade.mesh import REGIONS, MeshError, SolidMesh, checked_mesh
+from steamtwin.errors import RomError
 from steamtwin.rom.estimator import PodRbfRom
 from steamtwin.rom.features import FEATURE_NAMES, feature_table_arrays, features_from_arrays
 
@@ -37,7 +38,7 @@ FORMAT_VERSION = 3  # 2: physics features, input_points, projection_tolerance; 3
 READABLE_VERSIONS = (2, 3)
 
 
-class RomFileError(ValueError):
+class RomFileError(RomError):
     """A ROM file is unreadable, corrupt, of another version or inconsistent."""
 
 

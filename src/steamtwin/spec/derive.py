@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from steamtwin.errors import SpecAreaError
 from steamtwin.spec.heat_balance import HeatBalance, HeatBalancePoint
 from steamtwin.spec.loader import SpecError, parse_spec
 from steamtwin.spec.schema import FIELD_BY_KEY, FORMAT_VERSION, METAL_DEPTH_RANGE_M
@@ -122,7 +123,7 @@ GLAND_SINK_RATIO = 0.9
 _KAPPA = 1.3
 
 
-class DeriveError(ValueError):
+class DeriveError(SpecAreaError):
     """A heat balance from which no valid spec can be derived; the message names the point and
     the field responsible."""
 

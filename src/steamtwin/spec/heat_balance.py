@@ -27,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from steamtwin.errors import SpecAreaError
 from steamtwin.keys import unknown_key_message
 from steamtwin.steam import if97
 from steamtwin.steam.tables import lower_boundary_temperature
@@ -108,7 +109,7 @@ MIN_EXHAUST_FLOW_SHARE = 0.5
 HP_POWER_BAND = (0.85, 1.02)
 
 
-class HeatBalanceError(ValueError):
+class HeatBalanceError(SpecAreaError):
     """A heat-balance file is unreadable, incomplete, out of range or inconsistent."""
 
 

@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from steamtwin.dcs.signals import SIGNALS
+from steamtwin.errors import SpecAreaError
 from steamtwin.keys import unknown_key_message
 from steamtwin.spec.schema import FORMAT_VERSION, METAL_DEPTH_RANGE_M, Field, field_for
 from steamtwin.spec.turbine import (
@@ -105,7 +106,7 @@ OPTIONAL_KEYS = frozenset({"extractions", "part_load", "control_stage.valve_over
                            "metal.groups.rotor_bore_radius", "metal.casing_thermocouple_depth"})
 
 
-class SpecError(ValueError):
+class SpecError(SpecAreaError):
     """A turbine spec is missing a field, has a bad value or is inconsistent."""
 
 

@@ -27,6 +27,8 @@ import numpy as np
 from CoolProp.CoolProp import PropsSI
 from numpy.typing import ArrayLike, NDArray
 
+from steamtwin.errors import ModelError
+
 __all__ = [
     "P_CRIT",
     "P_MAX",
@@ -74,7 +76,7 @@ _RANGE_PT = (
 )
 
 
-class SteamPropertyError(ValueError):
+class SteamPropertyError(ModelError):
     """Invalid input to, or failure of, an IF97 property evaluation.
 
     ``argument`` names the offending argument (or ``None`` if CoolProp rejected a combination of

@@ -29,6 +29,8 @@ from urllib.parse import quote
 import numpy as np
 import pandas as pd
 
+from steamtwin.errors import SteamtwinError
+
 __all__ = ["FigureSection", "FilesSection", "NotesSection", "ReportError", "Section",
            "TableSection", "ValidationReport", "format_value", "package_versions"]
 
@@ -46,7 +48,7 @@ p.meta { color: #666; font-size: 0.85em; }
 """
 
 
-class ReportError(ValueError):
+class ReportError(SteamtwinError, ValueError):
     """A report cannot be written: a section is empty, missing or named twice."""
 
 
