@@ -31,8 +31,8 @@ import math
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 
+from steamtwin.cache import njit
 from steamtwin.model.metal import (
     dittus_boelter_from_logs,
     dittus_boelter_logs,

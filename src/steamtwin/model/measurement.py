@@ -21,7 +21,8 @@ from collections.abc import Mapping
 
 import numpy as np
 import pandas as pd
-from numba import njit
+
+from steamtwin.cache import njit
 
 __all__ = ["TYPICAL_TIME_CONSTANTS_S", "check_time_constants", "lag", "lag_outputs"]
 

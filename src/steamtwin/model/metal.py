@@ -22,7 +22,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+
+from steamtwin.cache import njit
 
 DITTUS_BOELTER_CONSTANT = 0.023
 CORE_SWIRL_RATIO = 0.5

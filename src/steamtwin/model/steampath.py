@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from steamtwin.cache import njit
 
 KAPPA_SUPERHEATED = 1.3  # isentropic exponent of superheated steam for nozzle flow (Dixon & Hall)
 WINDAGE_CONSTANT = 0.15  # B_e, single-row wheel (Kang et al.)

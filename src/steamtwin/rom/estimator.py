@@ -21,10 +21,10 @@ import warnings
 from collections.abc import Sequence
 
 import numpy as np
-from numba import njit
 from scipy.interpolate import RBFInterpolator
 from scipy.spatial import Delaunay, QhullError, cKDTree
 
+from steamtwin.cache import njit
 from steamtwin.errors import SteamtwinError
 from steamtwin.rom.features import ControlStageFeatures
 from steamtwin.rom.pod import SVD_METHODS, pod

@@ -41,8 +41,8 @@ from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
-from numba import njit
 
+from steamtwin.cache import njit
 from steamtwin.model.fom import MINIMUM_FLOW_FRACTION, FullOrderModel, InputError
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.spec import TurbineSpec

@@ -48,11 +48,10 @@ from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicSpline, RectBivariateSpline
 
-from steamtwin.cache import cache_root
+from steamtwin.cache import cache_root, njit
 
 # steamtwin.steam.if97 (and with it CoolProp, whose import takes seconds) is imported lazily:
 # loading the tables from a valid cache file does not need it.
