@@ -197,18 +197,6 @@ def mls_smooth(points: np.ndarray, neighbours: int = 30, max_shift: float = 0.05
     return points + shift[:, None] * normals
 
 
-@dataclass(frozen=True)
-class PairRegistration:
-    """Result of registering view ``source`` onto view ``target``."""
-
-    source: int
-    target: int
-    transformation: np.ndarray  # 4×4, source frame -> target frame
-    fitness: float
-    rmse: float
-    information: np.ndarray
-
-
 def _features(points: np.ndarray, voxel: float, normals: np.ndarray | None = None
               ) -> tuple[object, object]:
     """Voxel-downsampled cloud and its FPFH features (Rusu, Blodow & Beetz 2009).

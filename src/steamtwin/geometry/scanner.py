@@ -198,19 +198,6 @@ def blade_raycasting_scene(blade: Blade) -> object:
     return scene
 
 
-def random_rotation(rng: np.random.Generator) -> np.ndarray:
-    """A uniformly distributed rotation matrix (Shoemake's quaternion method)."""
-    u1, u2, u3 = rng.random(3)
-    q = np.array([math.sqrt(1 - u1) * math.sin(2 * math.pi * u2),
-                  math.sqrt(1 - u1) * math.cos(2 * math.pi * u2),
-                  math.sqrt(u1) * math.sin(2 * math.pi * u3),
-                  math.sqrt(u1) * math.cos(2 * math.pi * u3)])
-    x, y, z, w = q
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
-
-
 def _look_at(camera: np.ndarray, target: np.ndarray, roll: float) -> np.ndarray:
     """Rotation whose columns are the camera axes (x, y, z = viewing direction) in the blade
     frame, rolled by ``roll`` rad about the viewing direction."""
