@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import itertools
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -27,6 +29,30 @@ def test_every_command_has_help_with_an_example(command):
     result = runner.invoke(app, [*command, "--help"])
     assert result.exit_code == 0
     assert "Example: steamtwin" in result.output
+
+
+def _description_lines(output: str) -> list[str]:
+    """The help's prose between the usage line and the first option box."""
+    lines = output.splitlines()
+    start = next(i for i, line in enumerate(lines) if "Usage:" in line) + 1
+    stop = next((i for i, line in enumerate(lines) if line.lstrip().startswith("╭")),
+                len(lines))
+    return [line.strip() for line in lines[start:stop]]
+
+
+@pytest.mark.parametrize("command", [["calibrate"], ["calibrate-online"], ["validate"],
+                                     ["rom", "predict"], ["geometry", "scan"]])
+def test_help_prose_is_wrapped_to_the_terminal_not_the_source(command):
+    """Issue 20, item 6: a docstring hard-wrapped at 100 columns read as broken lines at 80
+    ("… recursive filter (a" / "random-walk state …"): every prose line but a paragraph's last
+    fills the 80-column terminal."""
+    result = runner.invoke(app, [*command, "--help"], env={"COLUMNS": "80"}, terminal_width=80)
+    assert result.exit_code == 0
+    lines = _description_lines(result.output)
+    short = [line for line, following in itertools.pairwise(lines)
+             if line and following and not following.startswith(("-", "*"))
+             and len(line) < 50]
+    assert short == []
 
 
 def test_turbine_show_prints_heat_balance_and_stages():

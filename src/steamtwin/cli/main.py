@@ -8,6 +8,8 @@ command becomes a one-line ``error: ...`` on stderr and an exit code (:data:`EXI
 from __future__ import annotations
 
 import errno
+import inspect
+import re
 from typing import Any
 
 import typer
@@ -108,3 +110,35 @@ app.command()(calibrate)
 app.command("calibrate-online")(calibrate_online)
 app.command()(validate)
 app.command()(demo)
+
+
+_LIST_ITEM = re.compile(r"^\s*(?:[-*•]|\d+[.)])\s")
+
+
+def reflow_help(text: str) -> str:
+    """A command's docstring as one line per paragraph, so that the terminal formatter (rich,
+    through typer) wraps it to the terminal's width instead of keeping the source's 100-column
+    breaks; list items (``-``, ``*``, ``1.``) keep their own lines."""
+    paragraphs = []
+    for paragraph in inspect.cleandoc(text).split("\n\n"):
+        lines = paragraph.splitlines()
+        joined: list[str] = []
+        for line in lines:
+            if joined and not _LIST_ITEM.match(line):
+                joined[-1] = f"{joined[-1]} {line.strip()}"
+            else:
+                joined.append(line.rstrip())
+        paragraphs.append("\n".join(joined))
+    return "\n\n".join(paragraphs)
+
+
+def _reflow_commands(typer_app: typer.Typer) -> None:
+    """Reflow the help of every command of ``typer_app`` and its sub-apps (see reflow_help)."""
+    for command in typer_app.registered_commands:
+        text = command.help or inspect.getdoc(command.callback) or ""
+        command.help = reflow_help(text)
+    for group in typer_app.registered_groups:
+        _reflow_commands(group.typer_instance)
+
+
+_reflow_commands(app)
