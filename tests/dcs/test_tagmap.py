@@ -132,7 +132,7 @@ def test_long_map_parses():
      "(this map has layout = 'wide')"),
     (WIDE.replace('unit = "t/h"', 'unit = "t/h"\ncolum = "x"'),
      "plant.toml: signals.main_steam_flow.colum is not a tag map field (did you mean 'column'?); "
-     "expected one of: column, depth, max_rate, noise, quality_column, range, resolution, "
+     "expected one of: column, depth, max_rate, node_id, noise, quality_column, range, resolution, "
      "time_constant, unit"),
     (WIDE.replace('unit = "t/h"', ""),
      "plant.toml: signals.main_steam_flow.unit is missing"),
@@ -362,3 +362,24 @@ def test_new_keys_round_trip(tmp_path, text):
     for key in ("delimiter", "decimal", "encoding", "quality", "signals"):
         assert getattr(loaded, key) == getattr(original, key), key
     assert "noise = 0.9\n" in path.read_text(encoding="utf-8") or original.layout == "long"
+
+
+def test_opc_ua_node_ids_parse_round_trip_and_are_checked(tmp_path):
+    """The live twin's OPC UA node id per signal (issue 21, item 2)."""
+    text = WIDE.replace('unit = "MPa"', 'unit = "MPa"\nnode_id = "nsu=urn:plant;s=10LBA10CP001"')
+    text = text.replace('unit = "t/h"', 'unit = "t/h"\nnode_id = "ns=3;i=1001"')
+    tag_map = parse_tag_map(text, "plant.toml")
+    assert tag_map.signals["main_steam_pressure"].node_id == "nsu=urn:plant;s=10LBA10CP001"
+    assert tag_map.signals["main_steam_flow"].node_id == "ns=3;i=1001"
+    assert tag_map.signals["main_steam_temperature"].node_id is None
+    path = tmp_path / "saved.toml"
+    write_tag_map(tag_map, path)
+    assert load_tag_map(path).signals == tag_map.signals
+    _fails(WIDE.replace('unit = "MPa"', 'unit = "MPa"\nnode_id = "10LBA10CP001"'),
+           'plant.toml: signals.main_steam_pressure.node_id = \'10LBA10CP001\': expected an '
+           'OPC UA node id such as "ns=2;s=10LBA10CP001", "nsu=urn:plant;s=TAG" or '
+           '"ns=3;i=1001"')
+    twice = WIDE.replace('unit = "MPa"', 'unit = "MPa"\nnode_id = "ns=2;s=X"').replace(
+        'unit = "t/h"', 'unit = "t/h"\nnode_id = "ns=2;s=X"')
+    _fails(twice, "plant.toml: signals.main_steam_flow.node_id = 'ns=2;s=X' is already the "
+                  "node of signals.main_steam_pressure; each OPC UA node maps one signal")

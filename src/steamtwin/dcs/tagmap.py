@@ -32,6 +32,8 @@ map (TOML) translates them to the canonical names of :data:`steamtwin.dcs.signal
     depth = "20 mm"              # hp_inner_casing_temperature only, optional: how deep the
                                  # metal thermocouple sits under the casing bore
     quality_column = "CP001_Q"   # wide layout only, optional: this signal's quality column
+    node_id = "nsu=urn:plant;s=10LBA10CP001"  # optional OPC UA node id of the tag (live twin:
+                                 # the NodeId string form of OPC UA Part 6 §5.3.1.10, ns= or nsu=)
 
 ``noise``, ``resolution`` and ``max_rate`` are differences, so they convert without the unit's
 offset (0.5 degC of noise is 0.5 K; 1 degF is 5/9 K).
@@ -82,7 +84,10 @@ _HISTORIAN_KEYS = (
 _LONG_ONLY = ("tag_column", "value_column", "quality_column")
 _QUALITY_KEYS = (*QUALITY_CLASSES, "exclude")
 _SIGNAL_KEYS = ("column", "unit", "range", "noise", "resolution", "max_rate", "time_constant",
-                "depth", "quality_column")
+                "depth", "quality_column", "node_id")
+#: OPC UA NodeId string form (Part 6 §5.3.1.10): optional ns=<index>; or nsu=<uri>; then
+#: i=<number>, s=<string>, g=<GUID> or b=<base64>.
+_NODE_ID = re.compile(r"^(?:(?:ns=\d+|nsu=[^;]+);)?(?:i=\d+|s=.+|g=[0-9A-Fa-f-]{36}|b=[A-Za-z0-9+/=]+)$")
 #: The signal measured by a thermocouple in the metal, the only one with a depth.
 METAL_THERMOCOUPLE = "hp_inner_casing_temperature"
 #: Deepest metal thermocouple accepted, m (an HP inner casing wall is 0.1-0.3 m thick).
@@ -115,7 +120,8 @@ class TagSpec:
     the sensor's first-order time constant (s), which the model's readings are lagged by.
     ``depth_m`` is how deep a metal thermocouple sits under the casing bore (m; only
     :data:`METAL_THERMOCOUPLE`). ``quality_column`` is the wide layout's column holding this
-    signal's quality, if any.
+    signal's quality, if any. ``node_id`` is the tag's OPC UA node id (NodeId string form,
+    e.g. ``"ns=2;s=10LBA10CP001"``), for the live twin's OPC UA source.
     """
 
     signal: str
@@ -128,6 +134,7 @@ class TagSpec:
     time_constant_s: float | None = None
     quality_column: str | None = None
     depth_m: float | None = None
+    node_id: str | None = None
 
 
 @dataclass(frozen=True)
@@ -277,6 +284,7 @@ def parse_tag_map(text: str, source: str = "<string>") -> TagMap:
         raise TagMapError(f"{source}: [signals] maps no signal; add e.g. [signals.load]")
     signals: dict[str, TagSpec] = {}
     owners: dict[str, str] = {}
+    node_owners: dict[str, str] = {}
     for name, entry in signals_table.items():
         spec = _tag_spec(name, entry, layout, source)
         if spec.column in owners:
@@ -290,6 +298,12 @@ def parse_tag_map(text: str, source: str = "<string>") -> TagMap:
                 "(historian.time_column)"
             )
         owners[spec.column] = name
+        if spec.node_id is not None:
+            if spec.node_id in node_owners:
+                raise TagMapError(
+                    f"{source}: signals.{name}.node_id = {spec.node_id!r} is already the node of "
+                    f"signals.{node_owners[spec.node_id]}; each OPC UA node maps one signal")
+            node_owners[spec.node_id] = name
         signals[name] = spec
     for name, spec in signals.items():
         if spec.quality_column is None:
@@ -359,6 +373,8 @@ def write_tag_map(tag_map: TagMap, path: str | Path) -> None:
             lines.append(f'depth = "{_toml_float(spec.depth_m * 1e3)} mm"')
         if spec.quality_column is not None:
             lines.append(f"quality_column = {_toml_string(spec.quality_column)}")
+        if spec.node_id is not None:
+            lines.append(f"node_id = {_toml_string(spec.node_id)}")
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
@@ -438,9 +454,15 @@ def _tag_spec(name: str, entry: Any, layout: str, source: str) -> TagSpec:
                 "has one quality column for all tags (historian.quality_column)"
             )
         quality_column = _text(entry, "quality_column", f"signals.{name}", source)
+    node_id = None
+    if "node_id" in entry:
+        node_id = _text(entry, "node_id", f"signals.{name}", source)
+        if not _NODE_ID.match(node_id):
+            raise TagMapError(f"{where}.node_id = {node_id!r}: expected an OPC UA node id such as "
+                              "\"ns=2;s=10LBA10CP001\", \"nsu=urn:plant;s=TAG\" or \"ns=3;i=1001\"")
     return TagSpec(signal=name, column=column, unit=unit, valid_range_si=valid_range,
                    time_constant_s=time_constant, quality_column=quality_column,
-                   depth_m=depth, **deltas)
+                   depth_m=depth, node_id=node_id, **deltas)
 
 
 def _depth(entry: dict[str, Any], name: str, where: str) -> float | None:
