@@ -87,7 +87,8 @@ _SIGNAL_KEYS = ("column", "unit", "range", "noise", "resolution", "max_rate", "t
                 "depth", "quality_column", "node_id")
 #: OPC UA NodeId string form (Part 6 §5.3.1.10): optional ns=<index>; or nsu=<uri>; then
 #: i=<number>, s=<string>, g=<GUID> or b=<base64>.
-_NODE_ID = re.compile(r"^(?:(?:ns=\d+|nsu=[^;]+);)?(?:i=\d+|s=.+|g=[0-9A-Fa-f-]{36}|b=[A-Za-z0-9+/=]+)$")
+_NODE_ID = re.compile(r"^(?:(?:ns=\d+|nsu=[^;]+);)?"
+                      r"(?:i=\d+|s=.+|g=[0-9A-Fa-f-]{36}|b=[A-Za-z0-9+/=]+)$")
 #: The signal measured by a thermocouple in the metal, the only one with a depth.
 METAL_THERMOCOUPLE = "hp_inner_casing_temperature"
 #: Deepest metal thermocouple accepted, m (an HP inner casing wall is 0.1-0.3 m thick).
