@@ -19,7 +19,7 @@ from steamtwin.cli.calibrate import calibrate, calibrate_online
 from steamtwin.cli.dcs import dcs_app
 from steamtwin.cli.demo import demo
 from steamtwin.cli.geometry import geometry_app
-from steamtwin.cli.plant import plant
+from steamtwin.cli.plant import plant_app
 from steamtwin.cli.rom import rom_app
 from steamtwin.cli.simulate import simulate
 from steamtwin.cli.turbine import turbine_app
@@ -105,7 +105,7 @@ app.add_typer(dcs_app, name="dcs")
 app.add_typer(geometry_app, name="geometry")
 app.add_typer(rom_app, name="rom")
 app.command()(simulate)
-app.command()(plant)
+app.add_typer(plant_app, name="plant")
 app.command()(calibrate)
 app.command("calibrate-online")(calibrate_online)
 app.command()(validate)
@@ -134,6 +134,10 @@ def reflow_help(text: str) -> str:
 
 def _reflow_commands(typer_app: typer.Typer) -> None:
     """Reflow the help of every command of ``typer_app`` and its sub-apps (see reflow_help)."""
+    callback = typer_app.registered_callback
+    if callback is not None and callback.callback is not None and not isinstance(
+            typer_app.info.help, str) and (callback.help or inspect.getdoc(callback.callback)):
+        callback.help = reflow_help(callback.help or inspect.getdoc(callback.callback) or "")
     for command in typer_app.registered_commands:
         text = command.help or inspect.getdoc(command.callback) or ""
         command.help = reflow_help(text)
