@@ -14,6 +14,7 @@ from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
 from steamtwin.cli.paths import prepare_output_file, prepare_output_folder
 from steamtwin.dcs.plant import SCENARIOS, PlantRun, plant_tag_map, run_plant, write_plant
+from steamtwin.dcs.sensor_faults import SensorFault, parse_sensor_fault
 from steamtwin.dcs.tagmap import write_tag_map
 from steamtwin.live.plant_server import CLOCKS, PlantServer, PlantServerSettings, plant_node_ids
 
@@ -37,7 +38,21 @@ def _fail(problems: list[str]) -> None:
     raise typer.Exit(code=2)
 
 
-def _run(scenario: str, hours: float | None, seed: int, console: Console) -> PlantRun:
+_FAULT_HELP = ("A sensor fault to inject after the instruments, SIGNAL:KIND[:SIZE]@STARTh[-ENDh] "
+               "(kinds drift [SI per hour], bias_step [SI], stuck; hours from the first "
+               "sample), e.g. hp_exhaust_temperature:drift:2@6h; repeatable.")
+
+
+def _faults(texts: list[str] | None) -> list[SensorFault]:
+    try:
+        return [parse_sensor_fault(text) for text in texts or []]
+    except ValueError as error:
+        _fail([f"--sensor-fault: {error}"])
+        raise  # unreachable
+
+
+def _run(scenario: str, hours: float | None, seed: int, console: Console,
+         faults: list[SensorFault]) -> PlantRun:
     columns = (TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn())
     with Progress(*columns, console=console, transient=True) as bar:
         task = bar.add_task(f"plant {scenario}", total=1.0)
@@ -46,7 +61,8 @@ def _run(scenario: str, hours: float | None, seed: int, console: Console) -> Pla
             bar.update(task, completed=fraction, description=f"plant {scenario}: {message}")
 
         try:
-            return run_plant(scenario, hours=hours, seed=seed, progress=progress)
+            return run_plant(scenario, hours=hours, seed=seed, progress=progress,
+                             sensor_faults=faults)
         except ValueError as error:
             _fail([str(error)])
             raise  # unreachable: _fail exits
@@ -62,6 +78,7 @@ def plant(
     seed: int = typer.Option(0, help="Seed of the instruments' random generator."),
     layout: str = typer.Option("wide", help="Historian layout: 'wide' or 'long'."),
     file_format: str = typer.Option("parquet", help="'parquet' or 'csv'."),
+    sensor_fault: list[str] | None = typer.Option(None, help=_FAULT_HELP),
 ) -> None:
     """Generate DCS historian data of the virtual 600 MW plant (hidden truth in OUT/truth/).
 
@@ -84,9 +101,10 @@ def plant(
     if problems:
         _fail(problems)
     assert scenario is not None and out is not None
+    faults = _faults(sensor_fault)
     prepare_output_folder(out, "--out")
     console = Console(stderr=True)
-    run = _run(scenario, hours, seed, console)
+    run = _run(scenario, hours, seed, console, faults)
     paths = write_plant(run, out, layout=layout, file_format=file_format)
     typer.echo(f"wrote {len(run.measured)} samples of {len(run.measured.columns)} tags:")
     for name, path in paths.items():
@@ -121,6 +139,7 @@ def serve(
     exit_at_end: bool = typer.Option(False, "--exit-at-end", help="Stop once the last "
                                      "sample is out (default: keep serving for HistoryRead "
                                      "until Ctrl-C or SIGTERM)."),
+    sensor_fault: list[str] | None = typer.Option(None, help=_FAULT_HELP),
 ) -> None:
     """Publish the virtual plant's historian tags live over OPC UA.
 
@@ -144,10 +163,11 @@ def serve(
     except ValueError as error:
         _fail([str(error)])
         raise
+    faults = _faults(sensor_fault)
     if tags_out is not None:
         prepare_output_file(tags_out, "--tags-out")
     console = Console(stderr=True)
-    run = _run(scenario, hours, seed, console)
+    run = _run(scenario, hours, seed, console, faults)
     tag_map = plant_tag_map()
     if tags_out is not None:
         write_tag_map(plant_node_ids(tag_map), tags_out)

@@ -78,7 +78,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property, lru_cache
 from itertools import pairwise
@@ -90,6 +90,7 @@ import pandas as pd
 from scipy.optimize import least_squares
 
 from steamtwin.dcs.readers import canonical_to_historian
+from steamtwin.dcs.sensor_faults import SensorFault, apply_sensor_faults
 from steamtwin.dcs.sensors import (
     FaultConfig,
     Injected,
@@ -806,14 +807,17 @@ def plant_sensor_models(truth: PlantTruth) -> dict[str, SensorModel]:
 def run_plant(scenario: str, *, hours: float | None = None, seed: int = 0,
               truth: PlantTruth = PlantTruth(), progress: ProgressCallback | None = None,
               ramp_rate: float | None = None,
-              instruments: pd.DataFrame | None = None) -> PlantRun:
+              instruments: pd.DataFrame | None = None,
+              sensor_faults: Sequence[SensorFault] = ()) -> PlantRun:
     """Run the virtual plant through ``scenario`` (a key of :data:`SCENARIOS`).
 
     ``hours`` overrides the long hold (h); ``seed`` seeds the instruments' generator;
     ``ramp_rate`` (%/min, 1–5) overrides the scenario's ramps; ``instruments``: an earlier
     run's ``injected.sensors`` — the same instruments (calibration errors and drift rates) on
-    another day, with noise and faults drawn from ``seed``. Raises ``KeyError`` listing the
-    scenarios for an unknown name.
+    another day, with noise and faults drawn from ``seed``; ``sensor_faults``: faults
+    scheduled on purpose after the instruments (drift, bias step, stuck reading;
+    :mod:`steamtwin.dcs.sensor_faults`), recorded in ``injected.faults``. Raises ``KeyError``
+    listing the scenarios for an unknown name.
     """
     if scenario not in SCENARIOS:
         raise KeyError(f"unknown scenario {scenario!r}; known: {', '.join(SCENARIOS)}")
@@ -844,10 +848,14 @@ def run_plant(scenario: str, *, hours: float | None = None, seed: int = 0,
     true_frame = inputs.join(outputs)[sensed]
     measurement = measure(true_frame, plant_sensor_models(truth), np.random.default_rng(seed),
                           faults=truth.faults, instruments=instruments)
+    measured, injected = measurement.measured, measurement.injected
+    if sensor_faults:
+        measured, scheduled = apply_sensor_faults(measured, sensor_faults)
+        injected = replace(injected, faults=pd.concat([injected.faults, scheduled],
+                                                      ignore_index=True))
     report(1.0, "done")
-    return PlantRun(true_inputs=true_inputs, true_outputs=outputs,
-                    measured=measurement.measured, injected=measurement.injected, truth=truth,
-                    scenario=scenario)
+    return PlantRun(true_inputs=true_inputs, true_outputs=outputs, measured=measured,
+                    injected=injected, truth=truth, scenario=scenario)
 
 
 # ------------------------------------------------------------------------------------------
