@@ -23,7 +23,8 @@ runner = CliRunner()
     [[], ["turbine", "show"], ["simulate"], ["demo"], ["dcs", "check"], ["plant"], ["calibrate"],
      ["calibrate-online"], ["rom", "build"], ["rom", "predict"], ["rom", "info"],
      ["geometry", "scan"], ["geometry", "preprocess"], ["geometry", "mesh"],
-     ["geometry", "assemble"], ["geometry", "uncertainty"], ["validate"], ["plant", "serve"]],
+     ["geometry", "assemble"], ["geometry", "uncertainty"], ["validate"], ["plant", "serve"],
+     ["history", "export"]],
 )
 def test_every_command_has_help_with_an_example(command):
     result = runner.invoke(app, [*command, "--help"])

@@ -19,6 +19,7 @@ from steamtwin.cli.calibrate import calibrate, calibrate_online
 from steamtwin.cli.dcs import dcs_app
 from steamtwin.cli.demo import demo
 from steamtwin.cli.geometry import geometry_app
+from steamtwin.cli.history import history_app
 from steamtwin.cli.plant import plant_app
 from steamtwin.cli.rom import rom_app
 from steamtwin.cli.simulate import simulate
@@ -104,6 +105,7 @@ app.add_typer(turbine_app, name="turbine")
 app.add_typer(dcs_app, name="dcs")
 app.add_typer(geometry_app, name="geometry")
 app.add_typer(rom_app, name="rom")
+app.add_typer(history_app, name="history")
 app.command()(simulate)
 app.add_typer(plant_app, name="plant")
 app.command()(calibrate)

@@ -1,0 +1,318 @@
+"""The live twin's embedded historian: one DuckDB file per service (issue 21, item 7).
+
+Everything the live twin sees and says is kept in SI with the canonical names, one database
+file per service, several units side by side:
+
+* ``series`` (long: unit, time, source, signal, value, flag) — ``source`` is ``measured``
+  (the cleaned DCS sample), ``twin`` (the model's output, ROM probe temperatures included)
+  or ``residual`` (measured − twin); ``flag`` names what the data-quality gate found (NULL:
+  good). Long rather than wide so that a unit's signals, a new probe or another twin output
+  need no schema change;
+* ``alarms`` (id, unit, kind, signal, start, end, evidence JSON, acknowledged_at/by);
+* ``parameters`` (unit, time, name, value, reason) — every swap of the live parameters;
+* ``states`` (unit, time, state JSON) — model state snapshots to restart from;
+* ``progress`` (unit, last_time) — the last committed sample.
+
+Exactly once: :meth:`LiveHistorian.commit_block` writes a block's series rows, the unit's
+progress and (optionally) its state snapshot in ONE transaction (DuckDB transactions are
+ACID, durable at commit through its write-ahead log; DuckDB docs, "Transaction
+Management"), so after a crash (even SIGKILL) the file holds whole blocks only, and
+:meth:`resume_time` says where the stream must resume: no sample lost, none stored twice.
+Times are stored as UTC ``TIMESTAMPTZ``.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import duckdb
+import numpy as np
+import pandas as pd
+
+__all__ = ["SOURCES", "Alarm", "LiveHistorian", "export_history"]
+
+SOURCES = ("measured", "twin", "residual")
+
+_SCHEMA = (
+    """CREATE TABLE IF NOT EXISTS series (unit VARCHAR NOT NULL, time TIMESTAMPTZ NOT NULL,
+       source VARCHAR NOT NULL, signal VARCHAR NOT NULL, value DOUBLE, flag VARCHAR)""",
+    """CREATE TABLE IF NOT EXISTS alarms (id BIGINT PRIMARY KEY, unit VARCHAR NOT NULL,
+       kind VARCHAR NOT NULL, signal VARCHAR, start TIMESTAMPTZ NOT NULL, "end" TIMESTAMPTZ,
+       evidence JSON, acknowledged_at TIMESTAMPTZ, acknowledged_by VARCHAR)""",
+    """CREATE TABLE IF NOT EXISTS parameters (unit VARCHAR NOT NULL, time TIMESTAMPTZ NOT NULL,
+       name VARCHAR NOT NULL, value DOUBLE NOT NULL, reason VARCHAR)""",
+    """CREATE TABLE IF NOT EXISTS states (unit VARCHAR NOT NULL, time TIMESTAMPTZ NOT NULL,
+       state JSON NOT NULL)""",
+    """CREATE TABLE IF NOT EXISTS progress (unit VARCHAR PRIMARY KEY,
+       last_time TIMESTAMPTZ NOT NULL)""",
+)
+
+
+@dataclass(frozen=True)
+class Alarm:
+    """One alarm: ``kind`` (e.g. "sensor_fault", "degradation"), the ``signal`` it concerns
+    (None: the unit), ``start``/``end`` (UTC; end None while active) and its ``evidence``
+    (JSON-ready mapping: statistics, thresholds, the residuals that raised it)."""
+
+    unit: str
+    kind: str
+    start: pd.Timestamp
+    signal: str | None = None
+    end: pd.Timestamp | None = None
+    evidence: Mapping[str, object] | None = None
+
+
+def _utc(times: pd.DatetimeIndex | pd.Series) -> pd.DatetimeIndex:
+    index = pd.DatetimeIndex(times)
+    if index.tz is None:
+        raise ValueError("times must be time-zone aware (UTC or a zone)")
+    return index.tz_convert("UTC")
+
+
+class LiveHistorian:
+    """The DuckDB file at ``path`` (created with its tables if missing); use as a context
+    manager or call :meth:`close`."""
+
+    def __init__(self, path: str | Path) -> None:
+        self.path = Path(path)
+        self._connection: duckdb.DuckDBPyConnection | None = None
+
+    def __enter__(self) -> LiveHistorian:
+        self.open()
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.close()
+
+    def open(self) -> None:
+        """Open (or create) the database and its tables."""
+        if self._connection is None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            connection = duckdb.connect(str(self.path))
+            connection.execute("SET TimeZone = 'UTC'")
+            for statement in _SCHEMA:
+                connection.execute(statement)
+            self._connection = connection
+
+    def close(self) -> None:
+        """Close the database (idempotent)."""
+        if self._connection is not None:
+            self._connection.close()
+            self._connection = None
+
+    @property
+    def connection(self) -> duckdb.DuckDBPyConnection:
+        """The open connection."""
+        if self._connection is None:
+            raise RuntimeError(f"{self.path}: the historian is not open")
+        return self._connection
+
+    def resume_time(self, unit: str) -> pd.Timestamp | None:
+        """The last committed sample's time of ``unit`` (UTC), None before the first."""
+        row = self.connection.execute(
+            "SELECT last_time FROM progress WHERE unit = ?", [unit]).fetchone()
+        return None if row is None else pd.Timestamp(row[0]).tz_convert("UTC")
+
+    def commit_block(self, unit: str, frames: Mapping[str, pd.DataFrame],
+                     flags: pd.DataFrame | None = None,
+                     state: Mapping[str, object] | None = None) -> int:
+        """Store one block of samples of ``unit`` atomically; return the rows written.
+
+        ``frames``: source (one of :data:`SOURCES`) → wide frame (time index, canonical signal
+        columns, SI). ``flags``: the gate's finding per measured sample and signal (same
+        shape as ``frames["measured"]``, strings, NaN/None for good). ``state``: a model state
+        snapshot (JSON-ready) stored at the block's last time. Refuses a block that does not
+        start after the unit's last committed sample (ValueError naming both times).
+        """
+        unknown = sorted(set(frames) - set(SOURCES))
+        if unknown:
+            raise ValueError(f"unknown series source(s) {unknown}; expected {SOURCES}")
+        times = [_utc(frame.index) for frame in frames.values() if len(frame)]
+        if not times:
+            return 0
+        first = min(index[0] for index in times)
+        last = max(index[-1] for index in times)
+        resume = self.resume_time(unit)
+        if resume is not None and first <= resume:
+            raise ValueError(f"unit {unit!r}: block starts at {first.isoformat()}, not after "
+                             f"the last committed sample {resume.isoformat()} (a sample would "
+                             "be stored twice)")
+        long = [self._long(unit, source, frame, flags if source == "measured" else None)
+                for source, frame in frames.items() if len(frame)]
+        rows = pd.concat(long, ignore_index=True)
+        connection = self.connection
+        connection.execute("BEGIN TRANSACTION")
+        try:
+            connection.register("block_rows", rows)
+            connection.execute("INSERT INTO series SELECT unit, time, source, signal, value, "
+                               "flag FROM block_rows")
+            connection.unregister("block_rows")
+            connection.execute("INSERT OR REPLACE INTO progress VALUES (?, ?)",
+                               [unit, last.to_pydatetime()])
+            if state is not None:
+                connection.execute("INSERT INTO states VALUES (?, ?, ?)",
+                                   [unit, last.to_pydatetime(), json.dumps(state)])
+            connection.execute("COMMIT")
+        except Exception:
+            connection.execute("ROLLBACK")
+            raise
+        return len(rows)
+
+    @staticmethod
+    def _long(unit: str, source: str, frame: pd.DataFrame, flags: pd.DataFrame | None
+              ) -> pd.DataFrame:
+        times = _utc(frame.index)
+        signals = [str(name) for name in frame.columns]
+        values = frame.to_numpy(dtype=float)
+        flag_values = np.full(values.shape, None, dtype=object)
+        if flags is not None:
+            aligned = flags.reindex(index=frame.index, columns=frame.columns)
+            raw = aligned.to_numpy(dtype=object)
+            present = pd.notna(raw)
+            flag_values[present] = raw[present].astype(str)
+        return pd.DataFrame({
+            "unit": unit,
+            "time": np.repeat(times.to_numpy(), len(signals)),
+            "source": source,
+            "signal": np.tile(np.array(signals, dtype=object), len(times)),
+            "value": values.reshape(-1),
+            "flag": flag_values.reshape(-1),
+        })
+
+    def latest_state(self, unit: str) -> tuple[pd.Timestamp, dict] | None:
+        """The newest state snapshot of ``unit`` and its time, None if there is none."""
+        row = self.connection.execute(
+            "SELECT time, state FROM states WHERE unit = ? ORDER BY time DESC LIMIT 1",
+            [unit]).fetchone()
+        if row is None:
+            return None
+        return pd.Timestamp(row[0]).tz_convert("UTC"), json.loads(row[1])
+
+    def record_parameters(self, unit: str, time: pd.Timestamp, values: Mapping[str, float],
+                          reason: str) -> None:
+        """One swap of the live parameters (name → value) and why it happened."""
+        stamp = _utc(pd.DatetimeIndex([time]))[0].to_pydatetime()
+        self.connection.executemany("INSERT INTO parameters VALUES (?, ?, ?, ?, ?)",
+                                    [[unit, stamp, name, float(value), reason]
+                                     for name, value in values.items()])
+
+    def raise_alarm(self, alarm: Alarm) -> int:
+        """Store ``alarm``; return its id."""
+        connection = self.connection
+        next_id = connection.execute("SELECT coalesce(max(id), 0) + 1 FROM alarms").fetchone()[0]
+        connection.execute(
+            "INSERT INTO alarms VALUES (?, ?, ?, ?, ?, ?, ?, NULL, NULL)",
+            [next_id, alarm.unit, alarm.kind, alarm.signal,
+             _utc(pd.DatetimeIndex([alarm.start]))[0].to_pydatetime(),
+             None if alarm.end is None
+             else _utc(pd.DatetimeIndex([alarm.end]))[0].to_pydatetime(),
+             json.dumps(dict(alarm.evidence or {}))])
+        return int(next_id)
+
+    def end_alarm(self, alarm_id: int, end: pd.Timestamp) -> None:
+        """Mark alarm ``alarm_id`` as ended at ``end``."""
+        self.connection.execute('UPDATE alarms SET "end" = ? WHERE id = ?',
+                                [_utc(pd.DatetimeIndex([end]))[0].to_pydatetime(), alarm_id])
+
+    def acknowledge(self, alarm_id: int, by: str, at: pd.Timestamp) -> None:
+        """Acknowledge alarm ``alarm_id`` (KeyError if there is no such alarm)."""
+        found = self.connection.execute("SELECT count(*) FROM alarms WHERE id = ?",
+                                        [alarm_id]).fetchone()[0]
+        if not found:
+            raise KeyError(f"no alarm {alarm_id} in {self.path}")
+        self.connection.execute(
+            "UPDATE alarms SET acknowledged_at = ?, acknowledged_by = ? WHERE id = ?",
+            [_utc(pd.DatetimeIndex([at]))[0].to_pydatetime(), by, alarm_id])
+
+    def alarms(self, unit: str | None = None) -> pd.DataFrame:
+        """Every alarm (of ``unit``), oldest first, evidence parsed."""
+        query = "SELECT * FROM alarms" + (" WHERE unit = ?" if unit else "") + " ORDER BY id"
+        frame = self.connection.execute(query, [unit] if unit else []).df()
+        frame["evidence"] = [json.loads(text) if text else {} for text in frame["evidence"]]
+        return frame
+
+    def series(self, unit: str, start: pd.Timestamp | None = None,
+               end: pd.Timestamp | None = None, sources: tuple[str, ...] = SOURCES
+               ) -> pd.DataFrame:
+        """``unit``'s series in [start, end] as a wide frame: columns ``<source>/<signal>``
+        (SI) and ``flag/<signal>`` where the gate flagged measured samples, UTC time index."""
+        clauses, arguments = ["unit = ?"], [unit]
+        if start is not None:
+            clauses.append("time >= ?")
+            arguments.append(_utc(pd.DatetimeIndex([start]))[0].to_pydatetime())
+        if end is not None:
+            clauses.append("time <= ?")
+            arguments.append(_utc(pd.DatetimeIndex([end]))[0].to_pydatetime())
+        marks = ", ".join("?" for _ in sources)
+        long = self.connection.execute(
+            f"SELECT time, source, signal, value, flag FROM series WHERE "
+            f"{' AND '.join(clauses)} AND source IN ({marks}) ORDER BY time",
+            [*arguments, *sources]).df()
+        return _wide(long)
+
+
+def _wide(long: pd.DataFrame) -> pd.DataFrame:
+    """Long series rows → one row per time, ``<source>/<signal>`` and ``flag/<signal>``."""
+    if long.empty:
+        return pd.DataFrame(index=pd.DatetimeIndex([], tz="UTC", name="time"))
+    long = long.assign(time=pd.to_datetime(long["time"], utc=True))
+    values = long.pivot_table(index="time", columns=["source", "signal"], values="value",
+                              aggfunc="first", dropna=False)
+    values.columns = [f"{source}/{signal}" for source, signal in values.columns]
+    flagged = long.dropna(subset=["flag"])
+    if not flagged.empty:
+        flags = flagged.pivot_table(index="time", columns="signal", values="flag",
+                                    aggfunc="first")
+        flags.columns = [f"flag/{signal}" for signal in flags.columns]
+        values = values.join(flags)
+    values.index.name = "time"
+    return values.sort_index()
+
+
+def export_history(db: str | Path, out: str | Path, *, unit: str | None = None,
+                   start: pd.Timestamp | None = None, end: pd.Timestamp | None = None,
+                   layout: str = "wide") -> int:
+    """Write ``db``'s series (of ``unit``; all units when None and the layout is long) in
+    [start, end] to ``out`` (.parquet or .csv); return the rows written. ``layout`` "wide"
+    (one row per time: ``<source>/<signal>`` columns, one unit) or "long"."""
+    path = Path(db)
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: no such historian database")
+    out = Path(out)
+    if out.suffix not in (".parquet", ".csv"):
+        raise ValueError(f"{out}: expected a .parquet or .csv file")
+    if layout not in ("wide", "long"):
+        raise ValueError(f"layout must be 'wide' or 'long' (got {layout!r})")
+    with LiveHistorian(path) as historian:
+        units = [row[0] for row in historian.connection.execute(
+            "SELECT DISTINCT unit FROM series ORDER BY unit").fetchall()]
+        if unit is not None and unit not in units:
+            raise ValueError(f"{path}: no unit {unit!r} (units: {', '.join(units) or 'none'})")
+        if layout == "wide":
+            if unit is None:
+                if len(units) != 1:
+                    raise ValueError(f"{path} holds units {units}: name one (--unit) for the "
+                                     "wide layout")
+                unit = units[0]
+            frame = historian.series(unit, start, end)
+        else:
+            clauses, arguments = [], []
+            if unit is not None:
+                clauses.append("unit = ?")
+                arguments.append(unit)
+            for bound, operator in ((start, ">="), (end, "<=")):
+                if bound is not None:
+                    clauses.append(f"time {operator} ?")
+                    arguments.append(_utc(pd.DatetimeIndex([bound]))[0].to_pydatetime())
+            where = f" WHERE {' AND '.join(clauses)}" if clauses else ""
+            frame = historian.connection.execute(
+                f"SELECT * FROM series{where} ORDER BY unit, time, source, signal",
+                arguments).df()
+    if out.suffix == ".parquet":
+        frame.to_parquet(out)
+    else:
+        frame.to_csv(out)
+    return len(frame)
