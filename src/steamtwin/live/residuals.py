@@ -1,0 +1,289 @@
+"""Residual monitoring: tell a failing sensor from a degrading turbine (issue 21, item 5).
+
+Per block of ``block_s`` seconds (60 s by default) the monitor takes the mean residual r
+(measured − twin, SI) of each monitored sensor. Block means rather than 1-s samples: the
+residuals of a thermowell-lagged temperature are autocorrelated over minutes, and a CUSUM
+assumes independent increments; one-minute means of a 1-s stream are nearly so at the
+residuals' observed decorrelation (and the ROM/FOM run every second all the same).
+
+Noise model. In a healthy block r ~ N(0, Σ), Σ = diag(σ_s²) with
+σ_s = max(instrument floor, healthy scale): the floor is the instrument's own error for a
+block mean (noise σ over √n plus resolution, from the tag map), the healthy scale the robust
+spread (1.4826·MAD) of the block means the monitor is fitted on (:meth:`fit`: residuals of the
+calibrated twin over healthy hours, which carry the model's own error on ramps). The
+thresholds therefore follow from the instruments' error and never fall below it.
+
+Hypotheses (structured residuals; Gertler, *Fault Detection and Diagnosis in Engineering
+Systems*, 1998, ch. 6; Willsky & Jones, IEEE TAC 21 (1976) 108–112, GLR for a bias):
+* ``sensor:<s>`` — sensor s reads off by a bias b_s (signature b_s·e_s: this sensor alone);
+* ``degradation:<p>`` — parameter p changed by Δ_p (signature Δ_p·J[:, p], J the twin's
+  sensitivity of every sensor to p at the block's operating point).
+Each hypothesis h with signature μ_h has a two-sided CUSUM of the log-likelihood ratio of
+N(±μ_h, Σ) against N(0, Σ) (Page, Biometrika 41 (1954) 100–115; the multi-hypothesis form of
+Nikiforov, IEEE TAC 40 (1995) 1230–1246, and Basseville & Nikiforov, *Detection of Abrupt
+Changes*, 1993, §4.3/§7.2):
+    g_h ← max(0, g_h + μ_hᵀΣ⁻¹r − ½ μ_hᵀΣ⁻¹μ_h)   (and the same for −μ_h).
+An alarm of the hypothesis whose statistic first exceeds the threshold H names its kind and
+signal: a bias in one sensor grows only that sensor's CUSUM (the others pay the ½μᵀΣ⁻¹μ
+penalty of directions the data do not follow), a parameter change grows the CUSUM whose
+signature matches the pattern across sensors. H comes from the mean run length wanted
+between false alarms, ``arl0_blocks`` (default 10⁶ blocks ≈ 2 years of minutes), by
+Siegmund's approximation for the standardised CUSUM with drift k = ½‖μ‖_Σ:
+ARL₀ ≈ (e^{2k(H′)} − 2kH′ − 1)/(2k²), H′ = H/‖μ‖_Σ + 1.166 (Siegmund, *Sequential Analysis*,
+1985, §X.2; Montgomery, *Introduction to Statistical Quality Control*, 7th ed., §9.1.3),
+divided by the number of hypotheses (Bonferroni). An alarm ends when the reverse CUSUM —
+healthy against the fault — crosses the same threshold (Page's test run the other way), so an
+alarm is as slow to clear as to raise, and never flickers.
+
+Design sizes: ``sensor_shift`` (K for temperatures, Pa for pressures; default
+2 × the sensor's σ) and ``parameter_shift`` (per parameter; default 0.01, half a fouling step
+of 2 %).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import brentq
+
+from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.simulator import Simulator
+
+__all__ = ["AlarmEvent", "MonitorSettings", "ResidualMonitor", "block_means",
+           "model_sensitivity", "siegmund_threshold"]
+
+#: Gaussian consistency constant of the MAD (1/Φ⁻¹(3/4)).
+MAD_TO_SIGMA = 1.4826
+
+
+def siegmund_threshold(arl0: float, drift: float) -> float:
+    """Decision interval H (in standardised units) of a one-sided CUSUM with reference drift
+    ``drift`` (k, standardised) whose in-control average run length is ``arl0`` samples, by
+    Siegmund's approximation ARL₀ ≈ (e^{2k(H+1.166)} − 2k(H+1.166) − 1)/(2k²)."""
+    if not (arl0 > 1.0 and drift > 0.0):
+        raise ValueError(f"need arl0 > 1 and drift > 0 (got {arl0!r}, {drift!r})")
+
+    def arl(h: float) -> float:
+        b = 2.0 * drift * (h + 1.166)
+        return (math.expm1(b) - b) / (2.0 * drift**2)
+
+    upper = 1.0
+    while arl(upper) < arl0:
+        upper *= 2.0
+    return brentq(lambda h: arl(h) - arl0, 0.0, upper, xtol=1e-9)
+
+
+def block_means(residuals: pd.DataFrame, block_s: float = 60.0) -> pd.DataFrame:
+    """Mean of each column over consecutive blocks of ``block_s`` seconds (labelled by the
+    block's end), with ``n_<column>`` the number of finite samples in it."""
+    if not isinstance(residuals.index, pd.DatetimeIndex):
+        raise ValueError("residuals need a DatetimeIndex")
+    grouped = residuals.resample(pd.Timedelta(seconds=block_s), label="right", closed="left")
+    means = grouped.mean()
+    counts = grouped.count().add_prefix("n_")
+    return means.join(counts)
+
+
+def model_sensitivity(simulator: Simulator, inputs: pd.DataFrame, params: ModelParameters,
+                      sensors: Sequence[str], parameters: Sequence[str] = ("flow_coefficient",),
+                      relative_step: float = 1e-3) -> pd.DataFrame:
+    """J (sensors × parameters): the change of each sensor's block-mean output per unit change
+    of each parameter at ``params`` over ``inputs`` (central differences, step
+    ``relative_step`` × the value)."""
+    columns = {}
+    for name in parameters:
+        value = getattr(params, name)
+        step = relative_step * abs(value)
+        up = simulator.simulate(inputs, _with(params, name, value + step))
+        down = simulator.simulate(inputs, _with(params, name, value - step))
+        columns[name] = [(up[s].mean() - down[s].mean()) / (2.0 * step) for s in sensors]
+    return pd.DataFrame(columns, index=list(sensors))
+
+
+def _with(params: ModelParameters, name: str, value: float) -> ModelParameters:
+    import dataclasses
+
+    return dataclasses.replace(params, **{name: value})
+
+
+@dataclass(frozen=True)
+class MonitorSettings:
+    """``block_s``: residual block length (s); ``arl0_blocks``: wanted mean number of blocks
+    between false alarms over all hypotheses; ``sensor_shift``: design bias per sensor (SI;
+    missing: 2 σ); ``parameter_shift``: design change per parameter (default 0.01 each)."""
+
+    block_s: float = 60.0
+    arl0_blocks: float = 1.0e6
+    sensor_shift: Mapping[str, float] = field(default_factory=dict)
+    parameter_shift: Mapping[str, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not self.block_s > 0.0:
+            raise ValueError(f"block_s must be positive (got {self.block_s!r})")
+        if not self.arl0_blocks > 1.0:
+            raise ValueError(f"arl0_blocks must exceed 1 (got {self.arl0_blocks!r})")
+        for name, value in {**self.sensor_shift, **self.parameter_shift}.items():
+            if not (math.isfinite(value) and value > 0.0):
+                raise ValueError(f"design shift of {name} must be positive (got {value!r})")
+
+
+@dataclass(frozen=True)
+class AlarmEvent:
+    """An alarm starting (``end`` None) or ending: ``kind`` "sensor_fault" or "degradation",
+    ``signal`` (the sensor or the parameter), ``time`` (block end), the statistic, the
+    threshold and the block's standardised residuals as evidence."""
+
+    kind: str
+    signal: str
+    time: pd.Timestamp
+    ended: bool
+    statistic: float
+    threshold: float
+    evidence: dict[str, float]
+
+
+class ResidualMonitor:
+    """Multi-hypothesis CUSUM on block-mean residuals (see the module docstring).
+
+    ``sensors``: monitored sensors (canonical names); ``instrument_sigma``: each one's
+    instrument error for a block mean (SI), the floor of its σ. :meth:`fit` learns the healthy
+    spread; :meth:`update` takes one block and returns the alarms it starts or ends.
+    """
+
+    def __init__(self, sensors: Sequence[str], instrument_sigma: Mapping[str, float],
+                 settings: MonitorSettings = MonitorSettings()) -> None:
+        self.sensors = tuple(sensors)
+        self.instrument_sigma = dict(instrument_sigma)
+        self.settings = settings
+
+    def fit(self, healthy_blocks: pd.DataFrame) -> ResidualMonitor:
+        """Learn σ per sensor from block means of healthy residuals (columns ``sensors``):
+        max(instrument floor, 1.4826·MAD about the median); the median is the offset
+        ``offset_`` the monitor subtracts (a sensor's calibration residual)."""
+        missing = [s for s in self.sensors if s not in self.instrument_sigma]
+        if missing:
+            raise ValueError(f"instrument_sigma lacks {missing}")
+        for sensor in self.sensors:
+            if not (math.isfinite(self.instrument_sigma[sensor])
+                    and self.instrument_sigma[sensor] > 0.0):
+                raise ValueError(f"instrument_sigma of {sensor} must be positive")
+        sigma, offset = {}, {}
+        for sensor in self.sensors:
+            values = healthy_blocks[sensor].dropna().to_numpy(dtype=float)
+            if values.size < 10:
+                raise ValueError(f"fit needs at least 10 healthy blocks of {sensor} (got "
+                                 f"{values.size})")
+            centre = float(np.median(values))
+            spread = MAD_TO_SIGMA * float(np.median(np.abs(values - centre)))
+            offset[sensor] = centre
+            sigma[sensor] = max(self.instrument_sigma[sensor], spread)
+        self.sigma_ = sigma
+        self.offset_ = offset
+        self.statistics_: dict[str, float] = {}
+        self.active_: dict[str, pd.Timestamp] = {}
+        return self
+
+    def _hypotheses(self, sensitivity: pd.DataFrame | None) -> dict[str, tuple[str, str,
+                                                                               np.ndarray]]:
+        hypotheses = {}
+        for j, sensor in enumerate(self.sensors):
+            shift = self.settings.sensor_shift.get(sensor, 2.0 * self.sigma_[sensor])
+            direction = np.zeros(len(self.sensors))
+            direction[j] = shift
+            hypotheses[f"sensor:{sensor}"] = ("sensor_fault", sensor, direction)
+        if sensitivity is not None:
+            for parameter in sensitivity.columns:
+                shift = self.settings.parameter_shift.get(parameter, 0.01)
+                column = sensitivity[parameter].reindex(list(self.sensors)).to_numpy(float)
+                hypotheses[f"degradation:{parameter}"] = ("degradation", parameter,
+                                                          shift * column)
+        return hypotheses
+
+    def threshold(self, direction: np.ndarray, hypotheses: int) -> float:
+        """H of one hypothesis with signature ``direction`` among ``hypotheses`` (two-sided
+        each): the log-likelihood-ratio threshold for the wanted false-alarm rate."""
+        sigma = np.array([self.sigma_[s] for s in self.sensors])
+        norm = float(np.linalg.norm(direction / sigma))
+        standard = siegmund_threshold(self.settings.arl0_blocks * 2 * hypotheses, 0.5 * norm)
+        return standard * norm  # the LLR CUSUM is the standardised one scaled by ‖μ‖_Σ
+
+    def update(self, time: pd.Timestamp, block: Mapping[str, float],
+               sensitivity: pd.DataFrame | None = None) -> list[AlarmEvent]:
+        """Advance every CUSUM by one block of mean residuals (sensor → SI; NaN: sensor out
+        of this block) with the twin's ``sensitivity`` J there (sensors × parameters); return
+        the alarms that start or end.
+
+        Isolation (Gertler 1998, §6; accommodation): an active sensor fault takes its sensor
+        out of the other hypotheses' evidence, an active degradation removes its pattern (the
+        block's projection on its signature) — so a fault explained once does not raise the
+        hypotheses it also moves. When several hypotheses cross their thresholds in the same
+        block, the one furthest past its threshold (statistic / threshold) is raised and the
+        others' statistics restart: the same evidence, explained by the raised one.
+        """
+        if not hasattr(self, "sigma_"):
+            raise RuntimeError("fit the monitor on healthy residuals first")
+        sigma = np.array([self.sigma_[s] for s in self.sensors])
+        r = np.array([float(block.get(s, math.nan)) - self.offset_[s] for s in self.sensors])
+        present = np.isfinite(r)
+        z_raw = np.where(present, r / sigma, 0.0)
+        hypotheses = self._hypotheses(sensitivity)
+        active = {name[:-1] for name in self.active_}
+        explained = present.copy()
+        for key in active:
+            if key.startswith("sensor:"):
+                explained[self.sensors.index(key.split(":", 1)[1])] = False
+        z = np.where(explained, z_raw, 0.0)
+        for key in active:
+            if key.startswith("degradation:") and key in hypotheses:
+                d = np.where(explained, hypotheses[key][2] / sigma, 0.0)
+                if d @ d > 0.0:
+                    z = z - (d @ z) / (d @ d) * d
+        events, crossing = [], []
+        evidence = {s: float(v) for s, v in zip(self.sensors, z_raw, strict=True)}
+        for key, (kind, signal, direction) in hypotheses.items():
+            own = key in active  # an active alarm follows its own, unadjusted evidence
+            mask = present if own else explained
+            d = np.where(mask, direction / sigma, 0.0)
+            gain = float(d @ (z_raw if own else z))
+            penalty = 0.5 * float(d @ d)
+            limit = self.threshold(direction, len(hypotheses))
+            for sign, suffix in ((1.0, "+"), (-1.0, "-")):
+                name = key + suffix
+                step = sign * gain - penalty  # log-likelihood ratio, fault against healthy
+                if name in self.active_:  # the return: healthy against fault
+                    value = max(0.0, self.statistics_.get(name, 0.0) - step)
+                    self.statistics_[name] = value
+                    if value > limit:
+                        del self.active_[name]
+                        self.statistics_[name] = 0.0
+                        events.append(AlarmEvent(kind, signal, time, True, value, limit,
+                                                 evidence))
+                    continue
+                value = max(0.0, self.statistics_.get(name, 0.0) + step)
+                self.statistics_[name] = value
+                if key not in active and value > limit:
+                    crossing.append((value / limit, name, kind, signal, value, limit))
+        if crossing:
+            _, name, kind, signal, value, limit = max(crossing)
+            self.active_[name] = time
+            events.append(AlarmEvent(kind, signal, time, False, value, limit, evidence))
+            for _, other, *_ in crossing:
+                self.statistics_[other] = 0.0  # the raised one's return CUSUM starts at 0
+        return events
+
+    def get_state(self) -> dict:
+        """JSON-ready state (fitted σ, offsets, statistics, active alarms) to restart from."""
+        return {"sigma": self.sigma_, "offset": self.offset_, "statistics": self.statistics_,
+                "active": {k: v.isoformat() for k, v in self.active_.items()}}
+
+    def set_state(self, state: Mapping[str, object]) -> ResidualMonitor:
+        """Restore :meth:`get_state`'s output exactly."""
+        self.sigma_ = {k: float(v) for k, v in state["sigma"].items()}
+        self.offset_ = {k: float(v) for k, v in state["offset"].items()}
+        self.statistics_ = {k: float(v) for k, v in state["statistics"].items()}
+        self.active_ = {k: pd.Timestamp(v) for k, v in state["active"].items()}
+        return self

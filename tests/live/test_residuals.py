@@ -1,0 +1,162 @@
+"""Residual monitoring (issue 21, item 5): CUSUM thresholds from the wanted false-alarm rate,
+a drifting sensor told from a degrading turbine, no alarm on healthy data."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from steamtwin.live.residuals import (
+    MonitorSettings,
+    ResidualMonitor,
+    block_means,
+    model_sensitivity,
+    siegmund_threshold,
+)
+
+SENSORS = ("control_stage_pressure", "control_stage_temperature", "hp_exhaust_temperature",
+           "hp_inner_casing_temperature")
+SIGMA = {"control_stage_pressure": 1.0e4, "control_stage_temperature": 0.1,
+         "hp_exhaust_temperature": 0.1, "hp_inner_casing_temperature": 0.1}
+# sensitivity to the flow coefficient (per unit): p1 ∝ 1/φ at 9.5 MPa, temperatures mildly
+J = pd.DataFrame({"flow_coefficient": [-9.5e6, 25.0, 8.0, 20.0]}, index=list(SENSORS))
+
+
+def _healthy(blocks: int, rng: np.random.Generator) -> pd.DataFrame:
+    index = pd.date_range("2026-03-01", periods=blocks, freq="60s", tz="UTC")
+    return pd.DataFrame({s: rng.normal(0.0, SIGMA[s], blocks) for s in SENSORS}, index=index)
+
+
+def _monitor(seed: int = 0) -> ResidualMonitor:
+    rng = np.random.default_rng(seed)
+    return ResidualMonitor(SENSORS, {s: 0.5 * v for s, v in SIGMA.items()}).fit(
+        _healthy(600, rng))
+
+
+def test_siegmund_threshold_matches_the_tabulated_cusum():
+    """Montgomery (7th ed.) Table 9.3: two-sided k = 0.5, h = 4 → ARL₀ 168, h = 5 → 465; a
+    one-sided CUSUM has twice that."""
+    assert siegmund_threshold(2 * 168.0, 0.5) == pytest.approx(4.0, abs=0.05)
+    assert siegmund_threshold(2 * 465.0, 0.5) == pytest.approx(5.0, abs=0.05)
+    with pytest.raises(ValueError):
+        siegmund_threshold(0.5, 0.5)
+
+
+def test_the_threshold_gives_the_wanted_run_length_monte_carlo():
+    rng = np.random.default_rng(3)
+    k, arl0 = 0.5, 200.0
+    h = siegmund_threshold(arl0, k)
+    lengths = []
+    for _ in range(400):
+        g, n = 0.0, 0
+        while g <= h:
+            g = max(0.0, g + rng.normal() - k)
+            n += 1
+        lengths.append(n)
+    assert np.mean(lengths) == pytest.approx(arl0, rel=0.2)
+
+
+def test_healthy_days_raise_no_alarm():
+    for seed in range(3):
+        monitor = _monitor(seed)
+        day = _healthy(1440, np.random.default_rng(100 + seed))
+        events = [e for t, row in day.iterrows() for e in monitor.update(t, row, J)]
+        assert events == []
+
+
+def test_a_drifting_thermocouple_is_a_sensor_fault():
+    monitor = _monitor()
+    day = _healthy(120, np.random.default_rng(7))
+    minutes = np.arange(120, dtype=float)
+    day["hp_exhaust_temperature"] += np.clip(minutes - 30.0, 0.0, None) * 2.0 / 60.0  # 2 K/h
+    events = [e for t, row in day.iterrows() for e in monitor.update(t, row, J)]
+    assert events, "the drift was not flagged"
+    first = events[0]
+    assert (first.kind, first.signal) == ("sensor_fault", "hp_exhaust_temperature")
+    assert first.time - day.index[30] <= pd.Timedelta(minutes=15)
+    assert not any(e.kind == "degradation" for e in events)
+
+
+def test_a_flow_coefficient_step_is_degradation():
+    monitor = _monitor()
+    day = _healthy(120, np.random.default_rng(8))
+    step = np.where(np.arange(120) >= 60, -0.02, 0.0)
+    for sensor in SENSORS:
+        day[sensor] += J.loc[sensor, "flow_coefficient"] * step
+    events = [e for t, row in day.iterrows() for e in monitor.update(t, row, J)]
+    assert events and (events[0].kind, events[0].signal) == ("degradation", "flow_coefficient")
+    assert events[0].time - day.index[60] <= pd.Timedelta(minutes=10)
+    assert not any(e.kind == "sensor_fault" for e in events)
+
+
+def test_an_alarm_ends_and_the_state_restores_exactly():
+    monitor = _monitor()
+    day = _healthy(200, np.random.default_rng(9))
+    day.iloc[20:40, 2] += 2.0  # a 20-min bias step on the exhaust
+    events, copied = [], []
+    copy = None
+    for k, (t, row) in enumerate(day.iterrows()):
+        if k == 30:  # mid-alarm: a restart from the saved state
+            copy = ResidualMonitor(SENSORS, {s: 0.5 * v for s, v in SIGMA.items()}).set_state(
+                monitor.get_state())
+        events += monitor.update(t, row, J)
+        if copy is not None:
+            copied += copy.update(t, row, J)
+    starts = [e for e in events if not e.ended]
+    ends = [e for e in events if e.ended]
+    assert [(e.kind, e.signal) for e in starts] == [("sensor_fault", "hp_exhaust_temperature")]
+    assert len(ends) == 1 and ends[0].signal == "hp_exhaust_temperature"
+    assert day.index[20] <= starts[0].time <= day.index[23]
+    assert day.index[40] <= ends[0].time <= day.index[45]
+    assert copied == [e for e in events if e.time >= day.index[30]]
+    assert copy.get_state() == monitor.get_state()
+
+
+@settings(max_examples=25, deadline=None)
+@given(scale=st.floats(1e-3, 1e3), shift=st.floats(-5.0, 5.0))
+def test_the_statistics_do_not_depend_on_the_units(scale, shift):
+    """Invariant: rescaling a sensor (units) and its σ together leaves every statistic as it is."""
+    rng = np.random.default_rng(11)
+    healthy = _healthy(200, rng)
+    block = healthy.iloc[-1] + shift * pd.Series(SIGMA)
+    a = ResidualMonitor(SENSORS, SIGMA).fit(healthy)
+    scaled = {**SIGMA, "hp_exhaust_temperature": SIGMA["hp_exhaust_temperature"] * scale}
+    b = ResidualMonitor(SENSORS, scaled, MonitorSettings(sensor_shift={
+        "hp_exhaust_temperature": 2.0 * a.sigma_["hp_exhaust_temperature"] * scale}))
+    b.fit(healthy.assign(hp_exhaust_temperature=healthy["hp_exhaust_temperature"] * scale))
+    t = healthy.index[-1]
+    scaled_block = block.copy()
+    scaled_block["hp_exhaust_temperature"] *= scale
+    a.update(t, block, None)
+    b.update(t, scaled_block, None)
+    assert a.statistics_.keys() == b.statistics_.keys()
+    for key in a.statistics_:
+        assert b.statistics_[key] == pytest.approx(a.statistics_[key], rel=1e-9, abs=1e-12)
+
+
+def test_block_means_count_samples():
+    index = pd.date_range("2026-03-01", periods=180, freq="1s", tz="UTC")
+    frame = pd.DataFrame({"x": np.arange(180.0)}, index=index)
+    frame.iloc[5, 0] = np.nan
+    means = block_means(frame, 60.0)
+    assert list(means["n_x"]) == [59, 60, 60]
+    assert means["x"].iloc[1] == pytest.approx(np.arange(60.0, 120.0).mean())
+
+
+def test_model_sensitivity_of_the_full_order_model(reference_model):
+    from steamtwin.model.operating import operating_point
+    from steamtwin.model.parameters import ModelParameters
+
+    point = operating_point(reference_model.spec, 0.5)
+    index = pd.date_range("2026-03-01", periods=30, freq="1s", tz="UTC")
+    inputs = pd.DataFrame({name: np.full(30, point[name]) for name in
+                           reference_model.input_signals}, index=index)
+    sensitivity = model_sensitivity(reference_model, inputs, ModelParameters(),
+                                    ["control_stage_pressure"])
+    p1 = reference_model.simulate(inputs, ModelParameters())["control_stage_pressure"].mean()
+    # Stodola's cone law through the first pressure stage: p1 roughly ∝ 1/φ
+    assert sensitivity.loc["control_stage_pressure", "flow_coefficient"] == pytest.approx(
+        -p1, rel=0.35)
