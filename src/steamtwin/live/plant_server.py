@@ -154,6 +154,9 @@ class PlantServer:
                                          ua.DataValue(ua.Variant(True, ua.VariantType.Boolean)))
             for attribute in (ua.AttributeIds.AccessLevel, ua.AttributeIds.UserAccessLevel):
                 await variable.set_attr_bit(attribute, ua.AccessLevel.HistoryRead)
+            await server.write_attribute_value(node_id, ua.DataValue(
+                Value=ua.Variant(math.nan, ua.VariantType.Double),
+                StatusCode=ua.StatusCode(ua.StatusCodes.BadWaitingForInitialData)))
             await storage.new_historized_node(node_id, None, self.settings.history_samples)
             self._nodes[name] = node_id
         await server.start()

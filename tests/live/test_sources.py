@@ -1,0 +1,212 @@
+"""Sources of the live twin (issue 21, item 2): a replay of a historian file, and an OPC UA
+client against a real asyncua server on 127.0.0.1 (never a mock) — values, reconnection with
+HistoryRead back-fill, gaps left as gaps, bad input as findings."""
+
+from __future__ import annotations
+
+import asyncio
+import socket
+from datetime import UTC, datetime, timedelta
+
+import numpy as np
+import pandas as pd
+import pytest
+from asyncua import Server, ua
+
+from steamtwin.dcs.plant import plant_tag_map, run_plant, write_plant
+from steamtwin.dcs.readers import read_historian
+from steamtwin.dcs.tagmap import load_tag_map
+from steamtwin.live.plant_server import PlantServer, PlantServerSettings, plant_node_ids
+from steamtwin.live.sources import OpcUaSecurity, OpcUaSource, ReplaySource
+
+INSECURE = OpcUaSecurity(allow_insecure=True)
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+@pytest.fixture(scope="module")
+def plant(tmp_path_factory):
+    run = run_plant("deep-peak-50", hours=0.01, seed=5)
+    paths = write_plant(run, tmp_path_factory.mktemp("plant"), file_format="csv")
+    return run, paths
+
+
+async def _started(source: OpcUaSource, blocks: list) -> asyncio.Task:
+    """Consume ``source`` into ``blocks`` in a task, once it is connected and subscribed."""
+    async def consume() -> None:
+        async for block in source.blocks():
+            blocks.append(block)
+
+    task = asyncio.create_task(consume())
+    while source.connections < 1:
+        await asyncio.sleep(0.05)
+    await asyncio.sleep(0.3)
+    return task
+
+
+def _frame(blocks) -> pd.DataFrame:
+    frames = [block.frame for block in blocks if len(block.frame)]
+    return pd.concat(frames) if frames else pd.DataFrame()
+
+
+def test_replay_gives_the_file_in_blocks(plant):
+    _, paths = plant
+    tag_map = load_tag_map(paths["tag_map"])
+
+    async def collect(start_after=None):
+        source = ReplaySource(paths["historian"], tag_map, speed=None, block_samples=50,
+                              start_after=start_after)
+        return [block async for block in source.blocks()]
+
+    blocks = asyncio.run(collect())
+    expected = read_historian(paths["historian"], tag_map).signals
+    replayed = _frame(blocks)
+    assert all(len(block.frame) <= 50 for block in blocks)
+    pd.testing.assert_frame_equal(replayed, expected)
+    resumed = _frame(asyncio.run(collect(expected.index[99])))
+    pd.testing.assert_frame_equal(resumed, expected.iloc[100:])
+    with pytest.raises(ValueError, match="speed"):
+        ReplaySource(paths["historian"], tag_map, speed=-1.0)
+
+
+def test_security_must_be_asked_for():
+    with pytest.raises(ValueError, match="allow_insecure=True"):
+        OpcUaSecurity()
+    with pytest.raises(ValueError, match="go together"):
+        OpcUaSecurity(user="operator", allow_insecure=True)
+
+
+def test_opc_ua_source_reads_what_the_plant_publishes_across_a_restart(plant):
+    """Server A publishes 0–59 and stops; server B (same port) comes back with 70–109 in its
+    history before the client is back and 110– live: the client gets every sample either
+    way, 60–69 (which no server had) stay a gap, with a finding saying so."""
+    run, _ = plant
+    measured = run.measured.iloc[:160]
+    tag_map = plant_tag_map()
+    live_map = plant_node_ids(tag_map)
+    port = _free_port()
+    settings = PlantServerSettings(port=port, speed=None, history_samples=1000)
+
+    async def scenario():
+        source = OpcUaSource(settings.endpoint, live_map, INSECURE, reconnect_s=0.3,
+                             settle_s=2.0)
+        blocks: list = []
+        server_a = PlantServer(measured, tag_map, settings)
+        await server_a.start()
+        consumer = await _started(source, blocks)
+        await server_a.publish(60)
+        await asyncio.sleep(1.0)
+        await server_a.stop()
+        server_b = PlantServer(measured, tag_map, settings)
+        server_b.published = 70  # 60–69 are lost for good
+        await server_b.start()
+        await server_b.publish(40)  # 70–109: only in B's history when the client returns
+        while source.connections < 2:
+            await asyncio.sleep(0.05)
+        await asyncio.sleep(0.5)
+        await server_b.publish()  # 110–159 live
+        last = measured.index[-1]
+        for _ in range(400):  # until the last sample is in (a loaded machine is slow)
+            if any(len(b.frame) and b.frame.index[-1] >= last - pd.Timedelta(seconds=3)
+                   for b in blocks):
+                break
+            await asyncio.sleep(0.05)
+        source.close()
+        await consumer
+        await server_b.stop()
+        return blocks
+
+    blocks = asyncio.run(scenario())
+    received = _frame(blocks)
+    kept = np.r_[0:60, 70:160]
+    expected = measured.iloc[kept]
+    assert list(received.index) == list(expected.index)
+    for name in received.columns:
+        both = np.isfinite(expected[name].to_numpy())
+        assert np.array_equal(np.isfinite(received[name].to_numpy()), both)  # dropouts stay
+        assert np.allclose(received[name].to_numpy()[both], expected[name].to_numpy()[both],
+                           rtol=1e-12)
+    findings = [finding for block in blocks for finding in block.findings]
+    kinds = {finding.kind for finding in findings}
+    assert "disconnected" in kinds
+    gaps = [finding for finding in findings if finding.kind == "gap"]
+    assert len(gaps) == 1 and "10 missing" in gaps[0].message
+
+
+def test_bad_input_becomes_findings_and_the_source_goes_on():
+    """Unknown node, a string value, a timestamp from the future and one going backwards."""
+    port = _free_port()
+    endpoint = f"opc.tcp://127.0.0.1:{port}/test/"
+    tag_map = plant_tag_map()
+    signals = {"main_steam_pressure": "P", "main_steam_temperature": "T",
+               "control_stage_pressure": "S"}
+
+    async def scenario():
+        server = Server()
+        await server.init()
+        server.set_endpoint(endpoint)
+        server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
+        index = await server.register_namespace("urn:test")
+        variables = {}
+        for name, tag in signals.items():  # a text tag where the map expects a number
+            initial = ua.Variant("ok", ua.VariantType.String) if tag == "S" else ua.Variant(
+                0.0, ua.VariantType.Double)
+            variables[name] = await server.nodes.objects.add_variable(ua.NodeId(tag, index),
+                                                                      tag, initial)
+            await server.write_attribute_value(variables[name].nodeid, ua.DataValue(
+                Value=initial,
+                StatusCode=ua.StatusCode(ua.StatusCodes.BadWaitingForInitialData)))
+        specs = {name: tag_map.signals[name] for name in signals}
+        import dataclasses
+
+        specs = {name: dataclasses.replace(spec, node_id=f"nsu=urn:test;s={signals[name]}")
+                 for name, spec in specs.items()}
+        specs["main_steam_flow"] = dataclasses.replace(tag_map.signals["main_steam_flow"],
+                                                       node_id="nsu=urn:test;s=NOPE")
+        mapped = dataclasses.replace(tag_map, signals=specs)
+        await server.start()
+        source = OpcUaSource(endpoint, mapped, INSECURE, settle_s=1.0)
+        blocks: list = []
+        consumer = await _started(source, blocks)
+        base = datetime(2026, 3, 1, tzinfo=UTC)
+
+        async def write(name, value, when, variant=ua.VariantType.Double):
+            await server.write_attribute_value(variables[name].nodeid, ua.DataValue(
+                Value=ua.Variant(value, variant), SourceTimestamp=when))
+
+        for k in range(5):
+            stamp = base + timedelta(seconds=k)
+            await write("main_steam_pressure", 16.0 + k, stamp)
+            await write("main_steam_temperature", 538.0, stamp)
+            await asyncio.sleep(0.05)
+        await write("control_stage_pressure", "I/O fault", base + timedelta(seconds=5),
+                    ua.VariantType.String)
+        await write("main_steam_pressure", 16.0, datetime.now(UTC) + timedelta(hours=1))
+        await write("main_steam_pressure", 15.0, base + timedelta(seconds=1))  # backwards
+        await asyncio.sleep(0.1)
+        for k in range(6, 10):
+            stamp = base + timedelta(seconds=k)
+            await write("main_steam_pressure", 16.0 + k, stamp)
+            await write("main_steam_temperature", 538.0, stamp)
+            await asyncio.sleep(0.05)
+        await asyncio.sleep(1.5)
+        source.close()
+        await consumer
+        await server.stop()
+        return blocks
+
+    blocks = asyncio.run(scenario())
+    findings = [finding for block in blocks for finding in block.findings]
+    kinds = {finding.kind: finding for finding in findings}
+    assert {"unknown_node", "not_a_number", "future", "backwards"} <= set(kinds)
+    assert kinds["unknown_node"].signal == "main_steam_flow" and "NOPE" in \
+        kinds["unknown_node"].message
+    assert kinds["not_a_number"].tag == tag_map.signals["control_stage_pressure"].column
+    received = _frame(blocks)
+    assert received["main_steam_pressure"].iloc[-1] == pytest.approx(25.0e6)  # still going
+    assert received["control_stage_pressure"].isna().all()
+    assert received["main_steam_flow"].isna().all()
