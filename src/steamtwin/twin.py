@@ -7,35 +7,20 @@ and return the twin, their results in attributes ending in ``_`` (``params_``, `
 ``calibrate`` and ``validate`` are thin layers over it.
 
 One folder holds a twin (:meth:`Twin.save`, :meth:`Twin.load`), to zip and hand on; nothing is
-pickled:
+pickled. Its format and checks are :mod:`steamtwin.twinfile`.
 
-* ``spec.toml`` — the turbine spec's TOML text (its SHA-256 content hash,
-  :func:`~steamtwin.spec.fingerprint.spec_hash`, recorded in ``twin.json``);
-* ``params.json`` — the model parameters as calibration writes them (intervals, priors, sensor
-  offsets when calibrated; :meth:`ModelParameters.from_json` reads it) and
-  ``params.history.csv`` after a GA calibration;
-* ``rom.npz`` — the blade ROM in its data-only file format (:mod:`steamtwin.rom.romfile`);
-* ``reports/`` — the calibration's windows (``calibration_windows.csv``) and the last
-  validation report (``reports/validation/``);
-* ``twin.json`` — format and version, package versions, the spec's name and hash, the SHA-256 of
-  every file above and the provenance: the steps that made the twin, with their settings.
-
-:meth:`Twin.load` refuses a folder whose files do not match ``twin.json`` (changed after
-saving), whose spec hash differs from the recorded one, or whose ROM was built from another
-spec or other parameters than the twin's (:class:`TwinError`, naming the file and both values).
+(Over 500 lines for a reason: the one class a user imports, each method the body a CLI command
+had before; what is not the class's — the folder format — lives in :mod:`steamtwin.twinfile`.)
 """
 
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
-import platform
 import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import asdict
 from datetime import UTC, datetime
-from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -47,11 +32,8 @@ from steamtwin.dcs.tagmap import TagMap
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import (
     DEFAULT_PRIORS,
-    PARAMETER_BOUNDS,
-    PARAMETERS_SCHEMA_VERSION,
     ModelParameters,
     ParameterPrior,
-    sensor_offsets_from_json,
 )
 from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.model.simulator import INPUT_SIGNALS
@@ -60,31 +42,25 @@ from steamtwin.spec import TurbineSpec
 from steamtwin.spec.fingerprint import (
     builtin_spec_text,
     load_spec_and_text,
-    short_hash,
     spec_hash,
 )
-from steamtwin.spec.loader import parse_spec
+from steamtwin.twinfile import (
+    PARAMS_FILE,
+    REPORTS,
+    ROM_FILE,
+    SPEC_FILE,
+    TwinError,
+    read_folder,
+    write_manifest,
+    write_parameters_file,
+)
 
-__all__ = ["FORMAT", "FORMAT_VERSION", "Twin", "TwinError", "monitoring_model",
-           "sensor_model"]
+__all__ = ["Twin", "TwinError", "monitoring_model", "sensor_model"]
 
-FORMAT = "steamtwin-twin"
-FORMAT_VERSION = 1
-MANIFEST = "twin.json"
-SPEC_FILE = "spec.toml"
-PARAMS_FILE = "params.json"
-ROM_FILE = "rom.npz"
-REPORTS = "reports"
 STEADY_TOLERANCE = 0.02
 """± fraction of rated load of a steady hold (validation's automatic windows)."""
 PRESSURE_WITNESS = "control_stage_pressure"
 """The pressure a calibration adds to the fitted temperatures when every file maps it."""
-_VERSIONED = ("steamtwin", "numpy", "scipy", "pandas", "pymoo", "numba", "scikit-fem")
-
-
-class TwinError(ValueError):
-    """A twin folder is missing a file, changed after saving, or inconsistent; or a twin lacks
-    what a method needs (a ROM to validate)."""
 
 
 class Twin:
@@ -103,6 +79,8 @@ class Twin:
     ``model_`` (the FOM read through the plant's sensors), ``sensors_``,
     ``initial_rmse_`` (K, the empirical parameters on the same windows); after
     :meth:`build_rom` ``rom_``; after :meth:`validate` ``validation_`` (the report).
+    In use, fitted or given: :attr:`parameters`, :attr:`intervals`, :attr:`offsets`,
+    :attr:`blade_rom`; the provenance: :attr:`steps`.
     """
 
     def __init__(self, spec: TurbineSpec, params: ModelParameters | None = None, *,
@@ -144,6 +122,20 @@ class Twin:
     def offsets(self) -> dict[str, float]:
         """Sensor offsets in use (K): the calibration's, else the constructor's."""
         return dict(getattr(self, "sensor_offsets_", self.sensor_offsets))
+
+    @property
+    def intervals(self) -> dict[str, tuple[float, float]]:
+        """The parameters' 95 % posterior intervals (name → (low, high), dimensionless) of the
+        calibration — this twin's, else the one its ``params.json`` carries; empty without."""
+        calibrator = getattr(self, "calibrator_", None)
+        if calibrator is not None:
+            posterior = calibrator.posterior_
+            section = posterior.to_dict()["intervals"] if posterior is not None else {}
+        else:
+            text = getattr(self, "_params_text", None)
+            document = json.loads(text) if text is not None else {}
+            section = document.get("posterior", {}).get("intervals", {})
+        return {name: (float(row["low"]), float(row["high"])) for name, row in section.items()}
 
     @property
     def blade_rom(self) -> BladeRom | None:
@@ -258,6 +250,7 @@ class Twin:
         else:
             calibrator.fit(window_set, resume=resume)
         self.calibrator_ = calibrator
+        self.calibration_settings_ = {**settings, "generations": generations}
         self.windows_ = window_set
         self.model_ = model
         self.sensors_ = sensors
@@ -273,6 +266,59 @@ class Twin:
             evaluations=int(calibrator.n_evaluations_), rmse_K=float(calibrator.rmse_),
             parameters=asdict(calibrator.params_)))
         return self
+
+    def calibration_report(self, folder: str | Path, *, sensitivity: bool = False,
+                           progress: Callable[[str], None] | None = None) -> list[Path]:
+        """Write the calibration's result files into ``folder``; returns their paths.
+
+        Table 6 (RMSE per load band before/after, with the instruments' error; the parameter
+        intervals), Figure 7 (GA convergence), Figure 8 (temperatures before/after in the
+        window closest to 50 % load, as the method shows it), the identifiability check and,
+        with ``sensitivity``, Table 7 (nine more calibrations with the GA settings varied;
+        ``progress(message)`` names it).
+        """
+        from steamtwin.calibration import Calibrator
+        from steamtwin.calibration.report import (
+            band_rmse_table,
+            convergence_figure,
+            ga_sensitivity_table,
+            parameter_table,
+            temperature_comparison_figure,
+        )
+
+        if not hasattr(self, "calibrator_"):
+            raise TwinError("the twin is not calibrated: call calibrate(history) first")
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        model, window_set, calibrator = self.model_, self.windows_, self.calibrator_
+        rated = self.spec.design.generator_power
+        windows = [w.data for w in window_set]
+        names = [f"window {i + 1}: {w.name}" for i, w in enumerate(window_set)]
+        written = [folder / "table6_rmse.csv"]
+        band_rmse_table(model, window_set, calibrator.params_).to_csv(written[-1])
+        if calibrator.posterior_ is not None:
+            written.append(folder / "table6_parameters.csv")
+            parameter_table(calibrator.posterior_).to_csv(written[-1])
+        if isinstance(calibrator, Calibrator):
+            written.append(convergence_figure(calibrator.history_,
+                                              folder / "figure7_convergence.png"))
+        loads = [abs(float(w["load"].mean()) / rated - 0.5) if "load" in w.columns else 0.0
+                 for w in windows]
+        closest = int(np.argmin(loads))  # the method's Figure 8 is at 50 % load
+        written.append(temperature_comparison_figure(
+            model, windows[closest], calibrator.params_, folder / "figure8_temperatures.png",
+            title=f"Predicted vs measured temperatures, {names[closest]} (Figure 8)"))
+        if calibrator.identifiability_ is not None:
+            written.append(folder / "identifiability.csv")
+            calibrator.identifiability_.to_csv(written[-1])
+        if sensitivity:
+            if progress is not None:
+                progress("Table 7: GA settings varied")
+            table7 = ga_sensitivity_table(lambda s: Calibrator(model, **s).fit(window_set),
+                                          self.calibration_settings_)
+            written.append(folder / "table7_ga_sensitivity.csv")
+            table7.to_csv(written[-1], index=False)
+        return written
 
     # -- ROM --------------------------------------------------------------------------------
 
@@ -400,7 +446,7 @@ class Twin:
     # -- files ------------------------------------------------------------------------------
 
     def save(self, directory: str | Path) -> Path:
-        """Write the twin into one folder (module docstring); returns the folder.
+        """Write the twin into one folder (:mod:`steamtwin.twinfile`); returns the folder.
 
         TwinError when the spec's TOML text is unknown (a spec built in Python: give
         ``spec_toml``)."""
@@ -417,14 +463,7 @@ class Twin:
             params_path.write_text(self._params_text, encoding="utf-8")
             written.append(params_path)
         else:
-            document: dict[str, object] = {
-                "schema_version": PARAMETERS_SCHEMA_VERSION,
-                "parameters": asdict(self.parameters),
-                "bounds": {name: list(b) for name, b in PARAMETER_BOUNDS.items()}}
-            if self.offsets:
-                document["sensor_offsets"] = self.offsets
-            params_path.write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
-            written.append(params_path)
+            written.append(write_parameters_file(params_path, self.parameters, self.offsets))
         if self.blade_rom is not None:
             written.append(save_rom(self.blade_rom, folder / ROM_FILE))
         if hasattr(self, "windows_"):
@@ -435,70 +474,18 @@ class Twin:
             target = folder / REPORTS / "validation"
             self.validation_.write(target)
             written += sorted(p for p in target.rglob("*") if p.is_file())
-        manifest = {
-            "format": FORMAT, "format_version": FORMAT_VERSION,
-            "saved": datetime.now(UTC).isoformat(timespec="seconds"),
-            "versions": _versions(),
-            "spec": {"name": self.spec.name, "sha256": spec_hash(self.spec)},
-            "parameters": asdict(self.parameters),
-            "files": {p.relative_to(folder).as_posix(): _sha256(p) for p in written},
-            "provenance": self.steps,
-        }
-        (folder / MANIFEST).write_text(json.dumps(manifest, indent=2, default=str) + "\n",
-                                       encoding="utf-8")
+        write_manifest(folder, written, self.spec, self.parameters, self.steps)
         return folder
 
     @classmethod
     def load(cls, directory: str | Path) -> Twin:
         """Read a twin folder :meth:`save` wrote, checking every file against ``twin.json``
         and the ROM against the spec and parameters (TwinError naming the file otherwise)."""
-        from steamtwin.rom.romfile import load_rom
-
-        folder = Path(directory)
-        manifest_path = folder / MANIFEST
-        if not manifest_path.is_file():
-            raise TwinError(f"{folder}: no {MANIFEST}; not a twin folder (Twin.save writes one)")
-        try:
-            manifest = json.loads(manifest_path.read_text(encoding="utf-8"))
-        except (ValueError, UnicodeDecodeError) as error:
-            raise TwinError(f"{manifest_path}: not valid JSON: {error}") from None
-        if not isinstance(manifest, dict) or manifest.get("format") != FORMAT:
-            raise TwinError(f"{manifest_path}: format is not {FORMAT!r}")
-        version = manifest.get("format_version")
-        if not isinstance(version, int) or not 1 <= version <= FORMAT_VERSION:
-            raise TwinError(f"{manifest_path}: format_version {version!r}; this steamtwin "
-                            f"reads 1…{FORMAT_VERSION}")
-        files = manifest.get("files")
-        if not isinstance(files, dict) or SPEC_FILE not in files or PARAMS_FILE not in files:
-            raise TwinError(f"{manifest_path}: 'files' must list {SPEC_FILE} and {PARAMS_FILE}")
-        for name, digest in files.items():
-            path = folder / name
-            if not path.is_file():
-                raise TwinError(f"{path}: listed in {MANIFEST} but missing")
-            actual = _sha256(path)
-            if actual != digest:
-                raise TwinError(
-                    f"{path}: its SHA-256 {short_hash(actual)} differs from the "
-                    f"{short_hash(str(digest))} {MANIFEST} records: the file was changed after "
-                    "the twin was saved; restore it, or load its parts by hand and save anew")
-        spec_text = (folder / SPEC_FILE).read_text(encoding="utf-8")
-        spec = parse_spec(spec_text, str(folder / SPEC_FILE))
-        recorded = manifest.get("spec", {}).get("sha256")
-        if spec_hash(spec) != recorded:
-            raise TwinError(f"{folder / SPEC_FILE}: describes turbine {spec.name!r} (sha256 "
-                            f"{short_hash(spec_hash(spec))}), but {MANIFEST} records sha256 "
-                            f"{short_hash(str(recorded))}")
-        params_path = folder / PARAMS_FILE
-        params = ModelParameters.from_json(params_path)
-        offsets = sensor_offsets_from_json(params_path)
-        rom = None
-        if ROM_FILE in files:
-            rom = load_rom(folder / ROM_FILE)
-            _check_rom(rom, spec, params, folder / ROM_FILE)
-        twin = cls(spec, params, rom=rom, spec_toml=spec_text, sensor_offsets=offsets,
-                   provenance=[*manifest.get("provenance", []),
-                               _step("load", folder=str(folder))])
-        twin._params_text = params_path.read_text(encoding="utf-8")
+        parts = read_folder(directory)
+        twin = cls(parts.spec, parts.params, rom=parts.rom, spec_toml=parts.spec_text,
+                   sensor_offsets=parts.offsets,
+                   provenance=[*parts.provenance, _step("load", folder=str(directory))])
+        twin._params_text = parts.params_text
         return twin
 
     # -- helpers ----------------------------------------------------------------------------
@@ -526,37 +513,6 @@ class Twin:
 def _step(name: str, **details: Any) -> dict[str, Any]:
     """One provenance entry: the step, when (UTC), with what."""
     return {"step": name, "time": datetime.now(UTC).isoformat(timespec="seconds"), **details}
-
-
-def _sha256(path: Path) -> str:
-    return hashlib.sha256(path.read_bytes()).hexdigest()
-
-
-def _versions() -> dict[str, str]:
-    """Python and the versions of the packages whose code shapes the twin's numbers."""
-    result = {"python": platform.python_version()}
-    for name in _VERSIONED:
-        try:
-            result[name] = metadata.version(name)
-        except metadata.PackageNotFoundError:
-            continue
-    return result
-
-
-def _check_rom(rom: BladeRom, spec: TurbineSpec, params: ModelParameters, path: Path) -> None:
-    """The ROM must record this spec (hash) and these parameters (TwinError naming both)."""
-    from steamtwin.rom.provenance import rom_parameters
-
-    record = rom.provenance.get("spec", {})
-    digest = spec_hash(spec)
-    if record.get("sha256") != digest:
-        raise TwinError(f"{path}: built from turbine {record.get('name')!r} (sha256 "
-                        f"{short_hash(str(record.get('sha256')))}), but the twin's spec is "
-                        f"{spec.name!r} (sha256 {short_hash(digest)})")
-    built_with = rom_parameters(rom)
-    if built_with != params:
-        raise TwinError(f"{path}: built with parameters {asdict(built_with)}, but the twin's "
-                        f"{PARAMS_FILE} holds {asdict(params)}; rebuild the ROM")
 
 
 def sensor_model(spec: TurbineSpec, histories: Sequence[History]) -> FullOrderModel:

@@ -1,5 +1,8 @@
 """``steamtwin calibrate``: fit the model parameters to plant historian data with the GA.
 
+Parsing and printing over :meth:`steamtwin.Twin.calibrate` (windows, sensors, calibrators) and
+:meth:`~steamtwin.Twin.calibration_report`.
+
 Several historian files calibrate jointly (``--data A --data B``, one ``--tags`` for all or one
 per file): windows at every steady load and on ramps, weighted by load band
 (:mod:`steamtwin.calibration.windowset`); the fit is the MAP under the parameters' priors with
@@ -12,36 +15,19 @@ import json
 import warnings
 from pathlib import Path
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-from steamtwin.calibration import CalibrationError, Calibrator
+from steamtwin.calibration import CalibrationError
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
-from steamtwin.calibration.objective import THERMOCOUPLE_BIAS
 from steamtwin.calibration.online import OnlineCalibrator, ParameterStore
-from steamtwin.calibration.report import (
-    band_rmse_table,
-    convergence_figure,
-    ga_sensitivity_table,
-    parameter_table,
-    temperature_comparison_figure,
-    trajectory_figure,
-)
-from steamtwin.calibration.surrogate import SurrogateCalibrator
-from steamtwin.calibration.tracking import (
-    ParameterTracker,
-    tracking_sigma,
-)
-from steamtwin.calibration.windowset import (
-    WindowSet,
-)
+from steamtwin.calibration.report import trajectory_figure
+from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
 from steamtwin.cli.paths import OutputPathError, prepare_output_file, prepare_output_folder
 from steamtwin.dcs.history import OVERRIDE_OPTION, DataQualityError, History, load_history
 from steamtwin.dcs.readers import HistorianFormatError
 from steamtwin.dcs.tagmap import TagMapError
-from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import (
     DEFAULT_PRIORS,
     ParameterError,
@@ -219,13 +205,11 @@ def calibrate(
                     max_evaluations=max_evaluations, seed=seed, workers=workers,
                     scheduler=scheduler, progress=progress, resume=resume,
                     checkpoint=None if surrogate else out.with_name(f"{out.stem}.checkpoint"))
-        calibrator, windows, model = twin.calibrator_, twin.windows_, twin.model_
-        settings = {"population": population, "seed": seed, "workers": workers,
-                    "scheduler": scheduler, "priors": priors, "sensors": twin.sensors_,
-                    "sensor_bias": THERMOCOUPLE_BIAS if sensor_bias else None}
+        calibrator, windows = twin.calibrator_, twin.windows_
         if report is not None:
-            written = _write_report(report, model, windows, calibrator, sensitivity,
-                                    {**settings, "generations": generations}, console)
+            with console.status("writing the report") as status:
+                written = twin.calibration_report(report, sensitivity=sensitivity,
+                                                  progress=status.update)
     except (DataQualityError, CalibrationError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=1) from None
@@ -256,41 +240,6 @@ def calibrate(
     typer.echo(f"wrote {params_path} and {history_path}")
     if report is not None:
         typer.echo(f"wrote {', '.join(str(path) for path in written)}")
-
-
-def _write_report(folder: Path, model: FullOrderModel, window_set: WindowSet,
-                  calibrator: Calibrator | SurrogateCalibrator, sensitivity: bool,
-                  settings: dict[str, object], console: Console) -> list[Path]:
-    """Table 6 (per load band, with the instruments' error; parameter intervals), Figures 7
-    and 8, identifiability (and Table 7) into ``folder``."""
-    folder.mkdir(parents=True, exist_ok=True)
-    rated = model.spec.design.generator_power
-    windows = [w.data for w in window_set]
-    names = [f"window {i + 1}: {w.name}" for i, w in enumerate(window_set)]
-    table6 = band_rmse_table(model, window_set, calibrator.params_)
-    written = [folder / "table6_rmse.csv"]
-    table6.to_csv(written[-1])
-    if calibrator.posterior_ is not None:
-        written.append(folder / "table6_parameters.csv")
-        parameter_table(calibrator.posterior_).to_csv(written[-1])
-    if isinstance(calibrator, Calibrator):
-        written.append(convergence_figure(calibrator.history_, folder / "figure7_convergence.png"))
-    loads = [abs(float(w["load"].mean()) / rated - 0.5) if "load" in w.columns else 0.0
-             for w in windows]
-    closest = int(np.argmin(loads))  # the method's Figure 8 is at 50 % load
-    written.append(temperature_comparison_figure(
-        model, windows[closest], calibrator.params_, folder / "figure8_temperatures.png",
-        title=f"Predicted vs measured temperatures, {names[closest]} (Figure 8)"))
-    if calibrator.identifiability_ is not None:
-        written.append(folder / "identifiability.csv")
-        calibrator.identifiability_.to_csv(written[-1])
-    if sensitivity:
-        with console.status("Table 7: GA settings varied"):
-            table7 = ga_sensitivity_table(
-                lambda s: Calibrator(model, **s).fit(window_set), settings)
-        written.append(folder / "table7_ga_sensitivity.csv")
-        table7.to_csv(written[-1], index=False)
-    return written
 
 
 def calibrate_online(
