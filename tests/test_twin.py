@@ -16,6 +16,8 @@ import numpy as np
 import pandas as pd
 import pytest
 import typer
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 import steamtwin
@@ -265,3 +267,19 @@ def test_readme_python_example_runs_as_printed(tmp_path, monkeypatch):
         exec(compile(block, "README.md", "exec"), {})  # the README's own example
     loaded = Twin.load(tmp_path / "my-twin")
     assert abs(loaded.parameters.flow_coefficient - TRUE_FLOW) < 0.015
+
+
+@settings(max_examples=15, deadline=None)
+@given(split=st.integers(min_value=40, max_value=460))
+def test_one_export_split_anywhere_loads_as_the_whole(tmp_path_factory, split):
+    """Exports cut at any row give the history of the uncut export (smooth, noisy data:
+    nothing for the gate to exclude at the cut)."""
+    folder = tmp_path_factory.mktemp("split")
+    tags = _tags(folder / "tags.toml")
+    whole = _wide_csv(folder / "whole.csv", 500, "2026-03-01T00:00Z")
+    lines = whole.read_text().splitlines()
+    (folder / "a.csv").write_text("\n".join(lines[:split + 1]) + "\n")
+    (folder / "b.csv").write_text("\n".join([lines[0], *lines[split + 1:]]) + "\n")
+    parts = steamtwin.load_history([folder / "b.csv", folder / "a.csv"], tags)
+    pd.testing.assert_frame_equal(parts.data, steamtwin.load_history(whole, tags).data)
+    assert parts.excluded == {"main_steam_pressure": 0}
