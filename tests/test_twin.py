@@ -64,6 +64,8 @@ def test_from_spec_stores_and_computes_nothing(reference_spec, tmp_path):
         Twin("reference")  # type: ignore[arg-type]
     with pytest.raises(TwinError, match="no blade ROM"):
         twin.signals_needed()
+    with pytest.raises(TypeError, match=r"takes histories from steamtwin\.load_history"):
+        twin.calibrate(pd.DataFrame())  # type: ignore[arg-type]
 
 
 def test_simulate_is_the_full_order_model_bit_for_bit(reference_spec, reference_model):

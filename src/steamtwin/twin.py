@@ -206,9 +206,11 @@ class Twin:
             raise ValueError(f"method must be 'ga' or 'surrogate' (got {method!r})")
         if method == "surrogate" and resume:
             raise ValueError("resume continues a GA run; the surrogate mode has no checkpoint")
-        histories = [history] if isinstance(history, History) else list(history)
+        histories = list(history) if isinstance(history, list | tuple) else [history]
         if not histories:
             raise ValueError("calibrate: no history given")
+        for item in histories:
+            _check_history(item, "calibrate")
         sources = []
         for item in histories:
             signals = item.tag_map.signals.values()
@@ -386,6 +388,7 @@ class Twin:
 
         if monitor not in ("fom", "rom"):
             raise ValueError(f"--monitor must be 'fom' or 'rom' (got {monitor!r})")
+        _check_history(history, "validate")
         bundle = self._rom_or_error()
         missing = [name for name in self.signals_needed(monitor=monitor, field_check=field_check)
                    if name not in history.data.columns]
@@ -513,6 +516,12 @@ class Twin:
 def _step(name: str, **details: Any) -> dict[str, Any]:
     """One provenance entry: the step, when (UTC), with what."""
     return {"step": name, "time": datetime.now(UTC).isoformat(timespec="seconds"), **details}
+
+
+def _check_history(history: object, method: str) -> None:
+    if not isinstance(history, History):
+        raise TypeError(f"Twin.{method} takes histories from steamtwin.load_history(path, "
+                        f"tag_map) (got {type(history).__name__})")
 
 
 def sensor_model(spec: TurbineSpec, histories: Sequence[History]) -> FullOrderModel:

@@ -125,12 +125,13 @@ class History:
         return result
 
 
-def load_history(data: str | Path | Sequence[str | Path], tags: str | Path | TagMap | None = None,
-                 *, required: Collection[str] = (), accept_errors: bool = False) -> History:
+def load_history(data: str | Path | Sequence[str | Path],
+                 tag_map: str | Path | TagMap | None = None, *,
+                 required: Collection[str] = (), accept_errors: bool = False) -> History:
     """Read, check and clean a historian export (CSV or Parquet, wide or long) through its tag
     map; a list of exports of one historian loads as one history (module docstring).
 
-    ``tags``: the tag map (TOML path or :class:`~steamtwin.dcs.tagmap.TagMap`); None takes
+    ``tag_map``: the tag map (TOML path or :class:`~steamtwin.dcs.tagmap.TagMap`); None takes
     ``tags.toml`` next to the (first) export. ``required``: canonical signals the caller cannot
     do without; each must be mapped in the tag map and present in the file (a ``ValueError``
     naming the signal, tag and files otherwise). Raises :class:`DataQualityError` on
@@ -140,22 +141,22 @@ def load_history(data: str | Path | Sequence[str | Path], tags: str | Path | Tag
     paths = [data] if isinstance(data, str | Path) else list(data)
     if not paths:
         raise ValueError("load_history: no historian file given")
-    if tags is None:
-        tags = Path(paths[0]).with_name(DEFAULT_TAG_MAP_NAME)
-        if not tags.is_file():
+    if tag_map is None:
+        tag_map = Path(paths[0]).with_name(DEFAULT_TAG_MAP_NAME)
+        if not tag_map.is_file():
             raise ValueError(f"{paths[0]}: no tag map given and no {DEFAULT_TAG_MAP_NAME} next "
                              "to it; pass the tag map (TOML) that maps the export's columns")
-    tag_map = tags if isinstance(tags, TagMap) else load_tag_map(tags)
-    parts = [_load_one(path, tag_map, tuple(required), accept_errors) for path in paths]
+    tags = tag_map if isinstance(tag_map, TagMap) else load_tag_map(tag_map)
+    parts = [_load_one(path, tags, tuple(required), accept_errors) for path in paths]
     return parts[0] if len(parts) == 1 else _joined(parts)
 
 
-def check_history(data: str | Path, tags: str | Path | TagMap, required: Collection[str] = ()
-                  ) -> tuple[HistorianData, QualityReport]:
+def check_history(data: str | Path, tag_map: str | Path | TagMap,
+                  required: Collection[str] = ()) -> tuple[HistorianData, QualityReport]:
     """The export as read and its quality report, nothing cleaned (``steamtwin dcs check``):
     the same checks, with the same settings, as :func:`load_history` applies."""
-    tag_map = tags if isinstance(tags, TagMap) else load_tag_map(tags)
-    historian = read_historian(data, tag_map)
+    tags = tag_map if isinstance(tag_map, TagMap) else load_tag_map(tag_map)
+    historian = read_historian(data, tags)
     return historian, check_quality(historian.signals, **quality_options(historian, required))
 
 
