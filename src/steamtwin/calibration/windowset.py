@@ -1,6 +1,8 @@
 """Calibration windows from one or several historian files, weighted so that no load dominates.
 
-Which windows (:func:`find_calibration_windows`)
+Which windows (:func:`find_calibration_windows`; the rule is
+:func:`steamtwin.dcs.windows.find_windows`, the same for validation, with each window then cut
+around input dropouts a calibration cannot fill, :func:`split_at_input_dropouts`)
     *Steady* windows: every steady-load span of at least ``min_steady_s`` (default 1 h;
     :func:`steamtwin.dcs.windows.find_steady_windows`), at every load, cut to its last
     ``max_steady_s`` (default 2 h; the start of a hold still carries the ramp's transient,
@@ -36,7 +38,7 @@ import numpy as np
 import pandas as pd
 
 from steamtwin.calibration.objective import MAX_INPUT_GAP_S, MIN_WINDOW_SAMPLES
-from steamtwin.dcs.windows import find_steady_windows, select_window
+from steamtwin.dcs.windows import find_windows, load_fraction, select_window
 from steamtwin.model.simulator import INPUT_SIGNALS
 
 __all__ = [
@@ -133,16 +135,10 @@ class WindowSet:
             "samples": [len(w.data) for w in self.windows], "weight": self.sample_weights()})
 
 
-def _load_fraction(frame: pd.DataFrame, rated_load_w: float) -> float:
-    if "load" not in frame.columns or not frame["load"].notna().any():
-        return float("nan")
-    return float(frame["load"].mean()) / rated_load_w
-
-
 def given_windows(frames: Sequence[pd.DataFrame], rated_load_w: float, *, source: str = "",
                   sigma: Mapping[str, float] | None = None) -> list[CalibrationWindow]:
     """Windows chosen by hand (kind "given"), banded by their mean load."""
-    return [CalibrationWindow(f, "given", _load_fraction(f, rated_load_w), source, sigma)
+    return [CalibrationWindow(f, "given", load_fraction(f, rated_load_w), source, sigma)
             for f in frames]
 
 
@@ -156,39 +152,15 @@ def find_calibration_windows(
     order. ``data``: canonical SI signals with ``load`` (W) on a DatetimeIndex;
     ``rated_load_w`` (W); durations in s; ``tolerance`` and ``ramp_min_change`` fractions of
     rated. ValueError naming ``source`` if the data have no load signal."""
-    if "load" not in data.columns:
-        raise ValueError(f"{source or 'data'}: no 'load' signal, which the search for steady "
-                         "and ramp windows needs; map the generator load in the tag map or "
-                         "pass --window START/END")
-    if not max_steady_s >= min_steady_s > 0:
-        raise ValueError(f"need 0 < min_steady_s ≤ max_steady_s (got {min_steady_s}, "
-                         f"{max_steady_s} s)")
-    # the steadiness test's sub-window (600 s by default) must fit in the shortest hold
-    steady = sorted(find_steady_windows(data, duration_s=min_steady_s,
-                                        rated_load_w=rated_load_w, tolerance=tolerance,
-                                        sub_window_s=min(600.0, min_steady_s / 2.0)),
-                    key=lambda w: pd.Timestamp(w.start))
-    result: list[CalibrationWindow] = []
-    for span in steady:
-        start = max(pd.Timestamp(span.start),
-                    pd.Timestamp(span.end) - pd.Timedelta(seconds=max_steady_s))
-        frame = select_window(data, start, span.end)
-        result.extend(CalibrationWindow(piece, "steady", span.mean_load_fraction, source, sigma)
-                      for piece in split_at_input_dropouts(frame))
-    edges = [data.index[0], *[t for s in steady for t in (pd.Timestamp(s.start),
-                                                          pd.Timestamp(s.end))], None]
-    for gap_start, gap_end in zip(edges[0::2], edges[1::2], strict=True):
-        gap = data.loc[gap_start:gap_end] if gap_end is not None else data.loc[gap_start:]
-        load = gap["load"].to_numpy(dtype=float)
-        if gap.empty or not np.isfinite(load).any():
-            continue
-        if np.nanmax(load) - np.nanmin(load) < ramp_min_change * rated_load_w:
-            continue
-        start = max(gap.index[0] - pd.Timedelta(seconds=ramp_before_s), data.index[0])
-        end = min(gap.index[-1] + pd.Timedelta(seconds=ramp_after_s), data.index[-1])
-        result.extend(CalibrationWindow(piece, "ramp", _load_fraction(piece, rated_load_w),
-                                        source, sigma)
-                      for piece in split_at_input_dropouts(data.loc[start:end]))
+    result = []
+    for window in find_windows(data, rated_load_w, min_steady_s=min_steady_s,
+                               max_steady_s=max_steady_s, tolerance=tolerance,
+                               ramp_min_change=ramp_min_change, ramp_before_s=ramp_before_s,
+                               ramp_after_s=ramp_after_s, source=source):
+        result.extend(CalibrationWindow(
+            piece, window.kind, window.load_fraction if window.kind == "steady"
+            else load_fraction(piece, rated_load_w), source, sigma)
+            for piece in split_at_input_dropouts(window.data))
     return sorted(result, key=lambda w: w.data.index[0])
 
 

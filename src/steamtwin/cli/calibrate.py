@@ -1,5 +1,8 @@
 """``steamtwin calibrate``: fit the model parameters to plant historian data with the GA.
 
+Parsing and printing over :meth:`steamtwin.Twin.calibrate` (windows, sensors, calibrators) and
+:meth:`~steamtwin.Twin.calibration_report`.
+
 Several historian files calibrate jointly (``--data A --data B``, one ``--tags`` for all or one
 per file): windows at every steady load and on ramps, weighted by load band
 (:mod:`steamtwin.calibration.windowset`); the fit is the MAP under the parameters' priors with
@@ -10,59 +13,32 @@ from __future__ import annotations
 
 import json
 import warnings
-from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
 import typer
 from rich.console import Console
 from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-from steamtwin.calibration import CalibrationError, Calibrator
+from steamtwin.calibration import CalibrationError
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
-from steamtwin.calibration.objective import DEFAULT_SENSORS, THERMOCOUPLE_BIAS
 from steamtwin.calibration.online import OnlineCalibrator, ParameterStore
-from steamtwin.calibration.report import (
-    band_rmse_table,
-    convergence_figure,
-    ga_sensitivity_table,
-    parameter_table,
-    temperature_comparison_figure,
-    trajectory_figure,
-)
-from steamtwin.calibration.surrogate import SurrogateCalibrator
-from steamtwin.calibration.tracking import (
-    TYPICAL_INSTRUMENT_ERROR,
-    ParameterTracker,
-    tracking_sigma,
-)
-from steamtwin.calibration.windowset import (
-    WindowSet,
-    WindowSource,
-    joint_window_set,
-    measurement_sigma,
-)
+from steamtwin.calibration.report import trajectory_figure
+from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
 from steamtwin.cli.paths import OutputPathError, prepare_output_file, prepare_output_folder
 from steamtwin.dcs.history import OVERRIDE_OPTION, DataQualityError, History, load_history
 from steamtwin.dcs.readers import HistorianFormatError
 from steamtwin.dcs.tagmap import TagMapError
-from steamtwin.dcs.windows import parse_window
-from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import (
     DEFAULT_PRIORS,
-    ModelParameters,
     ParameterError,
     ParameterPrior,
     parse_prior,
     priors_from_dict,
 )
-from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.model.simulator import INPUT_SIGNALS
-from steamtwin.spec import SpecError, TurbineSpec, load_spec
+from steamtwin.spec import SpecError, load_spec
 from steamtwin.textfile import read_utf8_text
-
-PRESSURE_WITNESS = "control_stage_pressure"
-"""The pressure ``--pressure-witness`` adds to the fitted temperatures."""
+from steamtwin.twin import PRESSURE_WITNESS, Twin, sensor_model
 
 
 def _read_cleaned(data: Path, tags: Path, accept_errors: bool, console: Console
@@ -79,23 +55,8 @@ def _read_cleaned(data: Path, tags: Path, accept_errors: bool, console: Console
     return history
 
 
-def _model(spec: TurbineSpec, histories: list[History]) -> FullOrderModel:
-    """The FOM read through the plant's sensors as every mode reads it
-    (:func:`~steamtwin.model.sensor_setup.sensor_setup`: the tag map's time constants and
-    thermocouple depth, typical thermowells' otherwise); every file's tag map must agree."""
-    setups = [sensor_setup(spec, history.historian.tag_map) for history in histories]
-    for history, setup in zip(histories[1:], setups[1:], strict=True):
-        if setup != setups[0]:
-            raise ValueError(
-                f"the tag maps {histories[0].historian.tag_map.source} and "
-                f"{history.historian.tag_map.source} give different sensor time constants or "
-                "thermocouple depths; one calibration runs one model: give the files' sensors "
-                "the same time_constant and depth")
-    return setups[0].model(spec)
-
-
-def _read_sources(data: list[Path], tags: list[Path], accept_errors: bool, console: Console
-                  ) -> list[tuple[History, WindowSource]]:
+def _read_histories(data: list[Path], tags: list[Path], accept_errors: bool, console: Console
+                    ) -> list[History]:
     """Every --data file through the quality gate with its tag map; errors name the file."""
     if len(tags) not in (1, len(data)):
         raise ValueError(f"give one --tags for all {len(data)} --data files or one per file "
@@ -104,32 +65,12 @@ def _read_sources(data: list[Path], tags: list[Path], accept_errors: bool, conso
     for k, path in enumerate(data):
         tag_path = tags[0] if len(tags) == 1 else tags[k]
         try:
-            history = _read_cleaned(path, tag_path, accept_errors, console)
+            result.append(_read_cleaned(path, tag_path, accept_errors, console))
         except DataQualityError:
             raise
         except (TagMapError, HistorianFormatError, ValueError, KeyError) as error:
             raise ValueError(f"--data {path} (with --tags {tag_path}): {error}") from None
-        signals = history.historian.tag_map.signals.values()
-        sigma = measurement_sigma({s.signal: s.noise_si for s in signals},
-                                  {s.signal: s.resolution_si for s in signals})
-        result.append((history, WindowSource(str(path), history.data, sigma or None)))
     return result
-
-
-def _with_pressure_witness(sources: list[tuple[History, WindowSource]]
-                           ) -> tuple[tuple[str, ...], list[tuple[History, WindowSource]]]:
-    """The sensors with the control-stage pressure added, and each file's σ with the
-    pressure's (its tag map's noise and resolution, else the typical transmitter's,
-    :data:`~steamtwin.calibration.tracking.TYPICAL_INSTRUMENT_ERROR`); ValueError naming a
-    file that lacks the pressure."""
-    for history, source in sources:
-        if PRESSURE_WITNESS not in source.data.columns:
-            raise ValueError(f"--pressure-witness: {source.name} has no {PRESSURE_WITNESS} "
-                             f"(map it in {history.historian.tag_map.source})")
-    typical = {PRESSURE_WITNESS: TYPICAL_INSTRUMENT_ERROR[PRESSURE_WITNESS]}
-    return (*DEFAULT_SENSORS, PRESSURE_WITNESS), [
-        (history, replace(source, sigma={**typical, **(source.sigma or {})}))
-        for history, source in sources]
 
 
 def _priors(no_priors: bool, priors_file: Path | None, prior: list[str] | None
@@ -238,51 +179,37 @@ def calibrate(
             prepare_output_folder(report, "--report")
         spec = load_spec(turbine)
         priors = _priors(no_priors, priors_file, prior)
-        sources = _read_sources(data, tags, accept_quality_errors, console)
-        if pressure_witness is None:
-            pressure_witness = all(PRESSURE_WITNESS in source.data.columns
-                                   for _, source in sources)
-            if not pressure_witness:
-                console.print(f"no {PRESSURE_WITNESS} in the data: the temperatures alone are "
-                              "fitted")
-        sensors = DEFAULT_SENSORS
-        if pressure_witness:
-            sensors, sources = _with_pressure_witness(sources)
-        windows = joint_window_set(
-            [source for _, source in sources], spec.design.generator_power,
-            given=[parse_window(text) for text in window or []], ramps=ramps,
-            min_steady_s=60.0 * min_steady_minutes,
-            max_steady_s=60.0 * max(max_steady_minutes, min_steady_minutes))
-        model = _model(spec, [history for history, _ in sources])
-        with console.status("preparing the model (the first run compiles it, ~20 s)"):
-            _ = model.design_
+        histories = _read_histories(data, tags, accept_quality_errors, console)
+        if pressure_witness is None and not all(PRESSURE_WITNESS in h.data.columns
+                                                for h in histories):
+            console.print(f"no {PRESSURE_WITNESS} in the data: the temperatures alone are "
+                          "fitted")
+        twin = Twin(spec)
         columns = (TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn())
         with Progress(*columns, console=console, transient=True) as bar:
-            task = bar.add_task("calibrating", total=1.0)
+            task = bar.add_task("preparing the model (the first run compiles it, ~20 s)",
+                                total=1.0)
 
             def progress(fraction: float, message: str) -> None:
                 bar.update(task, completed=fraction, description=message)
 
-            settings = {"population": population, "seed": seed, "workers": workers,
-                        "scheduler": scheduler, "priors": priors, "sensors": sensors,
-                        "sensor_bias": THERMOCOUPLE_BIAS if sensor_bias else None}
-            if surrogate:
-                calibrator = SurrogateCalibrator(model, max_evaluations=max_evaluations,
-                                                 progress=progress, **settings)
-            else:
-                calibrator = Calibrator(model, generations=generations, progress=progress,
-                                        checkpoint=out.with_name(f"{out.stem}.checkpoint"),
-                                        **settings)
-            before = Calibrator(model, workers=1).rmse(windows, ModelParameters())
             with warnings.catch_warnings(record=True) as caught:
                 warnings.simplefilter("always", IdentifiabilityWarning)
-                if surrogate:
-                    calibrator.fit(windows)
-                else:
-                    calibrator.fit(windows, resume=resume)
+                twin.calibrate(
+                    histories, method="surrogate" if surrogate else "ga",
+                    windows=window or (), ramps=ramps,
+                    min_steady_s=60.0 * min_steady_minutes,
+                    max_steady_s=60.0 * max_steady_minutes,
+                    pressure_witness=pressure_witness, sensor_bias=sensor_bias,
+                    priors=priors, population=population, generations=generations,
+                    max_evaluations=max_evaluations, seed=seed, workers=workers,
+                    scheduler=scheduler, progress=progress, resume=resume,
+                    checkpoint=None if surrogate else out.with_name(f"{out.stem}.checkpoint"))
+        calibrator, windows = twin.calibrator_, twin.windows_
         if report is not None:
-            written = _write_report(report, model, windows, calibrator, sensitivity,
-                                    {**settings, "generations": generations}, console)
+            with console.status("writing the report") as status:
+                written = twin.calibration_report(report, sensitivity=sensitivity,
+                                                  progress=status.update)
     except (DataQualityError, CalibrationError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=1) from None
@@ -307,46 +234,12 @@ def calibrate(
             typer.echo(f"  {name}: {row['map']:.4f}, 95 % interval [{row['low']:.4f}, "
                        f"{row['high']:.4f}] (prior [{row['prior_low']:.3f}, "
                        f"{row['prior_high']:.3f}])")
+    before = twin.initial_rmse_
     typer.echo(f"RMSE before (empirical 1, 1, 1): {before:.3f} K; after: {calibrator.rmse_:.3f} K"
                " (load-band weighted)")
     typer.echo(f"wrote {params_path} and {history_path}")
     if report is not None:
         typer.echo(f"wrote {', '.join(str(path) for path in written)}")
-
-
-def _write_report(folder: Path, model: FullOrderModel, window_set: WindowSet,
-                  calibrator: Calibrator | SurrogateCalibrator, sensitivity: bool,
-                  settings: dict[str, object], console: Console) -> list[Path]:
-    """Table 6 (per load band, with the instruments' error; parameter intervals), Figures 7
-    and 8, identifiability (and Table 7) into ``folder``."""
-    folder.mkdir(parents=True, exist_ok=True)
-    rated = model.spec.design.generator_power
-    windows = [w.data for w in window_set]
-    names = [f"window {i + 1}: {w.name}" for i, w in enumerate(window_set)]
-    table6 = band_rmse_table(model, window_set, calibrator.params_)
-    written = [folder / "table6_rmse.csv"]
-    table6.to_csv(written[-1])
-    if calibrator.posterior_ is not None:
-        written.append(folder / "table6_parameters.csv")
-        parameter_table(calibrator.posterior_).to_csv(written[-1])
-    if isinstance(calibrator, Calibrator):
-        written.append(convergence_figure(calibrator.history_, folder / "figure7_convergence.png"))
-    loads = [abs(float(w["load"].mean()) / rated - 0.5) if "load" in w.columns else 0.0
-             for w in windows]
-    closest = int(np.argmin(loads))  # the method's Figure 8 is at 50 % load
-    written.append(temperature_comparison_figure(
-        model, windows[closest], calibrator.params_, folder / "figure8_temperatures.png",
-        title=f"Predicted vs measured temperatures, {names[closest]} (Figure 8)"))
-    if calibrator.identifiability_ is not None:
-        written.append(folder / "identifiability.csv")
-        calibrator.identifiability_.to_csv(written[-1])
-    if sensitivity:
-        with console.status("Table 7: GA settings varied"):
-            table7 = ga_sensitivity_table(
-                lambda s: Calibrator(model, **s).fit(window_set), settings)
-        written.append(folder / "table7_ga_sensitivity.csv")
-        table7.to_csv(written[-1], index=False)
-    return written
 
 
 def calibrate_online(
@@ -388,7 +281,7 @@ def calibrate_online(
         prepare_output_folder(out, "--out")
         spec = load_spec(turbine)
         history = _read_cleaned(data, tags, accept_quality_errors, console)
-        model = _model(spec, [history])
+        model = sensor_model(spec, [history])
         with console.status("preparing the model (the first run compiles it, ~20 s)"):
             _ = model.design_
         columns = (TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn())

@@ -8,10 +8,9 @@ from pathlib import Path
 import typer
 
 from steamtwin.cli.paths import prepare_output_file
-from steamtwin.dcs.history import quality_options
-from steamtwin.dcs.quality import check_quality
-from steamtwin.dcs.readers import HistorianFormatError, read_historian
-from steamtwin.dcs.tagmap import TagMapError, load_tag_map
+from steamtwin.dcs.history import check_history
+from steamtwin.dcs.readers import HistorianFormatError
+from steamtwin.dcs.tagmap import TagMapError
 from steamtwin.model.simulator import INPUT_SIGNALS
 
 dcs_app = typer.Typer(help="Plant historian (DCS) data.", no_args_is_help=True)
@@ -32,14 +31,12 @@ def check(
     """
     if json_out is not None:
         prepare_output_file(json_out, "--json")
+    required = tuple(name.strip() for name in require.split(",") if name.strip())
     try:
-        tag_map = load_tag_map(tags)
-        historian = read_historian(data, tag_map)
+        historian, report = check_history(data, tags, required)
     except (TagMapError, HistorianFormatError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=2) from None
-    required = tuple(name.strip() for name in require.split(",") if name.strip())
-    report = check_quality(historian.signals, **quality_options(historian, required))
     if historian.dialect:
         typer.echo("read as: " + ", ".join(
             f"{key} {historian.dialect[key]!r} ({historian.dialect[f'{key}_source']})"

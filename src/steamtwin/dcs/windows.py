@@ -16,6 +16,17 @@ Steady criterion (:func:`find_steady_windows`)
     rest of the region is searched again. Spans never cross a stretch without valid data, or a
     step of the index, longer than ``sub_window_s``; shorter NaN stretches are bridged and
     reported in ``nan_fraction``. Spans start and end on valid samples and do not overlap.
+
+The one window-picking rule (:func:`find_windows`), for calibration and validation alike
+    *Steady* windows: every steady span of at least ``min_steady_s``, at every load, cut to
+    its last ``max_steady_s`` (the start of a hold still carries the ramp's transient). The
+    steadiness test's sub-window is min(600 s, ``min_steady_s`` / 2), so that it fits in the
+    shortest hold searched for. Validation takes the last ``hours`` of every hold of at least
+    ``hours`` (``min_steady_s = max_steady_s``); calibration the last 2 h of every hold of at
+    least 1 h. *Ramp* windows (``ramps=True``): every stretch between two steady spans (or
+    before the first / after the last) in which the load moves by at least
+    ``ramp_min_change`` of rated, widened by ``ramp_before_s`` before and ``ramp_after_s``
+    after (the metal's settling: :mod:`steamtwin.calibration.windowset`).
 """
 
 from __future__ import annotations
@@ -29,7 +40,8 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-__all__ = ["SteadyWindow", "find_steady_windows", "parse_window", "select_window"]
+__all__ = ["DataWindow", "SteadyWindow", "find_steady_windows", "find_windows", "name_windows",
+           "parse_window", "select_window"]
 
 _NS = 1_000_000_000
 _MAX_SPLITS = 10_000  # bound on region splits (only reached on pathological data)
@@ -52,6 +64,83 @@ class SteadyWindow:
     duration_s: float
     n_samples: int
     nan_fraction: float
+
+
+@dataclass(frozen=True)
+class DataWindow:
+    """One window of :func:`find_windows`: ``data`` (the rows, canonical SI signals), ``kind``
+    ("steady", "ramp" or "given") and ``load_fraction`` (mean load / rated: the steady span's
+    mean for a steady window, the rows' mean otherwise; NaN without load)."""
+
+    data: pd.DataFrame
+    kind: str
+    load_fraction: float
+
+
+def load_fraction(frame: pd.DataFrame, rated_load_w: float) -> float:
+    """Mean of ``frame``'s ``load`` (W) / ``rated_load_w`` (W); NaN without valid load."""
+    if "load" not in frame.columns or not frame["load"].notna().any():
+        return float("nan")
+    return float(frame["load"].mean()) / rated_load_w
+
+
+def find_windows(data: pd.DataFrame, rated_load_w: float, *, min_steady_s: float = 3600.0,
+                 max_steady_s: float = 7200.0, tolerance: float = 0.02, ramps: bool = True,
+                 ramp_min_change: float = 0.05, ramp_before_s: float = 600.0,
+                 ramp_after_s: float = 1800.0, source: str = "") -> list[DataWindow]:
+    """Steady windows at every load (and ramp windows) of one history, in time order (the
+    module docstring's rule). ``data``: canonical SI signals with ``load`` (W) on a sorted
+    DatetimeIndex; ``rated_load_w`` (W); durations in s; ``tolerance`` and
+    ``ramp_min_change`` fractions of rated. ValueError naming ``source`` when the data have
+    no load signal."""
+    if "load" not in data.columns:
+        raise ValueError(f"{source or 'data'}: no 'load' signal, which the search for steady "
+                         "and ramp windows needs; map the generator load in the tag map or "
+                         "pass --window START/END")
+    if not max_steady_s >= min_steady_s > 0:
+        raise ValueError(f"need 0 < min_steady_s ≤ max_steady_s (got {min_steady_s}, "
+                         f"{max_steady_s} s)")
+    steady = sorted(find_steady_windows(data, duration_s=min_steady_s,
+                                        rated_load_w=rated_load_w, tolerance=tolerance,
+                                        sub_window_s=min(600.0, min_steady_s / 2.0)),
+                    key=lambda w: pd.Timestamp(w.start))
+    result = []
+    for span in steady:
+        start = max(pd.Timestamp(span.start),
+                    pd.Timestamp(span.end) - pd.Timedelta(seconds=max_steady_s))
+        result.append(DataWindow(select_window(data, start, span.end), "steady",
+                                 span.mean_load_fraction))
+    if ramps:
+        edges = [data.index[0], *[t for s in steady for t in (pd.Timestamp(s.start),
+                                                              pd.Timestamp(s.end))], None]
+        for gap_start, gap_end in zip(edges[0::2], edges[1::2], strict=True):
+            gap = data.loc[gap_start:gap_end] if gap_end is not None else data.loc[gap_start:]
+            load = gap["load"].to_numpy(dtype=float)
+            if gap.empty or not np.isfinite(load).any():
+                continue
+            if np.nanmax(load) - np.nanmin(load) < ramp_min_change * rated_load_w:
+                continue
+            start = max(gap.index[0] - pd.Timedelta(seconds=ramp_before_s), data.index[0])
+            end = min(gap.index[-1] + pd.Timedelta(seconds=ramp_after_s), data.index[-1])
+            frame = data.loc[start:end]
+            result.append(DataWindow(frame, "ramp", load_fraction(frame, rated_load_w)))
+    return sorted(result, key=lambda w: w.data.index[0])
+
+
+def name_windows(frames: list[pd.DataFrame], rated_load_w: float) -> dict[str, pd.DataFrame]:
+    """Windows named by mean load ("50 % load"), told apart by start time when two share a
+    name, "window <n>" without load (as the validation report names them)."""
+    names = []
+    for i, frame in enumerate(frames):
+        fraction = load_fraction(frame, rated_load_w)
+        names.append(f"{100.0 * fraction:.0f} % load" if np.isfinite(fraction)
+                     else f"window {i + 1}")
+    named = {}
+    for name, frame in zip(names, frames, strict=True):
+        if names.count(name) > 1:
+            name = f"{name}, {frame.index[0]:%Y-%m-%d %H:%M}"
+        named[name] = frame
+    return named
 
 
 def parse_window(text: str, option: str = "--window") -> tuple[pd.Timestamp, pd.Timestamp]:
