@@ -2,4 +2,5 @@
 
 from steamtwin.cli.main import app
 
-app(prog_name="steamtwin")
+if __name__ == "__main__":
+    app(prog_name="steamtwin")
