@@ -35,7 +35,7 @@ from steamtwin.model.parameters import (
     ModelParameters,
     ParameterPrior,
 )
-from steamtwin.model.sensor_setup import sensor_setup
+from steamtwin.model.sensor_setup import SensorSetup, sensor_setup
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.rom.romfile import BladeRom
 from steamtwin.spec import TurbineSpec
@@ -377,10 +377,11 @@ class Twin:
         Windows: the ``windows`` spans, else the last ``hours`` (h) of every steady-load span
         (± 2 % of rated) of at least ``hours``, named by mean load. Blade temperatures come
         from the ROM; the steam-path temperatures from the FOM with the ROM's parameters
-        (``monitor="fom"``, read through the tag map's sensors: lags unless ``sensor_lag`` is
-        False, the twin's sensor offsets) or the ROM (``"rom"``). ``field_check`` adds the FOM
-        blade field at each window's mean conditions (Figure 9). ``settings`` and ``timings``
-        (stage → s) of the caller head the report's own; ``progress(message)`` names the stage.
+        (``monitor="fom"``) or the ROM (``"rom"``), either read through the tag map's sensors:
+        lags unless ``sensor_lag`` is False, and the twin's sensor offsets. ``field_check``
+        adds the FOM blade field at each window's mean conditions (Figure 9). ``settings``
+        and ``timings`` (stage → s) of the caller head the report's own;
+        ``progress(message)`` names the stage.
         """
         from steamtwin.dcs.windows import name_windows
         from steamtwin.validation.monitor import validate as run_validation
@@ -421,7 +422,7 @@ class Twin:
                 progress("solving the FOM blade field at each window's conditions")
             reference = _reference_fields(bundle, self.spec, named)
             timings["FOM blade fields (Figure 9)"] = time.perf_counter() - clock
-        offsets = self.offsets if monitor == "fom" else {}
+        offsets = self.offsets
         report_settings = {
             **(settings or {}),
             "windows from": "--window" if windows else (
@@ -439,6 +440,7 @@ class Twin:
             field_check=reference, time_zone=zone,
             simulator=monitoring_model(self.spec, monitor, sensor_lag, history.tag_map,
                                        offsets),
+            sensors=rom_sensors(self.spec, monitor, sensor_lag, history.tag_map, offsets),
             extra_sections=[quality_section(history.report, "Data quality of the export "
                                             "(whole file, before windowing)")])
         self.validation_ = report
@@ -549,6 +551,18 @@ def monitoring_model(spec: TurbineSpec, monitor: str, sensor_lag: bool, tag_map:
     if not sensor_lag:
         return FullOrderModel(setup.spec_for(spec), sensor_offsets=offsets or None)
     return setup.model(spec)
+
+
+def rom_sensors(spec: TurbineSpec, monitor: str, sensor_lag: bool, tag_map: TagMap | None,
+                offsets: dict[str, float]) -> SensorSetup | None:
+    """The sensors the ROM's steady temperatures are read through when the ROM monitors
+    (None when the FOM does: it reads through its own): the tag map's lags unless
+    ``sensor_lag`` is False, and the calibration's ``offsets`` (K)."""
+    if monitor != "rom":
+        return None
+    if not sensor_lag:
+        return SensorSetup({}, {}, offsets=offsets)
+    return dataclasses.replace(sensor_setup(spec, tag_map), offsets=offsets)
 
 
 def _check_windows(bundle: BladeRom, windows: Mapping[str, pd.DataFrame]) -> None:

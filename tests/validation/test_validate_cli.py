@@ -351,3 +351,14 @@ def test_the_calibrations_sensor_offsets_move_the_deviation_by_themselves(
     pd.testing.assert_frame_equal(tables["off"], tables["plain"])
     settings = _report(tmp_path / "offset")["settings"]
     assert "+1.50 K" in settings["sensor offsets (measured − model)"]
+    # the ROM monitoring reads through the same sensors (issue 18, item 3): offsets, and lags
+    for name, extra in (("rom", ("--monitor", "rom")),
+                        ("rom-offset", ("--monitor", "rom", "--params", str(params))),
+                        ("rom-steady", ("--monitor", "rom", "--no-sensor-lag"))):
+        result = _run(rom_file, data, tags, tmp_path / name, *window, *extra)
+        assert result.exit_code == 0, result.output
+        tables[name] = pd.read_csv(tmp_path / name / "table8_deviation.csv").set_index("signal")
+    shift = tables["rom-offset"]["mean_deviation"] - tables["rom"]["mean_deviation"]
+    assert abs(shift["hp_exhaust_temperature"]) == pytest.approx(1.5, abs=1e-6)
+    lagged = tables["rom"]["rmse"] - tables["rom-steady"]["rmse"]
+    assert lagged.abs().max() > 1e-4  # the thermowells' lags change what the ROM is read as

@@ -53,7 +53,7 @@ def validate(
         "offsets (a calibration with --sensor-bias writes them) are added to what the "
         "monitoring model's sensors read, unless --no-sensor-offsets."),
     sensor_offsets: bool = typer.Option(
-        True, "--sensor-offsets/--no-sensor-offsets", help="With --params and --monitor fom: "
+        True, "--sensor-offsets/--no-sensor-offsets", help="With --params: "
         "read the model through the sensors' offsets the calibration estimated (the same "
         "plant's instruments; leave them out after the thermocouples were recalibrated)."),
     monitor: str = typer.Option(
@@ -61,7 +61,7 @@ def validate(
         "--turbine with the ROM's parameters; metal dynamics included) or 'rom' (the ROM's "
         "steady map)."),
     sensor_lag: bool = typer.Option(
-        True, help="With --monitor fom: compare what the thermocouples read — the model's "
+        True, help="Compare what the thermocouples read — the model's (FOM or ROM) "
         "temperatures through first-order lags: the tag map's time_constant per signal where "
         "given, else typical thermowells (control stage 20 s, HP exhaust 30 s, casing metal "
         "5 s)."),
@@ -103,7 +103,7 @@ def validate(
         if params is not None:
             check_parameters(bundle, ModelParameters.from_json(params), f"--params {params}",
                              rom)
-            if sensor_offsets and monitor == "fom":
+            if sensor_offsets:
                 offsets = sensor_offsets_from_json(params)
         twin = Twin(spec, rom=bundle, sensor_offsets=offsets)
         timings["load ROM and turbine"] = time.perf_counter() - clock
