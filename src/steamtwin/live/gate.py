@@ -1,0 +1,166 @@
+"""The live twin's data-quality gate: the batch checks, incrementally (issue 21, item 4).
+
+The stream passes the same detectors as a historian file (:func:`steamtwin.dcs.quality.clean`:
+valid range, spikes, stuck runs, the historian's/OPC UA status, unit plausibility), run over a
+sliding window: ``context_samples`` already passed (the left context the detectors' noise and
+trend estimates need) plus the new samples. A sample's verdict is final once
+``lookahead_samples`` newer samples are in — the spike detector's half window (its rolling
+median is centred) and the shortest stuck run (``stuck_min_duration_s`` at the nominal step),
+whichever is longer, so a spike or a stuck run starting at a sample is recognised before that
+sample leaves the gate. The price is that latency (60 s at 1 Hz by default); the gain is that a
+bad sample is flagged and stored, never fed to the model as good. The verdicts agree with the
+batch gate's on ≥ 99.9 % of values (tested on half an hour with ~40 injected dropouts, spikes
+and stuck runs, for any block size): what differs is the spike detector's spread of departures,
+taken over the whole file in batch and over the window here, so near a ramp a few samples can
+go one way or the other. Rejected values become NaN
+with their :class:`~steamtwin.dcs.quality.Flag` bits; the findings of each passed block name
+signal, tag and time. Nothing is dropped: every sample in comes out once, in time order.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from steamtwin.dcs.quality import Finding, Flag, clean
+from steamtwin.dcs.tagmap import TagMap
+
+__all__ = ["GateOutput", "StreamGate", "gate_options"]
+
+
+def gate_options(tag_map: TagMap) -> dict[str, Any]:
+    """:func:`~steamtwin.dcs.quality.clean` keyword arguments from ``tag_map`` (ranges,
+    declared units, tags, noise, resolution, rate limits), as the batch gate takes them."""
+    specs = list(tag_map.signals.values())
+
+    def per_signal(attribute: str) -> dict[str, Any]:
+        return {s.signal: getattr(s, attribute) for s in specs
+                if getattr(s, attribute) is not None}
+
+    return {"ranges": per_signal("valid_range_si"),
+            "declared_units": {s.signal: s.unit for s in specs},
+            "tag_names": {s.signal: s.column for s in specs},
+            "noise_si": per_signal("noise_si"),
+            "resolution_si": per_signal("resolution_si"),
+            "max_rate_si": per_signal("max_rate_si"),
+            "source": tag_map.source}
+
+
+@dataclass
+class GateOutput:
+    """Samples whose verdict is final: ``data`` (SI, NaN where rejected or missing),
+    ``flags`` (:class:`~steamtwin.dcs.quality.Flag` bits per value) and ``findings`` (the
+    rejections among these samples, each naming signal, tag and first time)."""
+
+    data: pd.DataFrame
+    flags: pd.DataFrame
+    findings: list[Finding] = field(default_factory=list)
+
+
+class StreamGate:
+    """Incremental gate over a stream of sample blocks (see the module docstring).
+
+    ``options``: :func:`~steamtwin.dcs.quality.clean` keyword arguments (e.g.
+    :func:`gate_options`); ``nominal_step_s``: the stream's sample step (s);
+    ``context_samples``: passed samples kept as left context.
+    """
+
+    def __init__(self, options: Mapping[str, Any], nominal_step_s: float = 1.0,
+                 context_samples: int = 1800, spike_window: int = 61,
+                 stuck_min_duration_s: float = 30.0) -> None:
+        if not (math.isfinite(nominal_step_s) and nominal_step_s > 0.0):
+            raise ValueError(f"nominal_step_s must be positive (got {nominal_step_s!r})")
+        if context_samples < spike_window:
+            raise ValueError(f"context_samples ({context_samples}) must hold at least one "
+                             f"spike window ({spike_window})")
+        self.options = dict(options)
+        self.nominal_step_s = nominal_step_s
+        self.context_samples = context_samples
+        self.spike_window = spike_window
+        self.stuck_min_duration_s = stuck_min_duration_s
+        self.lookahead_samples = max(spike_window // 2 + 1,
+                                     math.ceil(2.0 * stuck_min_duration_s / nominal_step_s))
+        self._values: pd.DataFrame | None = None  # context + pending, raw SI
+        self._bad: pd.DataFrame | None = None
+        self._passed = 0  # rows of _values already passed (the context)
+
+    def push(self, data: pd.DataFrame, bad: pd.DataFrame | None = None) -> GateOutput:
+        """Take new samples (SI, time index after every earlier one; ``bad``: True where the
+        source's status excluded the value) and return those now final (maybe none)."""
+        if len(data) == 0:
+            return self._empty(data.columns)
+        bad = (pd.DataFrame(False, index=data.index, columns=data.columns) if bad is None
+               else bad.reindex(index=data.index, columns=data.columns, fill_value=False))
+        if self._values is not None and len(self._values) and not (
+                data.index[0] > self._values.index[-1]):
+            raise ValueError(f"samples from {data.index[0]} do not come after the gate's last "
+                             f"({self._values.index[-1]}); the source must pass them in order")
+        if self._values is None:
+            self._values, self._bad = data.copy(), bad.astype(bool)
+        else:
+            self._values = pd.concat([self._values, data])
+            self._bad = pd.concat([self._bad, bad.astype(bool)])
+        return self._release(len(self._values) - self.lookahead_samples)
+
+    def flush(self) -> GateOutput:
+        """Everything still pending (the end of a stream: no more look-ahead)."""
+        if self._values is None:
+            return self._empty(pd.Index([]))
+        return self._release(len(self._values))
+
+    def _release(self, stop: int) -> GateOutput:
+        assert self._values is not None and self._bad is not None
+        if stop <= self._passed:
+            return self._empty(self._values.columns)
+        cleaned = clean(self._values, nominal_step_s=self.nominal_step_s,
+                        spike_window=self.spike_window,
+                        stuck_min_duration_s=self.stuck_min_duration_s,
+                        bad_quality={name: self._bad[name].to_numpy(dtype=bool)
+                                     for name in self._values.columns},
+                        out_of_range_error_fraction=1.0,  # a stream has no "file" to refuse
+                        **self.options)
+        chosen = slice(self._passed, stop)
+        data = cleaned.data.iloc[chosen]
+        flags = cleaned.flags.iloc[chosen]
+        findings = _findings(flags, self.options.get("tag_names", {}))
+        keep = max(0, stop - self.context_samples)
+        self._values = self._values.iloc[keep:]
+        self._bad = self._bad.iloc[keep:]
+        self._passed = stop - keep
+        return GateOutput(data, flags, findings)
+
+    @staticmethod
+    def _empty(columns: pd.Index) -> GateOutput:
+        index = pd.DatetimeIndex([], tz="UTC", name="time")
+        return GateOutput(pd.DataFrame(index=index, columns=columns, dtype=float),
+                          pd.DataFrame(index=index, columns=columns, dtype=np.uint16))
+
+
+_REJECTIONS = ((Flag.SPIKE, "spike", "spike(s) replaced by NaN"),
+               (Flag.OUT_OF_RANGE, "out_of_range", "out-of-range value(s) replaced by NaN"),
+               (Flag.STUCK, "stuck", "stuck value(s) replaced by NaN"),
+               (Flag.BAD_QUALITY, "historian_quality",
+                "value(s) with a bad status replaced by NaN"))
+
+
+def _findings(flags: pd.DataFrame, tags: Mapping[str, str]) -> list[Finding]:
+    """One finding per signal and kind of rejection among these rows: count, first time."""
+    findings = []
+    for signal in flags.columns:
+        codes = flags[signal].to_numpy(dtype=np.uint16)
+        removed = (codes & np.uint16(Flag.REMOVED)) != 0
+        for bit, kind, what in _REJECTIONS:
+            mask = removed & ((codes & np.uint16(bit)) != 0)
+            if mask.any():
+                first = int(np.flatnonzero(mask)[0])
+                tag = tags.get(signal)
+                findings.append(Finding(
+                    kind, "warning", signal, tag, int(mask.sum()), None, flags.index[first],
+                    f"{signal} ({tag}): {int(mask.sum())} {what}, the first at "
+                    f"{flags.index[first]}", "rejected"))
+    return findings
