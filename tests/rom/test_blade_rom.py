@@ -105,6 +105,25 @@ def test_rom_file_round_trip(bundle, tmp_path, held_out_snapshots):
     np.testing.assert_array_equal(loaded.mesh.tetrahedra, bundle.mesh.tetrahedra)
 
 
+def test_state_round_trip_lists_the_file(bundle, held_out_snapshots, tmp_path):
+    """get_state → from_state rebuilds the same predictor (issue 20, item 5), and the ROM
+    file holds exactly that state beside the mesh, probes and provenance."""
+    from steamtwin.rom.estimator import PodRbfRom
+
+    state = bundle.rom.get_state()
+    assert all(isinstance(value, np.ndarray) and value.dtype != object
+               for value in state.values())
+    rebuilt = PodRbfRom.from_state(state)
+    conditions = held_out_snapshots.rom_inputs()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ExtrapolationWarning)
+        np.testing.assert_array_equal(rebuilt.predict(conditions),
+                                      bundle.rom.predict(conditions))
+    with np.load(save_rom(bundle, tmp_path / "rom.npz"), allow_pickle=False) as archive:
+        for name, value in state.items():
+            np.testing.assert_array_equal(archive[name], value)
+
+
 def _rewrite(path, target, **changes):
     with np.load(path, allow_pickle=False) as archive:
         arrays = {name: archive[name] for name in archive.files}

@@ -18,7 +18,7 @@ Inputs outside the snapshots' range raise an :class:`ExtrapolationWarning` namin
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 from scipy.interpolate import RBFInterpolator
@@ -26,7 +26,11 @@ from scipy.spatial import Delaunay, QhullError, cKDTree
 
 from steamtwin.cache import njit
 from steamtwin.errors import SteamtwinError
-from steamtwin.rom.features import ControlStageFeatures
+from steamtwin.rom.features import (
+    ControlStageFeatures,
+    feature_table_arrays,
+    features_from_arrays,
+)
 from steamtwin.rom.pod import SVD_METHODS, pod
 
 KERNELS = ("thin_plate_spline", "cubic", "quintic", "linear", "multiquadric",
@@ -190,6 +194,59 @@ class PodRbfRom:
         if self.input_scaling == "sensitivity":
             return _sensitivity_weights(unit, self.coefficients_)
         return np.ones(unit.shape[1])
+
+    def get_state(self) -> dict[str, np.ndarray]:
+        """The fitted ROM as named arrays (numbers and text only: no pickle): the
+        hyperparameters a prediction depends on and every learned array; the ROM file's
+        contents, listed once here (:meth:`from_state` reads them back)."""
+        self._check_fitted()
+        return {
+            "energy": np.array(float(self.energy)), "kernel": np.array(self.kernel),
+            "smoothing": np.array(float(self.smoothing)),
+            "degree": np.array(-1 if self.degree is None else int(self.degree), dtype=np.int64),
+            "epsilon": np.array(np.nan if self.epsilon is None else float(self.epsilon)),
+            "input_scaling": np.array(self.input_scaling),
+            "projection_tolerance": np.array(np.nan if self.projection_tolerance is None
+                                             else float(self.projection_tolerance)),
+            "modes": self.modes_, "mean": self.mean_, "singular_values": self.singular_values_,
+            "coefficients": self.coefficients_, "centres": self.centres_,
+            "sensor_values": self.sensor_values_, "sensor_names": text_array(self.sensor_names_),
+            "input_names": text_array(self.input_names_), "input_min": self.input_min_,
+            "input_span": self.input_span_, "input_weights": self.input_weights_,
+            "energy_captured": np.array(self.energy_captured_),
+            "field_range": np.array(self.field_range_), "input_points": self.input_points_,
+            "feature_names": text_array(self.feature_names_), "feature_min": self.feature_min_,
+            "feature_span": self.feature_span_, "feature_weights": self.feature_weights_,
+            **feature_table_arrays(self.features_),
+        }
+
+    @classmethod
+    def from_state(cls, state: Mapping[str, np.ndarray]) -> PodRbfRom:
+        """The ROM :meth:`get_state` described (ValueError for inconsistent arrays)."""
+        degree = int(state["degree"])
+        epsilon = float(state["epsilon"])
+        tolerance = float(state["projection_tolerance"])
+        features = features_from_arrays(state, tuple(state["feature_names"]))
+        rom = cls(energy=float(state["energy"]), kernel=str(state["kernel"]),
+                  smoothing=float(state["smoothing"]), degree=None if degree < 0 else degree,
+                  epsilon=None if np.isnan(epsilon) else epsilon,
+                  input_scaling=str(state["input_scaling"]),
+                  projection_tolerance=None if np.isnan(tolerance) else tolerance,
+                  features=features)
+        rom._check_hyperparameters()
+        return rom.restore(
+            modes=state["modes"], mean=state["mean"], singular_values=state["singular_values"],
+            coefficients=state["coefficients"], centres=state["centres"],
+            input_names=tuple(str(n) for n in state["input_names"]),
+            input_min=state["input_min"], input_span=state["input_span"],
+            input_weights=state["input_weights"],
+            sensor_names=tuple(str(n) for n in state["sensor_names"]),
+            sensor_values=state["sensor_values"],
+            energy_captured=float(state["energy_captured"]),
+            field_range=float(state["field_range"]), input_points=state["input_points"],
+            feature_names=tuple(str(n) for n in state["feature_names"]),
+            feature_min=state["feature_min"], feature_span=state["feature_span"],
+            feature_weights=state["feature_weights"], features=features)
 
     def restore(self, *, modes: np.ndarray, mean: np.ndarray, singular_values: np.ndarray,
                 coefficients: np.ndarray, centres: np.ndarray, input_names: Sequence[str],
@@ -413,3 +470,9 @@ def _sensitivity_weights(unit: np.ndarray, coefficients: np.ndarray) -> np.ndarr
     if not np.any(magnitude > 0):
         return np.ones(unit.shape[1])
     return np.maximum(magnitude / magnitude.max(), SENSITIVITY_FLOOR)
+
+
+def text_array(values: Sequence[str]) -> np.ndarray:
+    """Names as a fixed-width text array (an empty one of width 1)."""
+    return np.array([str(v) for v in values], dtype=np.str_) if len(values) else np.zeros(
+        0, dtype="<U1")

@@ -30,8 +30,8 @@ import pandas as pd
 
 from steamtwin.blade.mesh import REGIONS, MeshError, SolidMesh, checked_mesh
 from steamtwin.errors import RomError
-from steamtwin.rom.estimator import PodRbfRom
-from steamtwin.rom.features import FEATURE_NAMES, feature_table_arrays, features_from_arrays
+from steamtwin.rom.estimator import PodRbfRom, text_array
+from steamtwin.rom.features import FEATURE_NAMES
 
 FORMAT = "steamtwin-pod-rbf-rom"
 FORMAT_VERSION = 3  # 2: physics features, input_points, projection_tolerance; 3: spec_toml
@@ -82,45 +82,23 @@ def probe_nodes(mesh: SolidMesh) -> dict[str, int]:
     return probes
 
 
-def _text_array(values) -> np.ndarray:
-    return np.array([str(v) for v in values], dtype=np.str_) if len(values) else np.zeros(
-        0, dtype="<U1")
-
-
 def save_rom(bundle: BladeRom, path: str | Path) -> Path:
     """Write ``bundle`` to ``path`` (``.npz``, compressed); returns the path written."""
     rom = bundle.rom
-    rom._check_fitted()
     path = Path(path)
     conditions = bundle.conditions.select_dtypes("number")
     arrays = {
         "format": np.array(FORMAT),
         "format_version": np.array(FORMAT_VERSION, dtype=np.int64),
-        "modes": rom.modes_, "mean": rom.mean_, "singular_values": rom.singular_values_,
-        "coefficients": rom.coefficients_, "centres": rom.centres_,
-        "sensor_values": rom.sensor_values_, "sensor_names": _text_array(rom.sensor_names_),
-        "input_names": _text_array(rom.input_names_), "input_min": rom.input_min_,
-        "input_span": rom.input_span_, "input_weights": rom.input_weights_,
-        "energy": np.array(float(rom.energy)), "energy_captured": np.array(rom.energy_captured_),
-        "field_range": np.array(rom.field_range_),
-        "kernel": np.array(rom.kernel), "smoothing": np.array(float(rom.smoothing)),
-        "degree": np.array(-1 if rom.degree is None else int(rom.degree), dtype=np.int64),
-        "epsilon": np.array(np.nan if rom.epsilon is None else float(rom.epsilon)),
-        "input_scaling": np.array(rom.input_scaling),
-        "projection_tolerance": np.array(np.nan if rom.projection_tolerance is None
-                                         else float(rom.projection_tolerance)),
-        "input_points": rom.input_points_,
-        "feature_names": _text_array(rom.feature_names_), "feature_min": rom.feature_min_,
-        "feature_span": rom.feature_span_, "feature_weights": rom.feature_weights_,
-        **feature_table_arrays(rom.features_),
+        **rom.get_state(),
         "points": bundle.mesh.points, "tetrahedra": bundle.mesh.tetrahedra,
         "boundary_triangles": bundle.mesh.boundary_triangles,
         "boundary_regions": bundle.mesh.boundary_regions,
-        "region_names": _text_array(REGIONS),
-        "probe_names": _text_array(list(bundle.probes)),
+        "region_names": text_array(REGIONS),
+        "probe_names": text_array(list(bundle.probes)),
         "probe_nodes": np.array(list(bundle.probes.values()), dtype=np.int64),
         "snapshot_conditions": conditions.to_numpy(dtype=float),
-        "condition_names": _text_array(list(conditions.columns)),
+        "condition_names": text_array(list(conditions.columns)),
         "provenance": np.array(json.dumps(bundle.provenance, sort_keys=True, default=str)),
         "spec_toml": np.array(bundle.spec_toml, dtype=np.str_),
     }
@@ -236,28 +214,8 @@ def load_rom(path: str | Path) -> BladeRom:
         provenance = json.loads(str(a["provenance"]))
     except json.JSONDecodeError as error:
         raise RomFileError(f"{path}: provenance is not valid JSON ({error})") from None
-    degree = int(a["degree"])
-    epsilon = float(a["epsilon"])
     try:
-        tolerance = float(a["projection_tolerance"])
-        features = features_from_arrays(a, tuple(a["feature_names"]))
-        rom = PodRbfRom(energy=float(a["energy"]), kernel=str(a["kernel"]),
-                        smoothing=float(a["smoothing"]), degree=None if degree < 0 else degree,
-                        epsilon=None if np.isnan(epsilon) else epsilon,
-                        input_scaling=str(a["input_scaling"]),
-                        projection_tolerance=None if np.isnan(tolerance) else tolerance,
-                        features=features)
-        rom._check_hyperparameters()
-        rom.restore(
-            modes=a["modes"], mean=a["mean"], singular_values=a["singular_values"],
-            coefficients=a["coefficients"], centres=a["centres"],
-            input_names=tuple(a["input_names"]), input_min=a["input_min"],
-            input_span=a["input_span"], input_weights=a["input_weights"],
-            sensor_names=tuple(a["sensor_names"]), sensor_values=a["sensor_values"],
-            energy_captured=float(a["energy_captured"]), field_range=float(a["field_range"]),
-            input_points=a["input_points"], feature_names=tuple(a["feature_names"]),
-            feature_min=a["feature_min"], feature_span=a["feature_span"],
-            feature_weights=a["feature_weights"], features=features)
+        rom = PodRbfRom.from_state(a)
         mesh = checked_mesh(SolidMesh(a["points"], a["tetrahedra"], a["boundary_triangles"],
                                       a["boundary_regions"]))
     except (ValueError, MeshError, np.linalg.LinAlgError) as error:
