@@ -5,6 +5,7 @@ the data cannot see near their prior."""
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import numpy as np
 import pandas as pd
@@ -115,3 +116,17 @@ def test_calibrate_online_tracks_from_the_cli(tmp_path, reference_spec):
     assert track.index[0].endswith("+08:00")
     assert abs(track["flow_coefficient"].iloc[-1] - 0.98) < 0.01
     assert (tmp_path / "online" / "params.json").is_file()
+    # --params: a joint calibration's offsets are read by the model (issue 18, item 3), so a
+    # +2 K exhaust offset the data do not have moves what the tracker makes of the exhaust
+    params = tmp_path / "params.json"
+    params.write_text(json.dumps({"flow_coefficient": 0.98, "friction_coefficient": 1.0,
+                                  "heat_transfer_coefficient": 1.0,
+                                  "sensor_offsets": {"hp_exhaust_temperature": 2.0}}))
+    result = CliRunner().invoke(app, ["calibrate-online", "--data", str(tmp_path / "day.csv"),
+                                      "--tags", str(tmp_path / "tags.toml"), "--out",
+                                      str(tmp_path / "offset"), "--method", "track",
+                                      "--every-minutes", "10", "--params", str(params)])
+    assert result.exit_code == 0, result.output
+    offset = pd.read_csv(tmp_path / "offset" / "trajectory.csv", index_col=0)
+    assert abs(offset["friction_coefficient"].iloc[-1]
+               - track["friction_coefficient"].iloc[-1]) > 0.005

@@ -11,6 +11,7 @@ per file): windows at every steady load and on ramps, weighted by load band
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import warnings
 from pathlib import Path
@@ -28,12 +29,15 @@ from steamtwin.cli.paths import OutputPathError, prepare_output_file, prepare_ou
 from steamtwin.dcs.history import OVERRIDE_OPTION, DataQualityError, History, load_history
 from steamtwin.dcs.readers import HistorianFormatError
 from steamtwin.dcs.tagmap import TagMapError
+from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import (
     DEFAULT_PRIORS,
+    ModelParameters,
     ParameterError,
     ParameterPrior,
     parse_prior,
     priors_from_dict,
+    sensor_offsets_from_json,
 )
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import SpecError, load_spec
@@ -263,6 +267,9 @@ def calibrate_online(
         "friction coefficients step by step with a recursive Bayesian filter "
         "(calibration.tracking; every --every-minutes of new data, the control-stage pressure "
         "used as the flow coefficient's witness)."),
+    params: Path | None = typer.Option(
+        None, help="A joint calibration's params.json: its coefficients start the live file "
+        "and its sensor offsets are read by the model, as validate and rom predict read them."),
 ) -> None:
     """Keep the parameters current as the data stream in.
 
@@ -272,7 +279,9 @@ def calibrate_online(
     random-walk state, the step's MAP and Laplace covariance), which follows a step of a few
     per cent of the flow coefficient within half an hour. The live parameter file is replaced
     atomically and every update is logged (parameters, RMSE or interval, reason if it could not
-    run); the trajectory's times are in the data's own time zone.
+    run); the trajectory's times are in the data's own time zone. --params starts from a joint
+    calibration: its coefficients (the tracker's priors centred on them) and its sensor
+    offsets, which the model reads as validate and rom predict do.
 
     Example: steamtwin calibrate-online --data day/historian.parquet --tags day/tags.toml --out online --every-minutes 30
     """  # noqa: E501
@@ -282,6 +291,13 @@ def calibrate_online(
         spec = load_spec(turbine)
         history = _read_cleaned(data, tags, accept_quality_errors, console)
         model = sensor_model(spec, [history])
+        start = ModelParameters()
+        if params is not None:
+            start = ModelParameters.from_json(params)
+            offsets = sensor_offsets_from_json(params)
+            if offsets:
+                model = FullOrderModel(model.spec, sensor_offsets=offsets,
+                                       sensor_time_constants=model.sensor_time_constants)
         with console.status("preparing the model (the first run compiles it, ~20 s)"):
             _ = model.design_
         columns = (TextColumn("{task.description}"), BarColumn(), TimeElapsedColumn())
@@ -290,9 +306,12 @@ def calibrate_online(
         tag_map = history.historian.tag_map
         if method == "track":
             with console.status("tracking the coefficients step by step"):
+                centred = {name: dataclasses.replace(prior, center=getattr(start, name))
+                           for name, prior in DEFAULT_PRIORS.items()}
                 online = ParameterTracker(
                     model, sigma=tracking_sigma(tag_map), step_s=every_minutes * 60.0,
-                    store=ParameterStore(path=out / "params.json")).run(history.data)
+                    priors=centred,
+                    store=ParameterStore(start, path=out / "params.json")).run(history.data)
         else:
             with Progress(*columns, console=console, transient=True) as bar:
                 task = bar.add_task("online calibration", total=1.0)
@@ -300,7 +319,7 @@ def calibrate_online(
                     model, window_s=window_minutes * 60.0, every_s=every_minutes * 60.0,
                     population=population, generations=generations,
                     first_generations=first_generations, seed=seed, workers=workers,
-                    scheduler=scheduler, store=ParameterStore(path=out / "params.json"),
+                    scheduler=scheduler, store=ParameterStore(start, path=out / "params.json"),
                     progress=lambda f, m: bar.update(task, completed=f, description=m))
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore", IdentifiabilityWarning)
