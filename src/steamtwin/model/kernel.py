@@ -37,8 +37,8 @@ from steamtwin.model.metal import (
     dittus_boelter_from_logs,
     dittus_boelter_logs,
     factor_chain,
-    finish_chain,
-    prepare_chain,
+    finish_chains,
+    prepare_chains,
     rotor_relative_velocity,
     surface_heat,
     surface_response,
@@ -466,10 +466,9 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
     """
     n = c.stage_capacity.size
     control, metal_constants = c.control, c.metal
-    for chain in range(metal.shape[0]):
-        prepare_chain(chain, metal, metal_constants.capacity, metal_constants.conductance,
-                      metal_constants.outer_conductance[chain],
-                      metal_constants.ambient_temperature, inverse_dt, pivot, rhs)
+    prepare_chains(metal, metal_constants.capacity, metal_constants.conductance,
+                   metal_constants.outer_conductance, metal_constants.ambient_temperature,
+                   inverse_dt, pivot, rhs)
     flow_coefficient = params[0]
     throttle_tolerance = THROTTLE_TOLERANCE * min(tolerance[1] / ENTHALPY_TOLERANCE, 1.0)
     # the state after the wide-open valves depends on the inputs only
@@ -727,8 +726,8 @@ def _metal_energy(c, metal):
 def _commit_metal(conductance, pivot, rhs, surface, group_temperature, metal):
     """Metal temperatures (K) at the end of the step, from the converged steam temperatures."""
     for chain in range(metal.shape[0]):
-        surface_temperature = surface[chain, 1] + surface[chain, 2] * group_temperature[chain // 2]
-        finish_chain(chain, surface_temperature, conductance, pivot, rhs, metal)
+        metal[chain, 0] = surface[chain, 1] + surface[chain, 2] * group_temperature[chain // 2]
+    finish_chains(conductance, pivot, rhs, metal)
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
