@@ -480,7 +480,8 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
     predicted_h1 = predicted_level = 0.0
     for _ in range(PREDICTOR_PASSES if predict else 0):
         accepted[:] = pressures  # the pressures inlet_pv belongs to
-        _backward_sweep(c, flow, flow_coefficient, p_exhaust, inlet_pv, pressures, leak_flow)
+        _backward_sweep(c.stage_capacity, c.extraction_fraction, c.leak_origin, flow,
+                        flow_coefficient, p_exhaust, inlet_pv, pressures, leak_flow)
         if not (pressures[0] < p_valve and pressure_in_range(tables, pressures[0])):
             break  # the sweeps below report it
         h1 = _control_stage(control, tables, flow, p_valve, s_valve, pv_valve, h0, pressures[0],
@@ -500,7 +501,8 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
     for iteration in range(max_iter + 1):
         # 1. backward Stodola sweep; from the second on it also probes the previous sweep's state
         accepted[:] = pressures
-        _backward_sweep(c, flow, flow_coefficient, p_exhaust, inlet_pv, pressures, leak_flow)
+        _backward_sweep(c.stage_capacity, c.extraction_fraction, c.leak_origin, flow,
+                        flow_coefficient, p_exhaust, inlet_pv, pressures, leak_flow)
         change_p = abs(pressures[0] - previous_p1) / pressures[0]
         change_max = 0.0
         for i in range(n):
@@ -534,7 +536,9 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             result[9] = cs_out[2]
             result[10] = cs_out[3]
             result[11] = iteration
-            result[12], result[13] = _metal_energy(c, metal)
+            result[12], result[13] = _metal_energy(metal_constants.capacity,
+                                                   metal_constants.outer_conductance,
+                                                   metal_constants.ambient_temperature, metal)
             result[14] = outside_energy
             result[15] = 0.0
             for j in range(leaks):
@@ -634,23 +638,26 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
-def _backward_sweep(c, flow, flow_coefficient, p_exhaust, inlet_pv, pressures, leak_flow):
+def _backward_sweep(stage_capacity, extraction_fraction, leak_origin, flow, flow_coefficient,
+                    p_exhaust, inlet_pv, pressures, leak_flow):
     """Stage inlet pressures (Pa) by Stodola's law from the exhaust, with inlet p·v (J/kg).
 
-    ``leak_flow`` (kg/s per leakage) is taken off every stage after the leakage's origin.
+    ``stage_capacity``, ``extraction_fraction`` and ``leak_origin`` are the
+    :class:`KernelConstants` fields (only these: a compiled call counts references to every
+    array it is handed, and the whole constants hold ~30). ``leak_flow`` (kg/s per leakage) is
+    taken off every stage after the leakage's origin.
     """
-    n = c.stage_capacity.size
+    n = stage_capacity.size
     pressures[n] = p_exhaust
-    flow_fraction = 1.0 - c.extraction_fraction.sum()
-    leaks = c.leak_origin.size
+    flow_fraction = 1.0 - extraction_fraction.sum()
+    leaks = leak_origin.size
     for i in range(n - 1, -1, -1):
-        flow_fraction += c.extraction_fraction[i]  # stage i carries what is bled after it
+        flow_fraction += extraction_fraction[i]  # stage i carries what is bled after it
         stage_flow = flow * flow_fraction
         for j in range(leaks):
-            if c.leak_origin[j] <= i:
+            if leak_origin[j] <= i:
                 stage_flow -= leak_flow[j]
-        pressures[i] = stodola_inlet_pressure(stage_flow,
-                                              flow_coefficient * c.stage_capacity[i],
+        pressures[i] = stodola_inlet_pressure(stage_flow, flow_coefficient * stage_capacity[i],
                                               pressures[i + 1], inlet_pv[i])
 
 
@@ -709,17 +716,28 @@ def _casing_thermocouple(c, metal, surface, group_temperature):
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
-def _metal_energy(c, metal):
-    """Heat content of all metal (J, from 0 K) and the lagging loss (W) of a metal state."""
-    content = 0.0
-    loss = 0.0
+def _metal_energy(capacity, outer_conductance, ambient_temperature, metal):
+    """Heat content of all metal (J, from 0 K) and the lagging loss (W) of a metal state.
+
+    ``capacity`` (J/K per node), ``outer_conductance`` (W/K per chain) and
+    ``ambient_temperature`` (K) as in :class:`MetalConstants`. The content is summed in four
+    interleaved partial sums: one running sum is a chain of dependent additions the processor
+    cannot overlap (the order changes the sum by round-off only).
+    """
+    sum_0 = sum_1 = sum_2 = sum_3 = loss = 0.0
     chains, nodes = metal.shape
     for chain in range(chains):
-        for j in range(nodes):
-            content += c.metal.capacity[chain, j] * metal[chain, j]
-        loss += c.metal.outer_conductance[chain] * (metal[chain, nodes - 1]
-                                                    - c.metal.ambient_temperature)
-    return content, loss
+        j = 0
+        while j + 4 <= nodes:
+            sum_0 += capacity[chain, j] * metal[chain, j]
+            sum_1 += capacity[chain, j + 1] * metal[chain, j + 1]
+            sum_2 += capacity[chain, j + 2] * metal[chain, j + 2]
+            sum_3 += capacity[chain, j + 3] * metal[chain, j + 3]
+            j += 4
+        for rest in range(j, nodes):
+            sum_0 += capacity[chain, rest] * metal[chain, rest]
+        loss += outer_conductance[chain] * (metal[chain, nodes - 1] - ambient_temperature)
+    return (sum_0 + sum_1) + (sum_2 + sum_3), loss
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
