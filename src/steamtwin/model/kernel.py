@@ -11,7 +11,9 @@ loop therefore solves, sample by sample, warm-started from the previous sample:
    the control-stage pressure (each stage's p·v from the previous sweep);
 2. the control stage distributes the flow over the nozzle groups in valve order, throttling the
    group whose valve is part open (with a valve overlap, every group the overlapping lift
-   schedule leaves part open), expands each group and mixes them (``steampath``);
+   schedule leaves part open), expands each group and mixes them (``steampath``); the first
+   sweep instead shifts step 0's evaluation linearly to its p1 when that moved little
+   (:data:`REUSE_SHARE`);
 3. a forward sweep expands the pressure stages; at the end of each stage group the steam gives
    heat to that group's casing and rotor (implicit-Euler conduction step, ``metal``), which is
    taken from the steam enthalpy there; a leakage (spec ``[[leakages]]``) leaves the stage flow
