@@ -12,7 +12,9 @@ from steamtwin.model.metal import (
     dittus_boelter_htc,
     factor_chain,
     finish_chain,
+    finish_chains,
     prepare_chain,
+    prepare_chains,
     surface_heat,
     surface_response,
 )
@@ -123,3 +125,29 @@ def test_chains_are_independent_rows():
         _, alone = _step(old[chain], capacity[chain], conductance[chain], 2000.0, 0.5, 750.0,
                          308.0, 0.1)
         assert np.allclose(new[chain], alone, rtol=0, atol=1e-12)
+
+
+def test_all_chains_at_once_match_chain_by_chain():
+    """prepare_chains / finish_chains (node by node across the chains, as the kernel runs them)
+    give each chain's step as prepare_chain / finish_chain do, to round-off."""
+    rng = np.random.default_rng(5)
+    chains, nodes = 6, 16
+    capacity = rng.uniform(1e3, 1e5, (chains, nodes))
+    conductance = rng.uniform(10.0, 1e3, (chains, nodes - 1))
+    outer = rng.uniform(0.1, 5.0, chains)
+    old = rng.uniform(500.0, 800.0, (chains, nodes))
+    surface_temperature = rng.uniform(600.0, 820.0, chains)
+    pivot = np.zeros((chains, nodes))
+    for chain in range(chains):
+        factor_chain(chain, capacity, conductance, outer[chain], 1.0, pivot)
+    rhs_one, rhs_all = np.zeros((chains, nodes)), np.zeros((chains, nodes))
+    new_one, new_all = np.zeros((chains, nodes)), np.zeros((chains, nodes))
+    for chain in range(chains):
+        prepare_chain(chain, old, capacity, conductance, outer[chain], 300.0, 1.0, pivot, rhs_one)
+        finish_chain(chain, surface_temperature[chain], conductance, pivot, rhs_one, new_one)
+    prepare_chains(old, capacity, conductance, outer, 300.0, 1.0, pivot, rhs_all)
+    new_all[:, 0] = surface_temperature
+    finish_chains(conductance, pivot, rhs_all, new_all)
+    np.testing.assert_allclose(rhs_all, rhs_one, rtol=1e-14)
+    np.testing.assert_allclose(new_all, new_one, rtol=1e-14)
+    assert not np.allclose(new_all[:, 1:], old[:, 1:])  # a real step was taken

@@ -122,6 +122,30 @@ def prepare_chain(chain: int, old: np.ndarray, capacity: np.ndarray, conductance
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
+def prepare_chains(old: np.ndarray, capacity: np.ndarray, conductance: np.ndarray,
+                   outer_conductance: np.ndarray, ambient_temperature: float,
+                   inverse_dt: float, pivot: np.ndarray, rhs: np.ndarray) -> None:
+    """:func:`prepare_chain` for every chain at once, ``outer_conductance`` (W/K) per chain.
+
+    Node by node across the chains: each chain's elimination is a recurrence whose steps wait
+    for the previous one, and the chains are independent, so taking one node of every chain in
+    turn lets the processor overlap them. The same operations in the same order per chain as
+    :func:`prepare_chain`, so the same numbers up to round-off (the compiler may fuse
+    multiply-adds differently).
+    """
+    chains, n = capacity.shape
+    for chain in range(chains):
+        value = capacity[chain, n - 1] * inverse_dt * old[chain, n - 1]
+        value += outer_conductance[chain] * ambient_temperature
+        rhs[chain, n - 1] = value
+    for j in range(n - 2, -1, -1):
+        for chain in range(chains):
+            value = capacity[chain, j] * inverse_dt * old[chain, j]
+            value += conductance[chain, j] * pivot[chain, j + 1] * rhs[chain, j + 1]
+            rhs[chain, j] = value
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def surface_response(surface_conductance: float, pivot_surface: float, rhs_surface: float
                      ) -> tuple[float, float]:
     """The new surface temperature as ``base + response·T_steam`` (K), for any steam T (K).
@@ -150,3 +174,19 @@ def finish_chain(chain: int, surface_temperature: float, conductance: np.ndarray
     for j in range(1, new.shape[1]):
         new[chain, j] = (rhs[chain, j] + conductance[chain, j - 1] * new[chain, j - 1]) * pivot[
             chain, j]
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
+def finish_chains(conductance: np.ndarray, pivot: np.ndarray, rhs: np.ndarray,
+                  new: np.ndarray) -> None:
+    """:func:`finish_chain` for every chain at once; ``new[:, 0]`` holds each chain's new
+    surface temperature (K) on entry.
+
+    Node by node across the chains, like :func:`prepare_chains` (the same numbers as chain by
+    chain, up to round-off).
+    """
+    chains, n = new.shape
+    for j in range(1, n):
+        for chain in range(chains):
+            new[chain, j] = (rhs[chain, j] + conductance[chain, j - 1] * new[chain, j - 1]) * pivot[
+                chain, j]
