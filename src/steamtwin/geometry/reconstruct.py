@@ -154,8 +154,8 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
 
     Raises :class:`~steamtwin.geometry.segmentation.ReconstructionError` naming the problem
     (empty, too small or flat cloud; missing caps or edges; a surface that does not close; a
-    surface that stands off the cloud, :func:`guarded`). ``segmentation``: the cloud's, when
-    already computed.
+    surface that stands off the cloud or misses part of it, :func:`guarded`).
+    ``segmentation``: the cloud's, when already computed.
     """
     settings = settings or ReconstructionSettings()
     segmentation = segmentation or segment_blade(points, settings.segmentation)
@@ -199,14 +199,14 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
 
 def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings) -> Reconstruction:
     """The reconstruction with its guard report (:func:`~steamtwin.geometry.fit_guard.
-    guard_surface`); a surface standing off the cloud is refitted with the guard's stronger
-    penalties in turn (a beak or spike is an overshoot of the spline where few points hold
-    it) and refused with :class:`ReconstructionError` naming where and how far when none
-    passes."""
+    guard_surface`); a surface standing off the cloud, or missing a coherent part of it
+    (``GuardReport.gaps``), is refitted with the guard's stronger penalties in turn (a beak or
+    spike is an overshoot of the spline where few points hold it) and refused with
+    :class:`ReconstructionError` naming where and how far when none passes."""
     if settings.guard is None:
         return reconstruction
     report = guard_surface(reconstruction, settings.guard)
-    if not report.defects:
+    if not report.failed:
         return replace(reconstruction, guard=replace(report, repairs=settings.penalty_factor))
     stronger = [f for f in settings.guard.penalty_factors if f > settings.penalty_factor]
     if stronger:
