@@ -300,3 +300,79 @@ def test_a_defect_on_a_sparse_edge_is_refused_with_the_density_it_needs(slender_
     assert tip_band.span_from == pytest.approx(0.8) and tip_band.per_mm < tip_band.needed
     assert 0.11e-3 <= tip_band.radius <= 3 * 0.11e-3
     assert tip_band.describe() in message and "not written as a watertight surface" in message
+
+
+# --- the other way: cloud points the surface misses -------------------------------------------
+
+
+def _dented(reconstruction, region: str, depth: float, half_height: float = 2e-3,
+            half_width: float = 0.03):
+    """The reconstruction with the side vertices of ``region`` within ``half_height`` (m) of
+    mid-span and ``half_width`` (in s) of the patch's middle column pushed inward along the
+    surface normal by ``depth`` (m): a surface that misses a patch of the blade."""
+    s = reconstruction.ring_parameters
+    columns = len(s)
+    where = np.flatnonzero(_regions_at(s, reconstruction.boundaries) == REGIONS.index(region))
+    middle = s[where[len(where) // 2]]
+    vertices = reconstruction.vertices.copy()
+    z = vertices[:, 2]
+    ss = np.tile(s, len(vertices) // columns)
+    mid = 0.5 * (z.min() + z.max())
+    hit = (np.abs(z - mid) < half_height) & (np.abs(np.mod(ss - middle + 0.5, 1.0) - 0.5)
+                                             < half_width)
+    normals = reconstruction.surface.outward_normals(ss[hit], z[hit])
+    vertices[hit, :2] -= depth * normals
+    return dataclasses.replace(reconstruction, vertices=vertices)
+
+
+def test_a_surface_missing_a_patch_is_caught_by_the_cloud(dense_hp1) -> None:
+    """A 0.4 mm dent over 4 mm of span on the suction side: the surface stands off no point
+    (the forward excursion sees nothing inward), but ~300 cloud points lie up to 0.4 mm off
+    it — gaps named by patch, span and chord position and distance."""
+    dented = _dented(dense_hp1, "suction_side", 0.4e-3)
+    report = guard_surface(dented)
+    assert not report.defects  # the forward check alone would pass it
+    assert report.gaps and sum(gap.points for gap in report.gaps) >= 100
+    for gap in report.gaps:
+        assert gap.region == "suction_side"
+        assert 0.4 <= gap.span_from <= gap.span_to <= 0.6
+        assert 0.1 < gap.chord_from <= gap.chord_to < 0.9
+    assert report.gaps[0].distance == pytest.approx(0.4e-3, abs=0.06e-3)
+    assert "suction side" in report.gaps[0].describe()
+    assert "chord" in report.gaps[0].describe()
+
+
+def test_the_good_reconstruction_covers_its_cloud_despite_outliers(dense_hp1) -> None:
+    """1 % of the points moved 0.2–2 mm outward along their normals (as the issue's scans):
+    hundreds of points far from the surface, none of them a gap."""
+    rng = np.random.default_rng(7)
+    points = dense_hp1.points.copy()
+    moved = rng.choice(len(points), len(points) // 100, replace=False)
+    points[moved] += (rng.uniform(0.2e-3, 2e-3, len(moved))[:, None]
+                      * dense_hp1.segmentation.normals[moved])
+    report = guard_surface(dataclasses.replace(dense_hp1, points=points))
+    assert np.sum(report.back_distance > report.limit) >= 0.8 * len(moved)
+    assert not report.gaps
+    assert not guard_surface(dense_hp1).gaps
+    assert dense_hp1.summary()["guard_gaps"] == []
+
+
+def test_a_surface_that_misses_the_cloud_is_refused_not_written(dense_hp1, monkeypatch) -> None:
+    """A fit whose surface misses a patch of the cloud whatever the penalty is refused, the
+    message naming the patch, span and distance."""
+    import steamtwin.geometry.reconstruct as reconstruct
+
+    original = reconstruct.triangulate
+
+    def with_dent(*args, **kwargs):
+        vertices, triangles, regions, ring_s = original(*args, **kwargs)
+        fake = dataclasses.replace(dense_hp1, vertices=vertices, ring_parameters=ring_s,
+                                   boundaries=args[3], surface=args[0])
+        return _dented(fake, "pressure_side", 0.5e-3).vertices, triangles, regions, ring_s
+
+    monkeypatch.setattr(reconstruct, "triangulate", with_dent)
+    settings = ReconstructionSettings(guard=GuardSettings(penalty_factors=(10.0,)))
+    with pytest.raises(ReconstructionError,
+                       match=r"cloud points 0\.[45]\d mm off the surface at the pressure side "
+                             r"at [45]\d–[56]\d % span"):
+        reconstruct_blade(dense_hp1.points, settings, dense_hp1.segmentation)

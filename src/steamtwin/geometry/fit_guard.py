@@ -30,7 +30,16 @@ the vertex is judged only to what they allow). Vertices within ``rim_spacings`` 
 rim are measured but not judged (the side data end there).
 
 Defects are the connected groups of offending vertices, named by their patch (leading or
-trailing edge, suction or pressure side), span range (% from the root) and size (mm). Where an
+trailing edge, suction or pressure side), span range (% from the root) and size (mm).
+
+The other way (:func:`coverage_gaps`, the cloud side of the Hausdorff distance, Cignoni et al.
+1998): the cloud points the segmentation assigned to a patch farther from the triangulation than
+the same limit. A remaining outlier (0.2–2 mm off along the normal, isolated) is one of them,
+but its neighbours lie on the surface; where the surface misses a part of the blade (an edge cut
+short, a dent) the points there are far together. A far point counts when at least
+``coherent_share`` of its ``neighbours`` nearest patch points are far too, and the counted
+points linked within ``link_spacings`` point spacings form a gap when there are at least
+``min_gap_points`` of them — named by patch, span range, chord range and distance. Where an
 edge carries few points, :func:`edge_sampling` measures the points per millimetre across the
 edge's half circle and what :data:`~steamtwin.geometry.scanner.EDGE_SAMPLES` needs there.
 """
@@ -78,6 +87,12 @@ class GuardSettings:
     triangulation, while isolated one- and two-vertex excursions of 0.23–0.47 mm were measured
     on foreign-blade fits whose true deviation is ≤ 0.05 mm (80k points; the local neighbours
     a vertex is judged by thin out at the clouds' holes and outliers).
+
+    The other way (:func:`coverage_gaps`): a patch point farther from the triangulation than
+    the limit counts when at least ``coherent_share`` of its ``neighbours`` nearest patch
+    points are also that far (an isolated outlier has none: 1 % outliers put on average 0.2 of
+    its 20 neighbours out); counted points linked within ``link_spacings`` spacings form a gap
+    when there are ``min_gap_points`` or more (a gap one point spacing across and a few long).
     """
 
     neighbours: int = 20
@@ -88,6 +103,9 @@ class GuardSettings:
     rim_spacings: float = 8.0
     min_vertices: int = 3
     isolated_limit: float = 0.5e-3
+    coherent_share: float = 0.5
+    link_spacings: float = 3.0
+    min_gap_points: int = 10
 
 
 @dataclass(frozen=True)
@@ -110,12 +128,43 @@ class Defect:
 
 
 @dataclass(frozen=True)
+class CoverageGap:
+    """Cloud points coherently farther from the fitted triangulation than the limit: the patch
+    most of them carry, their span and chord ranges (fractions from the root and from the
+    leading edge), the largest distance (m) and the point count."""
+
+    region: str
+    span_from: float
+    span_to: float
+    chord_from: float
+    chord_to: float
+    distance: float
+    points: int
+
+    def describe(self) -> str:
+        """e.g. "0.83 mm of the cloud off the surface at the trailing edge at 3–18 % span,
+        90–100 % chord (149 points)"."""
+        place = self.region.replace("_", " ")
+        span = _percent_range(self.span_from, self.span_to)
+        chord = _percent_range(self.chord_from, self.chord_to)
+        return (f"cloud points {self.distance * 1e3:.2f} mm off the surface at the {place} at "
+                f"{span} span, {chord} chord ({self.points} points)")
+
+
+def _percent_range(lo: float, hi: float) -> str:
+    a, b = round(lo * 100), round(hi * 100)
+    return f"{a} %" if a == b else f"{a}–{b} %"
+
+
+@dataclass(frozen=True)
 class GuardReport:
     """Result of :func:`guard_surface`: per-vertex ``excursion`` (m), the ``limit`` (m), the
     measured ``noise`` σ and ``spacing`` h (m), ``defects`` (largest first), ``judged`` the
     vertices held to the limit (off the rim zones), the per-vertex ``allowance`` (m) added to
-    the limit (:func:`local_excursion`) and ``repairs``, the penalty factor of the
-    fit that passed (1 = the first fit)."""
+    the limit (:func:`local_excursion`), ``repairs``, the penalty factor of the
+    fit that passed (1 = the first fit), ``gaps`` the cloud's parts the surface misses
+    (:func:`coverage_gaps`, largest first) and ``back_distance`` the distance (m) of every
+    patch point from the triangulation (NaN for unassigned points)."""
 
     excursion: np.ndarray
     limit: float
@@ -125,6 +174,13 @@ class GuardReport:
     judged: np.ndarray | None = None
     allowance: np.ndarray | None = None
     repairs: float = 1.0
+    gaps: list[CoverageGap] = field(default_factory=list)
+    back_distance: np.ndarray | None = None
+
+    @property
+    def failed(self) -> bool:
+        """Whether the surface stands off the cloud (defects) or misses part of it (gaps)."""
+        return bool(self.defects or self.gaps)
 
     def summary(self) -> dict:
         """Figures in report units (mm)."""
@@ -135,6 +191,11 @@ class GuardReport:
                 "guard_rim_max_excursion_mm": float(self.excursion.max()) * 1e3,
                 "guard_noise_mm": self.noise * 1e3,
                 "guard_defects": [d.describe() for d in self.defects],
+                "guard_gaps": [g.describe() for g in self.gaps],
+                **({} if self.back_distance is None else {
+                    "guard_back_max_mm": float(np.nanmax(self.back_distance)) * 1e3,
+                    "guard_back_p99_mm": float(np.nanpercentile(self.back_distance, 99.0))
+                    * 1e3}),
                 "guard_penalty_factor": self.repairs}
 
 
@@ -265,8 +326,104 @@ def guard_surface(reconstruction: Reconstruction, settings: GuardSettings | None
     defects = [d for d in _defects(reconstruction, np.where(judged, excursion, 0.0),
                                    limit + allowance)
                if d.vertices >= settings.min_vertices or d.size > settings.isolated_limit]
+    back_distance = np.full(len(reconstruction.points), np.nan)
+    assigned = segmentation.labels >= 0
+    back_distance[assigned] = mesh_distance(reconstruction.points[assigned],
+                                            reconstruction.vertices, reconstruction.triangles)
+    gaps = coverage_gaps(reconstruction, back_distance, limit, settings)
     return GuardReport(excursion=excursion, limit=limit, noise=noise, spacing=spacing,
-                       defects=defects, judged=judged, allowance=allowance)
+                       defects=defects, judged=judged, allowance=allowance, gaps=gaps,
+                       back_distance=back_distance)
+
+
+def mesh_distance(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarray
+                  ) -> np.ndarray:
+    """Unsigned distance (m) of ``points`` (n, 3; m) from a triangle mesh: open3d's
+    ``RaycastingScene.compute_distance`` (closest point on the triangles, Embree BVH) in
+    single precision about the mesh's centre — rounding below 0.1 µm for parts up to 1 m."""
+    import open3d as o3d
+
+    centre = vertices.mean(axis=0)
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(np.asarray(vertices - centre, np.float32)),
+                        o3d.core.Tensor(np.asarray(triangles, np.uint32)))
+    query = o3d.core.Tensor(np.asarray(points - centre, np.float32))
+    return scene.compute_distance(query).numpy().astype(np.float64)
+
+
+def coverage_gaps(reconstruction: Reconstruction, back_distance: np.ndarray, limit: float,
+                  settings: GuardSettings) -> list[CoverageGap]:
+    """The parts of the cloud the triangulation misses (module docstring): patch points
+    farther than ``limit`` (m) from it (``back_distance``, m, NaN for unassigned points) whose
+    neighbourhood is far as well, linked into groups; each group of at least
+    ``settings.min_gap_points`` points is a gap, largest distance first."""
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    assigned = np.flatnonzero(~np.isnan(back_distance))
+    points = reconstruction.points[assigned]
+    far = back_distance[assigned] > limit
+    if far.sum() < settings.min_gap_points:
+        return []
+    k = min(settings.neighbours + 1, len(points))
+    _, index = cKDTree(points).query(points[far], k=k)
+    share = far[index[:, 1:]].mean(axis=1)  # the point itself left out
+    members = np.flatnonzero(far)[share >= settings.coherent_share]
+    if len(members) < settings.min_gap_points:
+        return []
+    spacing = reconstruction.segmentation.spacing
+    pairs = cKDTree(points[members]).query_pairs(settings.link_spacings * spacing,
+                                                 output_type="ndarray")
+    graph = coo_array((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
+                      shape=(len(members), len(members)))
+    _, component = connected_components(graph, directed=False)
+    z = reconstruction.vertices[:, 2]
+    lo, hi = float(z.min()), float(z.max())
+    chord = _chord_fraction(reconstruction)
+    labels = reconstruction.segmentation.labels[assigned]
+    gaps = []
+    for group in np.unique(component):
+        inside = members[component == group]
+        if len(inside) < settings.min_gap_points:
+            continue
+        where = points[inside]
+        span = (where[:, 2] - lo) / (hi - lo)
+        along = chord(where)
+        region = np.bincount(labels[inside], minlength=len(REGIONS)).argmax()
+        gaps.append(CoverageGap(region=REGIONS[region], span_from=float(span.min()),
+                                span_to=float(span.max()), chord_from=float(along.min()),
+                                chord_to=float(along.max()),
+                                distance=float(back_distance[assigned][inside].max()),
+                                points=len(inside)))
+    return sorted(gaps, key=lambda g: -g.distance)
+
+
+def _chord_fraction(reconstruction: Reconstruction):
+    """Function of points (n, 3; m) → their position along the chord of the nearest ring of
+    the triangulation (0 at the leading edge, 1 at the trailing edge): the projection on the
+    line from the ring's leading-edge vertex (the middle of the leading-edge patch) to its
+    trailing-edge vertex (the middle of the trailing-edge patch), clipped to [0, 1]."""
+    s = reconstruction.ring_parameters
+    rings = reconstruction.vertices.reshape(-1, len(s), 3)
+    ends = []
+    for edge in ("leading_edge", "trailing_edge"):
+        lo = next(v for key, v in reconstruction.boundaries.items() if key.endswith(f"|{edge}"))
+        hi = next(v for key, v in reconstruction.boundaries.items()
+                  if key.startswith(f"{edge}|"))
+        middle = np.mod(lo + 0.5 * np.mod(hi - lo, 1.0), 1.0)
+        ends.append(int(np.argmin(np.abs(np.mod(s - middle + 0.5, 1.0) - 0.5))))
+    ring_z = rings[:, 0, 2]
+
+    def along(points: np.ndarray) -> np.ndarray:
+        ring = np.clip(np.searchsorted(ring_z, points[:, 2]), 0, len(ring_z) - 1)
+        front, rear = rings[ring, ends[0], :2], rings[ring, ends[1], :2]
+        chord = rear - front
+        t = np.einsum("ij,ij->i", points[:, :2] - front, chord) / np.einsum("ij,ij->i", chord,
+                                                                             chord)
+        return np.clip(t, 0.0, 1.0)
+
+    return along
 
 
 def _defects(reconstruction: Reconstruction, excursion: np.ndarray, limit: np.ndarray
@@ -386,12 +543,13 @@ def edge_sampling(points: np.ndarray, segmentation: Segmentation, edge: str,
 def refusal_message(report: GuardReport, points: np.ndarray, segmentation: Segmentation) -> str:
     """The error of a surface that stays beyond the limit after the repairs: the defects and,
     for those at an edge band sampled below what it needs, the density needed there."""
-    lines = [f"the fitted surface stands off the cloud by more than {report.limit * 1e3:.3g} mm "
-             f"(from σ = {report.noise * 1e3:.2g} mm of noise and a {report.spacing * 1e3:.2g}"
-             " mm point spacing): " + "; ".join(d.describe() for d in report.defects[:3])]
+    found = [d.describe() for d in report.defects[:3]] + [g.describe() for g in report.gaps[:3]]
+    lines = [f"the fitted surface stands off the cloud or misses part of it by more than "
+             f"{report.limit * 1e3:.3g} mm (from σ = {report.noise * 1e3:.2g} mm of noise and a "
+             f"{report.spacing * 1e3:.2g} mm point spacing): " + "; ".join(found)]
     sparse = []
     for edge in ("leading_edge", "trailing_edge"):
-        hit = [d for d in report.defects if d.region == edge]
+        hit = [d for d in [*report.defects, *report.gaps] if d.region == edge]
         for band in edge_sampling(points, segmentation, edge):
             overlaps = any(d.span_from <= band.span_to and d.span_to >= band.span_from
                            for d in hit)
