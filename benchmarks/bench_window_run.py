@@ -79,15 +79,15 @@ def kernel_call(model: FullOrderModel, checked, params: ModelParameters):
     parameter_array = np.array([[params.flow_coefficient, params.friction_coefficient,
                                  params.heat_transfer_coefficient]])
     tolerance = np.array([model.pressure_tolerance, model.enthalpy_tolerance])
-    start_h = float(if97.enthalpy_pt(p0[0], t0[0])) - 1.0e5
 
     def call() -> None:
+        carry = model._carry(constants, checked, None)  # the fresh start _solve makes
         kernel.run_kernel(
             constants, tables, checked.time_step, p0, t0, flow, p_exhaust, parameter_array,
-            tolerance, np.linspace(0.8 * p0[0], p_exhaust[0], stages + 1),
-            np.full(stages + 1, start_h), np.full(constants.metal.capacity.shape, t0[0]),
+            tolerance, carry["pressures"], carry["enthalpies"], carry["metal"],
             np.full((n, kernel.N_RESULTS), np.nan), np.zeros(n, dtype=np.int64),
-            np.zeros((0, stages + 1)), np.zeros((0, stages + 1)))
+            np.zeros((0, stages + 1)), np.zeros((0, stages + 1)), carry["throttled"],
+            carry["cs_out"], carry["leak_flow"], carry["inlet_pv"], carry["previous"], False)
 
     return call
 

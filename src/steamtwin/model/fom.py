@@ -30,6 +30,7 @@ from steamtwin.model.design import (
 from steamtwin.model.measurement import check_time_constants, lag
 from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
+from steamtwin.model.stream_state import StreamState
 from steamtwin.spec import SpecError, TurbineSpec
 from steamtwin.steam import if97
 from steamtwin.steam.tables import lower_boundary_temperature, steam_tables
@@ -336,6 +337,79 @@ class FullOrderModel:
                                     False)
         return self._readings(results, checked.time_step, signals)
 
+    def simulate_stream(self, inputs: pd.DataFrame, params: ModelParameters | None = None,
+                        state: StreamState | None = None) -> tuple[pd.DataFrame, StreamState]:
+        """Sensor predictions (SI) for the next block of a stream, and the state after it.
+
+        Without ``state`` the block starts like :meth:`simulate` (steady metal); with the state
+        a previous block returned, it continues that run: the outputs equal those of one
+        :meth:`simulate` over all blocks together (to round-off; tested). ``inputs`` must start
+        after ``state.time``. Raises :class:`InputError` as :meth:`simulate` does.
+        """
+        params = params or ModelParameters()
+        checked = self.check_inputs(inputs)
+        constants = self.design_.kernel
+        carry = self._carry(constants, checked, state)
+        time_step = checked.time_step
+        if state is not None:
+            gap = (pd.Timestamp(checked.index[0]) - pd.Timestamp(state.time)).total_seconds()
+            if not gap > 0.0:
+                raise InputError.at(checked.index, 0, None,
+                                    f"the block starts at {checked.index[0]}, not after the "
+                                    f"stream's last sample {state.time}")
+            time_step = time_step.copy()
+            time_step[0] = gap
+            checked = CheckedInputs(index=checked.index, columns=checked.columns,
+                                    time_step=time_step)
+        results, _, _ = self._solve(constants, checked, params, False, carry,
+                                    resume=state is not None)
+        lags = check_time_constants(self.sensor_time_constants, self.output_signals)
+        offsets = dict(self.sensor_offsets or {})
+        readings = np.empty((results.shape[0], len(self.output_signals)))
+        sensors: dict[str, tuple[float, float]] = {}
+        for j, name in enumerate(self.output_signals):
+            values = results[:, kernel.RESULT_COLUMNS.index(name)]
+            if name in lags:
+                before = None if state is None else state.sensors.get(name)
+                read = lag(values, time_step, lags[name], before=before)
+                sensors[name] = (float(read[-1]), float(values[-1]))
+            else:
+                read = values
+            readings[:, j] = read + offsets.get(name, 0.0)
+        outputs = pd.DataFrame(readings, index=inputs.index, columns=list(self.output_signals))
+        after = StreamState(pd.Timestamp(checked.index[-1]), carry, sensors).copy()
+        return outputs, after
+
+    def _carry(self, constants: kernel.KernelConstants, checked: CheckedInputs,
+               state: StreamState | None) -> dict[str, np.ndarray]:
+        """The kernel's carried arrays: a fresh start's, or a copy of ``state``'s (checked
+        against this model's shapes)."""
+        p0, t0, flow, p_exhaust = (checked.columns[name] for name in INPUT_SIGNALS)
+        stages = constants.stage_capacity.size
+        fresh = {
+            # a rough start for the first sample's sweeps (only its p·v values are used):
+            # pressures falling linearly from 80 % of throttle to the exhaust, enthalpy
+            # 100 kJ/kg under inlet
+            "pressures": np.linspace(0.8 * p0[0], p_exhaust[0], stages + 1),
+            "enthalpies": np.full(stages + 1, float(if97.enthalpy_pt(p0[0], t0[0])) - 1.0e5),
+            "metal": np.full(constants.metal.capacity.shape, t0[0]),
+            "throttled": np.zeros((2, constants.control.level_area.size)),
+            "cs_out": np.zeros(7),
+            "leak_flow": np.zeros(constants.leak_origin.size),
+            "inlet_pv": np.zeros(stages),
+            "previous": np.array([p0[0], t0[0], flow[0], p_exhaust[0]]),
+        }
+        if state is None:
+            return fresh
+        carried = {}
+        for name, array in fresh.items():
+            given = np.array(state.arrays[name], dtype=float)
+            if given.shape != array.shape:
+                raise ValueError(f"stream state array {name!r} has shape {given.shape}; this "
+                                 f"model needs {array.shape} (a state of another turbine?)")
+            carried[name] = given
+        return carried
+
     def _run(self, constants: kernel.KernelConstants, inputs: pd.DataFrame,
              params: ModelParameters | np.ndarray, detail: bool, diagnostics: bool = True
              ) -> SimulationResult:
@@ -374,18 +448,18 @@ class FullOrderModel:
         return readings
 
     def _solve(self, constants: kernel.KernelConstants, checked: CheckedInputs,
-               params: ModelParameters | np.ndarray, detail: bool
+               params: ModelParameters | np.ndarray, detail: bool,
+               carry: dict[str, np.ndarray] | None = None, resume: bool = False
                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Run the kernel: results (samples × N_RESULTS) and, with ``detail``, stage pressures
-        (Pa) and temperatures (K); raises :class:`InputError` at the first failed sample."""
+        (Pa) and temperatures (K); raises :class:`InputError` at the first failed sample.
+        ``carry``: the kernel's carried arrays (:meth:`_carry`; updated in place), ``resume``:
+        continue from them."""
         p0, t0, flow, p_exhaust = (checked.columns[name] for name in INPUT_SIGNALS)
         n = p0.size
         stages = constants.stage_capacity.size
-        # a rough start for the first sample's sweeps (only its p·v values are used): pressures
-        # falling linearly from 80 % of throttle to the exhaust, enthalpy 100 kJ/kg under inlet
-        pressures = np.linspace(0.8 * p0[0], p_exhaust[0], stages + 1)
-        enthalpies = np.full(stages + 1, float(if97.enthalpy_pt(p0[0], t0[0])) - 1.0e5)
-        metal = np.full(constants.metal.capacity.shape, t0[0])
+        if carry is None:
+            carry = self._carry(constants, checked, None)
         results = np.full((n, kernel.N_RESULTS), np.nan)
         status = np.zeros(n, dtype=np.int64)
         rows = n if detail else 0
@@ -401,8 +475,11 @@ class FullOrderModel:
             raise ValueError(f"pressure_tolerance and enthalpy_tolerance must be finite and > 0 "
                              f"(got {self.pressure_tolerance!r}, {self.enthalpy_tolerance!r})")
         solved = kernel.run_kernel(constants, steam_tables(), checked.time_step, p0, t0, flow,
-                                   p_exhaust, parameter_array, tolerance, pressures, enthalpies,
-                                   metal, results, status, stage_p, stage_t)
+                                   p_exhaust, parameter_array, tolerance, carry["pressures"],
+                                   carry["enthalpies"], carry["metal"], results, status, stage_p,
+                                   stage_t, carry["throttled"], carry["cs_out"],
+                                   carry["leak_flow"], carry["inlet_pv"], carry["previous"],
+                                   resume)
         if solved < n:
             raise InputError.at(
                 checked.index, int(solved), None,

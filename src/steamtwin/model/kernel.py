@@ -752,8 +752,10 @@ def _commit_metal(conductance, pivot, rhs, surface, group_temperature, metal):
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
 def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance, pressures,
-               enthalpies, metal, results, status, stage_pressures, stage_temperatures):
-    """Simulate a series; the first sample starts from steady metal (equilibrium).
+               enthalpies, metal, results, status, stage_pressures, stage_temperatures,
+               throttled, cs_out, leak_flow, inlet_pv, previous, resume):
+    """Simulate a series; the first sample starts from steady metal (equilibrium), or, with
+    ``resume``, continues the series whose state the carried arrays hold.
 
     ``params`` (rows, 3): flow, friction and heat-transfer coefficients, one row for the whole
     series or one per sample; ``tolerance`` (relative pressure, J/kg) bounds each sample's
@@ -762,22 +764,29 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
     2·group + CASING/ROTOR. Fills ``results`` (samples × N_RESULTS), ``status`` (samples,), and,
     when they have rows, the per-stage outlet pressures and temperatures (samples × stages + 1).
     Stops at the first failed sample.
+
+    The state a later call continues from (``resume``; ``time_step[0]`` then the seconds since
+    the last sample) is carried in and out by ``pressures``, ``enthalpies`` and ``metal`` and:
+    ``throttled`` (2, valve levels: valve-outlet pressure, flow slope), ``cs_out`` (7: the
+    control stage's last outputs; [5], [6] the measured dh1/dp1 and its valve level),
+    ``leak_flow`` (leakages), ``inlet_pv`` (stages: the last sweep's p·v) and ``previous`` (4:
+    the last sample's p0, t0, flow, p_exhaust). Without ``resume`` they are initialised here.
     """
     n_samples = p0.size
     chains = metal.shape[0]
     surface, pivot, rhs = np.zeros((chains, 3)), np.zeros(metal.shape), np.zeros(metal.shape)
     group_temperature = np.zeros(chains // 2)
     factored_inverse_dt = math.nan
-    throttled = np.zeros((2, c.control.level_area.size))  # valve-outlet pressure, flow slope
-    throttled[0, :] = p0[0]
-    cs_out = np.zeros(7)  # control stage's out; [5], [6]: dh1/dp1 and its valve level
     accepted = np.empty(pressures.size)
     properties = np.empty(6)
     detail = stage_pressures.shape[0] == n_samples
-    inlet_pv = np.empty(pressures.size - 1)
-    leak_flow = np.zeros(c.leak_origin.size)
-    for i in range(inlet_pv.size):
-        inlet_pv[i] = pressures[i] * ph_property(tables, PH_V, pressures[i], enthalpies[i])
+    if not resume:
+        throttled[0, :] = p0[0]
+        throttled[1, :] = 0.0
+        cs_out[:] = 0.0
+        leak_flow[:] = 0.0
+        for i in range(inlet_pv.size):
+            inlet_pv[i] = pressures[i] * ph_property(tables, PH_V, pressures[i], enthalpies[i])
     current = params[0].copy()
     varying = params.shape[0] > 1
     for k in range(n_samples):
@@ -793,13 +802,14 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
             return k
         # the first sample is steady (infinite step); the chains are factored anew only when the
         # step length changes
-        inverse_dt = 0.0 if k == 0 else 1.0 / time_step[k]
+        steady = k == 0 and not resume
+        inverse_dt = 0.0 if steady else 1.0 / time_step[k]
         if inverse_dt != factored_inverse_dt:
             for chain in range(chains):
                 factor_chain(chain, c.metal.capacity, c.metal.conductance,
                              c.metal.outer_conductance[chain], inverse_dt, pivot)
             factored_inverse_dt = inverse_dt
-        if k == 0:
+        if steady:
             # steady start: repeat the infinite-step (steady) metal solution to equilibrium,
             # with sweeps converged 10⁶× tighter so that a hold continues without drift
             code = STATUS_OK
@@ -814,8 +824,12 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                 if code != STATUS_OK or np.abs(metal - before).max() < 1e-9:
                     break
         else:
-            changed = (p0[k] != p0[k - 1] or t0[k] != t0[k - 1] or flow[k] != flow[k - 1]
-                       or p_exhaust[k] != p_exhaust[k - 1] or varying)
+            if k == 0:  # continuing: against the last sample of the previous call
+                changed = (p0[0] != previous[0] or t0[0] != previous[1]
+                           or flow[0] != previous[2] or p_exhaust[0] != previous[3] or varying)
+            else:
+                changed = (p0[k] != p0[k - 1] or t0[k] != t0[k - 1] or flow[k] != flow[k - 1]
+                           or p_exhaust[k] != p_exhaust[k - 1] or varying)
             code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], current, inverse_dt,
                                  pressures, enthalpies, inlet_pv, throttled, metal, pivot, rhs,
                                  surface, group_temperature, cs_out, properties, tolerance,
@@ -827,4 +841,5 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
             for i in range(pressures.size):
                 stage_pressures[k, i] = pressures[i]
                 stage_temperatures[k, i] = ph_property(tables, PH_T, pressures[i], enthalpies[i])
+        previous[0], previous[1], previous[2], previous[3] = p0[k], t0[k], flow[k], p_exhaust[k]
     return n_samples

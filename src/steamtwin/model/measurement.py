@@ -50,28 +50,36 @@ def check_time_constants(time_constants: Mapping[str, float] | None,
 
 
 @njit(cache=True)
-def _lag(x, steps, tau):
+def _lag(x, steps, tau, resume, y_before, x_before):
     y = np.empty_like(x)
-    y[0] = x[0]
-    for k in range(1, x.size):
+    for k in range(x.size):
+        if k == 0 and not resume:
+            y[0] = x[0]
+            continue
         ratio = steps[k] / tau
         a = math.exp(-ratio)
         one_minus_a = -math.expm1(-ratio)
         b0 = 1.0 - one_minus_a / ratio  # weight of x[k] under the first-order hold
-        y[k] = a * y[k - 1] + (one_minus_a - b0) * x[k - 1] + b0 * x[k]
+        y_last, x_last = (y_before, x_before) if k == 0 else (y[k - 1], x[k - 1])
+        y[k] = a * y_last + (one_minus_a - b0) * x_last + b0 * x[k]
     return y
 
 
-def lag(values: np.ndarray, steps: np.ndarray, time_constant_s: float) -> np.ndarray:
+def lag(values: np.ndarray, steps: np.ndarray, time_constant_s: float,
+        before: tuple[float, float] | None = None) -> np.ndarray:
     """Reading (unit of ``values``) of a first-order sensor of τ = ``time_constant_s`` s.
 
-    ``steps[k]`` is the time (s) from sample k − 1 to k (``steps[0]`` is ignored: the sensor
-    starts steady at ``values[0]``).
+    ``steps[k]`` is the time (s) from sample k − 1 to k. Without ``before`` the sensor starts
+    steady at ``values[0]`` (``steps[0]`` is ignored); with ``before`` = (last reading, last
+    value) of an earlier series, it continues that series (``steps[0]``: the time since its
+    last sample), exactly as one call over both would.
     """
     x = np.ascontiguousarray(values, dtype=float)
     if time_constant_s == 0.0 or x.size == 0:
         return x.copy()
-    return _lag(x, np.ascontiguousarray(steps, dtype=float), float(time_constant_s))
+    y_before, x_before = before if before is not None else (0.0, 0.0)
+    return _lag(x, np.ascontiguousarray(steps, dtype=float), float(time_constant_s),
+                before is not None, float(y_before), float(x_before))
 
 
 def lag_outputs(outputs: pd.DataFrame, steps: np.ndarray,
