@@ -216,7 +216,7 @@ class SurrogateCalibrator:
         check_calibration_result(result.rmse, problem)
         self.params_ = problem.parameters(best_x)
         self.rmse_, self.score_ = result.rmse, result.value
-        self.posterior_ = posterior_at(problem, self.params_, result)
+        self.posterior_ = posterior_at(problem, self.params_, result, windows)
         self.sensor_offsets_ = problem.objective.sensor_offsets(self.params_)
         self.n_evaluations_ = problem.n_evaluations
         self.n_penalised_ = problem.n_penalised
