@@ -2,7 +2,8 @@
 
 By default the GA minimises the posterior score (the negative log posterior with the default
 priors, :mod:`~steamtwin.calibration.objective`), i.e. it finds the MAP, and the Laplace
-posterior at the result gives 95 % intervals (:mod:`~steamtwin.calibration.posterior`);
+posterior at the result gives 95 % intervals (:mod:`~steamtwin.calibration.posterior`; for a
+``WindowSet`` each the wider of it and the cluster-robust interval over the load bands);
 ``priors=None`` gives the method's plain RMSE fit.
 """
 

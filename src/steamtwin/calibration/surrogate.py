@@ -24,7 +24,8 @@ The result is always a model-evaluated point, never a surrogate prediction; ``n_
 is what the model was asked for. What is minimised is the calibration objective's score — the
 negative log posterior's monotone transform with the default priors (the MAP), the RMSE with
 ``priors=None`` (:mod:`~steamtwin.calibration.objective`) — and the Laplace posterior at the
-result gives the intervals, as for the GA.
+result (for a ``WindowSet`` also the cluster-robust one over its load bands, the wider per
+parameter) gives the intervals, as for the GA.
 """
 
 from __future__ import annotations
