@@ -57,7 +57,8 @@ Model discrepancy: the cluster-robust covariance (:func:`cluster_robust_covarian
     the bands themselves (Liang & Zeger 1986, *Biometrika* 73:13; as a posterior covariance
     under misspecification, Müller 2013, *Econometrica* 81:1805). With few clusters (a day
     has 5–7 bands) the plain sandwich (CR1) is biased low; its leave-one-cluster-out jackknife
-    form (CV3) is not, and takes Student's t with G − 1 degrees of freedom (MacKinnon,
+    form (CV3) is not (if anything it errs wide), and takes Student's t with G − 1 degrees of
+    freedom (MacKinnon,
     Nielsen & Webb 2023, *J. Econometrics* 232:272, §4–5; Cameron & Miller 2015, *J. Human
     Resources* 50:317, §VI). With the objective's own weighting κ (the tempered MAP minimises
     κ χ²/2 + Σ z²/2), the untempered standardised residuals r, J = ∂r/∂θ, and each cluster g
