@@ -58,13 +58,13 @@ Model discrepancy: the cluster-robust covariance (:func:`cluster_robust_covarian
     under misspecification, Müller 2013, *Econometrica* 81:1805). With few clusters (a day
     has 5–7 bands) the plain sandwich (CR1) is biased low; its leave-one-cluster-out jackknife
     form (CV3) is not (if anything it errs wide), and takes Student's t with G − 1 degrees of
-    freedom (MacKinnon,
-    Nielsen & Webb 2023, *J. Econometrics* 232:272, §4–5; Cameron & Miller 2015, *J. Human
-    Resources* 50:317, §VI). With the objective's own weighting κ (the tempered MAP minimises
-    κ χ²/2 + Σ z²/2), the untempered standardised residuals r, J = ∂r/∂θ, and each cluster g
-    (a load band; every ramp one band): ``A = κ JᵀJ + diag(1/s²)``, the MAP without band g
-    one Newton step away, ``δ_g = κ (A − κ J_gᵀJ_g)⁻¹ J_gᵀ r_g``, and ``V = (G − 1)/G
-    Σ_g δ_g δ_gᵀ``; the interval is ``θ̂ ± t_{G−1} √V_ii``. The δ_g are the per-band
+    freedom (MacKinnon, Nielsen & Webb 2023, *J. Econometrics* 232:272, §4–5; Cameron &
+    Miller 2015, *J. Human Resources* 50:317, §VI). With the objective's own weighting κ
+    (the tempered MAP minimises κ χ²/2 + Σ z²/2), the untempered standardised residuals r,
+    J = ∂r/∂θ, and each cluster g (a load band; every ramp one band):
+    ``A = κ JᵀJ + diag(1/s²)``, the MAP without band g one Newton step away,
+    ``δ_g = κ (A − κ J_gᵀJ_g)⁻¹ J_gᵀ r_g``, and ``V = (G − 1)/G Σ_g δ_g δ_gᵀ``; the
+    interval is ``θ̂ ± t_{G−1} √V_ii``. The δ_g are the per-band
     influence — which band pulls a parameter where. The bias terms' own rows stay in A (a
     prior on the biases, part of the estimator) but in no cluster; J is the profiled
     Jacobian (the biases refit), so a parameter that only moves a sensor's level has δ_g ≈ 0.
