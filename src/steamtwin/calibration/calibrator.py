@@ -2,7 +2,8 @@
 
 By default the GA minimises the posterior score (the negative log posterior with the default
 priors, :mod:`~steamtwin.calibration.objective`), i.e. it finds the MAP, and the Laplace
-posterior at the result gives 95 % intervals (:mod:`~steamtwin.calibration.posterior`);
+posterior at the result gives 95 % intervals (:mod:`~steamtwin.calibration.posterior`; for a
+``WindowSet`` each the wider of it and the cluster-robust interval over the load bands);
 ``priors=None`` gives the method's plain RMSE fit.
 """
 
@@ -43,6 +44,7 @@ from steamtwin.calibration.posterior import (
     Posterior,
     laplace_posterior,
     likelihood_tempering,
+    window_clusters,
 )
 from steamtwin.errors import CalibrationAreaError
 from steamtwin.model.parameters import (
@@ -277,7 +279,7 @@ class Calibrator:
         check_calibration_result(result.rmse, problem)
         self.params_ = problem.parameters(best.X)
         self.rmse_, self.score_ = result.rmse, result.value
-        self.posterior_ = posterior_at(problem, self.params_, result)
+        self.posterior_ = posterior_at(problem, self.params_, result, windows)
         self.sensor_offsets_ = problem.objective.sensor_offsets(self.params_)
         self.history_ = pd.DataFrame(rows).set_index("generation")
         self.n_evaluations_ = problem.n_evaluations
@@ -356,14 +358,18 @@ def apply_tempering(problem: CalibrationProblem, tempering: float | str) -> floa
     return kappa
 
 
-def posterior_at(problem: CalibrationProblem, params: ModelParameters, result: Evaluation
-                 ) -> Posterior | None:
+def posterior_at(problem: CalibrationProblem, params: ModelParameters, result: Evaluation,
+                 windows: object = None) -> Posterior | None:
     """The Laplace posterior at a calibration result (None without priors or if rejected); the
     intervals carry the measured inputs' calibration errors
-    (:data:`~steamtwin.calibration.posterior.INPUT_UNCERTAINTIES`)."""
+    (:data:`~steamtwin.calibration.posterior.INPUT_UNCERTAINTIES`) and, for a
+    :class:`~steamtwin.calibration.windowset.WindowSet` of ``windows``, the cluster-robust
+    sandwich over its load bands where that is wider
+    (:func:`~steamtwin.calibration.posterior.window_clusters`)."""
     if problem.objective.priors is None or result.penalised:
         return None
-    return laplace_posterior(problem.objective, params, inputs=INPUT_UNCERTAINTIES)
+    return laplace_posterior(problem.objective, params, inputs=INPUT_UNCERTAINTIES,
+                             clusters=window_clusters(windows))
 
 
 def write_parameters(path: str | Path, params: ModelParameters, rmse: float,

@@ -48,6 +48,34 @@ Measured inputs (:data:`INPUT_UNCERTAINTIES`)
     before, so an input error that only shifts a temperature's level is absorbed there).
     The intervals report the total ``C + Σ g_i g_iᵀ``; params.json keeps both parts.
 
+Model discrepancy: the cluster-robust covariance (:func:`cluster_robust_covariance`)
+    A twin is not its plant: its error at one load repeats in every sample there and varies
+    smoothly across loads. The MAP then converges to a pseudo-true value that depends on how
+    the loads are weighted (White 1982, *Econometrica* 50:1), and its scatter over what the
+    plant could have done is set by how much each load band's residuals pull on it, not by
+    the instruments' σ. A cluster-robust ("sandwich") covariance estimates that scatter from
+    the bands themselves (Liang & Zeger 1986, *Biometrika* 73:13; as a posterior covariance
+    under misspecification, Müller 2013, *Econometrica* 81:1805). With few clusters (a day
+    has 5–7 bands) the plain sandwich (CR1) is biased low; its leave-one-cluster-out jackknife
+    form (CV3) is not (if anything it errs wide), and takes Student's t with G − 1 degrees of
+    freedom (MacKinnon, Nielsen & Webb 2023, *J. Econometrics* 232:272, §4–5; Cameron &
+    Miller 2015, *J. Human Resources* 50:317, §VI). With the objective's own weighting κ
+    (the tempered MAP minimises κ χ²/2 + Σ z²/2), the untempered standardised residuals r,
+    J = ∂r/∂θ, and each cluster g (a load band; every ramp one band):
+    ``A = κ JᵀJ + diag(1/s²)``, the MAP without band g one Newton step away,
+    ``δ_g = κ (A − κ J_gᵀJ_g)⁻¹ J_gᵀ r_g``, and ``V = (G − 1)/G Σ_g δ_g δ_gᵀ``; the
+    interval is ``θ̂ ± t_{G−1} √V_ii``. The δ_g are the per-band
+    influence — which band pulls a parameter where. The bias terms' own rows stay in A (a
+    prior on the biases, part of the estimator) but in no cluster; J is the profiled
+    Jacobian (the biases refit), so a parameter that only moves a sensor's level has δ_g ≈ 0.
+    For a correctly specified model with independent residuals and a weak prior, V ≈
+    (JᵀJ)⁻¹ (the untempered Laplace covariance) within its sampling error (relative
+    ≈ √(2/(G − 1))); where the bands disagree V grows with their disagreement. The reported
+    interval per parameter is the wider of the Laplace interval and the robust one (each a
+    lower bound on the uncertainty: the first from the residuals' size and correlation, the
+    second from the bands' disagreement; ``method`` in :meth:`Posterior.table` says which
+    made it), plus the inputs' term. Costs no model run beyond the Laplace posterior's.
+
 MAP by Gauss–Newton (:func:`fit_map`)
     ``scipy.optimize.least_squares`` (trust-region reflective) on the stacked vector
     [r(θ); (θ − m)/s], whose half sum of squares is the negative log posterior: the cheap local
@@ -62,13 +90,14 @@ MCMC check (:func:`metropolis`)
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass, replace
 from statistics import NormalDist
 
 import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
+from scipy.stats import t as student_t
 
 from steamtwin.calibration.identifiability import integrated_time
 from steamtwin.calibration.objective import (
@@ -86,8 +115,9 @@ from steamtwin.model.parameters import (
 )
 
 __all__ = ["FLOW_MEASUREMENT_UNCERTAINTY", "INPUT_UNCERTAINTIES", "INTERVAL_PROBABILITY",
-           "InputUncertainty", "Posterior", "fit_map", "input_covariance", "laplace_posterior",
-           "likelihood_tempering", "metropolis"]
+           "InputUncertainty", "Posterior", "cluster_robust_covariance", "fit_map",
+           "input_covariance", "laplace_posterior", "likelihood_tempering", "metropolis",
+           "window_clusters"]
 
 INTERVAL_PROBABILITY = 0.95
 """Probability of the reported central posterior intervals."""
@@ -156,8 +186,11 @@ class Posterior:
     normal coordinates), ``covariance`` (in θ), ``priors`` (PARAMETER_NAMES order),
     ``autocorrelation_time`` (samples, τ), ``samples`` (residuals used), ``scale_factor``
     (the Birge ratio S, ≥ 1), ``input_covariance`` (θ; what the measured inputs' calibration
-    errors add, :func:`input_covariance`; None: not propagated) and ``input_sources`` (signal
-    → the uncertainty it carried)."""
+    errors add, :func:`input_covariance`; None: not propagated), ``input_sources`` (signal
+    → the uncertainty it carried), ``robust_covariance`` (θ; the cluster-robust covariance V,
+    :func:`cluster_robust_covariance`; None: not computed), ``clusters`` (the labels of
+    the clusters it was computed over) and ``cluster_shifts`` (θ; per cluster, the MAP
+    without it minus the MAP, one Newton step)."""
 
     map: ModelParameters
     theta: np.ndarray
@@ -168,37 +201,97 @@ class Posterior:
     scale_factor: float = 1.0
     input_covariance: np.ndarray | None = None
     input_sources: tuple[tuple[str, str], ...] = ()
+    robust_covariance: np.ndarray | None = None
+    clusters: tuple[str, ...] = ()
+    cluster_shifts: np.ndarray | None = None
+
+    def without_cluster(self) -> dict[str, dict[str, float]]:
+        """Per cluster (load band): each parameter's MAP without that band's data (one Newton
+        step; module docstring) — which band pulls a parameter where. Empty without it."""
+        if self.cluster_shifts is None:
+            return {}
+        return {name: {parameter: float(prior.from_internal(self.theta[i] + shift[i]))
+                       for i, (parameter, prior) in enumerate(zip(PARAMETER_NAMES, self.priors,
+                                                                  strict=True))}
+                for name, shift in zip(self.clusters, self.cluster_shifts, strict=True)}
+
+    def robust_factor(self, probability: float = INTERVAL_PROBABILITY) -> float:
+        """t_{G−1}/z at ``probability``: the robust variance is scaled by its square so that
+        ``z·σ`` spans the Student-t interval of G clusters (module docstring); 1 without it."""
+        if self.robust_covariance is None:
+            return 1.0
+        tail = 0.5 + probability / 2.0
+        return float(student_t.ppf(tail, len(self.clusters) - 1) / NormalDist().inv_cdf(tail))
+
+    def fit_covariance(self, probability: float = INTERVAL_PROBABILITY
+                       ) -> tuple[np.ndarray, list[str]]:
+        """The fit's covariance in θ the intervals use and, per parameter, the method that
+        made its variance: "laplace", or "cluster-robust" where the t-scaled sandwich is
+        wider (module docstring). The variances are the wider of the two; the correlations
+        the Laplace covariance's."""
+        laplace = np.diag(self.covariance)
+        if self.robust_covariance is None:
+            return self.covariance, ["laplace"] * len(laplace)
+        robust = np.diag(self.robust_covariance) * self.robust_factor(probability) ** 2
+        variance = np.maximum(laplace, robust)
+        scale = np.sqrt(variance / laplace)
+        methods = ["cluster-robust" if r > v else "laplace" for r, v in zip(robust, laplace,
+                                                                            strict=True)]
+        return self.covariance * np.outer(scale, scale), methods
 
     @property
     def total_covariance(self) -> np.ndarray:
-        """Covariance in θ the intervals report: the fit's plus the inputs'."""
-        return self.covariance if self.input_covariance is None \
-            else self.covariance + self.input_covariance
+        """Covariance in θ the 95 % intervals report: the fit's (:meth:`fit_covariance`)
+        plus the inputs'."""
+        fit, _ = self.fit_covariance()
+        return fit if self.input_covariance is None else fit + self.input_covariance
 
     def table(self, probability: float = INTERVAL_PROBABILITY) -> pd.DataFrame:
         """One row per parameter: ``map``, ``low``/``high`` (central interval, clipped to the
-        physical bounds), ``std`` (θ units: absolute for normal, relative for log-normal),
-        the prior's ``prior_center`` and interval ``prior_low``/``prior_high``,
-        ``shrinkage`` (posterior σ / prior σ in θ: ≈ 1 = the data add nothing) and the
-        posterior correlations ``corr:<name>``."""
+        physical bounds), ``method`` (what made it: "laplace" or "cluster-robust"), the two
+        candidates ``laplace_low``/``laplace_high`` and ``robust_low``/``robust_high`` (NaN
+        without clusters; each with the inputs' term), ``std`` (θ units: absolute for normal,
+        relative for log-normal), ``robust_std`` (√V_ii, θ units, before the t factor), the
+        prior's ``prior_center`` and interval ``prior_low``/``prior_high``, ``shrinkage``
+        (Laplace posterior σ / prior σ in θ: ≈ 1 = the data add nothing), ``input_std`` and
+        the posterior correlations ``corr:<name>``."""
         z = NormalDist().inv_cdf(0.5 + probability / 2.0)
-        total = self.total_covariance
+        fit, methods = self.fit_covariance(probability)
+        inputs = np.zeros_like(fit) if self.input_covariance is None else self.input_covariance
+        total = fit + inputs
         std = np.sqrt(np.diag(total))
+        laplace_std = np.sqrt(np.diag(self.covariance + inputs))
+        robust_std = np.full(len(std), np.nan) if self.robust_covariance is None else \
+            np.sqrt(np.diag(self.robust_covariance))
+        robust_total = np.sqrt(robust_std**2 * self.robust_factor(probability) ** 2
+                               + np.diag(inputs))
         fit_std = np.sqrt(np.diag(self.covariance))
         correlation = total / np.outer(std, std)
         rows = []
         for i, (name, prior) in enumerate(zip(PARAMETER_NAMES, self.priors, strict=True)):
             low, high = PARAMETER_BOUNDS[name]
             prior_low, prior_high = prior.interval(probability)
-            half = z * std[i]
+
+            def bound(half: float, i: int = i, prior: ParameterPrior = prior,
+                      low: float = low, high: float = high) -> tuple[float, float]:
+                if not np.isfinite(half):
+                    return float("nan"), float("nan")
+                return (float(np.clip(prior.from_internal(self.theta[i] - half), low, high)),
+                        float(np.clip(prior.from_internal(self.theta[i] + half), low, high)))
+
+            interval = bound(z * std[i])
+            laplace = bound(z * laplace_std[i])
+            robust = bound(z * robust_total[i])
             row: dict[str, object] = {
                 "parameter": name, "map": getattr(self.map, name),
-                "low": float(np.clip(prior.from_internal(self.theta[i] - half), low, high)),
-                "high": float(np.clip(prior.from_internal(self.theta[i] + half), low, high)),
-                "std": float(std[i]), "distribution": prior.distribution,
+                "low": interval[0], "high": interval[1], "method": methods[i],
+                "laplace_low": laplace[0], "laplace_high": laplace[1],
+                "robust_low": robust[0], "robust_high": robust[1],
+                "std": float(std[i]), "robust_std": float(robust_std[i]),
+                "distribution": prior.distribution,
                 "prior_center": prior.center, "prior_low": prior_low, "prior_high": prior_high,
                 "shrinkage": float(fit_std[i] / prior.spread),
-                "input_std": float(np.sqrt(max(total[i, i] - self.covariance[i, i], 0.0))),
+                "input_std": float(np.sqrt(max(total[i, i] - fit[i, i], 0.0))),
             }
             for j, other in enumerate(PARAMETER_NAMES):
                 if j != i:
@@ -208,15 +301,34 @@ class Posterior:
 
     def to_dict(self, probability: float = INTERVAL_PROBABILITY) -> dict[str, object]:
         """The ``posterior`` section of a parameter file (schema version
-        :data:`~steamtwin.model.parameters.PARAMETERS_SCHEMA_VERSION`)."""
+        :data:`~steamtwin.model.parameters.PARAMETERS_SCHEMA_VERSION`): per parameter the
+        reported interval and the ``method`` that made it, beside both candidates."""
         table = self.table(probability)
+
+        def number(value: object) -> float | None:
+            return None if not np.isfinite(float(value)) else float(value)
+
+        robust = {} if self.robust_covariance is None else {
+            "robust": {"method": "cluster-robust (leave-one-band-out jackknife, CV3), "
+                                 "Student t with G − 1 degrees of freedom",
+                       "clusters": list(self.clusters),
+                       "t_over_z": self.robust_factor(probability),
+                       "map_without_band": self.without_cluster()}}
         return {
-            "schema_version": PARAMETERS_SCHEMA_VERSION, "method": "laplace",
+            "schema_version": PARAMETERS_SCHEMA_VERSION,
+            "method": "laplace" if self.robust_covariance is None
+            else "wider of laplace and cluster-robust",
             "probability": probability, "autocorrelation_time_samples": self.autocorrelation_time,
-            "scale_factor": self.scale_factor, "samples": self.samples,
+            "scale_factor": self.scale_factor, "samples": self.samples, **robust,
             "input_uncertainties": dict(self.input_sources),
             "intervals": {name: {"map": float(row["map"]), "low": float(row["low"]),
-                                 "high": float(row["high"]), "std": float(row["std"]),
+                                 "high": float(row["high"]), "method": str(row["method"]),
+                                 "laplace_low": float(row["laplace_low"]),
+                                 "laplace_high": float(row["laplace_high"]),
+                                 "robust_low": number(row["robust_low"]),
+                                 "robust_high": number(row["robust_high"]),
+                                 "std": float(row["std"]),
+                                 "robust_std": number(row["robust_std"]),
                                  "input_std": float(row["input_std"]),
                                  "shrinkage": float(row["shrinkage"])}
                           for name, row in table.iterrows()},
@@ -254,12 +366,16 @@ def _theta_bounds(priors: tuple[ParameterPrior, ...]) -> tuple[np.ndarray, np.nd
 def laplace_posterior(objective: Objective, params: ModelParameters,
                       priors: Mapping[str, ParameterPrior] | None = None, *,
                       inflate: bool = True,
-                      inputs: Mapping[str, InputUncertainty] | None = None) -> Posterior:
+                      inputs: Mapping[str, InputUncertainty] | None = None,
+                      clusters: Sequence[Hashable] | None = None) -> Posterior:
     """Laplace posterior at ``params`` (the MAP; module docstring). ``priors`` default to the
     objective's; ``inflate=False`` takes τ = S = 1 (independent residuals of the stated
     σ); ``inputs``: the measured inputs' calibration errors to propagate (e.g.
-    :data:`INPUT_UNCERTAINTIES`; those the model does not take are skipped). Costs 1 + 2·3
-    model runs per window, and 2 per propagated input."""
+    :data:`INPUT_UNCERTAINTIES`; those the model does not take are skipped); ``clusters``:
+    one label per objective window (e.g. its load band, :func:`window_clusters`) for the
+    cluster-robust sandwich beside the Laplace covariance (None, or fewer than two distinct
+    labels: Laplace only). Costs 1 + 2·3 model runs per window, and 2 per propagated
+    input."""
     prior_tuple = _priors(objective, priors)
     theta = np.array([p.to_internal(getattr(params, n))
                       for n, p in zip(PARAMETER_NAMES, prior_tuple, strict=True)])
@@ -281,6 +397,15 @@ def laplace_posterior(objective: Objective, params: ModelParameters,
         [1.0 / p.spread**2 for p in prior_tuple])
     covariance = np.linalg.inv(precision)
     posterior = Posterior(params, theta, covariance, prior_tuple, tau, int(base.size), scale)
+    if clusters is not None:
+        labels = _row_clusters(objective, clusters, base.size)
+        if len(set(labels) - {None}) >= 2:
+            prior_precision = np.diag([1.0 / p.spread**2 for p in prior_tuple])
+            robust, names, shifts = cluster_robust_covariance(
+                jacobian / np.sqrt(kappa), base / np.sqrt(kappa), labels, prior_precision,
+                weight=kappa)
+            posterior = replace(posterior, robust_covariance=robust, clusters=names,
+                                cluster_shifts=shifts)
     if not inputs:
         return posterior
     gain = covariance @ jacobian.T / (kappa * tau * scale**2)  # δθ = −gain·δr
@@ -290,6 +415,61 @@ def laplace_posterior(objective: Objective, params: ModelParameters,
     return replace(posterior, input_covariance=covariance_in, input_sources=tuple(
         (name, f"not propagated: the model rejects the inputs with {name} moved by ±{u.source}"
          if name in rejected else u.source) for name, u in used.items()))
+
+
+def cluster_robust_covariance(jacobian: np.ndarray, residuals: np.ndarray,
+                              clusters: Sequence[Hashable | None],
+                              prior_precision: np.ndarray, *, weight: float = 1.0
+                              ) -> tuple[np.ndarray, tuple[str, ...], np.ndarray]:
+    """Cluster-robust covariance (the leave-one-cluster-out jackknife, CV3; module
+    docstring) of the estimate minimising ``weight``·Σ r²/2 + (θ − m)ᵀ P (θ − m)/2, from the
+    Jacobian (rows, p) of the residuals (rows) at it, each row's cluster label (None: a row
+    in A only, e.g. a bias term's) and the prior precision P (p, p; zeros for none):
+    A = weight·JᵀJ + P, δ_g = weight·(A − weight·J_gᵀJ_g)⁻¹ J_gᵀ r_g (the estimate without
+    cluster g, one Newton step) and V = (G − 1)/G Σ_g δ_g δ_gᵀ. Returns V (θ units²), the
+    G cluster labels (as text, in first-seen order) and the shifts δ (G, p; θ units: the
+    estimate without each cluster minus the estimate); ValueError for fewer than 2."""
+    labels = list(clusters)
+    if len(labels) != len(residuals) or jacobian.shape[0] != len(residuals):
+        raise ValueError(f"cluster_robust_covariance: {len(labels)} labels, "
+                         f"{len(residuals)} residuals and {jacobian.shape[0]} Jacobian rows "
+                         "must agree")
+    names = list(dict.fromkeys(label for label in labels if label is not None))
+    if len(names) < 2:
+        raise ValueError(f"cluster_robust_covariance: needs at least 2 clusters (got "
+                         f"{len(names)})")
+    index = {name: k for k, name in enumerate(names)}
+    rows = np.array([index[label] if label is not None else -1 for label in labels])
+    precision = weight * jacobian.T @ jacobian + prior_precision
+    g = len(names)
+    shifts = np.empty((g, jacobian.shape[1]))
+    for k in range(g):
+        part = jacobian[rows == k]
+        # the estimate without cluster k, one Newton step from the full one (exact if linear)
+        shifts[k] = weight * np.linalg.solve(precision - weight * part.T @ part,
+                                             part.T @ residuals[rows == k])
+    return (g - 1.0) / g * shifts.T @ shifts, tuple(str(name) for name in names), shifts
+
+
+def window_clusters(windows: object) -> list[str] | None:
+    """Cluster label of each calibration window: its load band for a
+    :class:`~steamtwin.calibration.windowset.WindowSet` (every ramp one band; the bands are
+    what the model's error repeats over, module docstring), None for plain frames."""
+    bands = getattr(windows, "bands", None)
+    return list(bands()) if callable(bands) else None
+
+
+def _row_clusters(objective: Objective, clusters: Sequence[Hashable], rows: int
+                  ) -> list[Hashable | None]:
+    """Each standardised residual's cluster: its window's label, None for the bias terms."""
+    labels = list(clusters)
+    if len(labels) != len(objective.windows):
+        raise ValueError(f"clusters: expected one label per window ({len(objective.windows)}), "
+                         f"got {len(labels)}")
+    per_row: list[Hashable | None] = []
+    for window, label in zip(objective.windows, labels, strict=True):
+        per_row += [label] * int((~np.isnan(window.measured)).sum())
+    return per_row + [None] * (rows - len(per_row))
 
 
 def input_covariance(objective: Objective, params: ModelParameters, gain: np.ndarray,

@@ -83,9 +83,11 @@ def band_rmse_table(simulator: Simulator, window_set: WindowSet, params: ModelPa
 
 
 def parameter_table(posterior: Posterior) -> pd.DataFrame:
-    """Table 6, parameters: per parameter the MAP, the 95 % posterior interval, its prior's
-    centre and 95 % interval, the shrinkage (posterior σ / prior σ) and the posterior
-    correlations (:meth:`~steamtwin.calibration.posterior.Posterior.table`)."""
+    """Table 6, parameters: per parameter the MAP, the 95 % posterior interval and the method
+    that made it (the wider of the Laplace and, over a joint calibration's load bands, the
+    cluster-robust interval; both given), its prior's centre and 95 % interval, the shrinkage
+    (posterior σ / prior σ) and the posterior correlations
+    (:meth:`~steamtwin.calibration.posterior.Posterior.table`)."""
     return posterior.table()
 
 

@@ -24,7 +24,8 @@ The result is always a model-evaluated point, never a surrogate prediction; ``n_
 is what the model was asked for. What is minimised is the calibration objective's score — the
 negative log posterior's monotone transform with the default priors (the MAP), the RMSE with
 ``priors=None`` (:mod:`~steamtwin.calibration.objective`) — and the Laplace posterior at the
-result gives the intervals, as for the GA.
+result (for a ``WindowSet`` also the cluster-robust one over its load bands, the wider per
+parameter) gives the intervals, as for the GA.
 """
 
 from __future__ import annotations
@@ -216,7 +217,7 @@ class SurrogateCalibrator:
         check_calibration_result(result.rmse, problem)
         self.params_ = problem.parameters(best_x)
         self.rmse_, self.score_ = result.rmse, result.value
-        self.posterior_ = posterior_at(problem, self.params_, result)
+        self.posterior_ = posterior_at(problem, self.params_, result, windows)
         self.sensor_offsets_ = problem.objective.sensor_offsets(self.params_)
         self.n_evaluations_ = problem.n_evaluations
         self.n_penalised_ = problem.n_penalised
