@@ -54,12 +54,7 @@ def main() -> None:
     run = run_plant("day", seed=0)
     measured = run.measured.iloc[:int(args.hours * 3600)]
     seconds = len(measured)
-    options = gate_options(plant_tag_map())
-    sensors = run.injected.sensors
-    options["noise_si"] = {k: float(v) for k, v in sensors["noise_sigma"].items()
-                           if k in measured.columns and v > 0}
-    options["resolution_si"] = {k: float(v) for k, v in sensors["resolution"].items()
-                                if k in measured.columns and v > 0}
+    options = gate_options(plant_tag_map(), run.injected.sensors)
     model = FullOrderModel(load_spec("reference"), sensor_time_constants=TYPICAL_TIME_CONSTANTS_S)
     _ = model.design_
     model.simulate(measured.iloc[:10][list(INPUT_SIGNALS)].ffill().bfill())  # compile

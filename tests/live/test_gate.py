@@ -22,12 +22,7 @@ def faulty():
                                           stuck_rate_per_h=2, stuck_median_s=120))
     run = run_plant("deep-peak-50", hours=0.3, seed=3, truth=truth)
     measured = run.measured
-    options = gate_options(plant_tag_map())
-    sensors = run.injected.sensors
-    options["noise_si"] = {k: float(v) for k, v in sensors["noise_sigma"].items()
-                           if k in measured.columns and v > 0}
-    options["resolution_si"] = {k: float(v) for k, v in sensors["resolution"].items()
-                                if k in measured.columns and v > 0}
+    options = gate_options(plant_tag_map(), run.injected.sensors)
     batch = clean(measured, nominal_step_s=1.0, out_of_range_error_fraction=1.0, **options)
     return measured, options, batch, run.injected.faults
 
