@@ -125,3 +125,24 @@ def test_order_by_faces_is_monotone_along_each_face_at_any_stagger(stagger):
     assert front_turn == pytest.approx(lengths[0] / sum(lengths), abs=0.02)
     assert np.all(np.isfinite(perimeter))
     assert tour_ratio(points, mask, turn, perimeter, 4.0 * spacing) < 2.0
+
+
+def test_section_turn_orders_a_sharp_edged_section_at_70_degrees_stagger():
+    """The crescent's edges are sharp (no circle): the graph does not go round them, the ring
+    is broken and section_turn falls back on the order by faces."""
+    from steamtwin.geometry.segmentation import section_turn
+
+    points, normals, pressure, along = crescent(8000, 70.0, seed=2)
+    count = len(points)
+    distances, index = cKDTree(points).query(points, k=20)
+    direction = np.array([math.cos(math.radians(70.0)), math.sin(math.radians(70.0))])
+    front = np.zeros((count, 2))
+    rear = np.broadcast_to(CHORD * direction, (count, 2)).copy()
+    turn, perimeter = section_turn(points, normals, index, np.ones(count, dtype=bool), front,
+                                   rear, float(np.median(distances[:, -1])), 2e-3)
+    from scipy.stats import spearmanr
+
+    unwrapped = np.where(turn < 0.25, turn + 1.0, turn)
+    assert spearmanr(turn[~pressure], along[~pressure]).statistic < -0.99
+    assert spearmanr(unwrapped[pressure], along[pressure]).statistic > 0.99
+    assert np.all(np.isfinite(perimeter))

@@ -561,7 +561,8 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     only shortens the paths beyond it by part of the circle. Unlike the chordwise position, θ
     is monotone round any section, however strongly cambered, and unchanged by twist and
     taper. Points the graph does not reach (strays) take the θ of their nearest reached point.
-    Where the ring is broken — the paths do not come back, or the order jumps between the faces
+    Where the ring is broken — no seam across y = y_front at the front end (high stagger), the
+    paths do not come back, or the order jumps between the faces
     (:func:`~steamtwin.geometry.sections.tour_ratio` above
     :data:`~steamtwin.geometry.sections.BROKEN_TOUR`), as at a thin edge sampled too sparsely
     for the graph to go round it — the order by faces
@@ -597,8 +598,10 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     seam = mask & (offset < seed_radius)
     start, end = np.flatnonzero(seam & below), np.flatnonzero(seam & ~below)
     if start.size == 0 or end.size == 0:
-        raise ReconstructionError("no side points at the front end of the sections: is the "
-                                  "leading edge scanned?")
+        # no seam across the line y = y_front (a section staggered so far that both faces
+        # leave the front end upwards or downwards): the order by faces, cut along the chord
+        return two_face_turn(points, normals, mask, *graph_edges, front, rear, seed_radius,
+                             slab)
     origin = count  # a virtual source joined to the seam points below the cut
     rows = np.concatenate([lo, hi, np.full(start.size, origin)])
     cols = np.concatenate([hi, lo, start])
