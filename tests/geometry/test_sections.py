@@ -146,3 +146,23 @@ def test_section_turn_orders_a_sharp_edged_section_at_70_degrees_stagger():
     assert spearmanr(turn[~pressure], along[~pressure]).statistic < -0.99
     assert spearmanr(unwrapped[pressure], along[pressure]).statistic > 0.99
     assert np.all(np.isfinite(perimeter))
+
+
+def test_order_by_faces_refuses_a_face_not_reached_from_both_ends():
+    """No neighbour pairs at all on the suction face: a ReconstructionError that says so, which
+    section_turn turns into keeping the ring order, never a crash."""
+    from steamtwin.geometry.segmentation import ReconstructionError
+
+    points, normals, pressure, _ = crescent(4000, 30.0)
+    count = len(points)
+    distances, index = cKDTree(points).query(points, k=9)
+    i = np.repeat(np.arange(count), 8)
+    j = index[:, 1:].ravel()
+    keep = pressure[i] & pressure[j]
+    direction = np.array([math.cos(math.radians(30.0)), math.sin(math.radians(30.0))])
+    front = np.zeros((count, 2))
+    rear = np.broadcast_to(CHORD * direction, (count, 2)).copy()
+    with pytest.raises(ReconstructionError, match="reached from both"):
+        two_face_turn(points, normals, np.ones(count, dtype=bool), i[keep], j[keep],
+                      distances[:, 1:].ravel()[keep], front, rear,
+                      4.0 * float(np.median(distances[:, 1])), 2e-3)

@@ -35,6 +35,8 @@ from steamtwin.geometry.segmentation import ReconstructionError, _slab_median
 #: A θ order whose median :func:`tour_ratio` exceeds this is broken (an order that follows the
 #: section zig-zags by 1.2–1.6 on 80k-point clouds with σ 0.017 mm noise; a broken one by 5–13).
 BROKEN_TOUR = 2.0
+#: Fewest points of a face reached from both ends for the order by faces.
+MIN_FACE_POINTS = 100
 #: Thin slabs along the span in which :func:`tour_ratio` is measured.
 TOUR_SLABS = 12
 
@@ -107,6 +109,11 @@ def two_face_turn(points: np.ndarray, normals: np.ndarray, mask: np.ndarray, lo:
     face_length = {}
     for face, on in (("pressure", pressure), ("suction", ~pressure)):
         chosen = reached & on
+        if np.sum(chosen) < MIN_FACE_POINTS:
+            raise ReconstructionError(
+                f"only {int(np.sum(chosen))} side points on the {face} side are reached from "
+                "both the leading and the trailing edge: the sections cannot be ordered by "
+                "their faces")
         face_length[face] = _slab_median(points[chosen, 2], total[chosen], points[:, 2], slab)
     perimeter = np.full(count, np.nan)
     perimeter[mask] = (face_length["pressure"] + face_length["suction"])[mask]

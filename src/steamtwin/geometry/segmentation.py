@@ -176,7 +176,8 @@ def oriented_normals(points: np.ndarray, neighbours: int = 20
     :func:`~steamtwin.geometry.orientation.sheet_offset_bound` from each other's tangent
     plane, and each of its parts that ray parity decides
     (:func:`~steamtwin.geometry.orientation.part_orientation`, rays over the section plane's
-    extent) is turned as parity says; the other points keep the first orientation.
+    extent) and that the first orientation inverted for the most part is turned as parity
+    says; the other points keep the first orientation.
     """
     from steamtwin.geometry.orientation import (
         median_spacing,
@@ -210,8 +211,15 @@ def oriented_normals(points: np.ndarray, neighbours: int = 20
     flip, part = _propagate(normals, i[strict], j[strict], count)
     by_parts = np.where(flip[:, None], -normals, normals)
     sign = part_orientation(points, by_parts, variation, part, median_spacing(points),
-                            float(np.linalg.norm(np.ptp(points[:, :2], axis=0))))[part]
-    normals = np.where(sign[:, None] != 0, by_parts * sign[:, None], by_centroid)
+                            float(np.linalg.norm(np.ptp(points[:, :2], axis=0))))
+    # a decided part overrides the centroid vote only where that inverted most of it (a whole
+    # face): elsewhere the two differ at a few points of uncertain orientation, which keep the
+    # first
+    agree = np.einsum("ij,ij->i", by_parts * sign[part, None], by_centroid) > 0.0
+    inverted = np.bincount(part, weights=~agree, minlength=len(sign)) > 0.5 * np.bincount(
+        part, minlength=len(sign))
+    override = (sign != 0) & inverted
+    normals = np.where(override[part, None], by_parts * sign[part, None], by_centroid)
     return index, normals, variation
 
 
