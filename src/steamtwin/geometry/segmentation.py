@@ -168,17 +168,23 @@ def oriented_normals(points: np.ndarray, neighbours: int = 20
     """Neighbour indices (n, k), outward unit normals (n, 3) and surface variation (n,).
 
     Orientation: Hoppe et al. (1992) propagation over a minimum spanning tree with weights
-    1 − |n_i·n_j|, restricted to tangential neighbour pairs (the chord between them within 30°
-    of both tangent planes); every connected part of the tree then points the majority of its
-    normals away from the cloud's centroid.
+    1 − |n_i·n_j| (:func:`_propagate`), restricted to tangential neighbour pairs (the chord
+    between them within 30° of both tangent planes); every connected part of the tree then
+    points the majority of its normals away from the cloud's centroid. That vote fails where
+    the tree joins the opposite faces of a thin edge (it passes one face's orientation to the
+    other, inverted) or the centroid lies outside the section: a second, strict tree also
+    leaves out the pairs farther than
+    :func:`~steamtwin.geometry.orientation.sheet_offset_bound` from each other's tangent
+    plane, and each of its parts that ray parity decides
+    (:func:`~steamtwin.geometry.orientation.part_orientation`, rays over the section plane's
+    extent) and that the first orientation inverted for the most part is turned as parity
+    says; the other points keep the first orientation.
     """
-    from scipy.sparse import coo_array
-    from scipy.sparse.csgraph import (
-        breadth_first_order,
-        connected_components,
-        minimum_spanning_tree,
+    from steamtwin.geometry.orientation import (
+        median_spacing,
+        part_orientation,
+        sheet_offset_bound,
     )
-
     from steamtwin.geometry.preprocess import local_frames
 
     index, normals, variation = local_frames(points, neighbours)
@@ -187,8 +193,50 @@ def oriented_normals(points: np.ndarray, neighbours: int = 20
     along_i = np.abs(np.einsum("ij,ij->i", normals[i], chord))
     along_j = np.abs(np.einsum("ij,ij->i", normals[j], chord))
     tangential = (length > 0.0) & (along_i < 0.5 * length) & (along_j < 0.5 * length)
-    lo = np.minimum(i, j)[tangential]
-    hi = np.maximum(i, j)[tangential]
+    # the strict tree does not join the opposite faces of a thin edge either (normals
+    # antiparallel, the chord tangential, but each point off the other's tangent plane by the
+    # edge's thickness)
+    # every part of the tangential tree points the majority of its normals away from the
+    # cloud's centroid
+    flip, part = _propagate(normals, i[tangential], j[tangential], count)
+    by_centroid = np.where(flip[:, None], -normals, normals)
+    outward = np.einsum("ij,ij->i", by_centroid, points - points.mean(axis=0)) > 0.0
+    votes = np.bincount(part, weights=np.where(outward, 1.0, -1.0))
+    by_centroid = np.where((votes[part] < 0.0)[:, None], -by_centroid, by_centroid)
+    # the strict tree does not join the opposite faces of a thin edge (normals antiparallel,
+    # the chord tangential, but each point off the other's tangent plane by the edge's
+    # thickness); its parts that ray parity decides are turned by it (a thin cambered
+    # section's pressure side faces the cloud's centroid, issue 19)
+    bound = sheet_offset_bound(points, normals, index)
+    strict = tangential & (along_i < bound) & (along_j < bound)
+    flip, part = _propagate(normals, i[strict], j[strict], count)
+    by_parts = np.where(flip[:, None], -normals, normals)
+    sign = part_orientation(points, by_parts, variation, part, median_spacing(points),
+                            float(np.linalg.norm(np.ptp(points[:, :2], axis=0))))
+    # a decided part overrides the centroid vote only where that inverted most of it (a whole
+    # face): elsewhere the two differ at a few points of uncertain orientation, which keep the
+    # first
+    agree = np.einsum("ij,ij->i", by_parts * sign[part, None], by_centroid) > 0.0
+    inverted = np.bincount(part, weights=~agree, minlength=len(sign)) > 0.5 * np.bincount(
+        part, minlength=len(sign))
+    override = (sign != 0) & inverted
+    normals = np.where(override[part, None], by_parts * sign[part, None], by_centroid)
+    return index, normals, variation
+
+
+def _propagate(normals: np.ndarray, i: np.ndarray, j: np.ndarray, count: int
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Hoppe et al. (1992) orientation propagation over the minimum spanning tree of the
+    neighbour pairs ``(i, j)`` with weights 1 − |n_i·n_j|: which normals to turn so that each
+    agrees with its parent in the tree, and the connected part of every point."""
+    from scipy.sparse import coo_array
+    from scipy.sparse.csgraph import (
+        breadth_first_order,
+        connected_components,
+        minimum_spanning_tree,
+    )
+
+    lo, hi = np.minimum(i, j), np.maximum(i, j)
     _, unique = np.unique(lo * count + hi, return_index=True)
     lo, hi = lo[unique], hi[unique]
     weight = 1.0 - np.abs(np.einsum("ij,ij->i", normals[lo], normals[hi])) + 1e-9
@@ -209,12 +257,7 @@ def oriented_normals(points: np.ndarray, neighbours: int = 20
     flipped = [False] * (count + 1)  # parents come before their children in ``order``
     for node, up, same in zip(order.tolist(), parent.tolist(), agree.tolist(), strict=True):
         flipped[node] = flipped[up] != (not same)
-    flip = np.array(flipped[:count])
-    normals = np.where(flip[:, None], -normals, normals)
-    outward = np.einsum("ij,ij->i", normals, points - points.mean(axis=0)) > 0.0
-    votes = np.bincount(part, weights=np.where(outward, 1.0, -1.0), minlength=parts)
-    normals = np.where((votes[part] < 0.0)[:, None], -normals, normals)
-    return index, normals, variation
+    return np.array(flipped[:count]), part
 
 
 def principal_curvature(points: np.ndarray, normals: np.ndarray, index: np.ndarray) -> np.ndarray:
@@ -527,10 +570,19 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     only shortens the paths beyond it by part of the circle. Unlike the chordwise position, θ
     is monotone round any section, however strongly cambered, and unchanged by twist and
     taper. Points the graph does not reach (strays) take the θ of their nearest reached point.
+    Where the ring is broken — no seam across y = y_front at the front end (high stagger), the
+    paths do not come back, or the order jumps between the faces
+    (:func:`~steamtwin.geometry.sections.tour_ratio` above
+    :data:`~steamtwin.geometry.sections.BROKEN_TOUR`), as at a thin edge sampled too sparsely
+    for the graph to go round it — the order by faces
+    (:func:`~steamtwin.geometry.sections.two_face_turn`) is taken instead, when it follows the
+    sections better.
     """
     from scipy.sparse import coo_array
     from scipy.sparse.csgraph import dijkstra
     from scipy.spatial import cKDTree
+
+    from steamtwin.geometry.sections import BROKEN_TOUR, tour_ratio, two_face_turn
 
     count = len(points)
     i, j, chord, length = neighbour_chords(points, index)
@@ -546,6 +598,7 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     pair = np.minimum(i, j)[edge] * count + np.maximum(i, j)[edge]
     _, unique = np.unique(pair, return_index=True)  # a mutual neighbour pair once
     lo, hi, length = i[edge][unique], j[edge][unique], length[edge][unique]
+    graph_edges = (lo, hi, length)  # for the order by faces, should the ring be broken
     offset = np.linalg.norm(points[:, :2] - front, axis=1)
     below = points[:, 1] < front[:, 1]
     # cut the ring along the line y = y_front across the leading edge
@@ -554,8 +607,10 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     seam = mask & (offset < seed_radius)
     start, end = np.flatnonzero(seam & below), np.flatnonzero(seam & ~below)
     if start.size == 0 or end.size == 0:
-        raise ReconstructionError("no side points at the front end of the sections: is the "
-                                  "leading edge scanned?")
+        # no seam across the line y = y_front (a section staggered so far that both faces
+        # leave the front end upwards or downwards): the order by faces, cut along the chord
+        return two_face_turn(points, normals, mask, *graph_edges, front, rear, seed_radius,
+                             slab)
     origin = count  # a virtual source joined to the seam points below the cut
     rows = np.concatenate([lo, hi, np.full(start.size, origin)])
     cols = np.concatenate([hi, lo, start])
@@ -576,9 +631,8 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     distance = np.where(reached, smooth, np.inf)
     closing = end[np.isfinite(distance[end])]
     if closing.size == 0 or np.mean(reached[mask]) < 0.9:
-        raise ReconstructionError("the side points do not close round the section: the paths "
-                                  "from the leading edge do not come back to it (a hole "
-                                  "across the whole span?)")
+        return two_face_turn(points, normals, mask, *graph_edges, front, rear, seed_radius,
+                             slab)
     perimeter = np.full(count, np.nan)
     perimeter[mask] = _slab_median(points[closing, 2], distance[closing] + offset[closing],
                                    points[mask, 2], slab)
@@ -601,6 +655,17 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     turn[mask] = np.where(front_based >= rear_turn,
                           (front_based - rear_turn) / (1.0 - rear_turn) * (1.0 - share),
                           1.0 - share + front_based / rear_turn * share)
+    # a ring broken at a thin, sparse edge leaves the order jumping between the faces: then
+    # the order by faces, when it follows the sections better
+    ratio = tour_ratio(points, mask, turn, perimeter, seed_radius)
+    if ratio > BROKEN_TOUR:
+        try:
+            by_faces = two_face_turn(points, normals, mask, *graph_edges, front, rear,
+                                     seed_radius, slab)
+        except ReconstructionError:
+            return turn, perimeter
+        if tour_ratio(points, mask, *by_faces, seed_radius) < ratio:
+            return by_faces
     return turn, perimeter
 
 
