@@ -141,6 +141,34 @@ class StreamGate:
         self._passed = stop - keep
         return GateOutput(data, flags, findings)
 
+    def get_state(self) -> dict[str, Any]:
+        """JSON-ready context (the passed samples the detectors look back on), exact; samples
+        still waiting for their look-ahead are not kept: a restart receives them again."""
+        if self._values is None:
+            return {"columns": [], "times": [], "values": [], "bad": []}
+        context = self._values.iloc[:self._passed]
+        bad = self._bad.iloc[:self._passed]
+        return {"columns": [str(c) for c in context.columns],
+                "times": [t.isoformat() for t in context.index],
+                "values": [[None if not np.isfinite(v) else float(v) for v in row]
+                           for row in context.to_numpy(dtype=float)],
+                "bad": bad.to_numpy(dtype=bool).tolist()}
+
+    def set_state(self, state: Mapping[str, Any]) -> StreamGate:
+        """Continue after the context :meth:`get_state` wrote."""
+        if not state.get("times"):
+            self._values = self._bad = None
+            self._passed = 0
+            return self
+        index = pd.DatetimeIndex(pd.to_datetime(state["times"], utc=True), name="time")
+        values = np.array([[np.nan if v is None else v for v in row] for row in state["values"]],
+                          dtype=float)
+        self._values = pd.DataFrame(values, index=index, columns=state["columns"])
+        self._bad = pd.DataFrame(np.array(state["bad"], dtype=bool), index=index,
+                                 columns=state["columns"])
+        self._passed = len(index)
+        return self
+
     @staticmethod
     def _empty(columns: pd.Index) -> GateOutput:
         index = pd.DatetimeIndex([], tz="UTC", name="time")

@@ -10,7 +10,8 @@ file per service, several units side by side:
   need no schema change;
 * ``alarms`` (id, unit, kind, signal, start, end, evidence JSON, acknowledged_at/by);
 * ``parameters`` (unit, time, name, value, reason) — every swap of the live parameters;
-* ``states`` (unit, time, state JSON) — model state snapshots to restart from;
+* ``states`` (unit, time, state JSON) — the newest :data:`KEPT_STATES` state snapshots of
+  each unit, to restart from;
 * ``progress`` (unit, last_time) — the last committed sample.
 
 Exactly once: :meth:`LiveHistorian.commit_block` writes a block's series rows, the unit's
@@ -35,6 +36,8 @@ import pandas as pd
 __all__ = ["SOURCES", "Alarm", "LiveHistorian", "export_history"]
 
 SOURCES = ("measured", "twin", "residual")
+KEPT_STATES = 3
+"""State snapshots kept per unit (a restart needs the newest; the rest are a margin)."""
 
 _SCHEMA = (
     """CREATE TABLE IF NOT EXISTS series (unit VARCHAR NOT NULL, time TIMESTAMPTZ NOT NULL,
@@ -155,6 +158,10 @@ class LiveHistorian:
             if state is not None:
                 connection.execute("INSERT INTO states VALUES (?, ?, ?)",
                                    [unit, last.to_pydatetime(), json.dumps(state)])
+                connection.execute(  # a restart needs the newest; keep a few
+                    "DELETE FROM states WHERE unit = ? AND time < (SELECT min(time) FROM "
+                    "(SELECT time FROM states WHERE unit = ? ORDER BY time DESC LIMIT ?))",
+                    [unit, unit, KEPT_STATES])
             connection.execute("COMMIT")
         except Exception:
             connection.execute("ROLLBACK")
