@@ -24,7 +24,7 @@ runner = CliRunner()
      ["calibrate-online"], ["rom", "build"], ["rom", "predict"], ["rom", "info"],
      ["geometry", "scan"], ["geometry", "preprocess"], ["geometry", "mesh"],
      ["geometry", "assemble"], ["geometry", "uncertainty"], ["validate"], ["plant", "serve"],
-     ["history", "export"]],
+     ["history", "export"], ["serve"]],
 )
 def test_every_command_has_help_with_an_example(command):
     result = runner.invoke(app, [*command, "--help"])

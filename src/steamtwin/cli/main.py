@@ -22,6 +22,7 @@ from steamtwin.cli.geometry import geometry_app
 from steamtwin.cli.history import history_app
 from steamtwin.cli.plant import plant_app
 from steamtwin.cli.rom import rom_app
+from steamtwin.cli.serve import serve
 from steamtwin.cli.simulate import simulate
 from steamtwin.cli.turbine import turbine_app
 from steamtwin.cli.validate import validate
@@ -112,6 +113,7 @@ app.command()(calibrate)
 app.command("calibrate-online")(calibrate_online)
 app.command()(validate)
 app.command()(demo)
+app.command()(serve)
 
 
 _LIST_ITEM = re.compile(r"^\s*(?:[-*•]|\d+[.)])\s")

@@ -248,11 +248,17 @@ class OpcUaSource:
                     except TimeoutError:
                         await client.check_connection()
                         name = value = None
-                    if isinstance(value, ua.DataValue) and name is not None:
-                        self._accept(name, value, pending, latest_per_signal, last_emitted,
-                                     findings)
-                    elif value is not None and not isinstance(value, ua.DataValue):
-                        raise ConnectionError(f"subscription status {value}")
+                    # take everything already delivered before judging what has settled:
+                    # the consumer may have kept the loop busy while notifications queued up
+                    arrived = [(name, value)]
+                    while not queue.empty():
+                        arrived.append(queue.get_nowait())
+                    for name, value in arrived:
+                        if isinstance(value, ua.DataValue) and name is not None:
+                            self._accept(name, value, pending, latest_per_signal,
+                                         last_emitted, findings)
+                        elif value is not None and not isinstance(value, ua.DataValue):
+                            raise ConnectionError(f"subscription status {value}")
                     block = self._settled(pending, latest_per_signal, findings)
                     if block is not None:
                         if len(block.frame):

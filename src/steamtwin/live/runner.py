@@ -1,0 +1,109 @@
+"""The live service: every configured unit's :class:`~steamtwin.live.service.LiveTwin` run side
+by side on one event loop, sharing one DuckDB historian, until its sources end or it is told
+to stop (``steamtwin serve``). Progress and findings go to the ``steamtwin.live`` logger."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import dataclasses
+import logging
+
+from steamtwin.dcs.tagmap import load_tag_map
+from steamtwin.live.config import ServiceConfig, UnitConfig
+from steamtwin.live.gate import StreamGate, gate_options
+from steamtwin.live.historian import LiveHistorian
+from steamtwin.live.service import LiveSummary, LiveTwin
+from steamtwin.live.sources import OpcUaSecurity, OpcUaSource, ReplaySource, Source
+from steamtwin.model.parameters import ModelParameters, sensor_offsets_from_json
+from steamtwin.model.sensor_setup import sensor_setup
+from steamtwin.rom.romfile import load_rom
+from steamtwin.spec import load_spec
+
+__all__ = ["build_unit", "run_service"]
+
+LOG = logging.getLogger("steamtwin.live")
+
+
+def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, Source]:
+    """The unit's live twin (its FOM read through the tag map's sensors and the params'
+    offsets) and its source, resuming after the historian's last committed sample."""
+    spec = load_spec(unit.turbine)
+    tag_map = load_tag_map(unit.tags)
+    params, offsets = ModelParameters(), {}
+    if unit.params is not None:
+        params = ModelParameters.from_json(unit.params)
+        offsets = sensor_offsets_from_json(unit.params)
+    setup = dataclasses.replace(sensor_setup(spec, tag_map), offsets=offsets)
+    twin = LiveTwin(unit.name, setup.model(spec), params, StreamGate(gate_options(tag_map)),
+                    historian, rom=None if unit.rom is None else load_rom(unit.rom))
+    twin.start()
+    resume = twin.resume_after()
+    source_config = unit.source
+    if source_config.kind == "replay":
+        source: Source = ReplaySource(source_config.path, tag_map, speed=source_config.speed,
+                                      block_samples=unit.block_samples, start_after=resume)
+    else:
+        password = None
+        if source_config.password_file is not None:
+            password = source_config.password_file.read_text(encoding="utf-8").strip()
+        security = OpcUaSecurity(certificate=source_config.certificate,
+                                 private_key=source_config.private_key,
+                                 user=source_config.user, password=password,
+                                 allow_insecure=source_config.allow_insecure)
+        source = OpcUaSource(source_config.endpoint, tag_map, security, start_after=resume)
+    return twin, source
+
+
+async def _run_unit(twin: LiveTwin, source: Source, stop: asyncio.Event,
+                    summary: LiveSummary) -> LiveSummary:
+    blocks = source.blocks()
+    try:
+        async for block in blocks:
+            twin.process(block, summary)
+            for finding in block.findings:
+                LOG.warning("%s: %s", twin.name, finding.message)
+            if stop.is_set():
+                break
+    finally:
+        await blocks.aclose()
+    if not stop.is_set():
+        twin.finish(summary)  # a finished replay: no more look-ahead to wait for
+    LOG.info("%s: %d samples stored (%d without a twin value), %d alarm(s), %d finding(s)",
+             twin.name, summary.samples, summary.without_twin, summary.alarms,
+             summary.findings)
+    return summary
+
+
+async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None
+                      ) -> dict[str, LiveSummary]:
+    """Run every unit of ``config`` until its source ends or ``stop`` is set; returns each
+    unit's summary. What was committed stays; a restart continues from it."""
+    stop = stop if stop is not None else asyncio.Event()
+    historian = LiveHistorian(config.database)
+    historian.open()
+    try:
+        built = [build_unit(unit, historian) for unit in config.units]
+        for twin, _ in built:
+            resume = twin.resume_after()
+            LOG.info("%s: starting%s", twin.name,
+                     f" after {resume.isoformat()}" if resume is not None else "")
+
+        async def until_stopped(twin: LiveTwin, source: Source) -> LiveSummary:
+            summary = LiveSummary()  # kept up to date even when the run is cancelled
+            task = asyncio.create_task(_run_unit(twin, source, stop, summary))
+            waiter = asyncio.create_task(stop.wait())
+            await asyncio.wait({task, waiter}, return_when=asyncio.FIRST_COMPLETED)
+            if not task.done():
+                if hasattr(source, "close"):
+                    source.close()
+                task.cancel()
+            waiter.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await task
+            return summary
+
+        results = await asyncio.gather(*(until_stopped(t, s) for t, s in built))
+        return {twin.name: result for (twin, _), result in zip(built, results, strict=True)}
+    finally:
+        historian.close()
