@@ -36,7 +36,7 @@ def test_report_holds_every_table_and_figure_of_the_method(demo):
     document = json.loads((result.out / "report.json").read_text(encoding="utf-8"))
     for table in ("table5_operating", "table6_rmse", "table7_ga_sensitivity",
                   "table8_deviation", "sobol_indices", "noise_propagation",
-                  "geometry_fidelity", "scan_uncertainty", "figure9_field_error"):
+                  "geometry_fidelity", "scan_uncertainty", "figure9_field_error", "live_twin"):
         assert document["tables"][table]["records"], table
         assert (result.out / document["tables"][table]["csv"]).stat().st_size > 0
     files = {figure["file"] for figure in document["figures"]}
@@ -78,3 +78,15 @@ def test_report_numbers_are_the_runs_own(demo):
     html = (result.out / "report.html").read_text(encoding="utf-8")
     for value in exhaust["max_abs_deviation"]:
         assert f">{format_value(value)}<" in html
+
+
+def test_the_live_stage_stored_what_the_plant_published(demo):
+    """Issue 21: the demo's live stage — the plant over OPC UA into the service's database."""
+    result, _ = demo
+    document = json.loads((result.out / "report.json").read_text(encoding="utf-8"))
+    rows = {row["quantity"]: row["value"]
+            for row in document["tables"]["live_twin"]["records"]}
+    published, stored = rows["samples published over OPC UA"], rows["samples stored"]
+    assert published - 61 <= stored <= published  # all but the gate's last look-ahead
+    assert 0.0 < rows["HP-exhaust residual, mean abs (K)"] < 10.0
+    assert (result.out / "live.duckdb").stat().st_size > 0
