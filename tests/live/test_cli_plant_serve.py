@@ -6,22 +6,16 @@ from __future__ import annotations
 import asyncio
 import os
 import signal
-import socket
 import subprocess
 import sys
 import time
 from pathlib import Path
 
 from asyncua import Client
+from ports import free_port
 
 from steamtwin.dcs.tagmap import load_tag_map
 from steamtwin.live.nodes import resolve_node_id
-
-
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 def _wait_for(process: subprocess.Popen, text: str, timeout: float) -> str:
@@ -38,7 +32,7 @@ def _wait_for(process: subprocess.Popen, text: str, timeout: float) -> str:
 
 
 def test_plant_serve_publishes_resolvable_tags_and_stops_on_sigterm(tmp_path: Path):
-    port = _free_port()
+    port = free_port()
     tags = tmp_path / "live-tags.toml"
     process = subprocess.Popen(
         [sys.executable, "-m", "steamtwin", "plant", "serve", "--scenario",

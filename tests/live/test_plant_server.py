@@ -5,12 +5,12 @@ from __future__ import annotations
 
 import asyncio
 import math
-import socket
 
 import numpy as np
 import pandas as pd
 import pytest
 from asyncua import Client, ua
+from ports import free_port
 
 from steamtwin.dcs.plant import plant_tag_map
 from steamtwin.live.nodes import resolve_node_id
@@ -21,12 +21,6 @@ from steamtwin.live.plant_server import (
     plant_node_ids,
 )
 from steamtwin.units import convert
-
-
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 def _signals(n: int = 120) -> pd.DataFrame:
@@ -53,7 +47,7 @@ def test_settings_are_checked():
 def test_a_client_reads_values_status_timestamps_and_history():
     frame = _signals()
     tag_map = plant_tag_map()
-    settings = PlantServerSettings(port=_free_port(), speed=None, history_samples=100)
+    settings = PlantServerSettings(port=free_port(), speed=None, history_samples=100)
 
     async def scenario():
         async with PlantServer(frame, tag_map, settings) as server:
@@ -97,7 +91,7 @@ def test_a_client_reads_values_status_timestamps_and_history():
 
 def test_speed_paces_the_samples():
     frame = _signals(6)
-    settings = PlantServerSettings(port=_free_port(), speed=10.0)
+    settings = PlantServerSettings(port=free_port(), speed=10.0)
 
     async def scenario():
         async with PlantServer(frame, plant_tag_map(), settings) as server:

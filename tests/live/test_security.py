@@ -5,7 +5,6 @@ without a certificate get none, and say why. A real asyncua server on 127.0.0.1.
 from __future__ import annotations
 
 import asyncio
-import socket
 from datetime import UTC, datetime, timedelta
 
 import pytest
@@ -13,6 +12,7 @@ from asyncua import Server, ua
 from asyncua.crypto.cert_gen import setup_self_signed_certificate
 from asyncua.crypto.permission_rules import User, UserRole
 from cryptography.x509.oid import ExtendedKeyUsageOID
+from ports import free_port
 
 from steamtwin.dcs.plant import plant_tag_map
 from steamtwin.live.sources import OpcUaSecurity, OpcUaSource
@@ -28,11 +28,6 @@ class _Passwords:
             return User(role=UserRole.User)
         return None
 
-
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 @pytest.fixture(scope="module")
@@ -52,7 +47,7 @@ def certificates(tmp_path_factory):
 
 
 def _run(certificates, security: OpcUaSecurity) -> tuple[int, list[str]]:
-    port = _free_port()
+    port = free_port()
     endpoint = f"opc.tcp://127.0.0.1:{port}/secure/"
     tag_map = plant_tag_map()
     import dataclasses

@@ -5,13 +5,13 @@ HistoryRead back-fill, gaps left as gaps, bad input as findings."""
 from __future__ import annotations
 
 import asyncio
-import socket
 from datetime import UTC, datetime, timedelta
 
 import numpy as np
 import pandas as pd
 import pytest
 from asyncua import Server, ua
+from ports import free_port
 
 from steamtwin.dcs.plant import plant_tag_map, run_plant, write_plant
 from steamtwin.dcs.readers import read_historian
@@ -21,11 +21,6 @@ from steamtwin.live.sources import OpcUaSecurity, OpcUaSource, ReplaySource
 
 INSECURE = OpcUaSecurity(allow_insecure=True)
 
-
-def _free_port() -> int:
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        return probe.getsockname()[1]
 
 
 @pytest.fixture(scope="module")
@@ -88,7 +83,7 @@ def test_opc_ua_source_reads_what_the_plant_publishes_across_a_restart(plant):
     measured = run.measured.iloc[:160]
     tag_map = plant_tag_map()
     live_map = plant_node_ids(tag_map)
-    port = _free_port()
+    port = free_port()
     settings = PlantServerSettings(port=port, speed=None, history_samples=1000)
 
     async def scenario():
@@ -139,7 +134,7 @@ def test_opc_ua_source_reads_what_the_plant_publishes_across_a_restart(plant):
 
 def test_bad_input_becomes_findings_and_the_source_goes_on():
     """Unknown node, a string value, a timestamp from the future and one going backwards."""
-    port = _free_port()
+    port = free_port()
     endpoint = f"opc.tcp://127.0.0.1:{port}/test/"
     tag_map = plant_tag_map()
     signals = {"main_steam_pressure": "P", "main_steam_temperature": "T",
