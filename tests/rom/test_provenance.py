@@ -145,12 +145,11 @@ def test_validate_uses_the_roms_own_spec_without_turbine(built, reference_spec, 
     moved_path = save_rom(moved, tmp_path / "unit7.npz")
     seen = {}
 
-    def stop(data, tag_map, needed, accept):
+    def stop(*args, **kwargs):
         raise ValueError("stopped after the spec was chosen")
 
     monkeypatch.setattr(validate_cli, "load_tag_map", lambda tags: None)
-    monkeypatch.setattr(validate_cli, "_needed_signals", lambda *a: ())
-    monkeypatch.setattr(validate_cli, "_read_cleaned", stop)
+    monkeypatch.setattr(validate_cli, "load_history", stop)
     original = validate_cli.resolve_spec
 
     def recording(*args, **kwargs):
