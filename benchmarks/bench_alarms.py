@@ -34,7 +34,12 @@ import pandas as pd
 from steamtwin.dcs.plant import ParameterDrift, PlantTruth, plant_tag_map, run_plant
 from steamtwin.dcs.sensor_faults import apply_sensor_faults, parse_sensor_fault
 from steamtwin.live.gate import StreamGate, gate_options
-from steamtwin.live.residuals import ResidualMonitor, block_means, model_sensitivity
+from steamtwin.live.residuals import (
+    MonitorSettings,
+    ResidualMonitor,
+    block_means,
+    model_sensitivity,
+)
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.measurement import TYPICAL_TIME_CONSTANTS_S
 from steamtwin.model.parameters import ModelParameters
@@ -119,6 +124,7 @@ def main() -> None:
     parser.add_argument("--cache", type=Path,
                         default=Path(tempfile.gettempdir()) / "alarms-cache")
     parser.add_argument("--plain", action="store_true")
+    parser.add_argument("--band", type=float, default=0.05)
     args = parser.parse_args()
     args.cache.mkdir(parents=True, exist_ok=True)
     clock = time.perf_counter()
@@ -147,7 +153,8 @@ def main() -> None:
         key = id(calib)
         if key not in fitted:
             healthy = _replay(model, calib["measured"], calib["sensors"], params)
-            monitor = ResidualMonitor(SENSORS, _instrument_sigma(calib["sensors"]))
+            monitor = ResidualMonitor(SENSORS, _instrument_sigma(calib["sensors"]),
+                                      MonitorSettings(load_band=args.band))
             if args.plain:
                 monitor.fit(healthy[list(SENSORS)])
             else:

@@ -138,6 +138,19 @@ def _with(params: ModelParameters, name: str, value: float) -> ModelParameters:
     return dataclasses.replace(params, **{name: value})
 
 
+def _long_run_factor(deviation: np.ndarray) -> float:
+    """√((1 + ρ)/(1 − ρ)), ρ ∈ [0, 0.95] the lag-1 autocorrelation of consecutive healthy
+    deviations: the long-run σ of an AR(1) series over its marginal σ, by which a CUSUM that
+    assumes independent blocks must widen σ to keep its false-alarm rate on correlated model
+    error (Montgomery, *Introduction to Statistical Quality Control*, 7th ed., §10.4;
+    Box, Jenkins & Reinsel, *Time Series Analysis*, 4th ed., §3.2)."""
+    centred = deviation - np.mean(deviation)
+    denominator = float(centred @ centred)
+    rho = float(centred[1:] @ centred[:-1]) / denominator if denominator > 0.0 else 0.0
+    rho = min(max(rho, 0.0), 0.95)
+    return math.sqrt((1.0 + rho) / (1.0 - rho))
+
+
 @dataclass(frozen=True)
 class MonitorSettings:
     """``block_s``: residual block length (s); ``arl0_blocks``: wanted mean number of blocks
@@ -250,8 +263,9 @@ class ResidualMonitor:
                 # E|x| = σ√(2/π): least squares of |deviation| on (1, |L − L_f,k|), all ≥ 0
                 design = np.column_stack([np.ones(values.size), np.abs(off)])
                 coefficients, _ = nnls(design, np.abs(deviation))
-                spread = math.sqrt(math.pi / 2.0) * float(coefficients[0])
-                growth[sensor] = [math.sqrt(math.pi / 2.0) * float(c) for c in coefficients[1:]]
+                factor = math.sqrt(math.pi / 2.0) * _long_run_factor(deviation)
+                spread = factor * float(coefficients[0])
+                growth[sensor] = [factor * float(c) for c in coefficients[1:]]
             sigma[sensor] = max(self.instrument_sigma[sensor], spread)
         self.sigma_ = sigma
         self.offset_ = offset
