@@ -163,7 +163,7 @@ class MonitorSettings:
     arl0_blocks: float = 1.0e6
     sensor_shift: Mapping[str, float] = field(default_factory=dict)
     parameter_shift: Mapping[str, float] = field(default_factory=dict)
-    load_band: float = 0.05
+    load_band: float = 0.02
     transient_times_s: tuple[float, ...] = (300.0, 1200.0, 3600.0)
 
     def __post_init__(self) -> None:
