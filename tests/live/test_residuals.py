@@ -3,6 +3,8 @@ a drifting sensor told from a degrading turbine, no alarm on healthy data."""
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -12,6 +14,7 @@ from hypothesis import strategies as st
 from steamtwin.live.residuals import (
     MonitorSettings,
     ResidualMonitor,
+    _long_run_factor,
     block_means,
     model_sensitivity,
     siegmund_threshold,
@@ -160,3 +163,78 @@ def test_model_sensitivity_of_the_full_order_model(reference_model):
     # Stodola's cone law through the first pressure stage: p1 roughly ∝ 1/φ
     assert sensitivity.loc["control_stage_pressure", "flow_coefficient"] == pytest.approx(
         -p1, rel=0.35)
+
+
+def _load_day(rng: np.random.Generator, blocks: int = 720) -> tuple[pd.DataFrame, pd.Series]:
+    """Healthy residuals whose mean follows the load (a curve) and the lag of a 20-min
+    first-order metal behind it (ramps of 2 %/min between holds), plus AR(1) noise."""
+    index = pd.date_range("2026-03-01", periods=blocks, freq="60s", tz="UTC")
+    targets = [0.5, 0.9, 0.4, 0.8, 0.6, 1.0]
+    load, level = np.empty(blocks), 0.5
+    for k in range(blocks):
+        target = targets[(k // 120) % len(targets)]
+        level += float(np.clip(target - level, -0.02, 0.02))
+        load[k] = level
+    lagged = np.empty(blocks)
+    lagged[0] = load[0]
+    for k in range(1, blocks):
+        lagged[k] = lagged[k - 1] + (1.0 - np.exp(-60.0 / 1200.0)) * (load[k] - lagged[k - 1])
+    noise = np.zeros((blocks, len(SENSORS)))
+    for k in range(1, blocks):
+        noise[k] = 0.5 * noise[k - 1] + rng.normal(0.0, 1.0, len(SENSORS))
+    scale = np.array([SIGMA[s] for s in SENSORS])
+    shape = np.column_stack([3.0 * load**2, -2.0 * load, np.sin(3.0 * load), load])
+    transient = np.outer(load - lagged, [20.0, 10.0, 30.0, -5.0])
+    frame = pd.DataFrame((shape + transient + 0.5 * noise) * scale, index=index,
+                         columns=list(SENSORS))
+    return frame, pd.Series(load, index=index)
+
+
+def test_an_operating_point_baseline_holds_where_one_offset_alarms():
+    """Fitted on a healthy day with ramps, the load baseline and transient σ raise no alarm
+    on another such day (one offset raises many) and still catch a 2 K/h drift."""
+    healthy, load = _load_day(np.random.default_rng(20))
+    plain = ResidualMonitor(SENSORS, {s: 0.5 * v for s, v in SIGMA.items()}).fit(healthy)
+    fitted = ResidualMonitor(SENSORS, {s: 0.5 * v for s, v in SIGMA.items()}).fit(
+        healthy, load=load)
+    day, day_load = _load_day(np.random.default_rng(21))
+    assert sum(len(plain.update(t, row, J)) for t, row in day.iterrows()) > 0
+    assert [e for t, row in day.iterrows()
+            for e in fitted.update(t, row, J, load=day_load[t])] == []
+    fitted.set_state(fitted.get_state() | {"statistics": {}, "active": {},
+                                           "filtered_load": None, "last_time": None})
+    drifted = day.copy()
+    minutes = np.arange(len(day), dtype=float)
+    drifted["hp_exhaust_temperature"] += np.clip(minutes - 360.0, 0.0, None) * 2.0 / 60.0
+    events = [e for t, row in drifted.iterrows()
+              for e in fitted.update(t, row, J, load=day_load[t])]
+    assert events and (events[0].kind, events[0].signal) == ("sensor_fault",
+                                                             "hp_exhaust_temperature")
+    assert events[0].time - day.index[360] <= pd.Timedelta(minutes=30)
+
+
+def test_the_load_state_restores_exactly():
+    healthy, load = _load_day(np.random.default_rng(22), 240)
+    monitor = ResidualMonitor(SENSORS, SIGMA).fit(healthy, load=load)
+    day, day_load = _load_day(np.random.default_rng(23), 240)
+    day.iloc[100:, 1] += 5.0 * SIGMA["control_stage_temperature"]
+    copy, a, b = None, [], []
+    for k, (t, row) in enumerate(day.iterrows()):
+        if k == 50:
+            state = json.loads(json.dumps(monitor.get_state()))
+            copy = ResidualMonitor(SENSORS, SIGMA).set_state(state)
+        a += monitor.update(t, row, J, load=day_load[t])
+        if copy is not None:
+            b += copy.update(t, row, J, load=day_load[t])
+    assert a and b == [e for e in a if e.time >= day.index[50]]
+    assert copy.get_state() == monitor.get_state()
+
+
+def test_the_long_run_factor_of_an_ar1_series():
+    """√((1+ρ)/(1−ρ)) for AR(1): ρ = 0.6 → 2 (Box, Jenkins & Reinsel §3.2)."""
+    rng = np.random.default_rng(5)
+    x = np.zeros(20000)
+    for k in range(1, x.size):
+        x[k] = 0.6 * x[k - 1] + rng.normal()
+    assert _long_run_factor(x) == pytest.approx(2.0, rel=0.05)
+    assert _long_run_factor(rng.normal(size=5000)) == pytest.approx(1.0, abs=0.05)

@@ -35,9 +35,35 @@ divided by the number of hypotheses (Bonferroni). An alarm ends when the reverse
 healthy against the fault — crosses the same threshold (Page's test run the other way), so an
 alarm is as slow to clear as to raise, and never flickers.
 
+Operating-point baseline and transient σ (optional: :meth:`fit` and :meth:`update` with
+``load``). The twin's error is not a constant: it depends on the load (model structure, e.g. the
+plant's valve overlap and tip leakage the twin lacks) and on how far the metal lags the load
+after a ramp (metal and thermowell transients the twin's lumped metal follows less well). The
+metal's load L_f is the block-mean load L through a first-order lag of time constant
+``transient_time_s`` (lumped-capacitance response, Incropera & DeWitt, *Fundamentals of Heat
+and Mass Transfer*, 6th ed., §5.2; exact discretisation L_f ← L_f + (1 − e^{−Δt/τ})(L − L_f));
+the imbalance L − L_f is zero at a steady hold and decays after a ramp. Fitted on healthy data
+that include ramps (a calibration day):
+
+* the baseline b_s(L) + β_s·(L − L_f): b_s the median residual of the healthy blocks in each
+  band of ``load_band`` (load fraction), linearly interpolated between the bands' median loads
+  (held beyond them), β_s the least-squares gain of what is left on the imbalance (alternated
+  three times) — the residual's expected value at the operating point, which the monitor
+  subtracts instead of one offset (operating-point dependent reference, Isermann,
+  *Fault-Diagnosis Systems*, 2006, §7.2, §10.3);
+* σ_s = max(floor, √(π/2)·c₀) + √(π/2)·c₁·|L − L_f|, (c₀, c₁) ≥ 0 the least-squares fit of
+  the healthy |residual − baseline| on (1, |L − L_f|) (variance function from absolute
+  residuals, Davidian & Carroll, JASA 82 (1987) 1079–1091; E|x| = σ√(2/π) for a Gaussian): an
+  adaptive threshold (Frank & Ding, J. Process Control 7 (1997) 403–424; Emami-Naeini, Akhter &
+  Rock, IEEE TAC 33 (1988) 1106–1115: the model error bounded in proportion to the excitation).
+  The thresholds and design shifts stay those of σ at rest: in a transient the standardised
+  signatures shrink, the CUSUM steps with them, and the fixed threshold is conservative.
+
 Design sizes: ``sensor_shift`` (K for temperatures, Pa for pressures; default
 2 × the sensor's σ) and ``parameter_shift`` (per parameter; default 0.01, half a fouling step
-of 2 %).
+of 2 %), the latter capped where its pattern exceeds 2 σ (‖Δ·J‖_Σ ≤ 2, the sensors' size):
+a CUSUM is tuned to its design shift (Lorden, Ann. Math. Stat. 42 (1971) 1897–1908) and a
+design far above the noise leaves no room for a threshold (H → 0: every block alarms).
 """
 
 from __future__ import annotations
@@ -48,7 +74,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
-from scipy.optimize import brentq
+from scipy.optimize import brentq, nnls
 
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import Simulator
@@ -74,6 +100,8 @@ def siegmund_threshold(arl0: float, drift: float) -> float:
     upper = 1.0
     while arl(upper) < arl0:
         upper *= 2.0
+    if arl(0.0) >= arl0:  # a drift so large that any excess is rare enough: H = 0
+        return 0.0
     return brentq(lambda h: arl(h) - arl0, 0.0, upper, xtol=1e-9)
 
 
@@ -110,18 +138,39 @@ def _with(params: ModelParameters, name: str, value: float) -> ModelParameters:
     return dataclasses.replace(params, **{name: value})
 
 
+def _long_run_factor(deviation: np.ndarray) -> float:
+    """√((1 + ρ)/(1 − ρ)), ρ ∈ [0, 0.95] the lag-1 autocorrelation of consecutive healthy
+    deviations: the long-run σ of an AR(1) series over its marginal σ, by which a CUSUM that
+    assumes independent blocks must widen σ to keep its false-alarm rate on correlated model
+    error (Montgomery, *Introduction to Statistical Quality Control*, 7th ed., §10.4;
+    Box, Jenkins & Reinsel, *Time Series Analysis*, 4th ed., §3.2)."""
+    centred = deviation - np.mean(deviation)
+    denominator = float(centred @ centred)
+    rho = float(centred[1:] @ centred[:-1]) / denominator if denominator > 0.0 else 0.0
+    rho = min(max(rho, 0.0), 0.95)
+    return math.sqrt((1.0 + rho) / (1.0 - rho))
+
+
 @dataclass(frozen=True)
 class MonitorSettings:
     """``block_s``: residual block length (s); ``arl0_blocks``: wanted mean number of blocks
     between false alarms over all hypotheses; ``sensor_shift``: design bias per sensor (SI;
-    missing: 2 σ); ``parameter_shift``: design change per parameter (default 0.01 each)."""
+    missing: 2 σ); ``parameter_shift``: design change per parameter (default 0.01 each);
+    ``load_band``: width of the baseline's load bands (load fraction); ``transient_times_s``:
+    the time constants (s) of the load lags behind the imbalances (the module docstring)."""
 
     block_s: float = 60.0
     arl0_blocks: float = 1.0e6
     sensor_shift: Mapping[str, float] = field(default_factory=dict)
     parameter_shift: Mapping[str, float] = field(default_factory=dict)
+    load_band: float = 0.02
+    transient_times_s: tuple[float, ...] = (300.0, 1200.0, 3600.0)
 
     def __post_init__(self) -> None:
+        if not (self.load_band > 0.0 and self.transient_times_s
+                and all(t > 0.0 for t in self.transient_times_s)):
+            raise ValueError(f"load_band and transient_times_s must be positive (got "
+                             f"{self.load_band!r}, {self.transient_times_s!r})")
         if not self.block_s > 0.0:
             raise ValueError(f"block_s must be positive (got {self.block_s!r})")
         if not self.arl0_blocks > 1.0:
@@ -160,10 +209,16 @@ class ResidualMonitor:
         self.instrument_sigma = dict(instrument_sigma)
         self.settings = settings
 
-    def fit(self, healthy_blocks: pd.DataFrame) -> ResidualMonitor:
+    def fit(self, healthy_blocks: pd.DataFrame, load: pd.Series | None = None
+            ) -> ResidualMonitor:
         """Learn σ per sensor from block means of healthy residuals (columns ``sensors``):
         max(instrument floor, 1.4826·MAD about the median); the median is the offset
-        ``offset_`` the monitor subtracts (a sensor's calibration residual)."""
+        ``offset_`` the monitor subtracts (a sensor's calibration residual).
+
+        With ``load`` (each block's mean load fraction, same index; the healthy blocks should
+        then include ramps) the offset becomes the operating-point baseline of the module
+        docstring — band medians ``baseline_`` plus ``transient_gain_``·(L − L_f) — and σ
+        grows with |L − L_f| by ``transient_sigma_`` (σ per unit imbalance)."""
         missing = [s for s in self.sensors if s not in self.instrument_sigma]
         if missing:
             raise ValueError(f"instrument_sigma lacks {missing}")
@@ -171,25 +226,91 @@ class ResidualMonitor:
             if not (math.isfinite(self.instrument_sigma[sensor])
                     and self.instrument_sigma[sensor] > 0.0):
                 raise ValueError(f"instrument_sigma of {sensor} must be positive")
-        sigma, offset = {}, {}
+        loads = imbalance = None
+        self.filtered_load_: list[float] | None = None
+        self.last_time_: pd.Timestamp | None = None
+        if load is not None:
+            if not load.index.equals(healthy_blocks.index):
+                raise ValueError(f"fit: load must have the healthy blocks' index ({len(load)} "
+                                 f"values against {len(healthy_blocks)} blocks)")
+            loads = load.to_numpy(dtype=float)
+            imbalance = np.array([self._advance(stamp, value) for stamp, value in
+                                  zip(healthy_blocks.index, loads, strict=True)])
+            imbalance = imbalance.reshape(len(loads), len(self.settings.transient_times_s))
+        sigma, offset, baseline, gain, growth = {}, {}, {}, {}, {}
         for sensor in self.sensors:
-            values = healthy_blocks[sensor].dropna().to_numpy(dtype=float)
+            column = healthy_blocks[sensor].to_numpy(dtype=float)
+            usable = np.isfinite(column)
+            if loads is not None:
+                usable &= np.isfinite(loads) & np.isfinite(imbalance).all(axis=1)
+            values = column[usable]
             if values.size < 10:
                 raise ValueError(f"fit needs at least 10 healthy blocks of {sensor} (got "
                                  f"{values.size})")
             centre = float(np.median(values))
-            spread = MAD_TO_SIGMA * float(np.median(np.abs(values - centre)))
             offset[sensor] = centre
+            if loads is None:
+                spread = MAD_TO_SIGMA * float(np.median(np.abs(values - centre)))
+            else:
+                at, off = loads[usable], imbalance[usable]
+                beta = np.zeros(off.shape[1])
+                for _ in range(3):  # alternate: band medians given the gains, gains given them
+                    baseline[sensor] = self._bands(at, values - off @ beta)
+                    rest = values - np.interp(at, *baseline[sensor])
+                    beta = np.linalg.lstsq(off, rest, rcond=None)[0]
+                gain[sensor] = [float(b) for b in beta]
+                deviation = rest - off @ beta
+                # E|x| = σ√(2/π): least squares of |deviation| on (1, |L − L_f,k|), all ≥ 0
+                design = np.column_stack([np.ones(values.size), np.abs(off)])
+                coefficients, _ = nnls(design, np.abs(deviation))
+                factor = math.sqrt(math.pi / 2.0) * _long_run_factor(deviation)
+                spread = factor * float(coefficients[0])
+                growth[sensor] = [factor * float(c) for c in coefficients[1:]]
             sigma[sensor] = max(self.instrument_sigma[sensor], spread)
         self.sigma_ = sigma
         self.offset_ = offset
+        self.baseline_ = baseline
+        self.transient_gain_ = gain
+        self.transient_sigma_ = growth
+        self.filtered_load_ = None
+        self.last_time_ = None
         self.statistics_: dict[str, float] = {}
         self.active_: dict[str, pd.Timestamp] = {}
         return self
 
+    def _bands(self, loads: np.ndarray, values: np.ndarray) -> tuple[list[float], list[float]]:
+        """(median load, median residual) of each load band holding ≥ 3 blocks, by load."""
+        bands = np.floor(loads / self.settings.load_band)
+        centres, medians = [], []
+        for band in np.unique(bands):
+            inside = bands == band
+            if inside.sum() >= 3:
+                centres.append(float(np.median(loads[inside])))
+                medians.append(float(np.median(values[inside])))
+        if not centres:
+            raise ValueError("fit: no load band holds 3 healthy blocks")
+        return centres, medians
+
+    def _advance(self, time: pd.Timestamp, load: float) -> list[float]:
+        """Advance the lagged loads L_f,k by one block of load ``load`` (first-order lags of
+        time constants ``transient_times_s``; NaN: held) and return the imbalances L − L_f,k."""
+        count = len(self.settings.transient_times_s)
+        if not math.isfinite(load):
+            return [math.nan] * count
+        if self.filtered_load_ is None:
+            self.filtered_load_ = [float(load)] * count  # the stream starts in equilibrium
+        else:
+            elapsed = max((pd.Timestamp(time) - self.last_time_).total_seconds(), 0.0)
+            for k, tau in enumerate(self.settings.transient_times_s):
+                share = -math.expm1(-elapsed / tau)
+                self.filtered_load_[k] += share * (float(load) - self.filtered_load_[k])
+        self.last_time_ = pd.Timestamp(time)
+        return [float(load) - lagged for lagged in self.filtered_load_]
+
     def _hypotheses(self, sensitivity: pd.DataFrame | None) -> dict[str, tuple[str, str,
                                                                                np.ndarray]]:
         hypotheses = {}
+        sigma = np.array([self.sigma_[s] for s in self.sensors])
         for j, sensor in enumerate(self.sensors):
             shift = self.settings.sensor_shift.get(sensor, 2.0 * self.sigma_[sensor])
             direction = np.zeros(len(self.sensors))
@@ -197,8 +318,11 @@ class ResidualMonitor:
             hypotheses[f"sensor:{sensor}"] = ("sensor_fault", sensor, direction)
         if sensitivity is not None:
             for parameter in sensitivity.columns:
-                shift = self.settings.parameter_shift.get(parameter, 0.01)
                 column = sensitivity[parameter].reindex(list(self.sensors)).to_numpy(float)
+                shift = self.settings.parameter_shift.get(parameter, 0.01)
+                norm = float(np.linalg.norm(np.nan_to_num(column) / sigma))
+                if norm > 0.0:  # no larger than a 2-σ pattern (the sensors' design size)
+                    shift = min(shift, 2.0 / norm)
                 hypotheses[f"degradation:{parameter}"] = ("degradation", parameter,
                                                           shift * column)
         return hypotheses
@@ -212,22 +336,35 @@ class ResidualMonitor:
         return standard * norm  # the LLR CUSUM is the standardised one scaled by ‖μ‖_Σ
 
     def update(self, time: pd.Timestamp, block: Mapping[str, float],
-               sensitivity: pd.DataFrame | None = None) -> list[AlarmEvent]:
+               sensitivity: pd.DataFrame | None = None,
+               load: float | None = None) -> list[AlarmEvent]:
         """Advance every CUSUM by one block of mean residuals (sensor → SI; NaN: sensor out
         of this block) with the twin's ``sensitivity`` J there (sensors × parameters); return
-        the alarms that start or end.
+        the alarms that start or end. ``load`` (the block's mean load fraction) selects the
+        operating-point baseline and σ of a monitor fitted with loads (module docstring).
 
         Isolation (Gertler 1998, §6; accommodation): an active sensor fault takes its sensor
         out of the other hypotheses' evidence, an active degradation removes its pattern (the
         block's projection on its signature) — so a fault explained once does not raise the
         hypotheses it also moves. When several hypotheses cross their thresholds in the same
-        block, the one furthest past its threshold (statistic / threshold) is raised and the
-        others' statistics restart: the same evidence, explained by the raised one.
+        block, the one whose signature explains most of the block's standardised residual (the
+        GLR of the block, (dᵀz)²/dᵀd signed by the direction, Willsky & Jones 1976; ties: the
+        one furthest past its threshold) is raised and the others' statistics restart: the
+        same evidence, explained by the raised one.
         """
         if not hasattr(self, "sigma_"):
             raise RuntimeError("fit the monitor on healthy residuals first")
-        sigma = np.array([self.sigma_[s] for s in self.sensors])
-        r = np.array([float(block.get(s, math.nan)) - self.offset_[s] for s in self.sensors])
+        baseline = getattr(self, "baseline_", {})
+        at_load = bool(baseline) and load is not None and math.isfinite(load)
+        imbalance = np.array(self._advance(time, float(load)) if at_load
+                             else [0.0] * len(self.settings.transient_times_s))
+        growth = getattr(self, "transient_sigma_", {})
+        sigma = np.array([self.sigma_[s] + float(np.abs(imbalance) @ growth[s]) if s in growth
+                          else self.sigma_[s] for s in self.sensors])
+        r = np.array([float(block.get(s, math.nan))
+                      - (float(np.interp(load, *baseline[s]))
+                         + float(imbalance @ self.transient_gain_[s]) if at_load
+                         else self.offset_[s]) for s in self.sensors])
         present = np.isfinite(r)
         z_raw = np.where(present, r / sigma, 0.0)
         hypotheses = self._hypotheses(sensitivity)
@@ -266,19 +403,31 @@ class ResidualMonitor:
                 value = max(0.0, self.statistics_.get(name, 0.0) + step)
                 self.statistics_[name] = value
                 if key not in active and value > limit:
-                    crossing.append((value / limit, name, kind, signal, value, limit))
+                    explains = sign * gain * abs(gain) / penalty if penalty > 0.0 else 0.0
+                    crossing.append((explains, value / limit if limit > 0.0 else math.inf,
+                                     name, kind,
+                                     signal, value, limit))
         if crossing:
-            _, name, kind, signal, value, limit = max(crossing)
+            _, _, name, kind, signal, value, limit = max(crossing)
             self.active_[name] = time
             events.append(AlarmEvent(kind, signal, time, False, value, limit, evidence))
-            for _, other, *_ in crossing:
+            for _, _, other, *_ in crossing:
                 self.statistics_[other] = 0.0  # the raised one's return CUSUM starts at 0
         return events
 
     def get_state(self) -> dict:
-        """JSON-ready state (fitted σ, offsets, statistics, active alarms) to restart from."""
+        """JSON-ready state (fitted σ, offsets, load baselines, ramp σ and activity, statistics,
+        active alarms) to restart from."""
         return {"sigma": self.sigma_, "offset": self.offset_, "statistics": self.statistics_,
-                "active": {k: v.isoformat() for k, v in self.active_.items()}}
+                "active": {k: v.isoformat() for k, v in self.active_.items()},
+                "baseline": {k: [list(c), list(m)] for k, (c, m) in
+                             getattr(self, "baseline_", {}).items()},
+                "transient_gain": dict(getattr(self, "transient_gain_", {})),
+                "transient_sigma": dict(getattr(self, "transient_sigma_", {})),
+                "filtered_load": (None if getattr(self, "filtered_load_", None) is None
+                                  else list(self.filtered_load_)),
+                "last_time": (None if getattr(self, "last_time_", None) is None
+                              else self.last_time_.isoformat())}
 
     def set_state(self, state: Mapping[str, object]) -> ResidualMonitor:
         """Restore :meth:`get_state`'s output exactly."""
@@ -286,4 +435,14 @@ class ResidualMonitor:
         self.offset_ = {k: float(v) for k, v in state["offset"].items()}
         self.statistics_ = {k: float(v) for k, v in state["statistics"].items()}
         self.active_ = {k: pd.Timestamp(v) for k, v in state["active"].items()}
+        self.baseline_ = {k: ([float(x) for x in c], [float(x) for x in m])
+                          for k, (c, m) in state.get("baseline", {}).items()}
+        self.transient_gain_ = {k: [float(x) for x in v]
+                                for k, v in state.get("transient_gain", {}).items()}
+        self.transient_sigma_ = {k: [float(x) for x in v]
+                                 for k, v in state.get("transient_sigma", {}).items()}
+        filtered = state.get("filtered_load")
+        self.filtered_load_ = None if filtered is None else [float(x) for x in filtered]
+        last = state.get("last_time")
+        self.last_time_ = None if last is None else pd.Timestamp(last)
         return self
