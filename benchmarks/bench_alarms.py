@@ -24,7 +24,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import os
-import pickle
 import tempfile
 import time
 from pathlib import Path
@@ -55,15 +54,16 @@ FAULT_AT = pd.Timedelta(hours=12)
 
 
 def _plant(cache: Path, name: str, make) -> dict:
-    path = cache / f"{name}.pkl"
-    if path.exists():
-        with path.open("rb") as handle:
-            return pickle.load(handle)
+    """The run's measured frame and instrument record, cached as Parquet (data only)."""
+    measured_path = cache / f"{name}.measured.parquet"
+    sensors_path = cache / f"{name}.sensors.parquet"
+    if measured_path.exists() and sensors_path.exists():
+        return {"measured": pd.read_parquet(measured_path),
+                "sensors": pd.read_parquet(sensors_path)}
     run = make()
-    data = {"measured": run.measured, "sensors": run.injected.sensors}
-    with path.open("wb") as handle:
-        pickle.dump(data, handle)
-    return data
+    run.measured.to_parquet(measured_path)
+    run.injected.sensors.to_parquet(sensors_path)
+    return {"measured": run.measured, "sensors": run.injected.sensors}
 
 
 def _fouling_truth() -> PlantTruth:
