@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
@@ -55,11 +55,11 @@ from steamtwin.model.parameters import (
     ParameterPrior,
 )
 from steamtwin.model.simulator import Simulator
+from steamtwin.progress import ProgressCallback
 
 __all__ = ["HISTORY_COLUMNS", "CalibrationError", "Calibrator", "ProgressCallback",
            "check_calibration_result", "check_common_settings", "write_parameters"]
 
-ProgressCallback = Callable[[float, str], None]
 """``progress(fraction_done, message)``, fraction in 0…1 (as elsewhere in steamtwin)."""
 
 HISTORY_COLUMNS: tuple[str, ...] = (

@@ -78,7 +78,7 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field, replace
 from functools import cached_property, lru_cache
 from itertools import pairwise
@@ -107,6 +107,7 @@ from steamtwin.model.kernel import KernelConstants
 from steamtwin.model.operating import operating_point
 from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
+from steamtwin.progress import ProgressCallback
 from steamtwin.spec import Material, MetalGroup, TurbineSpec, load_spec
 from steamtwin.spec.turbine import DEFAULT_CASING_THERMOCOUPLE_DEPTH
 from steamtwin.units import convert
@@ -199,7 +200,6 @@ _TAG_RANGES: dict[str, tuple[float, float]] = {
     "load": (0.0, 700.0),
 }
 
-ProgressCallback = Callable[[float, str], None]
 """``progress(fraction_done, message)``, fraction in 0…1."""
 
 
