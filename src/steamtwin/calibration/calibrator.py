@@ -60,7 +60,6 @@ from steamtwin.progress import ProgressCallback
 __all__ = ["HISTORY_COLUMNS", "CalibrationError", "Calibrator", "ProgressCallback",
            "check_calibration_result", "check_common_settings", "write_parameters"]
 
-"""``progress(fraction_done, message)``, fraction in 0…1 (as elsewhere in steamtwin)."""
 
 HISTORY_COLUMNS: tuple[str, ...] = (
     "generation", "best_rmse", "mean_rmse", "best_fitness", "mean_fitness", *PARAMETER_NAMES,
