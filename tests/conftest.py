@@ -27,3 +27,33 @@ def reference_model(reference_spec: TurbineSpec) -> FullOrderModel:
     model = FullOrderModel(reference_spec)
     _ = model.design_  # design step (compiles the kernel) once per session
     return model
+
+
+def model_as_plant(spec: TurbineSpec, loads, flow_coefficient, sigma, *, seed: int,
+                   step_seconds: float = 1.0, friction_coefficient: float = 1.0):
+    """The model itself as the plant: ``loads`` (fraction per sample) on the operating line, a
+    time-varying ``flow_coefficient`` (per sample), each sensor of ``sigma`` (SI) read with
+    white noise of that σ; the frame also has the inputs and the load (W)."""
+    import numpy as np
+    import pandas as pd
+
+    from steamtwin.model.operating import load_profile_inputs
+
+    model = FullOrderModel(spec)
+    inputs = load_profile_inputs(spec, np.asarray(loads, dtype=float), step_seconds=step_seconds)
+    parameters = pd.DataFrame({"flow_coefficient": flow_coefficient,
+                               "friction_coefficient": friction_coefficient,
+                               "heat_transfer_coefficient": 1.0}, index=inputs.index)
+    outputs = model.simulate_varying(inputs, parameters).outputs
+    rng = np.random.default_rng(seed)
+    data = inputs.copy()
+    for name, error in sigma.items():
+        data[name] = outputs[name].to_numpy() + rng.normal(0.0, error, len(outputs))
+    data["load"] = np.asarray(loads, dtype=float) * spec.design.generator_power
+    return data
+
+
+@pytest.fixture(scope="session")
+def model_plant():
+    """:func:`model_as_plant`, for tests that need a plant the twin matches exactly."""
+    return model_as_plant

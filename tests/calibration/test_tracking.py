@@ -18,7 +18,6 @@ from steamtwin.dcs.plant import plant_tag_map
 from steamtwin.dcs.signals import SIGNALS
 from steamtwin.dcs.tagmap import write_tag_map
 from steamtwin.model.fom import FullOrderModel
-from steamtwin.model.operating import load_profile_inputs
 from steamtwin.units import convert
 
 STEP_S = 2.0
@@ -27,26 +26,12 @@ SIGMA = {"control_stage_temperature": 0.3, "hp_exhaust_temperature": 0.3,
          "hp_inner_casing_temperature": 0.3, "control_stage_pressure": 9.0e3}
 
 
-def _plant(spec, loads: np.ndarray, flow_coefficient: np.ndarray, seed: int) -> pd.DataFrame:
-    """The model itself with a time-varying flow coefficient, read with white noise."""
-    model = FullOrderModel(spec)
-    inputs = load_profile_inputs(spec, loads, step_seconds=STEP_S)
-    parameters = pd.DataFrame({"flow_coefficient": flow_coefficient,
-                               "friction_coefficient": 1.1,
-                               "heat_transfer_coefficient": 1.0}, index=inputs.index)
-    outputs = model.simulate_varying(inputs, parameters).outputs
-    rng = np.random.default_rng(seed)
-    data = inputs.copy()
-    for name, sigma in SIGMA.items():
-        data[name] = outputs[name].to_numpy() + rng.normal(0.0, sigma, len(outputs))
-    return data
-
-
-def test_a_two_percent_step_is_tracked_within_half_an_hour(reference_spec):
+def test_a_two_percent_step_is_tracked_within_half_an_hour(reference_spec, model_plant):
     samples = int(3 * 3600 / STEP_S)
     loads = np.full(samples, 0.5)
     truth = np.where(np.arange(samples) < samples // 2, 0.99, 0.97)  # −2 % at 1.5 h
-    data = _plant(reference_spec, loads, truth, seed=1)
+    data = model_plant(reference_spec, loads, truth, SIGMA, seed=1, step_seconds=STEP_S,
+                        friction_coefficient=1.1)
     tracker = ParameterTracker(FullOrderModel(reference_spec), sigma=SIGMA).run(data)
     track = tracker.trajectory_
     assert (track["error"] == "").all()
@@ -69,12 +54,13 @@ def test_a_two_percent_step_is_tracked_within_half_an_hour(reference_spec):
     assert tracker.params_.flow_coefficient == pytest.approx(track["flow_coefficient"].iloc[-1])
 
 
-def test_a_constant_plant_is_tracked_still_across_loads(reference_spec):
+def test_a_constant_plant_is_tracked_still_across_loads(reference_spec, model_plant):
     """30 % for 1.5 h, a ramp, 100 % for 1.5 h: the tracked flow coefficient stays put."""
     hold = int(1.5 * 3600 / STEP_S)
     ramp = np.linspace(0.3, 1.0, int(1200 / STEP_S))
     loads = np.concatenate([np.full(hold, 0.3), ramp, np.full(hold, 1.0)])
-    data = _plant(reference_spec, loads, np.full(loads.size, 0.985), seed=2)
+    data = model_plant(reference_spec, loads, np.full(loads.size, 0.985), SIGMA, seed=2,
+                        step_seconds=STEP_S, friction_coefficient=1.1)
     track = ParameterTracker(FullOrderModel(reference_spec), sigma=SIGMA).run(data).trajectory_
     settled = track.iloc[2:]["flow_coefficient"]
     assert settled.max() - settled.min() < 0.005
@@ -92,11 +78,12 @@ def test_bad_settings_are_refused(reference_spec):
         ParameterTracker(model, sigma=SIGMA, drift_per_hour={"flow": 0.1})._start()
 
 
-def test_calibrate_online_tracks_from_the_cli(tmp_path, reference_spec):
+def test_calibrate_online_tracks_from_the_cli(tmp_path, reference_spec, model_plant):
     """`calibrate-online --method track` on a historian file: the trajectory in the data's
     zone (+08:00), the live parameters written."""
     samples = int(3600 / STEP_S)
-    data = _plant(reference_spec, np.full(samples, 0.6), np.full(samples, 0.98), seed=3)
+    data = model_plant(reference_spec, np.full(samples, 0.6), np.full(samples, 0.98), SIGMA,
+                       seed=3, step_seconds=STEP_S, friction_coefficient=1.1).drop(columns="load")
     full = plant_tag_map("wide")
     tag_map = dataclasses.replace(full, signals={name: spec for name, spec in
                                                  full.signals.items() if name in data})

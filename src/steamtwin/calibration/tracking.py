@@ -49,6 +49,7 @@ from steamtwin.calibration.posterior import (
 )
 from steamtwin.calibration.windowset import measurement_sigma
 from steamtwin.dcs.tagmap import TagMap
+from steamtwin.jsonframe import frame_from_json, frame_to_json
 from steamtwin.model.parameters import (
     DEFAULT_PRIORS,
     PARAMETER_BOUNDS,
@@ -161,6 +162,7 @@ class ParameterTracker:
         self._kinds = {name: priors[name].distribution for name in PARAMETER_NAMES}
         self._theta = np.array([priors[n].mean_internal for n in PARAMETER_NAMES])
         self._variance = np.array([priors[n].spread ** 2 for n in PARAMETER_NAMES])
+        self._prior_variance = self._variance.copy()
         outputs = set(self.simulator.output_signals)
         self._sensors = tuple(s for s in self.sensors if s in outputs and s in self.sigma)
         if not self._sensors:
@@ -211,6 +213,50 @@ class ParameterTracker:
             self._rows.extend(added)
             self.trajectory_ = pd.DataFrame(self._rows).set_index("time")
         return pd.DataFrame(added).set_index("time") if added else pd.DataFrame()
+
+    def start(self) -> ParameterTracker:
+        """Validate the settings and set the state to the priors (``update`` does this on its
+        first call); returns self."""
+        self._start()
+        return self
+
+    def reset(self, names: Sequence[str]) -> None:
+        """Covariance resetting (Goodwin & Sin, *Adaptive Filtering, Prediction and Control*,
+        1984, §3.3.2): the variance of each named, tracked coefficient goes back to at least its
+        prior's, so the next steps weigh their data as a fresh calibration would and follow a
+        change the random walk's q would take hours to admit. The estimate itself is kept."""
+        if not hasattr(self, "_buffer"):
+            self._start()
+        unknown = [name for name in names if name not in PARAMETER_NAMES]
+        if unknown:
+            raise ValueError(f"reset: unknown parameters {unknown}; expected some of "
+                             f"{list(PARAMETER_NAMES)}")
+        for name in names:
+            index = PARAMETER_NAMES.index(name)
+            if not self._held[index]:
+                self._variance[index] = max(self._variance[index], self._prior_variance[index])
+
+    def get_state(self) -> dict[str, object]:
+        """JSON-ready filter state (θ, variances, the data of the step under way and its start)
+        to restart from; the trajectory is not part of it."""
+        if not hasattr(self, "_buffer"):
+            self._start()
+        return {"theta": [float(x) for x in self._theta],
+                "variance": [float(x) for x in self._variance],
+                "step_start": None if self._step_start is None else self._step_start.isoformat(),
+                "buffer": frame_to_json(self._buffer)}
+
+    def set_state(self, state: Mapping[str, object]) -> ParameterTracker:
+        """Restore :meth:`get_state`'s output exactly (settings from this instance)."""
+        self._start()
+        self._theta = np.array(state["theta"], dtype=float)
+        self._variance = np.array(state["variance"], dtype=float)
+        start = state["step_start"]
+        self._step_start = None if start is None else pd.Timestamp(start)
+        self._buffer = frame_from_json(state["buffer"])
+        self.params_ = self._params()
+        self.store_.swap(self.params_)
+        return self
 
     def run(self, data: pd.DataFrame | Iterable[pd.DataFrame], chunk_s: float = 60.0
             ) -> ParameterTracker:

@@ -33,7 +33,7 @@ import duckdb
 import numpy as np
 import pandas as pd
 
-__all__ = ["SOURCES", "Alarm", "LiveHistorian", "export_history"]
+__all__ = ["SOURCES", "Alarm", "AlarmEnd", "BlockEvents", "LiveHistorian", "export_history"]
 
 SOURCES = ("measured", "twin", "residual")
 KEPT_STATES = 3
@@ -66,6 +66,25 @@ class Alarm:
     signal: str | None = None
     end: pd.Timestamp | None = None
     evidence: Mapping[str, object] | None = None
+
+
+@dataclass(frozen=True)
+class AlarmEnd:
+    """The end at ``end`` (UTC) of the unit's open alarm of ``kind`` and ``signal``."""
+
+    kind: str
+    signal: str | None
+    end: pd.Timestamp
+
+
+@dataclass(frozen=True)
+class BlockEvents:
+    """What a block did besides its samples: ``alarms`` started (:class:`Alarm`) and ended
+    (:class:`AlarmEnd`), in the order they happened, and parameter swaps as
+    (time, name → value, reason)."""
+
+    alarms: tuple[Alarm | AlarmEnd, ...] = ()
+    parameters: tuple[tuple[pd.Timestamp, Mapping[str, float], str], ...] = ()
 
 
 def _utc(times: pd.DatetimeIndex | pd.Series) -> pd.DatetimeIndex:
@@ -121,14 +140,17 @@ class LiveHistorian:
 
     def commit_block(self, unit: str, frames: Mapping[str, pd.DataFrame],
                      flags: pd.DataFrame | None = None,
-                     state: Mapping[str, object] | None = None) -> int:
+                     state: Mapping[str, object] | None = None,
+                     events: BlockEvents | None = None) -> int:
         """Store one block of samples of ``unit`` atomically; return the rows written.
 
         ``frames``: source (one of :data:`SOURCES`) → wide frame (time index, canonical signal
         columns, SI). ``flags``: the gate's finding per measured sample and signal (same
         shape as ``frames["measured"]``, strings, NaN/None for good). ``state``: a model state
-        snapshot (JSON-ready) stored at the block's last time. Refuses a block that does not
-        start after the unit's last committed sample (ValueError naming both times).
+        snapshot (JSON-ready) stored at the block's last time. ``events``: the alarms the block
+        starts and ends and the parameter swaps it makes, stored in the same transaction (a
+        crash never leaves a state that knows an alarm the table lacks). Refuses a block that
+        does not start after the unit's last committed sample (ValueError naming both times).
         """
         unknown = sorted(set(frames) - set(SOURCES))
         if unknown:
@@ -162,11 +184,26 @@ class LiveHistorian:
                     "DELETE FROM states WHERE unit = ? AND time < (SELECT min(time) FROM "
                     "(SELECT time FROM states WHERE unit = ? ORDER BY time DESC LIMIT ?))",
                     [unit, unit, KEPT_STATES])
+            if events is not None:
+                self._store_events(unit, events)
             connection.execute("COMMIT")
         except Exception:
             connection.execute("ROLLBACK")
             raise
         return len(rows)
+
+    def _store_events(self, unit: str, events: BlockEvents) -> None:
+        for alarm in events.alarms:
+            if isinstance(alarm, Alarm):
+                self.raise_alarm(alarm)
+                continue
+            row = self.connection.execute(
+                'SELECT max(id) FROM alarms WHERE unit = ? AND kind = ? AND signal IS NOT '
+                'DISTINCT FROM ? AND "end" IS NULL', [unit, alarm.kind, alarm.signal]).fetchone()
+            if row[0] is not None:
+                self.end_alarm(int(row[0]), alarm.end)
+        for time, values, reason in events.parameters:
+            self.record_parameters(unit, time, values, reason)
 
     @staticmethod
     def _long(unit: str, source: str, frame: pd.DataFrame, flags: pd.DataFrame | None

@@ -415,6 +415,17 @@ class ResidualMonitor:
                 self.statistics_[other] = 0.0  # the raised one's return CUSUM starts at 0
         return events
 
+    def restart(self) -> None:
+        """Zero the statistics of every hypothesis not in alarm (the active ones keep their
+        return statistic): after the twin's parameters change, evidence gathered against the
+        old set no longer speaks for the new one, and a CUSUM restarts from zero after the
+        model it tests is re-identified (Basseville & Nikiforov, *Detection of Abrupt
+        Changes*, 1993, §2.2 and §8.1)."""
+        if not hasattr(self, "statistics_"):
+            raise RuntimeError("fit the monitor on healthy residuals first")
+        self.statistics_ = {name: (value if name in self.active_ else 0.0)
+                            for name, value in self.statistics_.items()}
+
     def get_state(self) -> dict:
         """JSON-ready state (fitted σ, offsets, load baselines, ramp σ and activity, statistics,
         active alarms) to restart from."""

@@ -10,9 +10,16 @@
    value (NaN, counted) and the model steps over them;
 3. the ROM, when given, adds the blade probe temperatures for those samples;
 4. residuals (measured − twin) of every monitored sensor the model predicts, and, when a
-   :class:`~steamtwin.live.residuals.ResidualMonitor` is given, its alarms per 60-s block;
-5. the DuckDB historian stores measured, twin and residual series with the gate's flags, the
-   alarms, and the state (model, gate context, monitor) — all in one transaction per block.
+   :class:`~steamtwin.live.residuals.ResidualMonitor` is given, its alarms on clock-aligned
+   60-s blocks (:class:`~steamtwin.live.blocks.BlockAccumulator`), with the load and, given a
+   :class:`~steamtwin.live.sensitivity.SensitivityCache`, the twin's J for the degradation
+   hypotheses; an alarm has a start, an end and an acknowledgement (:meth:`LiveTwin.acknowledge`);
+5. given a :class:`~steamtwin.live.recalibration.LiveRecalibration`, the good samples feed its
+   filter, and the parameters it swaps in (on schedule, or step by step while a degradation
+   alarm is active) apply from the next sample on;
+6. the DuckDB historian stores measured, twin and residual series with the gate's flags, the
+   alarms started and ended, the parameter swaps, and the state (model, gate context, monitor,
+   open block, J cache, filter, live parameters) — all in one transaction per block.
 
 Restart: a new LiveTwin on the same database continues from the last committed sample and
 state (:meth:`LiveTwin.resume_after` says from where the source must replay): no sample lost,
@@ -27,9 +34,13 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from steamtwin.live.blocks import Block, BlockAccumulator
 from steamtwin.live.gate import StreamGate
-from steamtwin.live.historian import Alarm, LiveHistorian
-from steamtwin.live.residuals import ResidualMonitor, block_means
+from steamtwin.live.historian import Alarm, AlarmEnd, BlockEvents, LiveHistorian
+from steamtwin.live.recalibration import LiveRecalibration, ParameterSwap, swap_values
+from steamtwin.live.residuals import AlarmEvent, ResidualMonitor
+from steamtwin.live.rewind import RewindBuffer
+from steamtwin.live.sensitivity import SensitivityCache
 from steamtwin.live.sources import Source, SourceBlock
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import ModelParameters
@@ -48,13 +59,14 @@ MONITORED = ("control_stage_pressure", "control_stage_temperature", "hp_exhaust_
 @dataclass
 class LiveSummary:
     """What a run did: samples stored, samples without a twin value (an input missing), rows
-    written, alarms raised, findings the source and gate reported."""
+    written, alarms raised, findings the source and gate reported, parameter swaps."""
 
     samples: int = 0
     without_twin: int = 0
     rows: int = 0
     alarms: int = 0
     findings: int = 0
+    swaps: int = 0
 
 
 class LiveTwin:
@@ -62,13 +74,17 @@ class LiveTwin:
 
     ``model``: the unit's FOM read through its sensors; ``params``: the live parameters;
     ``gate``: the stream's quality gate; ``historian``: the open database; ``rom``: optional
-    blade ROM (probe temperatures); ``monitor``: an optional fitted residual monitor.
+    blade ROM (probe temperatures); ``monitor``: an optional fitted residual monitor;
+    ``sensitivity``: J per load band for its degradation hypotheses (without it the monitor
+    tells sensor faults only); ``recalibration``: optional online recalibration.
     """
 
     def __init__(self, name: str, model: FullOrderModel, params: ModelParameters,
                  gate: StreamGate, historian: LiveHistorian, rom: BladeRom | None = None,
                  monitor: ResidualMonitor | None = None,
-                 monitored: Sequence[str] = MONITORED) -> None:
+                 monitored: Sequence[str] = MONITORED,
+                 sensitivity: SensitivityCache | None = None,
+                 recalibration: LiveRecalibration | None = None) -> None:
         self.name = name
         self.model = model
         self.params = params
@@ -77,13 +93,21 @@ class LiveTwin:
         self.rom = rom
         self.monitor = monitor
         self.monitored = tuple(monitored)
+        self.sensitivity = sensitivity
+        self.recalibration = recalibration
         self._state: StreamState | None = None
+        self._blocks: BlockAccumulator | None = None
+        self._rewind = RewindBuffer()
         self._started = False
 
     def start(self) -> LiveTwin:
         """Open the historian and continue from its last committed state, if any."""
         self.historian.open()
         self._started = True
+        if self.monitor is not None:
+            self._blocks = BlockAccumulator(self.monitor.settings.block_s)
+        if self.recalibration is not None:
+            self.recalibration.start()
         latest = self.historian.latest_state(self.name)
         if latest is None:
             return self
@@ -91,9 +115,22 @@ class LiveTwin:
         if document.get("model") is not None:
             self._state = StreamState.from_dict(document["model"])
         self.gate.set_state(document.get("gate", {}))
-        if self.monitor is not None and document.get("monitor") is not None:
-            self.monitor.set_state(document["monitor"])
+        if document.get("params") is not None:
+            self.params = ModelParameters(**document["params"])
+        parts = ((self.monitor, "monitor"), (self._blocks, "blocks"), (self._rewind, "rewind"),
+                 (self.sensitivity, "sensitivity"), (self.recalibration, "recalibration"))
+        for part, key in parts:
+            if part is not None and document.get(key) is not None:
+                part.set_state(document[key])
         return self
+
+    def acknowledge(self, alarm_id: int, by: str, at: pd.Timestamp | None = None) -> None:
+        """Acknowledge stored alarm ``alarm_id`` as operator ``by`` at ``at`` (default: now,
+        UTC); KeyError if there is no such alarm."""
+        if not self._started:
+            self.start()
+        self.historian.acknowledge(alarm_id, by, at if at is not None
+                                   else pd.Timestamp.now(tz="UTC"))
 
     def close(self) -> None:
         """Close the historian (what is committed stays; a restart continues from it)."""
@@ -134,10 +171,10 @@ class LiveTwin:
     def finish(self, summary: LiveSummary | None = None) -> LiveSummary:
         """The end of a stream: what the gate still holds (no more look-ahead)."""
         summary = summary if summary is not None else LiveSummary()
-        self._store(self.gate.flush(), summary)
+        self._store(self.gate.flush(), summary, final=True)
         return summary
 
-    def _store(self, passed, summary: LiveSummary) -> None:
+    def _store(self, passed, summary: LiveSummary, final: bool = False) -> None:
         data = passed.data
         if data.empty:
             return
@@ -146,6 +183,9 @@ class LiveTwin:
         complete = inputs.notna().all(axis=1).to_numpy()
         twin = pd.DataFrame(np.nan, index=data.index, columns=list(self.model.output_signals))
         if complete.any():
+            if self.recalibration is not None:
+                self._rewind.keep(self._state, inputs[complete],
+                                  2.0 * self.recalibration.tracker.step_s)
             outputs, self._state = self.model.simulate_stream(inputs[complete], self.params,
                                                               self._state)
             twin.loc[outputs.index, :] = outputs.to_numpy()
@@ -156,29 +196,73 @@ class LiveTwin:
                     twin.loc[probes.index[valid], name] = probes[name].to_numpy()[valid]
         sensors = [s for s in self.monitored if s in data.columns and s in twin.columns]
         residual = data[sensors] - twin[sensors]
-        alarms = self._alarms(residual) if self.monitor is not None else []
+        alarms = [] if self.monitor is None else self._alarms(data, residual, final)
+        swaps = self.recalibration.feed(data) if self.recalibration is not None else []
+        if swaps:  # the new set applies from the next sample on
+            self._swap(swaps[-1])
         flags = passed.flags.where(passed.flags != 0).astype(object)
-        state = {"model": None if self._state is None else self._state.to_dict(),
-                 "gate": self.gate.get_state(),
-                 "monitor": None if self.monitor is None else self.monitor.get_state()}
         summary.rows += self.historian.commit_block(
             self.name, {"measured": data, "twin": twin, "residual": residual}, flags,
-            state=state)
-        for alarm in alarms:
-            self.historian.raise_alarm(alarm)
-        summary.alarms += len(alarms)
+            state=self._snapshot(),
+            events=BlockEvents(tuple(alarms),
+                               tuple((s.time, swap_values(s), s.reason) for s in swaps)))
+        summary.alarms += sum(isinstance(alarm, Alarm) for alarm in alarms)
+        summary.swaps += len(swaps)
         summary.samples += len(data)
         summary.without_twin += int((~complete).sum())
 
-    def _alarms(self, residual: pd.DataFrame) -> list[Alarm]:
-        assert self.monitor is not None
-        alarms = []
-        for stamp, row in block_means(residual, self.monitor.settings.block_s)[
-                list(residual.columns)].iterrows():
-            for event in self.monitor.update(stamp, row, None):
-                if not event.ended:
-                    alarms.append(Alarm(self.name, event.kind, stamp, event.signal,
+    def _swap(self, swap: ParameterSwap) -> None:
+        """Make ``swap``'s parameters live. The model's carried state (metal temperatures,
+        sensor lags) is recomputed with them from the start of the data the estimate rests on:
+        a state grown under the old set would keep its metal a transient behind the plant's and
+        show, for the casing's time constant, a residual that no sensor or parameter explains."""
+        self.params = swap.params
+        if self.sensitivity is not None:
+            self.sensitivity.clear()
+        if self.monitor is not None:
+            self.monitor.restart()
+        assert self.recalibration is not None
+        since = swap.time - pd.Timedelta(seconds=self.recalibration.tracker.step_s)
+        replayed = self._rewind.replay(self.model, self.params, since)
+        if replayed is not None:
+            self._state = replayed
+
+    def _snapshot(self) -> dict:
+        parts = {"model": self._state, "monitor": self.monitor, "blocks": self._blocks,
+                 "rewind": self._rewind if self.recalibration is not None else None,
+                 "sensitivity": self.sensitivity, "recalibration": self.recalibration}
+        state = {key: None if part is None else (part.to_dict() if key == "model"
+                                                 else part.get_state())
+                 for key, part in parts.items()}
+        return {**state, "gate": self.gate.get_state(),
+                "params": {k: float(v) for k, v in vars(self.params).items()}}
+
+    def _alarms(self, data: pd.DataFrame, residual: pd.DataFrame, final: bool
+                ) -> list[Alarm | AlarmEnd]:
+        assert self.monitor is not None and self._blocks is not None
+        frame = residual.join(data[list(INPUT_SIGNALS)])
+        rated = self.model.spec.design.generator_power
+        frame["load"] = data["load"] / rated if "load" in data.columns else np.nan
+        blocks = self._blocks.push(frame) + (self._blocks.flush() if final else [])
+        alarms: list[Alarm | AlarmEnd] = []
+        for block in blocks:
+            for event in self._monitor_block(block, list(residual.columns)):
+                if self.recalibration is not None:
+                    self.recalibration.on_alarm(event.kind, event.signal, event.time,
+                                                event.ended)
+                if event.ended:
+                    alarms.append(AlarmEnd(event.kind, event.signal, event.time))
+                else:
+                    alarms.append(Alarm(self.name, event.kind, event.time, event.signal,
                                         evidence={"statistic": event.statistic,
                                                   "threshold": event.threshold,
                                                   "standardised": event.evidence}))
         return alarms
+
+    def _monitor_block(self, block: Block, sensors: list[str]) -> list[AlarmEvent]:
+        assert self.monitor is not None
+        load = float(block.means["load"])
+        sensitivity = (None if self.sensitivity is None
+                       else self.sensitivity.get(load, block.rows, self.params))
+        return self.monitor.update(block.end, block.means[sensors], sensitivity,
+                                   load=load if np.isfinite(load) else None)
