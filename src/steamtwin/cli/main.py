@@ -20,6 +20,7 @@ from steamtwin.cli.dcs import dcs_app
 from steamtwin.cli.demo import demo
 from steamtwin.cli.geometry import geometry_app
 from steamtwin.cli.history import history_app
+from steamtwin.cli.monitor import monitor_app
 from steamtwin.cli.plant import plant_app
 from steamtwin.cli.rom import rom_app
 from steamtwin.cli.serve import serve
@@ -107,6 +108,7 @@ app.add_typer(dcs_app, name="dcs")
 app.add_typer(geometry_app, name="geometry")
 app.add_typer(rom_app, name="rom")
 app.add_typer(history_app, name="history")
+app.add_typer(monitor_app, name="monitor")
 app.command()(simulate)
 app.add_typer(plant_app, name="plant")
 app.command()(calibrate)

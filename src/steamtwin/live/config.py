@@ -10,7 +10,13 @@
     tags = "live-tags.toml"               # tag map; for OPC UA each signal needs a node_id
     params = "params.json"                # optional: calibrated coefficients + sensor offsets
     rom = "rom.npz"                       # optional: blade ROM (probe temperatures)
+    monitor = "monitor.json"              # optional: residual alarms (steamtwin monitor fit)
     block_samples = 60                    # samples per processing block
+
+    [units.recalibration]                 # optional: online recalibration
+    every_h = 24                          # scheduled swap of the tracked parameters
+    step_min = 10                         # tracker step (data per update)
+    settle_steps = 3                      # steps still swapped after a degradation alarm ends
 
     [units.source]
     kind = "opcua"                        # or "replay"
@@ -35,7 +41,8 @@ from typing import Any
 
 from steamtwin.errors import DataError
 
-__all__ = ["ConfigError", "ServiceConfig", "SourceConfig", "UnitConfig", "load_config"]
+__all__ = ["ConfigError", "RecalibrationConfig", "ServiceConfig", "SourceConfig", "UnitConfig",
+           "load_config"]
 
 SOURCE_KINDS = ("opcua", "replay")
 
@@ -60,9 +67,20 @@ class SourceConfig:
 
 
 @dataclass(frozen=True)
+class RecalibrationConfig:
+    """``every_s``: scheduled swap interval, ``step_s``: tracker step (both s of data time);
+    ``settle_steps``: steps swapped after a degradation alarm ends."""
+
+    every_s: float = 86_400.0
+    step_s: float = 600.0
+    settle_steps: int = 3
+
+
+@dataclass(frozen=True)
 class UnitConfig:
     """One unit: ``name``, ``turbine`` ("reference" or a spec path), ``tags``, optional
-    ``params`` and ``rom``, ``block_samples`` and its ``source``."""
+    ``params``, ``rom``, ``monitor`` (a fitted monitor file) and ``recalibration``,
+    ``block_samples`` and its ``source``."""
 
     name: str
     turbine: str
@@ -71,6 +89,8 @@ class UnitConfig:
     params: Path | None = None
     rom: Path | None = None
     block_samples: int = 60
+    monitor: Path | None = None
+    recalibration: RecalibrationConfig | None = None
 
 
 @dataclass(frozen=True)
@@ -148,6 +168,25 @@ def _source(base: Path, table: Any, where: str) -> SourceConfig:
                         allow_insecure=insecure)
 
 
+def _recalibration(table: Any, where: str) -> RecalibrationConfig | None:
+    if table is None:
+        return None
+    if not isinstance(table, dict):
+        raise ConfigError(f"{where} is not a table")
+    _keys(table, {"every_h", "step_min", "settle_steps"}, where)
+    values = {}
+    for key, scale, default in (("every_h", 3600.0, 24.0), ("step_min", 60.0, 10.0)):
+        value = table.get(key, default)
+        if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
+            raise ConfigError(f"{where}.{key} = {value!r}: expected a positive number")
+        values[key] = float(value) * scale
+    settle = table.get("settle_steps", 3)
+    if isinstance(settle, bool) or not isinstance(settle, int) or settle < 0:
+        raise ConfigError(f"{where}.settle_steps = {settle!r}: expected a whole number ≥ 0")
+    return RecalibrationConfig(every_s=values["every_h"], step_s=values["step_min"],
+                               settle_steps=settle)
+
+
 def load_config(path: str | Path) -> ServiceConfig:
     """Read and check a service configuration (see the module docstring)."""
     path = Path(path).resolve()
@@ -168,8 +207,8 @@ def load_config(path: str | Path) -> ServiceConfig:
         where = f"{path}: units[{k}]"
         if not isinstance(table, dict):
             raise ConfigError(f"{where} is not a table")
-        _keys(table, {"name", "turbine", "tags", "params", "rom", "block_samples", "source"},
-              where)
+        _keys(table, {"name", "turbine", "tags", "params", "rom", "block_samples", "source",
+                      "monitor", "recalibration"}, where)
         name = _text(table, "name", where)
         if name in names:
             raise ConfigError(f"{where}.name = {name!r} is used twice; names must be unique")
@@ -184,6 +223,8 @@ def load_config(path: str | Path) -> ServiceConfig:
             name=name, turbine=turbine, tags=_path(base, table, "tags", where),
             source=_source(base, table.get("source"), f"{where}.source"),
             params=_path(base, table, "params", where, required=False),
-            rom=_path(base, table, "rom", where, required=False), block_samples=block))
+            rom=_path(base, table, "rom", where, required=False), block_samples=block,
+            monitor=_path(base, table, "monitor", where, required=False),
+            recalibration=_recalibration(table.get("recalibration"), f"{where}.recalibration")))
     return ServiceConfig(database=(base / database_text).resolve(), units=tuple(units),
                          source=path)

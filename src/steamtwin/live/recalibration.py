@@ -25,14 +25,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 
 import pandas as pd
 
 from steamtwin.calibration.tracking import ParameterTracker
-from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.parameters import DEFAULT_PRIORS, ModelParameters, ParameterPrior
 
-__all__ = ["LiveRecalibration", "ParameterSwap", "swap_values"]
+__all__ = ["LiveRecalibration", "ParameterSwap", "centred_priors", "swap_values"]
 
 
 @dataclass(frozen=True)
@@ -138,3 +138,13 @@ class LiveRecalibration:
 def swap_values(swap: ParameterSwap) -> dict[str, float]:
     """The swap's parameters as name → value, for the historian's ``parameters`` table."""
     return {name: float(value) for name, value in asdict(swap.params).items()}
+
+
+def centred_priors(params: ModelParameters,
+                   base: Mapping[str, ParameterPrior] | None = None) -> dict[str, ParameterPrior]:
+    """``base``'s priors (default :data:`~steamtwin.model.parameters.DEFAULT_PRIORS`) moved to
+    centre on ``params``: the tracker starts at the live (calibrated) coefficients with the
+    design spread, so its first estimate is the live set, not the design one."""
+    priors = dict(base or DEFAULT_PRIORS)
+    return {name: replace(prior, center=float(getattr(params, name)))
+            for name, prior in priors.items()}

@@ -6,19 +6,19 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import dataclasses
 import logging
 
-from steamtwin.dcs.tagmap import load_tag_map
+from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
 from steamtwin.live.config import ServiceConfig, UnitConfig
 from steamtwin.live.gate import StreamGate, gate_options
 from steamtwin.live.historian import LiveHistorian
-from steamtwin.live.service import LiveSummary, LiveTwin
+from steamtwin.live.monitor_file import load_monitor
+from steamtwin.live.recalibration import LiveRecalibration, centred_priors
+from steamtwin.live.sensitivity import SensitivityCache
+from steamtwin.live.service import MONITORED, LiveSummary, LiveTwin
 from steamtwin.live.sources import OpcUaSecurity, OpcUaSource, ReplaySource, Source
-from steamtwin.model.parameters import ModelParameters, sensor_offsets_from_json
-from steamtwin.model.sensor_setup import sensor_setup
+from steamtwin.live.unit_model import unit_model
 from steamtwin.rom.romfile import load_rom
-from steamtwin.spec import load_spec
 
 __all__ = ["build_unit", "run_service"]
 
@@ -28,15 +28,22 @@ LOG = logging.getLogger("steamtwin.live")
 def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, Source]:
     """The unit's live twin (its FOM read through the tag map's sensors and the params'
     offsets) and its source, resuming after the historian's last committed sample."""
-    spec = load_spec(unit.turbine)
-    tag_map = load_tag_map(unit.tags)
-    params, offsets = ModelParameters(), {}
-    if unit.params is not None:
-        params = ModelParameters.from_json(unit.params)
-        offsets = sensor_offsets_from_json(unit.params)
-    setup = dataclasses.replace(sensor_setup(spec, tag_map), offsets=offsets)
-    twin = LiveTwin(unit.name, setup.model(spec), params, StreamGate(gate_options(tag_map)),
-                    historian, rom=None if unit.rom is None else load_rom(unit.rom))
+    setup, params = unit_model(unit.turbine, unit.tags, unit.params)
+    tag_map, model = setup.tag_map, setup.model
+    monitor = None if unit.monitor is None else load_monitor(unit.monitor)
+    recalibration = None
+    if unit.recalibration is not None:
+        tracker = ParameterTracker(model, sigma=tracking_sigma(tag_map),
+                                   priors=centred_priors(params),
+                                   step_s=unit.recalibration.step_s)
+        recalibration = LiveRecalibration(tracker, every_s=unit.recalibration.every_s,
+                                          settle_steps=unit.recalibration.settle_steps)
+    twin = LiveTwin(unit.name, model, params, StreamGate(gate_options(tag_map)), historian,
+                    rom=None if unit.rom is None else load_rom(unit.rom), monitor=monitor,
+                    monitored=MONITORED if monitor is None else monitor.sensors,
+                    sensitivity=None if monitor is None else SensitivityCache(model,
+                                                                              monitor.sensors),
+                    recalibration=recalibration)
     twin.start()
     resume = twin.resume_after()
     source_config = unit.source
@@ -69,9 +76,9 @@ async def _run_unit(twin: LiveTwin, source: Source, stop: asyncio.Event,
         await blocks.aclose()
     if not stop.is_set():
         twin.finish(summary)  # a finished replay: no more look-ahead to wait for
-    LOG.info("%s: %d samples stored (%d without a twin value), %d alarm(s), %d finding(s)",
-             twin.name, summary.samples, summary.without_twin, summary.alarms,
-             summary.findings)
+    LOG.info("%s: %d samples stored (%d without a twin value), %d alarm(s), %d finding(s), "
+             "%d parameter swap(s)", twin.name, summary.samples, summary.without_twin,
+             summary.alarms, summary.findings, summary.swaps)
     return summary
 
 
