@@ -37,6 +37,7 @@ from steamtwin.model.parameters import (
 )
 from steamtwin.model.sensor_setup import SensorSetup, sensor_setup
 from steamtwin.model.simulator import INPUT_SIGNALS
+from steamtwin.progress import ProgressCallback
 from steamtwin.rom.romfile import BladeRom
 from steamtwin.spec import TurbineSpec
 from steamtwin.spec.fingerprint import (
@@ -174,8 +175,8 @@ class Twin:
                   sensor_bias: bool = False,
                   priors: Mapping[str, ParameterPrior] | None = DEFAULT_PRIORS,
                   population: int = 50, generations: int = 200, max_evaluations: int = 400,
-                  seed: int = 0, workers: int | None = None, scheduler: Any = None,
-                  progress: Callable[[float, str], None] | None = None,
+                  random_state: int = 0, workers: int | None = None, scheduler: Any = None,
+                  progress: ProgressCallback | None = None,
                   checkpoint: str | Path | None = None, resume: bool = False) -> Twin:
         """Calibrate the flow, friction and heat-transfer coefficients jointly over one or
         several cleaned histories (:func:`steamtwin.load_history`); returns the twin.
@@ -189,11 +190,17 @@ class Twin:
         every history maps it). ``sensor_bias``: integrate out each thermocouple's constant
         bias (IEC 60584-1 class 1). ``method``: ``"ga"`` (population × generations; a
         ``checkpoint`` file, ``resume``) or ``"surrogate"`` (≤ ``max_evaluations`` model runs).
-        ``priors`` None: plain RMSE fit, no intervals. Same ``seed``, same result.
+        ``priors`` None: plain RMSE fit, no intervals. Same ``random_state``, same result.
+        The calibrator (:class:`~steamtwin.calibration.calibrator.Calibrator`) is
+        ``calibrator_``.
         """
-        from steamtwin.calibration import Calibrator
-        from steamtwin.calibration.objective import DEFAULT_SENSORS, THERMOCOUPLE_BIAS
-        from steamtwin.calibration.surrogate import SurrogateCalibrator
+        from steamtwin.calibration import (
+            Calibrator,
+            GeneticSearch,
+            ObjectiveSettings,
+            SurrogateSearch,
+        )
+        from steamtwin.calibration.settings import DEFAULT_SENSORS, THERMOCOUPLE_BIAS
         from steamtwin.calibration.tracking import TYPICAL_INSTRUMENT_ERROR
         from steamtwin.calibration.windowset import (
             WindowSource,
@@ -235,24 +242,20 @@ class Twin:
                                       max_steady_s=max(max_steady_s, min_steady_s))
         model = sensor_model(self.spec, histories)
         _ = model.design_  # the first run compiles the kernels
-        settings: dict[str, Any] = {
-            "population": population, "seed": seed, "workers": workers,
-            "scheduler": scheduler, "priors": priors, "sensors": sensors,
-            "sensor_bias": THERMOCOUPLE_BIAS if sensor_bias else None}
-        calibrator: Calibrator | SurrogateCalibrator
-        if method == "surrogate":
-            calibrator = SurrogateCalibrator(model, max_evaluations=max_evaluations,
-                                             progress=progress, **settings)
-        else:
-            calibrator = Calibrator(model, generations=generations, progress=progress,
-                                    checkpoint=checkpoint, **settings)
+        objective = ObjectiveSettings(
+            sensors=sensors, priors=priors,
+            sensor_bias=THERMOCOUPLE_BIAS if sensor_bias else None)
+        search = (SurrogateSearch(max_evaluations=max_evaluations, population=population)
+                  if method == "surrogate" else
+                  GeneticSearch(population=population, generations=generations,
+                                checkpoint=checkpoint))
+        calibrator = Calibrator(model, objective=objective, search=search,
+                                random_state=random_state, workers=workers,
+                                scheduler=scheduler, progress=progress)
         initial = Calibrator(model, workers=1).rmse(window_set, ModelParameters())
-        if method == "surrogate":
-            calibrator.fit(window_set)
-        else:
-            calibrator.fit(window_set, resume=resume)
+        calibrator.fit(window_set, resume=resume)
         self.calibrator_ = calibrator
-        self.calibration_settings_ = {**settings, "generations": generations}
+        self._ga_settings = {"population": population, "generations": generations}
         self.windows_ = window_set
         self.model_ = model
         self.sensors_ = sensors
@@ -262,7 +265,7 @@ class Twin:
         self._record(_step(
             "calibrate", method=method, data=[s.name for s in sources],
             windows=len(window_set), samples=int(sum(len(w.data) for w in window_set)),
-            sensors=list(sensors), sensor_bias=sensor_bias, seed=seed,
+            sensors=list(sensors), sensor_bias=sensor_bias, random_state=random_state,
             population=population, generations=generations if method == "ga" else None,
             max_evaluations=max_evaluations if method == "surrogate" else None,
             evaluations=int(calibrator.n_evaluations_), rmse_K=float(calibrator.rmse_),
@@ -270,7 +273,7 @@ class Twin:
         return self
 
     def calibration_report(self, folder: str | Path, *, sensitivity: bool = False,
-                           progress: Callable[[str], None] | None = None) -> list[Path]:
+                           progress: ProgressCallback | None = None) -> list[Path]:
         """Write the calibration's result files into ``folder``; returns their paths.
 
         Table 6 (RMSE per load band before/after, with the instruments' error; the parameter
@@ -279,7 +282,7 @@ class Twin:
         with ``sensitivity``, Table 7 (nine more calibrations with the GA settings varied;
         ``progress(message)`` names it).
         """
-        from steamtwin.calibration import Calibrator
+        from steamtwin.calibration import Calibrator, GeneticSearch
         from steamtwin.calibration.report import (
             band_rmse_table,
             convergence_figure,
@@ -301,7 +304,7 @@ class Twin:
         if calibrator.posterior_ is not None:
             written.append(folder / "table6_parameters.csv")
             parameter_table(calibrator.posterior_).to_csv(written[-1])
-        if isinstance(calibrator, Calibrator):
+        if isinstance(calibrator.search_strategy, GeneticSearch):
             written.append(convergence_figure(calibrator.history_,
                                               folder / "figure7_convergence.png"))
         loads = [abs(float(w["load"].mean()) / rated - 0.5) if "load" in w.columns else 0.0
@@ -315,9 +318,14 @@ class Twin:
             calibrator.identifiability_.to_csv(written[-1])
         if sensitivity:
             if progress is not None:
-                progress("Table 7: GA settings varied")
-            table7 = ga_sensitivity_table(lambda s: Calibrator(model, **s).fit(window_set),
-                                          self.calibration_settings_)
+                progress(0.0, "Table 7: GA settings varied")
+            table7 = ga_sensitivity_table(
+                lambda s: Calibrator(model, objective=calibrator.objective,
+                                     search=GeneticSearch(**s),
+                                     random_state=calibrator.random_state,
+                                     workers=calibrator.workers,
+                                     scheduler=calibrator.scheduler).fit(window_set),
+                self._ga_settings)
             written.append(folder / "table7_ga_sensitivity.csv")
             table7.to_csv(written[-1], index=False)
         return written

@@ -100,9 +100,9 @@ from scipy.optimize import least_squares
 from scipy.stats import t as student_t
 
 from steamtwin.calibration.identifiability import integrated_time
-from steamtwin.calibration.objective import (
-    PARAMETER_NAMES,
-    Objective,
+from steamtwin.calibration.objective import Objective
+from steamtwin.calibration.settings import PARAMETER_NAMES
+from steamtwin.calibration.windowprep import (
     checked_inputs,
     predict_window,
     thermocouple_bias_spread,
@@ -556,11 +556,11 @@ def fit_map(objective: Objective, start: ModelParameters | None = None,
 
 
 def metropolis(log_posterior: Callable[[np.ndarray], float], start: np.ndarray,
-               covariance: np.ndarray, n_steps: int, *, seed: int = 0) -> np.ndarray:
+               covariance: np.ndarray, n_steps: int, *, random_state: int = 0) -> np.ndarray:
     """Random-walk Metropolis chain (n_steps, d) from ``start`` with proposal covariance
     (2.38²/d)·``covariance`` (module docstring); ``log_posterior`` returns −inf outside the
     support."""
-    random = np.random.default_rng(seed)
+    random = np.random.default_rng(random_state)
     d = len(start)
     factor = np.linalg.cholesky(2.38**2 / d * np.asarray(covariance, dtype=float))
     chain = np.empty((n_steps, d))

@@ -19,8 +19,9 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from steamtwin.calibration.objective import DEFAULT_SENSORS, window_rmse
+from steamtwin.calibration.objective import window_rmse
 from steamtwin.calibration.posterior import Posterior
+from steamtwin.calibration.settings import DEFAULT_SENSORS, ObjectiveSettings
 from steamtwin.calibration.windowset import WindowSet
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import Simulator
@@ -40,12 +41,11 @@ def rmse_table(simulator: Simulator, conditions: Mapping[str, Sequence[pd.DataFr
 
     ``conditions`` maps a name (e.g. "30 % load") to its windows; per-sensor RMSEs follow.
     """
+    settings = ObjectiveSettings(sensors=sensors, min_samples=min_samples)
     rows = []
     for name, windows in conditions.items():
-        before = window_rmse(simulator, windows, ModelParameters(), sensors=sensors,
-                             min_samples=min_samples)
-        after = window_rmse(simulator, windows, params, sensors=sensors,
-                            min_samples=min_samples)
+        before = window_rmse(simulator, windows, ModelParameters(), settings)
+        after = window_rmse(simulator, windows, params, settings)
         row: dict[str, object] = {"condition": name, "samples": int(after["samples"].sum())}
         row["rmse_empirical_K"] = _pooled(before, "rmse")
         row["rmse_calibrated_K"] = _pooled(after, "rmse")

@@ -206,14 +206,14 @@ def calibrate(
                     max_steady_s=60.0 * max_steady_minutes,
                     pressure_witness=pressure_witness, sensor_bias=sensor_bias,
                     priors=priors, population=population, generations=generations,
-                    max_evaluations=max_evaluations, seed=seed, workers=workers,
+                    max_evaluations=max_evaluations, random_state=seed, workers=workers,
                     scheduler=scheduler, progress=progress, resume=resume,
                     checkpoint=None if surrogate else out.with_name(f"{out.stem}.checkpoint"))
         calibrator, windows = twin.calibrator_, twin.windows_
         if report is not None:
             with console.status("writing the report") as status:
                 written = twin.calibration_report(report, sensitivity=sensitivity,
-                                                  progress=status.update)
+                                                  progress=lambda _, message: status.update(message))
     except (DataQualityError, CalibrationError) as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=1) from None
@@ -318,7 +318,7 @@ def calibrate_online(
                 online = OnlineCalibrator(
                     model, window_s=window_minutes * 60.0, every_s=every_minutes * 60.0,
                     population=population, generations=generations,
-                    first_generations=first_generations, seed=seed, workers=workers,
+                    first_generations=first_generations, random_state=seed, workers=workers,
                     scheduler=scheduler, store=ParameterStore(start, path=out / "params.json"),
                     progress=lambda f, m: bar.update(task, completed=f, description=m))
                 with warnings.catch_warnings():
