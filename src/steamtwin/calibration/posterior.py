@@ -1,6 +1,10 @@
 """Parameter uncertainty: the Laplace (Gauss–Newton) posterior at the MAP, a Gauss–Newton MAP
 fit, and a random-walk Metropolis check.
 
+(Over 500 lines for a reason: one method — the intervals of a calibration. Its parts share the
+priors' normal coordinates, the standardised residuals' Jacobian and the residual time τ, and a
+fifth of the module is this docstring, the method's statement with its sources.)
+
 Coordinates
     Each parameter is handled in its prior's normal coordinate θ (x for a normal prior, ln x
     for a log-normal one), where the prior is N(m, s²); intervals are computed there and mapped

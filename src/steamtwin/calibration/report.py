@@ -27,7 +27,7 @@ from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import Simulator
 
 __all__ = ["band_rmse_table", "convergence_figure", "ga_sensitivity_table", "parameter_table",
-           "rmse_table", "temperature_comparison_figure", "trajectory_figure"]
+           "rmse_table", "temperature_comparison_figure", "trajectory_figure", "write_trajectory"]
 
 _LABELS = {"control_stage_temperature": "control-stage steam",
            "hp_exhaust_temperature": "HP-exhaust steam",
@@ -169,6 +169,20 @@ def temperature_comparison_figure(simulator: Simulator, window: pd.DataFrame,
     figure.tight_layout()
     figure.savefig(path, dpi=120)
     return path
+
+
+def write_trajectory(trajectory: pd.DataFrame, folder: str | Path,
+                     time_zone: str | None = None) -> tuple[Path, Path]:
+    """An online calibration's trajectory as ``trajectory.csv`` and ``trajectory.png``
+    (:func:`trajectory_figure`) in ``folder``, its times converted to ``time_zone`` (the
+    data's own, e.g. the tag map's ``historian.time_zone``; None: as they are); returns both
+    paths."""
+    folder = Path(folder)
+    if time_zone:
+        trajectory = trajectory.set_axis(trajectory.index.tz_convert(time_zone))
+    table = folder / "trajectory.csv"
+    trajectory.to_csv(table)
+    return table, trajectory_figure(trajectory, folder / "trajectory.png")
 
 
 def trajectory_figure(trajectory: pd.DataFrame, path: str | Path,

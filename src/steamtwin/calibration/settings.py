@@ -12,13 +12,23 @@ settings mean is the objective's method (:mod:`~steamtwin.calibration.objective`
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
-from steamtwin.model.parameters import DEFAULT_PRIORS, PARAMETER_BOUNDS, ParameterPrior
+from steamtwin.model.parameters import (
+    DEFAULT_PRIORS,
+    PARAMETER_BOUNDS,
+    ParameterError,
+    ParameterPrior,
+    parse_prior,
+    priors_from_dict,
+)
+from steamtwin.textfile import read_utf8_text
 
 __all__ = [
     "DEFAULT_SENSORS",
@@ -29,6 +39,7 @@ __all__ = [
     "ObjectiveSettings",
     "check_bounds",
     "check_random_state",
+    "load_priors",
 ]
 
 DEFAULT_SENSORS: tuple[str, ...] = (
@@ -78,6 +89,26 @@ def check_random_state(random_state: object) -> int:
             or random_state < 0):
         raise ValueError(f"random_state must be an integer ≥ 0 (got {random_state!r})")
     return int(random_state)
+
+
+def load_priors(path: str | Path | None = None, overrides: Sequence[str] = ()
+                ) -> dict[str, ParameterPrior]:
+    """The default priors (:data:`DEFAULT_PRIORS`), overridden by the ``priors`` section of
+    the JSON file ``path`` (as a calibration's params.json carries it), then by each of
+    ``overrides`` (``NAME=normal|lognormal:CENTER:SPREAD``,
+    :func:`~steamtwin.model.parameters.parse_prior`); errors name the file or the text
+    (:class:`~steamtwin.model.parameters.ParameterError`)."""
+    result = dict(DEFAULT_PRIORS)
+    if path is not None:
+        document = json.loads(read_utf8_text(path, "priors file", "JSON", ParameterError))
+        if not isinstance(document, dict) or "priors" not in document:
+            raise ParameterError(f"{path}: expected a JSON object with a 'priors' section "
+                                 "(as calibrate writes into params.json)")
+        result = priors_from_dict(document["priors"], str(path), result)
+    for text in overrides:
+        name, value = parse_prior(text)
+        result[name] = value
+    return result
 
 
 def _is_number(value: object) -> bool:
