@@ -77,7 +77,8 @@ class Twin:
     ``calibrator_``, ``windows_`` (the :class:`~steamtwin.calibration.windowset.WindowSet`),
     ``model_`` (the FOM read through the plant's sensors), ``sensors_``,
     ``initial_rmse_`` (K, the empirical parameters on the same windows); after
-    :meth:`calibrate_online` ``online_``; after :meth:`build_rom` ``rom_``; after :meth:`validate` ``validation_`` (the report).
+    :meth:`calibrate_online` ``online_``; after :meth:`build_rom` ``rom_``; after
+    :meth:`validate` ``validation_`` (the report).
     In use, fitted or given: :attr:`parameters`, :attr:`intervals`, :attr:`offsets`,
     :attr:`blade_rom`; the provenance: :attr:`steps`.
     """
@@ -210,6 +211,10 @@ class Twin:
             raise ValueError("calibrate: no history given")
         for item in histories:
             _check_history(item, "calibrate")
+        search = (SurrogateSearch(max_evaluations=max_evaluations, population=population)
+                  if method == "surrogate" else
+                  GeneticSearch(population=population, generations=generations,
+                                checkpoint=checkpoint))
         window_set, sensors = calibration_window_set(
             histories, self.spec.design.generator_power, windows=windows, ramps=ramps,
             min_steady_s=min_steady_s, max_steady_s=max_steady_s,
@@ -219,10 +224,6 @@ class Twin:
         objective = ObjectiveSettings(
             sensors=sensors, priors=priors,
             sensor_bias=THERMOCOUPLE_BIAS if sensor_bias else None)
-        search = (SurrogateSearch(max_evaluations=max_evaluations, population=population)
-                  if method == "surrogate" else
-                  GeneticSearch(population=population, generations=generations,
-                                checkpoint=checkpoint))
         calibrator = Calibrator(model, objective=objective, search=search,
                                 random_state=random_state, workers=workers,
                                 scheduler=scheduler, progress=progress)

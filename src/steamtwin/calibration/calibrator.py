@@ -165,9 +165,9 @@ class Calibrator:
         candidate gave a finite RMSE raises :class:`CalibrationError`.
         """
         random_state = self._check()
-        objective, search = self.objective_settings, self.search_strategy
+        search = self.search_strategy
         problem = self.problem(windows)
-        self.tempering_ = apply_tempering(problem, objective.tempering)
+        self.tempering_ = apply_tempering(problem)
         evaluator = make_evaluator(self.workers, self.scheduler)
         evaluator.start(problem.objective)
         problem.evaluator = evaluator
@@ -223,25 +223,22 @@ class Calibrator:
                                 objective.priors, self.posterior_, self.sensor_offsets_)
 
 
-def apply_tempering(problem: CalibrationProblem, tempering: float | str) -> float:
-    """Set the problem's likelihood tempering κ (a number in (0, 1], or "auto": estimated at
-    the priors' centres; 1 without priors or when the model rejects that point); returns κ."""
-    if tempering == "auto":
-        kappa = 1.0
-        priors = problem.objective.priors
-        if priors is not None:
-            centre = ModelParameters(**{
-                name: float(np.clip(prior.center, *problem.parameter_bounds[name]))
-                for name, prior in zip(PARAMETER_NAMES, priors, strict=True)})
-            try:
-                kappa = likelihood_tempering(problem.objective, centre)
-            except ValueError:
-                kappa = 1.0
-    elif (isinstance(tempering, int | float) and not isinstance(tempering, bool)
-          and 0.0 < tempering <= 1.0):
-        kappa = float(tempering)
-    else:
-        raise ValueError(f"tempering must be a number in (0, 1] or 'auto' (got {tempering!r})")
+def apply_tempering(problem: CalibrationProblem) -> float:
+    """Set the problem's likelihood tempering κ from its settings' ``tempering`` (a number in
+    (0, 1], or "auto": estimated at the priors' centres by
+    :func:`~steamtwin.calibration.posterior.likelihood_tempering`; 1 without priors or when
+    the model rejects that point); returns κ."""
+    tempering = problem.settings.tempering
+    kappa = 1.0 if tempering == "auto" else float(tempering)
+    priors = problem.objective.priors
+    if tempering == "auto" and priors is not None:
+        centre = ModelParameters(**{
+            name: float(np.clip(prior.center, *problem.parameter_bounds[name]))
+            for name, prior in zip(PARAMETER_NAMES, priors, strict=True)})
+        try:
+            kappa = likelihood_tempering(problem.objective, centre)
+        except ValueError:
+            kappa = 1.0
     problem.objective = replace(problem.objective, tempering=kappa)
     return kappa
 

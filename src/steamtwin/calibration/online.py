@@ -26,9 +26,8 @@ import pandas as pd
 
 from steamtwin.calibration.calibrator import apply_tempering
 from steamtwin.calibration.evaluation import make_evaluator
-from steamtwin.calibration.ga import make_ga
+from steamtwin.calibration.ga import check_integer, make_ga
 from steamtwin.calibration.objective import PENALTY_RMSE, CalibrationProblem
-from steamtwin.calibration.search import check_positive_integer
 from steamtwin.calibration.settings import PARAMETER_NAMES, ObjectiveSettings, check_random_state
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import Simulator
@@ -142,7 +141,7 @@ class OnlineCalibrator:
             if not (isinstance(value, int | float) and np.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive number of seconds (got {value!r})")
         for name, low in (("population", 2), ("generations", 1), ("first_generations", 1)):
-            check_positive_integer(name, getattr(self, name), low)
+            check_integer(name, getattr(self, name), low)
         self._random_state = check_random_state(self.random_state)
         objective = self.objective
         if not isinstance(objective, ObjectiveSettings | None):
@@ -207,7 +206,7 @@ class OnlineCalibrator:
         current = self.store_.get()
         try:
             problem = CalibrationProblem(self.simulator, [data], self._settings)
-            apply_tempering(problem, self._settings.tempering)
+            apply_tempering(problem)
         except ValueError as error:
             return {**row, **asdict(current), "rmse": np.nan, "rmse_previous": np.nan,
                     "evaluations": 0, "error": str(error)}

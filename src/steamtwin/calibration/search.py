@@ -31,12 +31,12 @@ from steamtwin.calibration.checkpoint import (
     run_fingerprint,
     save_checkpoint,
 )
-from steamtwin.calibration.ga import RemutationRepair, check_ga_settings, make_ga
+from steamtwin.calibration.ga import RemutationRepair, check_ga_settings, check_integer, make_ga
 from steamtwin.calibration.objective import CalibrationProblem, fitness
 from steamtwin.calibration.settings import PARAMETER_NAMES
 from steamtwin.progress import ProgressCallback
 
-__all__ = ["HISTORY_COLUMNS", "GeneticSearch", "SearchResult", "check_positive_integer"]
+__all__ = ["HISTORY_COLUMNS", "GeneticSearch", "SearchResult"]
 
 HISTORY_COLUMNS: tuple[str, ...] = (
     "generation", "best_rmse", "mean_rmse", "best_fitness", "mean_fitness", *PARAMETER_NAMES,
@@ -44,12 +44,6 @@ HISTORY_COLUMNS: tuple[str, ...] = (
 """Columns of a GA history row (``generation`` becomes the index of ``history_``).
 ``best_rmse``/``mean_rmse`` are the minimised objective: the RMSE (K) without priors and σ,
 otherwise the posterior score (:mod:`~steamtwin.calibration.objective`)."""
-
-
-def check_positive_integer(name: str, value: object, low: int = 1) -> None:
-    """ValueError naming ``name`` unless ``value`` is an integer ≥ ``low``."""
-    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
-        raise ValueError(f"{name} must be an integer ≥ {low} (got {value!r})")
 
 
 @dataclass(frozen=True)
@@ -95,7 +89,7 @@ class GeneticSearch:
                           crossover_eta=self.crossover_eta,
                           mutation_probability=self.mutation_probability,
                           mutation_eta=self.mutation_eta, tournament_size=self.tournament_size)
-        check_positive_integer("generations", self.generations)
+        check_integer("generations", self.generations, 1)
 
     def course(self) -> dict[str, object]:
         """Every setting that shapes the run's course (not the checkpoint's path)."""

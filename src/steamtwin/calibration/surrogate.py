@@ -40,9 +40,9 @@ from pymoo.optimize import minimize
 from scipy.interpolate import RBFInterpolator
 from scipy.stats import qmc
 
-from steamtwin.calibration.ga import check_ga_settings, make_ga
+from steamtwin.calibration.ga import check_ga_settings, check_integer, make_ga
 from steamtwin.calibration.objective import PENALTY_RMSE, CalibrationProblem, fitness
-from steamtwin.calibration.search import SearchResult, check_positive_integer
+from steamtwin.calibration.search import SearchResult
 from steamtwin.calibration.settings import PARAMETER_NAMES
 from steamtwin.progress import ProgressCallback
 
@@ -94,7 +94,7 @@ class SurrogateSearch:
                                  ("infill_per_round", self.infill_per_round, 1),
                                  ("patience", self.patience, 1),
                                  ("generations", self.generations, 1)):
-            check_positive_integer(name, value, low)
+            check_integer(name, value, low)
         least = int(initial) + int(self.infill_per_round)
         if isinstance(self.max_evaluations, bool) or not isinstance(
                 self.max_evaluations, int | np.integer) or self.max_evaluations < least:
