@@ -32,10 +32,9 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from steamtwin.calibration import Calibrator
+from steamtwin.calibration import Calibrator, GeneticSearch, SurrogateSearch
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
-from steamtwin.calibration.objective import DEFAULT_SENSORS
-from steamtwin.calibration.surrogate import SurrogateCalibrator
+from steamtwin.calibration.settings import DEFAULT_SENSORS
 from steamtwin.dcs.plant import run_plant
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import ModelParameters
@@ -69,13 +68,13 @@ def main() -> None:
         unseen_floor[scenario] = _instrument_error(unseen[scenario], other.true_outputs)
         instrument = _instrument_error(hold, run.true_outputs)
         start = time.perf_counter()
-        ga = Calibrator(model, population=population, generations=generations, seed=0).fit(
-            [hold])
+        ga = Calibrator(model, search=GeneticSearch(population=population,
+                                                    generations=generations)).fit([hold])
         ga_time = time.perf_counter() - start
         before = ga.rmse([hold])
         start = time.perf_counter()
-        surrogate = SurrogateCalibrator(model, seed=0, max_evaluations=min(
-            1000, ga.n_evaluations_ // 10)).fit([hold])
+        surrogate = Calibrator(model, search=SurrogateSearch(max_evaluations=min(
+            1000, ga.n_evaluations_ // 10))).fit([hold])
         surrogate_time = time.perf_counter() - start
         truth = run.truth.twin_equivalent
         p = calibrated[scenario] = ga.params_
@@ -120,7 +119,8 @@ def instrument_draws(scenarios: list[str], seeds: list[int]) -> None:
             true = run.true_outputs.loc[hold.index]
             biases = " / ".join(f"{float(np.nanmean(hold[s] - true[s])):+.2f}"
                                 for s in DEFAULT_SENSORS)
-            ga = Calibrator(model, population=30, generations=40, seed=0).fit([hold])
+            ga = Calibrator(model, search=GeneticSearch(population=30, generations=40)).fit(
+                [hold])
             before, floor = ga.rmse([hold]), _instrument_error(hold, run.true_outputs)
             print(f"| {scenario}, {seed} | {biases} | {before:.3f} → {ga.rmse_:.3f} K "
                   f"(−{100 * (1 - ga.rmse_ / before):.0f} %) | {floor:.2f} K "

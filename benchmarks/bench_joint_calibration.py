@@ -29,14 +29,10 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from steamtwin.calibration import Calibrator
+from steamtwin.calibration import Calibrator, GeneticSearch, SurrogateSearch
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
-from steamtwin.calibration.objective import (
-    DEFAULT_SENSORS,
-    THERMOCOUPLE_BIAS,
-    CalibrationProblem,
-)
-from steamtwin.calibration.surrogate import SurrogateCalibrator
+from steamtwin.calibration.objective import CalibrationProblem
+from steamtwin.calibration.settings import DEFAULT_SENSORS, THERMOCOUPLE_BIAS, ObjectiveSettings
 from steamtwin.calibration.windowset import CalibrationWindow, WindowSet, find_calibration_windows
 from steamtwin.dcs.plant import run_plant
 from steamtwin.model.fom import FullOrderModel
@@ -77,15 +73,17 @@ def main() -> None:
         float_format=lambda v: f"{v:.2f}"))
     if not arguments.ga_only:
         start = time.perf_counter()
-        joint = SurrogateCalibrator(model, seed=0, max_evaluations=150 if arguments.quick else 400,
-                                    sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS).fit(windows)
+        search = SurrogateSearch(max_evaluations=150 if arguments.quick else 400)
+        joint = Calibrator(model, objective=ObjectiveSettings(sigma=sigma,
+                                                                 sensor_bias=THERMOCOUPLE_BIAS),
+                           search=search).fit(windows)
         joint_time = time.perf_counter() - start
         print(f"surrogate: {joint_time:.0f} s wall, {joint.n_evaluations_} model runs; "
               f"weighted RMSE {joint.rmse_:.3f} K (empirical "
               f"{Calibrator(model).rmse(windows, ModelParameters()):.3f} K)")
         _parameters(joint, truth)
-        problem = CalibrationProblem(model, windows, sigma=sigma, priors=DEFAULT_PRIORS,
-                                     sensor_bias=THERMOCOUPLE_BIAS)
+        problem = CalibrationProblem(model, windows, ObjectiveSettings(
+            sigma=sigma, priors=DEFAULT_PRIORS, sensor_bias=THERMOCOUPLE_BIAS))
         estimated = problem.objective.sensor_biases(joint.params_)[0]
         print("  thermocouple biases estimated / true: " + ", ".join(
             f"{s} {b:+.2f} / {biases[s]:+.2f} K"
@@ -103,17 +101,17 @@ def main() -> None:
     print(f"\n2. two 2-h windows jointly ({loads}), GA P = {population}, G = {generations} on "
           "the local pool")
     start = time.perf_counter()
-    ga = Calibrator(model, population=population, generations=generations, seed=0,
-                    sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS).fit(pair_set)
+    objective = ObjectiveSettings(sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS)
+    ga = Calibrator(model, objective=objective, search=GeneticSearch(
+        population=population, generations=generations)).fit(pair_set)
     ga_time = time.perf_counter() - start
     print(f"GA: {ga_time:.0f} s wall ({'✓' if ga_time <= 300 else '✗'} ≤ 300 s), "
           f"{ga.n_evaluations_} runs ({ga_time / ga.n_evaluations_ * 1e3:.0f} ms each); "
           f"RMSE {ga.rmse_:.3f} K, score {ga.score_:.4f}")
     _parameters(ga, truth)
     start = time.perf_counter()
-    surrogate = SurrogateCalibrator(model, seed=0, sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS,
-                                    max_evaluations=min(
-        1000, ga.n_evaluations_ // 10)).fit(pair_set)
+    surrogate = Calibrator(model, objective=objective, search=SurrogateSearch(
+        max_evaluations=min(1000, ga.n_evaluations_ // 10))).fit(pair_set)
     surrogate_time = time.perf_counter() - start
     share = surrogate.n_evaluations_ / ga.n_evaluations_
     difference = surrogate.rmse_ - ga.rmse_
@@ -124,7 +122,7 @@ def main() -> None:
     _parameters(surrogate, truth)
 
 
-def _parameters(calibrator: Calibrator | SurrogateCalibrator, truth: ModelParameters) -> None:
+def _parameters(calibrator: Calibrator, truth: ModelParameters) -> None:
     posterior = calibrator.posterior_
     table = posterior.table()
     print(f"  likelihood tempering κ {calibrator.tempering_:.2e}; Laplace at the MAP: "

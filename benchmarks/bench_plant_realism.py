@@ -28,7 +28,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import least_squares
 
-from steamtwin.calibration import Calibrator
+from steamtwin.calibration import Calibrator, GeneticSearch
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
 from steamtwin.dcs.plant import TWIN_EQUIVALENT_LOADS, PlantTruth, plant_steady_states, run_plant
 from steamtwin.model.fom import FullOrderModel
@@ -106,8 +106,8 @@ def main() -> None:
         for scenario in ("deep-peak-30", "deep-peak-50"):
             hold = run_plant(scenario, seed=0, truth=truth).measured.iloc[-7200:]
             start = time.perf_counter()
-            ga = Calibrator(twin, population=population, generations=generations,
-                            seed=0).fit([hold])
+            ga = Calibrator(twin, search=GeneticSearch(population=population,
+                                                       generations=generations)).fit([hold])
             p = calibrated[scenario] = ga.params_
             print(f"\n{scenario} hold: RMSE {ga.rmse([hold]):.3f} → {ga.rmse_:.3f} K, flow "
                   f"{p.flow_coefficient:.4f} (twin-equivalent {equivalent.flow_coefficient:.4f}),"

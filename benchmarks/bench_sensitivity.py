@@ -63,7 +63,7 @@ def main() -> None:
             model.simulate(inputs)
             single.append(time.perf_counter() - began)
         began = time.perf_counter()
-        result = sobol_indices(model, inputs, bounds=bounds, n_base=n_base, seed=0,
+        result = sobol_indices(model, inputs, bounds=bounds, n_base=n_base, random_state=0,
                                evaluator=make_evaluator(arguments.workers))
         wall = time.perf_counter() - began
         table = result.table()
@@ -86,7 +86,7 @@ def main() -> None:
             result.figure(arguments.figures / f"sobol-{name}.png")
     inputs = load_profile_inputs(spec, ramp_profile(1.0, 0.3, 0.03, 60.0, 1800.0))
     began = time.perf_counter()
-    noise = noise_propagation(model, inputs, sigmas_K=(0.5, 1.0), repeats=8, seed=0)
+    noise = noise_propagation(model, inputs, sigmas_K=(0.5, 1.0), repeats=8, random_state=0)
     noise_wall = time.perf_counter() - began
     rms = noise["rms_deviation"].unstack("sigma_K")
     report["noise"] = {

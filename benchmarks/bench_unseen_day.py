@@ -39,14 +39,14 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from steamtwin.calibration import Calibrator, ObjectiveSettings, SurrogateSearch
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
-from steamtwin.calibration.objective import (
-    DEFAULT_SENSORS,
+from steamtwin.calibration.settings import DEFAULT_SENSORS
+from steamtwin.calibration.windowprep import (
     predict_window,
     prepare_window,
     thermocouple_bias_spread,
 )
-from steamtwin.calibration.surrogate import SurrogateCalibrator
 from steamtwin.calibration.windowset import WindowSet, find_calibration_windows
 from steamtwin.dcs.plant import run_plant
 from steamtwin.dcs.quality import clean
@@ -109,8 +109,9 @@ def _draw(spec, rated: float, seed: int, sensors: tuple[str, ...], quick: bool) 
         spread[PRESSURE] = PRESSURE_BIAS_SPREAD
     windows = WindowSet(tuple(find_calibration_windows(measured, rated, sigma=sigma)))
     model = sensor_setup(spec).model(spec)
-    calibrator = SurrogateCalibrator(model, seed=0, max_evaluations=150 if quick else 400,
-                                     sensors=sensors, sigma=sigma, sensor_bias=spread)
+    calibrator = Calibrator(
+        model, objective=ObjectiveSettings(sensors=sensors, sigma=sigma, sensor_bias=spread),
+        search=SurrogateSearch(max_evaluations=150 if quick else 400))
     calibrator.fit(windows)
     params = calibrator.params_
     offsets = calibrator.sensor_offsets_  # what params.json carries for validate

@@ -43,7 +43,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from steamtwin.calibration import Calibrator
+from steamtwin.calibration import Calibrator, GeneticSearch, SurrogateSearch
 from steamtwin.calibration.evaluation import make_evaluator
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
 from steamtwin.calibration.report import (
@@ -52,7 +52,6 @@ from steamtwin.calibration.report import (
     rmse_table,
     temperature_comparison_figure,
 )
-from steamtwin.calibration.surrogate import SurrogateCalibrator
 from steamtwin.dcs.plant import PlantRun, plant_tag_map, run_plant, write_plant
 from steamtwin.dcs.quality import clean
 from steamtwin.dcs.tagmap import write_tag_map
@@ -456,16 +455,16 @@ def _ramp_window(run: PlantRun, data: pd.DataFrame) -> pd.DataFrame:
 
 def _calibration_stage(model: FullOrderModel, plant: _PlantData, settings: DemoSettings,
                        out: Path, report: Callable[[float], None]
-                       ) -> tuple[Calibrator | SurrogateCalibrator, list[Section]]:
+                       ) -> tuple[Calibrator, list[Section]]:
     windows = list(plant.calibration.values())
     if settings.calibration == "ga":
-        calibrator = Calibrator(model, population=settings.population,
-                                generations=settings.generations, seed=settings.seed,
-                                workers=settings.workers,
+        calibrator = Calibrator(model, search=GeneticSearch(population=settings.population,
+                                                            generations=settings.generations),
+                                random_state=settings.seed, workers=settings.workers,
                                 progress=lambda fraction, _: report(0.9 * fraction))
     else:
-        calibrator = SurrogateCalibrator(model, max_evaluations=settings.evaluations,
-                                         seed=settings.seed, workers=settings.workers)
+        calibrator = Calibrator(model, search=SurrogateSearch(max_evaluations=settings.evaluations),
+                                random_state=settings.seed, workers=settings.workers)
     calibrator.fit(windows)
     calibrator.save(out / "params.json")
     report(0.9)
@@ -518,8 +517,8 @@ def _table7_stage(model: FullOrderModel, plant: _PlantData, settings: DemoSettin
     def fit(setting: dict[str, object]) -> Calibrator:
         key = tuple(sorted(setting.items()))
         if key not in fitted:
-            fitted[key] = Calibrator(model, seed=settings.seed, workers=workers,
-                                     **setting).fit(windows)
+            fitted[key] = Calibrator(model, search=GeneticSearch(**setting),
+                                     random_state=settings.seed, workers=workers).fit(windows)
             report(len(fitted) / runs)
         return fitted[key]
 
@@ -562,15 +561,16 @@ def _rom_stage(spec: TurbineSpec, mesh: object, params: ModelParameters,
 def _sensitivity_stage(model: FullOrderModel, plant: _PlantData, params: ModelParameters,
                        settings: DemoSettings, out: Path,
                        report: Callable[[float], None]) -> list[Section]:
-    sobol = sobol_indices(model, plant.ramp, n_base=settings.sobol_n_base, seed=settings.seed,
+    sobol = sobol_indices(model, plant.ramp, n_base=settings.sobol_n_base,
+                          random_state=settings.seed,
                           evaluator=make_evaluator(settings.workers, None),
                           progress=lambda fraction, _: report(0.8 * fraction))
     sobol_png = sobol.figure(out / "sobol_indices.png")
     hold = plant.holds["50 % load"].ffill().bfill()
     noise = noise_propagation(model, hold, params, repeats=settings.noise_repeats,
-                              seed=settings.seed)
+                              random_state=settings.seed)
     noise_png = noise_figure(model, hold, out / "noise_propagation.png", params,
-                             seed=settings.seed)
+                             random_state=settings.seed)
     report(1.0)
     return [
         TableSection("sobol_indices", sobol.table().reset_index(),

@@ -37,6 +37,7 @@ from steamtwin.model.parameters import (
 )
 from steamtwin.model.sensor_setup import SensorSetup, sensor_setup
 from steamtwin.model.simulator import INPUT_SIGNALS
+from steamtwin.progress import ProgressCallback
 from steamtwin.rom.romfile import BladeRom
 from steamtwin.spec import TurbineSpec
 from steamtwin.spec.fingerprint import (
@@ -59,8 +60,6 @@ __all__ = ["Twin", "TwinError", "monitoring_model", "sensor_model"]
 
 STEADY_TOLERANCE = 0.02
 """± fraction of rated load of a steady hold (validation's automatic windows)."""
-PRESSURE_WITNESS = "control_stage_pressure"
-"""The pressure a calibration adds to the fitted temperatures when every file maps it."""
 
 
 class Twin:
@@ -78,7 +77,8 @@ class Twin:
     ``calibrator_``, ``windows_`` (the :class:`~steamtwin.calibration.windowset.WindowSet`),
     ``model_`` (the FOM read through the plant's sensors), ``sensors_``,
     ``initial_rmse_`` (K, the empirical parameters on the same windows); after
-    :meth:`build_rom` ``rom_``; after :meth:`validate` ``validation_`` (the report).
+    :meth:`calibrate_online` ``online_``; after :meth:`build_rom` ``rom_``; after
+    :meth:`validate` ``validation_`` (the report).
     In use, fitted or given: :attr:`parameters`, :attr:`intervals`, :attr:`offsets`,
     :attr:`blade_rom`; the provenance: :attr:`steps`.
     """
@@ -174,8 +174,8 @@ class Twin:
                   sensor_bias: bool = False,
                   priors: Mapping[str, ParameterPrior] | None = DEFAULT_PRIORS,
                   population: int = 50, generations: int = 200, max_evaluations: int = 400,
-                  seed: int = 0, workers: int | None = None, scheduler: Any = None,
-                  progress: Callable[[float, str], None] | None = None,
+                  random_state: int = 0, workers: int | None = None, scheduler: Any = None,
+                  progress: ProgressCallback | None = None,
                   checkpoint: str | Path | None = None, resume: bool = False) -> Twin:
         """Calibrate the flow, friction and heat-transfer coefficients jointly over one or
         several cleaned histories (:func:`steamtwin.load_history`); returns the twin.
@@ -189,18 +189,18 @@ class Twin:
         every history maps it). ``sensor_bias``: integrate out each thermocouple's constant
         bias (IEC 60584-1 class 1). ``method``: ``"ga"`` (population × generations; a
         ``checkpoint`` file, ``resume``) or ``"surrogate"`` (≤ ``max_evaluations`` model runs).
-        ``priors`` None: plain RMSE fit, no intervals. Same ``seed``, same result.
+        ``priors`` None: plain RMSE fit, no intervals. Same ``random_state``, same result.
+        The calibrator (:class:`~steamtwin.calibration.calibrator.Calibrator`) is
+        ``calibrator_``.
         """
-        from steamtwin.calibration import Calibrator
-        from steamtwin.calibration.objective import DEFAULT_SENSORS, THERMOCOUPLE_BIAS
-        from steamtwin.calibration.surrogate import SurrogateCalibrator
-        from steamtwin.calibration.tracking import TYPICAL_INSTRUMENT_ERROR
-        from steamtwin.calibration.windowset import (
-            WindowSource,
-            joint_window_set,
-            measurement_sigma,
+        from steamtwin.calibration import (
+            Calibrator,
+            GeneticSearch,
+            ObjectiveSettings,
+            SurrogateSearch,
         )
-        from steamtwin.dcs.windows import parse_window
+        from steamtwin.calibration.histories import calibration_window_set
+        from steamtwin.calibration.settings import THERMOCOUPLE_BIAS
 
         if method not in ("ga", "surrogate"):
             raise ValueError(f"method must be 'ga' or 'surrogate' (got {method!r})")
@@ -211,48 +211,26 @@ class Twin:
             raise ValueError("calibrate: no history given")
         for item in histories:
             _check_history(item, "calibrate")
-        sources = []
-        for item in histories:
-            signals = item.tag_map.signals.values()
-            sigma = measurement_sigma({s.signal: s.noise_si for s in signals},
-                                      {s.signal: s.resolution_si for s in signals})
-            sources.append(WindowSource(item.historian.source, item.data, sigma or None))
-        if pressure_witness is None:
-            pressure_witness = all(PRESSURE_WITNESS in s.data.columns for s in sources)
-        sensors: tuple[str, ...] = DEFAULT_SENSORS
-        if pressure_witness:
-            for item, source in zip(histories, sources, strict=True):
-                if PRESSURE_WITNESS not in source.data.columns:
-                    raise ValueError(f"--pressure-witness: {source.name} has no "
-                                     f"{PRESSURE_WITNESS} (map it in {item.tag_map.source})")
-            typical = {PRESSURE_WITNESS: TYPICAL_INSTRUMENT_ERROR[PRESSURE_WITNESS]}
-            sensors = (*DEFAULT_SENSORS, PRESSURE_WITNESS)
-            sources = [dataclasses.replace(s, sigma={**typical, **(s.sigma or {})})
-                       for s in sources]
-        given = [parse_window(w) if isinstance(w, str) else w for w in windows]
-        window_set = joint_window_set(sources, self.spec.design.generator_power, given=given,
-                                      ramps=ramps, min_steady_s=min_steady_s,
-                                      max_steady_s=max(max_steady_s, min_steady_s))
+        search = (SurrogateSearch(max_evaluations=max_evaluations, population=population)
+                  if method == "surrogate" else
+                  GeneticSearch(population=population, generations=generations,
+                                checkpoint=checkpoint))
+        window_set, sensors = calibration_window_set(
+            histories, self.spec.design.generator_power, windows=windows, ramps=ramps,
+            min_steady_s=min_steady_s, max_steady_s=max_steady_s,
+            pressure_witness=pressure_witness)
         model = sensor_model(self.spec, histories)
         _ = model.design_  # the first run compiles the kernels
-        settings: dict[str, Any] = {
-            "population": population, "seed": seed, "workers": workers,
-            "scheduler": scheduler, "priors": priors, "sensors": sensors,
-            "sensor_bias": THERMOCOUPLE_BIAS if sensor_bias else None}
-        calibrator: Calibrator | SurrogateCalibrator
-        if method == "surrogate":
-            calibrator = SurrogateCalibrator(model, max_evaluations=max_evaluations,
-                                             progress=progress, **settings)
-        else:
-            calibrator = Calibrator(model, generations=generations, progress=progress,
-                                    checkpoint=checkpoint, **settings)
+        objective = ObjectiveSettings(
+            sensors=sensors, priors=priors,
+            sensor_bias=THERMOCOUPLE_BIAS if sensor_bias else None)
+        calibrator = Calibrator(model, objective=objective, search=search,
+                                random_state=random_state, workers=workers,
+                                scheduler=scheduler, progress=progress)
         initial = Calibrator(model, workers=1).rmse(window_set, ModelParameters())
-        if method == "surrogate":
-            calibrator.fit(window_set)
-        else:
-            calibrator.fit(window_set, resume=resume)
+        calibrator.fit(window_set, resume=resume)
         self.calibrator_ = calibrator
-        self.calibration_settings_ = {**settings, "generations": generations}
+        self._ga_settings = {"population": population, "generations": generations}
         self.windows_ = window_set
         self.model_ = model
         self.sensors_ = sensors
@@ -260,9 +238,9 @@ class Twin:
         self.params_ = calibrator.params_
         self.sensor_offsets_ = dict(calibrator.sensor_offsets_)
         self._record(_step(
-            "calibrate", method=method, data=[s.name for s in sources],
+            "calibrate", method=method, data=[h.historian.source for h in histories],
             windows=len(window_set), samples=int(sum(len(w.data) for w in window_set)),
-            sensors=list(sensors), sensor_bias=sensor_bias, seed=seed,
+            sensors=list(sensors), sensor_bias=sensor_bias, random_state=random_state,
             population=population, generations=generations if method == "ga" else None,
             max_evaluations=max_evaluations if method == "surrogate" else None,
             evaluations=int(calibrator.n_evaluations_), rmse_K=float(calibrator.rmse_),
@@ -270,7 +248,7 @@ class Twin:
         return self
 
     def calibration_report(self, folder: str | Path, *, sensitivity: bool = False,
-                           progress: Callable[[str], None] | None = None) -> list[Path]:
+                           progress: ProgressCallback | None = None) -> list[Path]:
         """Write the calibration's result files into ``folder``; returns their paths.
 
         Table 6 (RMSE per load band before/after, with the instruments' error; the parameter
@@ -279,7 +257,7 @@ class Twin:
         with ``sensitivity``, Table 7 (nine more calibrations with the GA settings varied;
         ``progress(message)`` names it).
         """
-        from steamtwin.calibration import Calibrator
+        from steamtwin.calibration import Calibrator, GeneticSearch
         from steamtwin.calibration.report import (
             band_rmse_table,
             convergence_figure,
@@ -301,7 +279,7 @@ class Twin:
         if calibrator.posterior_ is not None:
             written.append(folder / "table6_parameters.csv")
             parameter_table(calibrator.posterior_).to_csv(written[-1])
-        if isinstance(calibrator, Calibrator):
+        if isinstance(calibrator.search_strategy, GeneticSearch):
             written.append(convergence_figure(calibrator.history_,
                                               folder / "figure7_convergence.png"))
         loads = [abs(float(w["load"].mean()) / rated - 0.5) if "load" in w.columns else 0.0
@@ -315,12 +293,62 @@ class Twin:
             calibrator.identifiability_.to_csv(written[-1])
         if sensitivity:
             if progress is not None:
-                progress("Table 7: GA settings varied")
-            table7 = ga_sensitivity_table(lambda s: Calibrator(model, **s).fit(window_set),
-                                          self.calibration_settings_)
+                progress(0.0, "Table 7: GA settings varied")
+            table7 = ga_sensitivity_table(
+                lambda s: Calibrator(model, objective=calibrator.objective,
+                                     search=GeneticSearch(**s),
+                                     random_state=calibrator.random_state,
+                                     workers=calibrator.workers,
+                                     scheduler=calibrator.scheduler).fit(window_set),
+                self._ga_settings)
             written.append(folder / "table7_ga_sensitivity.csv")
             table7.to_csv(written[-1], index=False)
         return written
+
+    def calibrate_online(self, history: History, *, method: str = "ga",
+                         store: str | Path | None = None, window_s: float = 3600.0,
+                         every_s: float = 1800.0, population: int = 20, generations: int = 8,
+                         first_generations: int = 25, random_state: int = 0,
+                         workers: int | None = 1, scheduler: Any = None,
+                         progress: ProgressCallback | None = None) -> Twin:
+        """Keep the parameters current as ``history`` streams in (replayed in one-minute
+        chunks), starting from the twin's :attr:`parameters`, the model reading through the
+        plant's sensors (:func:`sensor_model`) with the twin's sensor :attr:`offsets`; returns
+        the twin, the calibrator in ``online_`` (its ``trajectory_``, ``params_``).
+
+        ``method="ga"``: every ``every_s`` (s of data time) the GA refits the last
+        ``window_s`` (s), warm-started (:class:`~steamtwin.calibration.online.OnlineCalibrator`:
+        ``population``, ``generations``, ``first_generations``, ``random_state``, ``workers``,
+        ``scheduler``, ``progress``). ``method="track"``: a recursive Bayesian filter updated
+        every ``every_s`` of new data (:class:`~steamtwin.calibration.tracking.ParameterTracker`;
+        σ from the tag map, the default priors centred on the start). ``store``: the live
+        parameters file, replaced atomically at every change.
+        """
+        from steamtwin.calibration.online import OnlineCalibrator, ParameterStore
+        from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
+
+        if method not in ("ga", "track"):
+            raise ValueError(f"method must be 'ga' or 'track' (got {method!r})")
+        _check_history(history, "calibrate_online")
+        model = sensor_model(self.spec, [history])
+        if self.offsets:
+            model = FullOrderModel(model.spec, sensor_offsets=self.offsets,
+                                   sensor_time_constants=model.sensor_time_constants)
+        start = self.parameters
+        live = ParameterStore(start, path=store)
+        if method == "track":
+            centred = {name: dataclasses.replace(prior, center=getattr(start, name))
+                       for name, prior in DEFAULT_PRIORS.items()}
+            self.online_ = ParameterTracker(
+                model, sigma=tracking_sigma(history.tag_map), step_s=every_s, priors=centred,
+                store=live).run(history.data)
+        else:
+            self.online_ = OnlineCalibrator(
+                model, window_s=window_s, every_s=every_s, population=population,
+                generations=generations, first_generations=first_generations,
+                random_state=random_state, workers=workers, scheduler=scheduler, store=live,
+                progress=progress).run(history.data)
+        return self
 
     # -- ROM --------------------------------------------------------------------------------
 

@@ -1,4 +1,5 @@
-"""The Calibrator: improvement, elitism, reproducibility, saving, arguments, failed runs."""
+"""The Calibrator: improvement, elitism, reproducibility, saving, arguments, failed runs, and
+the numbers of the calibrators before they became one (pinned bit for bit)."""
 
 from __future__ import annotations
 
@@ -8,19 +9,27 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from steamtwin.calibration import CalibrationError, Calibrator, make_ga
+from steamtwin.calibration import (
+    CalibrationError,
+    Calibrator,
+    GeneticSearch,
+    ObjectiveSettings,
+    SurrogateSearch,
+    make_ga,
+)
+from steamtwin.calibration.online import OnlineCalibrator
 from steamtwin.model.fom import InputError
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
 
-SMALL = {"population": 8, "generations": 4, "workers": 1}
+SMALL = GeneticSearch(population=8, generations=4)
 
 
 @pytest.fixture(scope="module")
 def fitted(reference_model, low_load_window):
     messages = []
-    calibrator = Calibrator(reference_model, seed=0, progress=lambda f, m: messages.append(f),
-                            **SMALL)
+    calibrator = Calibrator(reference_model, search=SMALL, random_state=0, workers=1,
+                            progress=lambda f, m: messages.append(f))
     return calibrator.fit([low_load_window]), messages
 
 
@@ -47,7 +56,8 @@ def test_history_best_never_increases(fitted):
 
 def test_same_seed_same_history_different_seed_different(linear_simulator, low_load_window):
     def history(seed: int) -> pd.DataFrame:
-        return Calibrator(linear_simulator, seed=seed, **SMALL).fit([low_load_window]).history_
+        return Calibrator(linear_simulator, search=SMALL, random_state=seed,
+                          workers=1).fit([low_load_window]).history_
 
     pd.testing.assert_frame_equal(history(1), history(1))
     assert not history(1).equals(history(2))
@@ -65,12 +75,14 @@ def test_unfitted_save_and_bad_settings(linear_simulator, low_load_window, tmp_p
     with pytest.raises(RuntimeError, match="not fitted"):
         Calibrator(linear_simulator).save(tmp_path / "p.json")
     with pytest.raises(ValueError, match="generations"):
-        Calibrator(linear_simulator, generations=0).fit([low_load_window])
+        GeneticSearch(generations=0)
+    with pytest.raises(TypeError, match="search must be"):
+        Calibrator(linear_simulator, search={"generations": 10}).fit([low_load_window])
 
 
 # -- arguments: one message per argument, naming it and its range, before any work ------------
 
-BAD_ARGUMENTS = [
+BAD_SEARCH = [
     ({"population": 0}, r"^population must be an integer ≥ 2 \(got 0\)$"),
     ({"population": 1, "tournament_size": 3}, r"^population must be an integer ≥ 2 \(got 1\)$"),
     ({"population": 2.5}, r"^population must be an integer ≥ 2 \(got 2\.5\)$"),
@@ -87,24 +99,48 @@ BAD_ARGUMENTS = [
     ({"mutation_probability": float("nan")}, r"^mutation_probability must be a number within"),
     ({"crossover_eta": 0.0}, r"^crossover_eta must be a finite number > 0 \(got 0\.0\)$"),
     ({"mutation_eta": float("inf")}, r"^mutation_eta must be a finite number > 0 \(got inf\)$"),
-    ({"seed": -1}, r"^seed must be an integer ≥ 0 \(got -1\)$"),
+]
+
+BAD_OBJECTIVE = [
     ({"max_input_gap_s": -5.0}, r"^max_input_gap_s must be a number ≥ 0 s \(got -5\.0\)$"),
     ({"min_samples": 0}, r"^min_samples must be an integer ≥ 1 \(got 0\)$"),
+    ({"sensors": ()}, r"^sensors must be a non-empty list of distinct signal names$"),
+    ({"sensors": "hp_exhaust_temperature"}, r"^sensors must be a list of signal names"),
+    ({"weights": (1.0, -1.0, 1.0)}, r"^weights must be finite, ≥ 0 and not all zero$"),
+    ({"weights": {"load": 1.0}}, r"^weights for unselected sensor\(s\) \['load'\]$"),
+    ({"bounds": {"flow_coefficient": (1.2, 1.1)}}, r"^bounds\['flow_coefficient'\]"),
+    ({"priors": {"flow_coefficient": None}}, r"^priors: give one per parameter"),
+    ({"sigma": {"hp_exhaust_temperature": 0.0}}, r"^sigma: measurement errors σ must be"),
+    ({"sensor_bias": "typeK"}, r"^sensor_bias must be None, 'thermocouple' or a mapping"),
+    ({"sensor_bias": {"load": 1.0}}, r"^sensor_bias: expected β ≥ 0 K for selected sensors"),
+    ({"tempering": 0.0}, r"^tempering must be a number in \(0, 1\] or 'auto' \(got 0\.0\)$"),
 ]
 
 
-@pytest.mark.parametrize(("arguments", "message"), BAD_ARGUMENTS)
-def test_each_bad_argument_is_named_with_its_range(linear_simulator, arguments, message):
-    # an empty window list would be refused too: the argument is checked first, before any work
+@pytest.mark.parametrize(("arguments", "message"), BAD_SEARCH)
+def test_each_bad_search_argument_is_named_with_its_range(arguments, message):
     with pytest.raises(ValueError, match=message):
-        Calibrator(linear_simulator, workers=1, **arguments).fit([])
+        GeneticSearch(**arguments)
+
+
+@pytest.mark.parametrize(("arguments", "message"), BAD_OBJECTIVE)
+def test_each_bad_objective_setting_is_named_with_its_range(arguments, message):
+    with pytest.raises(ValueError, match=message):
+        ObjectiveSettings(**arguments)
+
+
+@pytest.mark.parametrize("random_state", [-1, 1.5, True, None])
+def test_bad_random_state_is_named_before_any_work(linear_simulator, random_state):
+    # an empty window list would be refused too: the argument is checked first, before any work
+    with pytest.raises(ValueError, match=r"^random_state must be an integer ≥ 0 \(got "):
+        Calibrator(linear_simulator, workers=1, random_state=random_state).fit([])
 
 
 @given(population=st.integers(-10**6, 1), tournament_size=st.integers(-10, 10**6))
 def test_population_below_two_names_population_whatever_the_tournament(population,
                                                                        tournament_size):
     with pytest.raises(ValueError) as error:
-        Calibrator(None, population=population, tournament_size=tournament_size).fit([])
+        GeneticSearch(population=population, tournament_size=tournament_size)
     assert str(error.value) == f"population must be an integer ≥ 2 (got {population})"
 
 
@@ -153,8 +189,8 @@ class _RejectsEverything(_FarOff):
                 r"temperatures may be in another unit"),
 ])
 def test_no_finite_rmse_is_a_calibration_error(simulator, message, linear_window, tmp_path):
-    calibrator = Calibrator(simulator, population=4, generations=3, workers=1,
-                            checkpoint=tmp_path / "run.checkpoint")
+    search = GeneticSearch(population=4, generations=3, checkpoint=tmp_path / "run.checkpoint")
+    calibrator = Calibrator(simulator, search=search, workers=1)
     with pytest.raises(CalibrationError, match=message):
         calibrator.fit([linear_window])
     assert issubclass(CalibrationError, ValueError)
@@ -163,5 +199,61 @@ def test_no_finite_rmse_is_a_calibration_error(simulator, message, linear_window
         calibrator.save(tmp_path / "params.json")
     # resuming the failed run's checkpoint fails the same way
     with pytest.raises(CalibrationError, match=message):
-        Calibrator(simulator, population=4, generations=3, workers=1,
-                   checkpoint=tmp_path / "run.checkpoint").fit([linear_window], resume=True)
+        Calibrator(simulator, search=search, workers=1).fit([linear_window], resume=True)
+
+
+# -- one calibrator, same numbers: pinned against the three calibrators it replaced ------------
+# Recorded on 2026-11-27 with the separate Calibrator, SurrogateCalibrator and OnlineCalibrator
+# (commit cb06cd0), same settings and seeds: float.hex of the results, so bit for bit.
+
+def _hex(params: ModelParameters) -> list[str]:
+    return [float(v).hex() for v in (params.flow_coefficient, params.friction_coefficient,
+                                      params.heat_transfer_coefficient)]
+
+
+def test_ga_gives_todays_numbers_bit_for_bit(linear_simulator, linear_window):
+    ga = Calibrator(linear_simulator, search=GeneticSearch(population=8, generations=5),
+                    random_state=3, workers=1).fit([linear_window])
+    assert _hex(ga.params_) == ["0x1.0577266cd222bp+0", "0x1.05867f718fc93p+0",
+                                "0x1.224cc7a206252p-1"]
+    assert (ga.rmse_.hex(), ga.score_.hex()) == ("0x1.472bff4cb3e07p+0",
+                                                 "0x1.4a0128b5007e5p+0")
+    assert ga.n_evaluations_ == 40
+    plain = Calibrator(linear_simulator, objective=ObjectiveSettings(priors=None),
+                       search=GeneticSearch(population=8, generations=5,
+                                            mutation_probability=0.5, crossover_eta=10.0,
+                                            tournament_size=3),
+                       random_state=3, workers=1).fit([linear_window])
+    assert (plain.params_.flow_coefficient.hex(), plain.rmse_.hex()) == (
+        "0x1.06e5e28ff3db2p+0", "0x1.3bf47cdab36e4p+0")
+    assert plain.samples_ is None and plain.population_.shape == (8, 3)
+
+
+def test_surrogate_gives_todays_numbers_bit_for_bit(linear_simulator, linear_window):
+    search = SurrogateSearch(initial_samples=12, infill_per_round=3, max_evaluations=24,
+                             population=10, generations=10)
+    surrogate = Calibrator(linear_simulator, search=search, random_state=1,
+                           workers=1).fit([linear_window])
+    assert _hex(surrogate.params_) == ["0x1.07c9539f15626p+0", "0x1.24ef5c6d2b234p+0",
+                                       "0x1.2238dd4d02dc8p+0"]
+    assert (surrogate.rmse_.hex(), surrogate.score_.hex()) == ("0x1.3ca0e7e8200bep+0",
+                                                               "0x1.3d4bfb9381fe7p+0")
+    assert surrogate.n_evaluations_ == 24 and len(surrogate.samples_) == 24
+    assert surrogate.population_ is None
+
+
+FLOW_TRAJECTORY = ["0x1.080e33614b25bp+0", "0x1.07ae57725934ap+0"]
+RMSE_TRAJECTORY = ["0x1.315edfd666602p+0", "0x1.26cba7179ebdcp+0"]
+
+
+def test_online_calibrator_gives_todays_trajectory(linear_simulator, linear_window):
+    data = pd.concat([linear_window.set_axis(linear_window.index + pd.Timedelta(seconds=120 * k))
+                      for k in range(6)])
+    online = OnlineCalibrator(linear_simulator, window_s=240.0, every_s=240.0, population=6,
+                              generations=2, first_generations=3, random_state=2
+                              ).run(data, chunk_s=60.0)
+    trajectory = online.trajectory_
+    assert online.n_evaluations_ == 32 and len(trajectory) == 2
+    assert (trajectory["error"] == "").all()
+    assert [v.hex() for v in trajectory["flow_coefficient"]] == FLOW_TRAJECTORY
+    assert [v.hex() for v in trajectory["rmse"]] == RMSE_TRAJECTORY

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import dataclasses
 import json
 import pathlib
 import pickle
@@ -14,11 +15,16 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from steamtwin.calibration import Calibrator, CheckpointError
-from steamtwin.calibration.calibrator import HISTORY_COLUMNS
-from steamtwin.calibration.checkpoint import CHECKPOINT_FORMAT, load_checkpoint, run_fingerprint
+from steamtwin.calibration import Calibrator, CheckpointError, GeneticSearch
+from steamtwin.calibration.checkpoint import CHECKPOINT_FORMAT, load_checkpoint
+from steamtwin.calibration.search import HISTORY_COLUMNS
 
-SETTINGS = {"population": 8, "generations": 6, "seed": 3, "workers": 1}
+SEARCH = GeneticSearch(population=8, generations=6)
+
+
+def _calibrator(simulator, checkpoint=None, progress=None, random_state=3) -> Calibrator:
+    return Calibrator(simulator, search=dataclasses.replace(SEARCH, checkpoint=checkpoint),
+                      random_state=random_state, workers=1, progress=progress)
 
 
 class _Interrupted(Exception):
@@ -27,7 +33,7 @@ class _Interrupted(Exception):
 
 def _stop_after(generation: int):
     def progress(fraction: float, message: str) -> None:
-        if fraction >= generation / SETTINGS["generations"] - 1e-12:
+        if fraction >= generation / SEARCH.generations - 1e-12:
             raise _Interrupted
     return progress
 
@@ -43,7 +49,7 @@ def _same_result(a: Calibrator, b: Calibrator) -> None:
 
 @pytest.fixture(scope="module")
 def whole(linear_simulator, linear_window) -> Calibrator:
-    return Calibrator(linear_simulator, **SETTINGS).fit([linear_window])
+    return _calibrator(linear_simulator).fit([linear_window])
 
 
 @pytest.fixture(scope="module")
@@ -51,8 +57,7 @@ def written(linear_simulator, linear_window, tmp_path_factory) -> Path:
     """A checkpoint left by a run stopped after generation 3 (of 6)."""
     path = tmp_path_factory.mktemp("checkpoint") / "run.checkpoint"
     with pytest.raises(_Interrupted):
-        Calibrator(linear_simulator, checkpoint=path, progress=_stop_after(3),
-                   **SETTINGS).fit([linear_window])
+        _calibrator(linear_simulator, path, progress=_stop_after(3)).fit([linear_window])
     return path
 
 
@@ -62,15 +67,12 @@ def test_resume_from_any_generation_equals_the_uninterrupted_run(linear_simulato
                                                                  stop):
     path = tmp_path / "run.checkpoint"
     with pytest.raises(_Interrupted):
-        Calibrator(linear_simulator, checkpoint=path, progress=_stop_after(stop),
-                   **SETTINGS).fit([linear_window])
-    resumed = Calibrator(linear_simulator, checkpoint=path, **SETTINGS).fit(
-        [linear_window], resume=True)
+        _calibrator(linear_simulator, path, progress=_stop_after(stop)).fit([linear_window])
+    resumed = _calibrator(linear_simulator, path).fit([linear_window], resume=True)
     _same_result(whole, resumed)
     assert whole.n_penalised_ > 0  # the run exercised the penalty and its counters
     # and again from the finished run's own checkpoint: its result, no further work
-    again = Calibrator(linear_simulator, checkpoint=path, **SETTINGS).fit(
-        [linear_window], resume=True)
+    again = _calibrator(linear_simulator, path).fit([linear_window], resume=True)
     _same_result(whole, again)
 
 
@@ -78,7 +80,7 @@ def test_checkpoint_is_a_json_document_of_data(written):
     document = json.loads(written.read_text(encoding="utf-8"))
     assert document["format"] == CHECKPOINT_FORMAT
     assert document["generation"] == 3 and len(document["history"]) == 3
-    assert len(document["population"]["X"]) == SETTINGS["population"]
+    assert len(document["population"]["X"]) == SEARCH.population
     assert document["random_state"]["bit_generator"] == "PCG64"
     assert not list(written.parent.glob(".*.tmp"))  # the temporary file was renamed
 
@@ -102,8 +104,7 @@ def test_a_planted_pickle_is_refused_and_never_run(linear_simulator, linear_wind
     planted.write_bytes(pickle.dumps({"format": "steamtwin-calibration-checkpoint/1",
                                       "algorithm": _Payload(marker)}))
     with pytest.raises(CheckpointError, match="not a readable calibration checkpoint") as error:
-        Calibrator(linear_simulator, checkpoint=planted, **SETTINGS).fit(
-            [linear_window], resume=True)
+        _calibrator(linear_simulator, planted).fit([linear_window], resume=True)
     assert str(planted) in str(error.value)
     assert not marker.exists()  # … and resuming never unpickled it
 
@@ -111,15 +112,15 @@ def test_a_planted_pickle_is_refused_and_never_run(linear_simulator, linear_wind
 @pytest.fixture(scope="module")
 def run(linear_simulator, linear_window):
     """The calibration problem and fingerprint of the run ``written`` belongs to."""
-    calibrator = Calibrator(linear_simulator, **SETTINGS)
-    problem = calibrator._problem([linear_window])
-    return problem, run_fingerprint(calibrator._settings(), problem.objective)
+    calibrator = _calibrator(linear_simulator)
+    problem = calibrator.problem([linear_window])
+    return problem, SEARCH.fingerprint(problem, calibrator.run_settings())
 
 
 def _load(path: Path, run):
     problem, fingerprint = run
-    return load_checkpoint(path, problem, fingerprint, population=SETTINGS["population"],
-                           generations=SETTINGS["generations"], history_columns=HISTORY_COLUMNS)
+    return load_checkpoint(path, problem, fingerprint, population=SEARCH.population,
+                           generations=SEARCH.generations, history_columns=HISTORY_COLUMNS)
 
 
 def _edit(document: dict, path: str, value: object) -> dict:
@@ -198,11 +199,9 @@ def test_a_wrong_field_is_refused_naming_file_and_field(written, run, tmp_path,
 
 def test_other_settings_are_refused(linear_simulator, linear_window, written):
     with pytest.raises(CheckpointError, match=r"'fingerprint'.*other settings or data"):
-        Calibrator(linear_simulator, checkpoint=written, **{**SETTINGS, "seed": 4}).fit(
-            [linear_window], resume=True)
+        _calibrator(linear_simulator, written, random_state=4).fit([linear_window], resume=True)
     with pytest.raises(CheckpointError, match="'fingerprint'"):
-        Calibrator(linear_simulator, checkpoint=written, **SETTINGS).fit(
-            [linear_window.iloc[1:]], resume=True)
+        _calibrator(linear_simulator, written).fit([linear_window.iloc[1:]], resume=True)
 
 
 @pytest.mark.parametrize("damage", ["truncated", "binary", "nan", "deep", "list", "empty"])
@@ -261,6 +260,6 @@ def test_any_edit_is_refused_as_a_checkpoint_error_or_gives_valid_state(written,
         return
     # accepted: then every part is what a resume can use
     assert state.X.shape == (len(state.F), 3) and np.isfinite(state.X).all()
-    assert 1 <= state.generation <= SETTINGS["generations"] == 6
+    assert 1 <= state.generation <= SEARCH.generations == 6
     assert len(state.history) == state.generation
     assert 0 <= state.penalised <= state.evaluations

@@ -6,13 +6,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from steamtwin.calibration import Calibrator
+from steamtwin.calibration import Calibrator, GeneticSearch
 from steamtwin.calibration.identifiability import (
     IdentifiabilityWarning,
     identifiability,
     integrated_time,
 )
 from steamtwin.calibration.objective import CalibrationProblem
+from steamtwin.calibration.settings import ObjectiveSettings
 from steamtwin.model.parameters import ModelParameters
 
 
@@ -45,7 +46,7 @@ class BlindToHeatTransfer:
 def test_linear_model_is_identifiable_and_standard_errors_are_right(linear_simulator):
     truth = ModelParameters(1.0, 1.2, 1.4)
     window = _noisy_window(linear_simulator, truth)
-    problem = CalibrationProblem(linear_simulator, [window])
+    problem = CalibrationProblem(linear_simulator, [window], ObjectiveSettings(priors=None))
     table = identifiability(problem.objective, truth, problem.parameter_bounds)
     assert table["identifiable"].all()
     # white noise σ = 0.3 K on a sensor with slope a K per unit: standard error σ/(a·√n)
@@ -60,7 +61,8 @@ def test_a_parameter_without_effect_is_flagged_with_a_warning(linear_simulator):
     blind = BlindToHeatTransfer(linear_simulator)
     window = _noisy_window(blind, ModelParameters(1.0, 1.2, 1.0))
     with pytest.warns(IdentifiabilityWarning, match="heat_transfer_coefficient is not identif"):
-        fitted = Calibrator(blind, population=8, generations=3, workers=1).fit([window])
+        fitted = Calibrator(blind, search=GeneticSearch(population=8, generations=3),
+                            workers=1).fit([window])
     table = fitted.identifiability_
     assert not table.loc["heat_transfer_coefficient", "identifiable"]
     assert table.loc["heat_transfer_coefficient", "rmse_rise_K"] == pytest.approx(0.0, abs=1e-9)
@@ -70,7 +72,7 @@ def test_a_parameter_without_effect_is_flagged_with_a_warning(linear_simulator):
 
 def test_plant_hold_cannot_identify_heat_transfer(reference_model, plant_run):
     hold = plant_run.measured.iloc[-600:]
-    problem = CalibrationProblem(reference_model, [hold])
+    problem = CalibrationProblem(reference_model, [hold], ObjectiveSettings(priors=None))
     table = identifiability(problem.objective, plant_run.truth.twin_equivalent,
                             problem.parameter_bounds)
     assert table.loc["flow_coefficient", "identifiable"]

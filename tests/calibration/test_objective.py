@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -10,11 +12,14 @@ from steamtwin.calibration.objective import (
     FITNESS_EPSILON,
     PENALTY_RMSE,
     CalibrationProblem,
-    check_bounds,
     fitness,
     window_rmse,
 )
+from steamtwin.calibration.settings import ObjectiveSettings, check_bounds
 from steamtwin.model.parameters import ModelParameters
+
+PLAIN = ObjectiveSettings(priors=None, min_samples=1)  # the method's RMSE, tiny windows allowed
+CASING = replace(PLAIN, sensors=["hp_inner_casing_temperature"])
 
 
 def small_window(n: int = 6) -> pd.DataFrame:
@@ -34,8 +39,8 @@ def test_objective_equals_hand_computed_rmse(linear_simulator):
     params = ModelParameters(1.0, 1.0, 1.0)  # predictions 700, 610, 655 K
     weights = {"control_stage_temperature": 2.0, "hp_exhaust_temperature": 1.0,
                "hp_inner_casing_temperature": 0.5}
-    problem = CalibrationProblem(linear_simulator, [window, window.iloc[:3]], weights=weights,
-                                 min_samples=1)
+    problem = CalibrationProblem(linear_simulator, [window, window.iloc[:3]],
+                                 replace(PLAIN, weights=weights))
     # squared errors of the valid samples, per sensor, both windows pooled
     cs = [*[0, 1, 1, 0, 4], *[0, 1]]        # NaN at row 2 excluded
     ex = [*[1, 4, 1, 0], *[1, 4, 1]]        # NaN at rows 3, 4 excluded
@@ -53,8 +58,7 @@ def test_objective_equals_hand_computed_rmse(linear_simulator):
 
 
 def test_selected_sensor_only(linear_simulator):
-    problem = CalibrationProblem(linear_simulator, [small_window()],
-                                 sensors=["hp_inner_casing_temperature"], min_samples=1)
+    problem = CalibrationProblem(linear_simulator, [small_window()], CASING)
     assert problem.rmse(ModelParameters()) == pytest.approx(np.sqrt(2 / 6))
 
 
@@ -62,7 +66,7 @@ def test_input_dropouts_filled_forward_and_counted(linear_simulator):
     window = small_window()
     window.loc[window.index[0], "main_steam_flow"] = np.nan  # leading: dropped
     window.loc[window.index[3], "main_steam_temperature"] = np.nan  # short: filled
-    problem = CalibrationProblem(linear_simulator, [window], min_samples=1)
+    problem = CalibrationProblem(linear_simulator, [window], PLAIN)
     prepared = problem.windows[0]
     assert prepared.dropped_rows == 1 and prepared.filled_rows == 1
     assert len(prepared.inputs) == 5 and not prepared.inputs.isna().any().any()
@@ -70,18 +74,18 @@ def test_input_dropouts_filled_forward_and_counted(linear_simulator):
     long_gap.index = pd.date_range("2026-03-01", periods=len(long_gap), freq="1s", tz="UTC")
     long_gap.iloc[50:150, 1] = np.nan  # main_steam_temperature missing for 100 s
     with pytest.raises(ValueError, match="missing for more than 60 s"):
-        CalibrationProblem(linear_simulator, [long_gap])
+        CalibrationProblem(linear_simulator, [long_gap], ObjectiveSettings(priors=None))
 
 
 def test_infeasible_parameters_give_the_penalty(linear_simulator):
-    problem = CalibrationProblem(linear_simulator, [small_window()], min_samples=1)
+    problem = CalibrationProblem(linear_simulator, [small_window()], PLAIN)
     assert problem.rmse(ModelParameters(flow_coefficient=0.9)) == PENALTY_RMSE
     assert problem.n_penalised == 1 and "valves" in problem.last_error
 
 
 def test_fom_rejects_low_flow_coefficient_at_rated_flow(reference_model, plant_run):
     rated = plant_run.measured.iloc[:60]  # the run starts at rated load
-    problem = CalibrationProblem(reference_model, [rated])
+    problem = CalibrationProblem(reference_model, [rated], ObjectiveSettings(priors=None))
     assert problem.rmse(ModelParameters(flow_coefficient=0.9)) == PENALTY_RMSE
     assert problem.rmse(ModelParameters()) < 10.0
     assert problem.n_penalised == 1
@@ -97,21 +101,21 @@ def test_bounds_checked():
 
 def test_window_rmse_breakdown(linear_simulator):
     window = small_window()
-    table = window_rmse(linear_simulator, [window, window.iloc[:3]], min_samples=1)
+    table = window_rmse(linear_simulator, [window, window.iloc[:3]], settings=PLAIN)
     assert list(table["samples"]) == [6, 3]
     assert table.loc[1, "rmse:control_stage_temperature"] == pytest.approx(np.sqrt(1 / 2))
     assert table.loc[0, "excluded:hp_exhaust_temperature"] == 2
     rejected = window_rmse(linear_simulator, [window], ModelParameters(flow_coefficient=0.9),
-                           min_samples=1)
+                           PLAIN)
     assert np.isnan(rejected.loc[0, "rmse"]) and "valves" in rejected.loc[0, "error"]
 
 
 def test_too_short_window_and_missing_sensor_are_named(linear_simulator):
     with pytest.raises(ValueError, match=r"window 0: 6 usable rows .* fewer than the 60"):
-        CalibrationProblem(linear_simulator, [small_window()])
+        CalibrationProblem(linear_simulator, [small_window()], ObjectiveSettings(priors=None))
     no_casing = small_window().drop(columns="hp_inner_casing_temperature")
     with pytest.raises(ValueError, match=r"window 0: lacks column\(s\) \['hp_inner_casing"):
-        CalibrationProblem(linear_simulator, [no_casing], min_samples=1)
+        CalibrationProblem(linear_simulator, [no_casing], PLAIN)
 
 
 class _SimulateOnly:
@@ -129,15 +133,16 @@ class _SimulateOnly:
 def test_fast_path_scores_as_the_protocol_does(reference_model, low_load_window):
     """The FOM's windows are checked once and run as arrays; the RMSE is the protocol's."""
     window = low_load_window.iloc[:300]
-    fast = CalibrationProblem(reference_model, [window], min_samples=1)
-    plain = CalibrationProblem(_SimulateOnly(reference_model), [window], min_samples=1)
+    fast = CalibrationProblem(reference_model, [window], PLAIN)
+    plain = CalibrationProblem(_SimulateOnly(reference_model), [window],
+                               PLAIN)
     assert fast.windows[0].checked is not None and plain.windows[0].checked is None
     params = ModelParameters(0.97, 1.3, 1.4)
     assert fast.rmse(params) == pytest.approx(plain.rmse(params), rel=1e-13)
     # inputs the model rejects keep being reported per evaluation, as through ``simulate``
     bad = window.copy()
     bad.iloc[5, bad.columns.get_loc("main_steam_flow")] = 10.0
-    rejected = CalibrationProblem(reference_model, [bad], min_samples=1)
+    rejected = CalibrationProblem(reference_model, [bad], PLAIN)
     assert rejected.windows[0].checked is None
     evaluation = rejected.objective.evaluate([1.0, 1.0, 1.0])
     assert evaluation.rmse == PENALTY_RMSE and "main_steam_flow" in evaluation.error
@@ -149,13 +154,12 @@ def test_a_pressure_or_power_witness_counts_in_the_score_not_in_the_rmse(linear_
     window = small_window().assign(hp_power=1.0e8 + 3.0e5)  # 0.3 MW off
     sensors = ["hp_inner_casing_temperature", "hp_power"]
     sigma = {"hp_inner_casing_temperature": 1.0, "hp_power": 1.0e5}
-    problem = CalibrationProblem(linear_simulator, [window], sensors=sensors, sigma=sigma,
-                                 min_samples=1)
-    alone = CalibrationProblem(linear_simulator, [window],
-                               sensors=["hp_inner_casing_temperature"], min_samples=1)
+    problem = CalibrationProblem(linear_simulator, [window],
+                                 replace(PLAIN, sensors=sensors, sigma=sigma))
+    alone = CalibrationProblem(linear_simulator, [window], CASING)
     params = ModelParameters()
     assert problem.rmse(params) == pytest.approx(alone.rmse(params), rel=1e-12)
     chi2 = 2.0 + 6 * 3.0**2  # casing: 2 K² at σ 1 K; power: six samples 3σ off
     assert problem.score(params) == pytest.approx(np.sqrt(chi2 / 12), rel=1e-12)
     with pytest.raises(ValueError, match="at least one temperature"):
-        CalibrationProblem(linear_simulator, [window], sensors=["hp_power"], min_samples=1)
+        CalibrationProblem(linear_simulator, [window], replace(PLAIN, sensors=["hp_power"]))

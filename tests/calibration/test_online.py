@@ -25,7 +25,7 @@ def test_online_calibration_tracks_fouling(reference_model, fouling_day, tmp_pat
     store = ParameterStore(path=tmp_path / "live.json")
     data = fouling_day.measured.loc["2026-03-01 10:00":"2026-03-01 13:30"]
     online = OnlineCalibrator(reference_model, window_s=1800.0, every_s=1800.0, population=10,
-                              generations=5, first_generations=15, store=store, seed=1)
+                              generations=5, first_generations=15, store=store, random_state=1)
     online.run(data, chunk_s=300.0)
     trajectory = online.trajectory_
     assert len(trajectory) == 7 and (trajectory["error"] == "").all()

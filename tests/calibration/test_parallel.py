@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import signal
 import subprocess
@@ -12,7 +13,7 @@ import time
 import pandas as pd
 import pytest
 
-from steamtwin.calibration import Calibrator
+from steamtwin.calibration import Calibrator, GeneticSearch
 from steamtwin.calibration.evaluation import (
     DaskEvaluator,
     ProcessPoolEvaluator,
@@ -20,7 +21,10 @@ from steamtwin.calibration.evaluation import (
     make_evaluator,
 )
 
-SMALL = {"population": 6, "generations": 3, "seed": 4}
+SMALL = {"search": GeneticSearch(population=6, generations=3), "random_state": 4}
+
+
+ONE_GENERATION = GeneticSearch(population=4, generations=1)
 
 
 def test_pool_and_dask_cluster_give_the_serial_result(reference_model, low_load_window):
@@ -32,13 +36,13 @@ def test_pool_and_dask_cluster_give_the_serial_result(reference_model, low_load_
                       dashboard_address=None) as cluster, Client(cluster) as client:
         dask = Calibrator(reference_model, scheduler=client, **SMALL).fit([low_load_window])
         by_address = Calibrator(reference_model, scheduler=cluster.scheduler_address,
-                                population=4, generations=1, seed=4).fit([low_load_window])
+                                search=ONE_GENERATION, random_state=4).fit([low_load_window])
     pd.testing.assert_frame_equal(serial.history_, pool.history_)
     pd.testing.assert_frame_equal(serial.history_, dask.history_)
     assert serial.params_ == pool.params_ == dask.params_
     assert serial.n_evaluations_ == dask.n_evaluations_ == 6 * 3
     assert by_address.history_["best_rmse"].iloc[0] == pytest.approx(
-        Calibrator(reference_model, workers=1, population=4, generations=1, seed=4)
+        Calibrator(reference_model, workers=1, search=ONE_GENERATION, random_state=4)
         .fit([low_load_window]).score_)
 
 
@@ -58,39 +62,39 @@ class _Interrupted(Exception):
 
 def test_resume_after_interruption_equals_uninterrupted_run(reference_model, low_load_window,
                                                             tmp_path):
-    settings = {**SMALL, "generations": 5, "workers": 1}
-    whole = Calibrator(reference_model, **settings).fit([low_load_window])
+    search = GeneticSearch(population=6, generations=5)
+    whole = Calibrator(reference_model, search=search, random_state=4,
+                       workers=1).fit([low_load_window])
     checkpoint = tmp_path / "run.ckpt"
+
+    def resumable(path, progress=None, random_state=4) -> Calibrator:
+        return Calibrator(reference_model, search=dataclasses.replace(search, checkpoint=path),
+                          random_state=random_state, workers=1, progress=progress)
 
     def stop_at_generation_2(fraction: float, message: str) -> None:
         if fraction >= 2 / 5:
             raise _Interrupted
 
     with pytest.raises(_Interrupted):
-        Calibrator(reference_model, checkpoint=checkpoint, progress=stop_at_generation_2,
-                   **settings).fit([low_load_window])
-    resumed = Calibrator(reference_model, checkpoint=checkpoint, **settings).fit(
-        [low_load_window], resume=True)
+        resumable(checkpoint, stop_at_generation_2).fit([low_load_window])
+    resumed = resumable(checkpoint).fit([low_load_window], resume=True)
     pd.testing.assert_frame_equal(whole.history_, resumed.history_)
     assert whole.params_ == resumed.params_
     assert resumed.n_evaluations_ == whole.n_evaluations_
     with pytest.raises(ValueError, match="other settings or data"):
-        Calibrator(reference_model, checkpoint=checkpoint, **{**settings, "seed": 5}).fit(
-            [low_load_window], resume=True)
+        resumable(checkpoint, random_state=5).fit([low_load_window], resume=True)
     with pytest.raises(ValueError, match="no checkpoint"):
-        Calibrator(reference_model, checkpoint=tmp_path / "none.ckpt", **settings).fit(
-            [low_load_window], resume=True)
+        resumable(tmp_path / "none.ckpt").fit([low_load_window], resume=True)
     (tmp_path / "junk.ckpt").write_bytes(b"not a pickle")
     with pytest.raises(ValueError, match="not a readable calibration checkpoint"):
-        Calibrator(reference_model, checkpoint=tmp_path / "junk.ckpt", **settings).fit(
-            [low_load_window], resume=True)
+        resumable(tmp_path / "junk.ckpt").fit([low_load_window], resume=True)
 
 
 KILLED_RUN = textwrap.dedent("""
     import sys, time
     import pandas as pd
     from pathlib import Path
-    from steamtwin.calibration import Calibrator
+    from steamtwin.calibration import Calibrator, GeneticSearch
     from steamtwin.model.fom import FullOrderModel
     from steamtwin.spec import load_spec
 
@@ -101,8 +105,9 @@ KILLED_RUN = textwrap.dedent("""
         marker.write_text(str(round(fraction * 6)))
         time.sleep(0.3)  # leave the killer time to strike mid-run
 
-    Calibrator(FullOrderModel(load_spec("reference")), population=6, generations=6, seed=4,
-               workers=1, checkpoint=sys.argv[2], progress=progress).fit([window])
+    search = GeneticSearch(population=6, generations=6, checkpoint=sys.argv[2])
+    Calibrator(FullOrderModel(load_spec("reference")), search=search, random_state=4,
+               workers=1, progress=progress).fit([window])
 """)
 
 
@@ -120,9 +125,10 @@ def test_resume_after_a_real_kill(reference_model, low_load_window, tmp_path):
     os.kill(process.pid, signal.SIGKILL)
     process.wait()
     assert checkpoint.exists()
-    settings = {"population": 6, "generations": 6, "seed": 4, "workers": 1}
-    resumed = Calibrator(reference_model, checkpoint=checkpoint, **settings).fit(
-        [low_load_window], resume=True)
-    whole = Calibrator(reference_model, **settings).fit([low_load_window])
+    search = GeneticSearch(population=6, generations=6)
+    resumed = Calibrator(reference_model, search=dataclasses.replace(search, checkpoint=checkpoint),
+                         random_state=4, workers=1).fit([low_load_window], resume=True)
+    whole = Calibrator(reference_model, search=search, random_state=4,
+                       workers=1).fit([low_load_window])
     pd.testing.assert_frame_equal(whole.history_, resumed.history_)
     assert whole.params_ == resumed.params_

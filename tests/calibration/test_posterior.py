@@ -12,12 +12,7 @@ import pytest
 from scipy.signal import lfilter
 
 from steamtwin.calibration.calibrator import Calibrator, write_parameters
-from steamtwin.calibration.objective import (
-    PARAMETER_NAMES,
-    THERMOCOUPLE_BIAS,
-    CalibrationProblem,
-    thermocouple_bias_spread,
-)
+from steamtwin.calibration.objective import CalibrationProblem
 from steamtwin.calibration.posterior import (
     InputUncertainty,
     fit_map,
@@ -25,6 +20,9 @@ from steamtwin.calibration.posterior import (
     likelihood_tempering,
     metropolis,
 )
+from steamtwin.calibration.search import GeneticSearch
+from steamtwin.calibration.settings import PARAMETER_NAMES, THERMOCOUPLE_BIAS, ObjectiveSettings
+from steamtwin.calibration.windowprep import thermocouple_bias_spread
 from steamtwin.calibration.windowset import CalibrationWindow, WindowSet
 from steamtwin.model.parameters import (
     DEFAULT_PRIORS,
@@ -41,6 +39,10 @@ SENSORS = ("control_stage_temperature", "hp_exhaust_temperature",
 RATED_FLOW = 500.0  # kg/s
 TRUTH = ModelParameters(1.03, 1.25, 1.4)
 SIGMA = {name: 0.5 for name in SENSORS}  # K
+MAP = ObjectiveSettings(sensors=SENSORS, min_samples=30)  # the default priors
+BIASED = replace(MAP, sensor_bias=THERMOCOUPLE_BIAS)
+TWO = GeneticSearch(population=6, generations=2)
+ONE = GeneticSearch(population=6, generations=1)
 
 
 class LagSimulator:
@@ -110,8 +112,7 @@ def _window_set(random: np.random.Generator, ramp: bool = True) -> WindowSet:
 
 
 def _objective(windows: WindowSet):
-    return CalibrationProblem(LagSimulator(), windows, sensors=SENSORS, priors=DEFAULT_PRIORS,
-                              min_samples=30).objective
+    return CalibrationProblem(LagSimulator(), windows, MAP).objective
 
 
 def test_map_recovers_the_parameters_and_the_intervals_cover_the_truth():
@@ -170,8 +171,7 @@ def test_duplicating_a_loads_windows_changes_nothing():
     map_one, map_two = fit_map(one), fit_map(two)
     for name in PARAMETER_NAMES:
         assert getattr(map_two, name) == pytest.approx(getattr(map_one, name), rel=1e-6)
-    unweighted = CalibrationProblem(LagSimulator(), [w.data for w in doubled], sensors=SENSORS,
-                                    priors=DEFAULT_PRIORS, min_samples=30).objective
+    unweighted = CalibrationProblem(LagSimulator(), [w.data for w in doubled], MAP).objective
     assert unweighted.evaluate([1.05, 0.8, 1.6]).value != pytest.approx(
         one.evaluate([1.05, 0.8, 1.6]).value, rel=1e-6)  # without band weights it would
 
@@ -191,7 +191,8 @@ def test_metropolis_agrees_with_laplace():
         residuals = objective.standardised_residuals(params)
         return -0.5 * (residuals @ residuals + (objective.prior_terms(x) ** 2).sum())
 
-    chain = metropolis(log_posterior, posterior.theta, posterior.covariance, 2000, seed=1)[400:]
+    chain = metropolis(log_posterior, posterior.theta, posterior.covariance, 2000,
+                       random_state=1)[400:]
     laplace_std = np.sqrt(np.diag(posterior.covariance))
     np.testing.assert_array_less(np.abs(chain.mean(axis=0) - posterior.theta), 0.3 * laplace_std)
     np.testing.assert_allclose(chain.std(axis=0), laplace_std, rtol=0.3)
@@ -256,9 +257,8 @@ def test_thermocouple_biases_are_integrated_out_and_intervals_stay_honest():
     for seed in range(draws):
         windows, bias = _biased(seed)
         for mode in covered:
-            objective = CalibrationProblem(LagSimulator(), windows, sensors=SENSORS,
-                                           priors=DEFAULT_PRIORS, min_samples=30,
-                                           sensor_bias=mode).objective
+            objective = CalibrationProblem(LagSimulator(), windows,
+                                           replace(MAP, sensor_bias=mode)).objective
             estimate = fit_map(objective)
             table = laplace_posterior(objective, estimate).table()
             for name in PARAMETER_NAMES:
@@ -316,14 +316,15 @@ def test_likelihood_tempering_is_one_for_honest_residuals_and_shrinks_otherwise(
 
 def test_calibrator_tempering_setting(tmp_path):
     windows = _window_set(np.random.default_rng(8))
-    fitted = Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=2,
-                        workers=1, min_samples=30).fit(windows)
+    fitted = Calibrator(LagSimulator(), objective=MAP, search=TWO, workers=1).fit(windows)
     assert 0.0 < fitted.tempering_ <= 1.0
-    assert Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=1, workers=1,
-                      min_samples=30, priors=None).fit(windows).tempering_ == 1.0
+    assert Calibrator(LagSimulator(), objective=replace(MAP, priors=None), search=ONE,
+                      workers=1).fit(windows).tempering_ == 1.0
+    fixed = Calibrator(LagSimulator(), objective=replace(MAP, tempering=0.25), search=ONE,
+                       workers=1).fit(windows)
+    assert fixed.tempering_ == 0.25
     with pytest.raises(ValueError, match="tempering must be"):
-        Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=1, workers=1,
-                   min_samples=30, tempering=2.0).fit(windows)
+        replace(MAP, tempering=2.0)
 
 
 def test_a_biased_input_moves_the_map_as_the_propagated_uncertainty_says():
@@ -376,8 +377,7 @@ class PickySimulator(LagSimulator):
 
 def test_an_input_the_model_rejects_moved_either_way_is_said_not_propagated():
     windows = _window_set(np.random.default_rng(5), ramp=False)
-    objective = CalibrationProblem(PickySimulator(), windows, sensors=SENSORS,
-                                   priors=DEFAULT_PRIORS, min_samples=30).objective
+    objective = CalibrationProblem(PickySimulator(), windows, MAP).objective
     estimate = fit_map(objective)
     huge = {"main_steam_flow": InputUncertainty("relative", 2.0, "test: 200 %")}
     posterior = laplace_posterior(objective, estimate, inputs=huge)
@@ -396,16 +396,14 @@ def test_sensor_offsets_recover_the_sensors_biases_and_reach_the_parameter_file(
     windows = WindowSet(tuple(replace(w, data=w.data.assign(**{
         name: w.data[name] + value for name, value in bias.items()}))
         for w in _window_set(np.random.default_rng(6), ramp=True)))
-    problem = CalibrationProblem(LagSimulator(), windows, sensors=SENSORS, priors=DEFAULT_PRIORS,
-                                 min_samples=30, sensor_bias=THERMOCOUPLE_BIAS)
+    problem = CalibrationProblem(LagSimulator(), windows, BIASED)
     offsets = problem.objective.sensor_offsets(TRUTH)
     assert offsets.keys() == bias.keys()
     for name, value in bias.items():
         assert offsets[name] == pytest.approx(value, abs=0.1)
-    assert CalibrationProblem(LagSimulator(), windows, sensors=SENSORS, min_samples=30
-                              ).objective.sensor_offsets(TRUTH) == {}
-    calibrator = Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=2,
-                            workers=1, min_samples=30, sensor_bias=THERMOCOUPLE_BIAS).fit(windows)
+    unbiased = CalibrationProblem(LagSimulator(), windows, replace(MAP, priors=None))
+    assert unbiased.objective.sensor_offsets(TRUTH) == {}
+    calibrator = Calibrator(LagSimulator(), objective=BIASED, search=TWO, workers=1).fit(windows)
     path, _ = calibrator.save(tmp_path / "params.json")
     assert sensor_offsets_from_json(path) == pytest.approx(calibrator.sensor_offsets_)
     assert set(calibrator.sensor_offsets_) == set(bias)
@@ -430,9 +428,7 @@ def _full_load_discrepancy(seed: int, kelvin: float) -> WindowSet:
 
 
 def _robust_posterior(windows: WindowSet):
-    objective = CalibrationProblem(LagSimulator(), windows, sensors=SENSORS,
-                                   priors=DEFAULT_PRIORS, min_samples=30,
-                                   sensor_bias=THERMOCOUPLE_BIAS).objective
+    objective = CalibrationProblem(LagSimulator(), windows, BIASED).objective
     estimate = fit_map(objective)
     return estimate, laplace_posterior(objective, estimate, clusters=windows.bands())
 
@@ -478,9 +474,7 @@ def test_the_band_robust_covariance_agrees_with_laplace_for_a_correct_model():
 
 def test_a_joint_calibration_writes_both_intervals_and_says_which_it_reports(tmp_path):
     windows = _full_load_discrepancy(9, 1.5)
-    calibrator = Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=2,
-                            workers=1, min_samples=30, sensor_bias=THERMOCOUPLE_BIAS
-                            ).fit(windows)
+    calibrator = Calibrator(LagSimulator(), objective=BIASED, search=TWO, workers=1).fit(windows)
     assert calibrator.posterior_.clusters == tuple(dict.fromkeys(windows.bands()))
     path, _ = calibrator.save(tmp_path / "params.json")
     section = json.loads(path.read_text())["posterior"]
@@ -496,7 +490,7 @@ def test_a_joint_calibration_writes_both_intervals_and_says_which_it_reports(tmp
         assert interval["high"] >= max(interval["laplace_high"], interval["robust_high"]) - 1e-12
     assert set(section["robust"]["map_without_band"]["ramps"]) == set(PARAMETER_NAMES)
     # plain frames carry no bands: the Laplace interval alone, as before
-    plain = Calibrator(LagSimulator(), sensors=SENSORS, population=6, generations=1,
-                       workers=1, min_samples=30).fit([w.data for w in windows])
+    plain = Calibrator(LagSimulator(), objective=MAP, search=ONE, workers=1).fit(
+        [w.data for w in windows])
     assert plain.posterior_.robust_covariance is None
     assert set(plain.posterior_.table()["method"]) == {"laplace"}

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from steamtwin.calibration import Calibrator
+from steamtwin.calibration import Calibrator, GeneticSearch
 from steamtwin.calibration.objective import window_rmse
 from steamtwin.calibration.report import (
     convergence_figure,
@@ -32,10 +32,11 @@ def test_rmse_table_pools_windows_per_condition(linear_simulator, low_load_windo
 
 def test_sensitivity_table_and_figures(linear_simulator, reference_model, low_load_window,
                                        tmp_path):
-    base = {"population": 6, "generations": 2, "seed": 0, "workers": 1}
+    base = {"population": 6, "generations": 2}
 
     def fit(settings):
-        return Calibrator(linear_simulator, **settings).fit([low_load_window])
+        return Calibrator(linear_simulator, search=GeneticSearch(**settings), random_state=0,
+                          workers=1).fit([low_load_window])
 
     table = ga_sensitivity_table(fit, base, {"population": (4, 8),
                                              "mutation_probability": (0.2,)})

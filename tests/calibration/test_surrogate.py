@@ -6,9 +6,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from steamtwin.calibration import DEFAULT_SENSORS, CalibrationError, Calibrator
-from steamtwin.calibration.objective import PARAMETER_NAMES
-from steamtwin.calibration.surrogate import SurrogateCalibrator
+from steamtwin.calibration import (
+    DEFAULT_SENSORS,
+    CalibrationError,
+    Calibrator,
+    GeneticSearch,
+    SurrogateSearch,
+)
+from steamtwin.calibration.settings import PARAMETER_NAMES
 from steamtwin.model.fom import InputError
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
@@ -16,17 +21,18 @@ from steamtwin.model.simulator import INPUT_SIGNALS
 
 @pytest.fixture(scope="module")
 def full_ga(reference_model, low_load_window):
-    return Calibrator(reference_model, population=30, generations=20, seed=2,
-                      workers=1).fit([low_load_window])
+    return Calibrator(reference_model, search=GeneticSearch(population=30, generations=20),
+                      random_state=2, workers=1).fit([low_load_window])
 
 
 def test_surrogate_matches_the_full_ga_with_a_tenth_of_the_runs(reference_model,
                                                                  low_load_window, full_ga,
                                                                  tmp_path):
     budget = full_ga.n_evaluations_ // 10
-    surrogate = SurrogateCalibrator(reference_model, initial_samples=20, infill_per_round=4,
-                                    max_evaluations=budget, seed=2, workers=1,
-                                    generations=40).fit([low_load_window])
+    search = SurrogateSearch(initial_samples=20, infill_per_round=4, max_evaluations=budget,
+                             generations=40)
+    surrogate = Calibrator(reference_model, search=search, random_state=2,
+                           workers=1).fit([low_load_window])
     assert surrogate.n_evaluations_ <= budget
     assert surrogate.rmse_ <= full_ga.rmse_ + 0.1
     # the result is a model-evaluated point, not a surrogate prediction
@@ -36,19 +42,16 @@ def test_surrogate_matches_the_full_ga_with_a_tenth_of_the_runs(reference_model,
     assert surrogate.samples_["score"].min() == surrogate.score_
     assert (np.diff(surrogate.history_["best_rmse"]) <= 0).all()
     for name in PARAMETER_NAMES:
-        assert surrogate.samples_[name].between(*full_ga._problem([low_load_window])
+        assert surrogate.samples_[name].between(*full_ga.problem([low_load_window])
                                                 .parameter_bounds[name]).all()
     params_path, _ = surrogate.save(tmp_path / "p.json")
     assert ModelParameters.from_json(params_path) == surrogate.params_
 
 
-def test_surrogate_settings_are_checked(reference_model, low_load_window):
-    with pytest.raises(ValueError, match="max_evaluations"):
-        SurrogateCalibrator(reference_model, max_evaluations=10, workers=1).fit(
-            [low_load_window])
-    with pytest.raises(ValueError, match="initial_samples"):
-        SurrogateCalibrator(reference_model, initial_samples=3, workers=1).fit(
-            [low_load_window])
+def test_surrogate_has_no_checkpoint_to_resume(linear_simulator, linear_window):
+    with pytest.raises(ValueError, match="the surrogate mode has no checkpoint"):
+        Calibrator(linear_simulator, search=SurrogateSearch(), workers=1).fit(
+            [linear_window], resume=True)
 
 
 @pytest.mark.parametrize(("arguments", "message"), [
@@ -64,14 +67,10 @@ def test_surrogate_settings_are_checked(reference_model, low_load_window):
     ({"improvement_tolerance": -0.1},
      r"^improvement_tolerance must be a finite number ≥ 0 K \(got -0\.1\)$"),
     ({"improvement_tolerance": float("nan")}, r"^improvement_tolerance must be a finite"),
-    ({"seed": -3}, r"^seed must be an integer ≥ 0 \(got -3\)$"),
-    ({"min_samples": 0}, r"^min_samples must be an integer ≥ 1 \(got 0\)$"),
 ])
-def test_each_bad_surrogate_argument_is_named_with_its_range(linear_simulator, arguments,
-                                                             message):
-    # checked before any work: the empty window list is never looked at
+def test_each_bad_surrogate_argument_is_named_with_its_range(arguments, message):
     with pytest.raises(ValueError, match=message):
-        SurrogateCalibrator(linear_simulator, workers=1, **arguments).fit([])
+        SurrogateSearch(**arguments)
 
 
 class _RejectsEverything:
@@ -85,9 +84,9 @@ class _RejectsEverything:
 
 
 def test_surrogate_with_no_finite_rmse_is_a_calibration_error(linear_window):
-    calibrator = SurrogateCalibrator(_RejectsEverything(), initial_samples=6, infill_per_round=2,
-                                     max_evaluations=12, population=6, generations=3,
-                                     workers=1)
+    search = SurrogateSearch(initial_samples=6, infill_per_round=2, max_evaluations=12,
+                             population=6, generations=3)
+    calibrator = Calibrator(_RejectsEverything(), search=search, workers=1)
     with pytest.raises(CalibrationError, match=r"^no candidate gave a finite RMSE: the model "
                        r"rejected all 12 runs \(last reason: main_steam_flow 1\.2e4 kg/s"):
         calibrator.fit([linear_window])

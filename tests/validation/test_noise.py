@@ -20,7 +20,8 @@ def ramp_inputs(reference_spec) -> pd.DataFrame:
 
 @pytest.fixture(scope="module")
 def table(reference_model, ramp_inputs) -> pd.DataFrame:
-    return noise_propagation(reference_model, ramp_inputs, ModelParameters(), repeats=2, seed=7)
+    return noise_propagation(reference_model, ramp_inputs, ModelParameters(), repeats=2,
+                             random_state=7)
 
 
 def test_steam_follows_the_inlet_and_the_metal_filters(table, reference_model):
@@ -44,11 +45,11 @@ def test_deviation_is_linear_in_sigma(table):
     assert (rms[1.0] / rms[0.5]).to_numpy() == pytest.approx(2.0, rel=0.1)
 
 
-def test_same_seed_same_table(reference_model, ramp_inputs, table):
+def test_same_random_state_same_table(reference_model, ramp_inputs, table):
     window = ramp_inputs.iloc[:300]
-    first = noise_propagation(reference_model, window, sigmas_K=(1.0,), repeats=1, seed=3)
-    again = noise_propagation(reference_model, window, sigmas_K=(1.0,), repeats=1, seed=3)
-    other = noise_propagation(reference_model, window, sigmas_K=(1.0,), repeats=1, seed=4)
+    first = noise_propagation(reference_model, window, sigmas_K=(1.0,), repeats=1, random_state=3)
+    again = noise_propagation(reference_model, window, sigmas_K=(1.0,), repeats=1, random_state=3)
+    other = noise_propagation(reference_model, window, sigmas_K=(1.0,), repeats=1, random_state=4)
     pd.testing.assert_frame_equal(first, again)
     assert not first.equals(other)
 
@@ -59,7 +60,7 @@ def test_same_seed_same_table(reference_model, ramp_inputs, table):
     ({"sigmas_K": (np.nan,)}, "sigmas_K"),
     ({"repeats": 0}, "repeats"),
     ({"repeats": 1.5}, "repeats"),
-    ({"seed": -2}, "seed"),
+    ({"random_state": -2}, "random_state"),
 ])
 def test_bad_arguments_are_named(reference_model, ramp_inputs, arguments, message):
     with pytest.raises(ValueError, match=message):

@@ -52,7 +52,7 @@ def test_additive_model_matches_the_analytic_indices():
     inputs = pd.DataFrame({name: [1.0] for name in INPUT_SIGNALS},
                           index=pd.to_datetime(["2026-01-01T00:00:00Z"]))
     bounds = {**PARAMETER_BOUNDS, "heat_transfer_coefficient": (0.8, 1.6)}
-    result = sobol_indices(AdditiveSimulator(), inputs, bounds=bounds, n_base=256, seed=3)
+    result = sobol_indices(AdditiveSimulator(), inputs, bounds=bounds, n_base=256, random_state=3)
     table = result.table()
     for output, slopes in SLOPES.items():
         exact = analytic_indices(slopes, bounds)
@@ -70,11 +70,11 @@ def test_additive_model_matches_the_analytic_indices():
     assert result.runs["heat_transfer_coefficient"].between(low, high).all()
 
 
-def test_same_seed_same_result_on_a_process_pool(hold_inputs):
-    serial = sobol_indices(AdditiveSimulator(), hold_inputs, n_base=16, seed=5)
-    pooled = sobol_indices(AdditiveSimulator(), hold_inputs, n_base=16, seed=5,
+def test_same_random_state_same_result_on_a_process_pool(hold_inputs):
+    serial = sobol_indices(AdditiveSimulator(), hold_inputs, n_base=16, random_state=5)
+    pooled = sobol_indices(AdditiveSimulator(), hold_inputs, n_base=16, random_state=5,
                            evaluator=ProcessPoolEvaluator(workers=2))
-    other = sobol_indices(AdditiveSimulator(), hold_inputs, n_base=16, seed=6)
+    other = sobol_indices(AdditiveSimulator(), hold_inputs, n_base=16, random_state=6)
     pd.testing.assert_frame_equal(serial.table(), pooled.table())
     pd.testing.assert_frame_equal(serial.runs, pooled.runs)
     assert not serial.runs.equals(other.runs)
@@ -99,7 +99,7 @@ def test_on_a_ramp_heat_transfer_drives_the_metal_lag(reference_model, reference
     load = ramp_profile(0.8, 0.4, 0.03, hold_before_s=60.0, hold_after_s=600.0,
                         step_seconds=5.0)
     inputs = load_profile_inputs(reference_spec, load, step_seconds=5.0)
-    result = sobol_indices(reference_model, inputs, n_base=32, seed=1)
+    result = sobol_indices(reference_model, inputs, n_base=32, random_state=1)
     table = result.table()
     lag = table.loc[("hp_inner_casing_temperature", "lag_rms", "heat_transfer_coefficient")]
     assert lag["ST"] > 0.1 and lag["ST"] > lag["ST_conf"]
@@ -119,7 +119,7 @@ def test_on_a_ramp_heat_transfer_drives_the_metal_lag(reference_model, reference
     ({"bounds": {"friction_coefficient": (2.0, 0.5)}}, "low < high"),
     ({"bounds": {"flow_coefficient": (0.8, 1.0)}}, "physical bounds"),
     ({"bounds": {"fouling": (0.0, 1.0)}}, "unknown parameter"),
-    ({"seed": -1}, "seed"),
+    ({"random_state": -1}, "random_state"),
 ])
 def test_bad_arguments_are_named(hold_inputs, arguments, message):
     with pytest.raises(ValueError, match=message):

@@ -31,8 +31,8 @@ from pymoo.operators.mutation.pm import PM
 from pymoo.operators.sampling.rnd import FloatRandomSampling
 from pymoo.operators.selection.tournament import TournamentSelection, compare
 
-__all__ = ["RemutationRepair", "check_ga_settings", "make_ga", "polynomial_perturbation",
-           "tournament_by_fitness"]
+__all__ = ["RemutationRepair", "check_ga_settings", "check_integer", "make_ga",
+           "polynomial_perturbation", "tournament_by_fitness"]
 
 
 def tournament_by_fitness(pop: Population, P: np.ndarray,
@@ -78,7 +78,7 @@ class RemutationRepair(Repair):
         super().__init__()
         if not (_is_real(eta) and math.isfinite(eta) and eta > 0):
             raise ValueError(f"eta must be a finite number > 0 (got {eta!r})")
-        _check_integer("max_tries", max_tries, 1)
+        check_integer("max_tries", max_tries, 1)
         self.eta = float(eta)
         self.max_tries = int(max_tries)
         self.n_out_of_bounds = 0
@@ -116,7 +116,8 @@ class RemutationRepair(Repair):
         return values
 
 
-def _check_integer(name: str, value: object, low: int, high: int | None = None) -> None:
+def check_integer(name: str, value: object, low: int, high: int | None = None) -> None:
+    """ValueError naming ``name`` unless ``value`` is an integer ≥ ``low`` (and ≤ ``high``)."""
     allowed = f"within [{low}, {high}]" if high is not None else f"≥ {low}"
     if (isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low
             or (high is not None and value > high)):
@@ -137,9 +138,9 @@ def check_ga_settings(n_var: int, *, population: int = 50, crossover_probability
     probabilities within [0, 1] (``mutation_probability`` may be None: 1/n_var), the
     distribution indices ``crossover_eta`` and ``mutation_eta`` finite and > 0.
     """
-    _check_integer("n_var", n_var, 1)
-    _check_integer("population", population, 2)
-    _check_integer("tournament_size", tournament_size, 2, int(population))
+    check_integer("n_var", n_var, 1)
+    check_integer("population", population, 2)
+    check_integer("tournament_size", tournament_size, 2, int(population))
     probabilities = [("crossover_probability", crossover_probability)]
     if mutation_probability is not None:
         probabilities.append(("mutation_probability", mutation_probability))

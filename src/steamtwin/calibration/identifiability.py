@@ -24,13 +24,9 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from steamtwin.calibration.objective import (
-    PARAMETER_NAMES,
-    PENALTY_RMSE,
-    CalibrationProblem,
-    Objective,
-    predict_window,
-)
+from steamtwin.calibration.objective import PENALTY_RMSE, CalibrationProblem, Objective
+from steamtwin.calibration.settings import PARAMETER_NAMES
+from steamtwin.calibration.windowprep import predict_window
 from steamtwin.model.parameters import ModelParameters
 
 __all__ = [

@@ -58,41 +58,27 @@ import numpy as np
 import pandas as pd
 from pymoo.core.problem import Problem
 
+from steamtwin.calibration.settings import PARAMETER_NAMES, ObjectiveSettings, check_bounds
+from steamtwin.calibration.windowprep import (
+    PreparedWindow,
+    predict_window,
+    prepare_window,
+    squared_errors,
+    with_bias_spread,
+)
 from steamtwin.dcs.signals import SIGNALS
-from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters, ParameterPrior
+from steamtwin.model.parameters import ModelParameters, ParameterPrior
 from steamtwin.model.simulator import Simulator
 
 __all__ = [
-    "DEFAULT_SENSORS",
     "FITNESS_EPSILON",
-    "MAX_INPUT_GAP_S",
-    "MIN_WINDOW_SAMPLES",
-    "PARAMETER_NAMES",
     "PENALTY_RMSE",
-    "THERMOCOUPLE_BIAS",
     "CalibrationProblem",
     "Evaluation",
     "Objective",
-    "PreparedWindow",
-    "check_bounds",
-    "checked_inputs",
     "fitness",
-    "predict_window",
-    "prepare_window",
-    "squared_errors",
-    "thermocouple_bias_spread",
     "window_rmse",
 ]
-
-DEFAULT_SENSORS: tuple[str, ...] = (
-    "control_stage_temperature",
-    "hp_exhaust_temperature",
-    "hp_inner_casing_temperature",
-)
-"""Measured temperatures (K) the method fits against."""
-
-PARAMETER_NAMES: tuple[str, ...] = tuple(PARAMETER_BOUNDS)
-"""Decision variables, in this order: the three :class:`ModelParameters` fields."""
 
 PENALTY_RMSE = 1.0e3
 """Objective (K) of a candidate the simulator rejects (see the module docstring)."""
@@ -100,175 +86,12 @@ PENALTY_RMSE = 1.0e3
 FITNESS_EPSILON = 1.0e-6
 """ε (K) in the method's fitness ``1 / (RMSE + ε)``."""
 
-MAX_INPUT_GAP_S = 60.0
-"""Longest input dropout (s) filled forward; longer ones are an error."""
-
-MIN_WINDOW_SAMPLES = 60
-"""Fewest usable rows a window may have. The RMSE of n samples of noise σ has a standard error
-of about σ/√(2n) (the chi distribution's spread); 60 samples keep it under 10 % of σ."""
-
 
 def fitness(rmse: float | np.ndarray) -> float | np.ndarray:
     """The method's fitness ``1 / (RMSE + ε)`` (1/K) of an RMSE in K."""
     value = 1.0 / (np.asarray(rmse, dtype=float) + FITNESS_EPSILON)
     return float(value) if value.ndim == 0 else value
 
-
-def check_bounds(bounds: Mapping[str, tuple[float, float]] | None
-                 ) -> dict[str, tuple[float, float]]:
-    """Search bounds per parameter: ``bounds`` (partial allowed) within PARAMETER_BOUNDS."""
-    result = dict(PARAMETER_BOUNDS)
-    for name, pair in (bounds or {}).items():
-        if name not in PARAMETER_BOUNDS:
-            raise ValueError(f"bounds: unknown parameter {name!r}; known: {list(PARAMETER_NAMES)}")
-        low, high = (float(v) for v in pair)
-        phys_low, phys_high = PARAMETER_BOUNDS[name]
-        if not phys_low <= low < high <= phys_high:
-            raise ValueError(
-                f"bounds[{name!r}] = ({low}, {high}) must satisfy {phys_low} ≤ low < high ≤ "
-                f"{phys_high} (the physical bounds)"
-            )
-        result[name] = (low, high)
-    return result
-
-
-@dataclass(frozen=True)
-class PreparedWindow:
-    """One measured window ready for evaluation.
-
-    ``inputs``: the simulator's input columns (SI) after dropping/filling; ``measured``:
-    (n, n_sensors) measured temperatures (K), NaN where excluded; ``filled_rows``: rows with a
-    forward-filled input; ``dropped_rows``: leading rows dropped; ``excluded``: NaN measured
-    samples per sensor; ``checked``: the inputs as the simulator's ``check_inputs`` returned
-    them, when it has that fast path (see :func:`predict_window`), else None; ``weight``: the
-    weight ω of each of its samples (dimensionless); ``sigma``: measurement error σ per sensor
-    (K), None for 1 K each; ``group``: its instrument set (windows of one file share the
-    sensors' biases); ``bias_spread``: prior σ β of each sensor's bias (K; 0 or None: none).
-    """
-
-    inputs: pd.DataFrame
-    measured: np.ndarray
-    filled_rows: int
-    dropped_rows: int
-    excluded: tuple[int, ...]
-    checked: object = None
-    weight: float = 1.0
-    sigma: np.ndarray | None = None
-    group: int = 0
-    bias_spread: np.ndarray | None = None
-
-
-def _seconds(index: pd.Index) -> np.ndarray:
-    if isinstance(index, pd.DatetimeIndex):
-        return (index - index[0]).total_seconds().to_numpy(dtype=float)
-    if isinstance(index, pd.TimedeltaIndex):
-        return index.total_seconds().to_numpy(dtype=float)
-    return np.asarray(index, dtype=float)
-
-
-def prepare_window(window: pd.DataFrame, simulator: Simulator, sensors: Sequence[str],
-                   max_input_gap_s: float = MAX_INPUT_GAP_S, name: str = "window",
-                   min_samples: int = MIN_WINDOW_SAMPLES) -> PreparedWindow:
-    """Select, check and gap-fill one window (see the module docstring for the NaN policy)."""
-    if not isinstance(window, pd.DataFrame) or window.empty:
-        raise ValueError(f"{name}: expected a non-empty DataFrame of canonical SI signals")
-    needed = [*simulator.input_signals, *sensors]
-    missing = [column for column in needed if column not in window.columns]
-    if missing:
-        raise ValueError(f"{name}: lacks column(s) {missing}")
-    inputs = window[list(simulator.input_signals)].apply(pd.to_numeric, errors="coerce")
-    complete = inputs.notna().all(axis=1).to_numpy()
-    if not complete.any():
-        raise ValueError(f"{name}: no row has every input {list(simulator.input_signals)}")
-    first = int(np.argmax(complete))
-    inputs = inputs.iloc[first:]
-    if len(inputs) < min_samples:
-        raise ValueError(
-            f"{name}: {len(inputs)} usable rows ({window.index[first]} … {window.index[-1]}), "
-            f"fewer than the {min_samples} a calibration window needs; take a longer window")
-    seconds = _seconds(inputs.index)
-    for column in inputs.columns:
-        valid = inputs[column].notna().to_numpy()
-        last_valid = pd.Series(np.where(valid, seconds, np.nan)).ffill().to_numpy()
-        gap = seconds - last_valid
-        too_long = np.flatnonzero(gap > max_input_gap_s)
-        if too_long.size:
-            row = int(too_long[0])
-            raise ValueError(
-                f"{name}: input {column!r} is missing for more than {max_input_gap_s:g} s at "
-                f"{inputs.index[row]}; split the window around the dropout"
-            )
-    filled_rows = int((~inputs.notna().all(axis=1)).sum())
-    inputs = inputs.ffill()
-    measured = window[list(sensors)].iloc[first:].apply(pd.to_numeric, errors="coerce")
-    values = measured.to_numpy(dtype=float, copy=True)
-    values[~np.isfinite(values)] = np.nan
-    excluded = tuple(int(n) for n in np.isnan(values).sum(axis=0))
-    empty = [s for s, n in zip(sensors, excluded, strict=True) if n == len(values)]
-    if empty:
-        raise ValueError(f"{name}: sensor(s) {empty} have no valid measured sample")
-    return PreparedWindow(inputs=inputs, measured=values, filled_rows=filled_rows,
-                          dropped_rows=first, excluded=excluded,
-                          checked=checked_inputs(simulator, inputs))
-
-
-def checked_inputs(simulator: Simulator, inputs: pd.DataFrame) -> object:
-    """The simulator's checked form of ``inputs`` (None without the fast path, or when it
-    rejects them: every evaluation then reports the rejection through ``simulate``)."""
-    check = getattr(simulator, "check_inputs", None)
-    if check is None or not hasattr(simulator, "simulate_checked"):
-        return None
-    try:
-        return check(inputs)
-    except ValueError:
-        return None
-
-
-def predict_window(simulator: Simulator, prepared: PreparedWindow, params: ModelParameters,
-                   sensors: Sequence[str]) -> np.ndarray:
-    """Predicted ``sensors`` (samples, sensors; K) on one window.
-
-    A simulator may offer ``check_inputs(inputs)`` and ``simulate_checked(checked, params,
-    signals)`` (as :class:`~steamtwin.model.fom.FullOrderModel` does): the window's inputs are
-    then checked once, not at every one of a calibration's thousands of runs, and no DataFrame
-    is built; otherwise ``simulate`` is called.
-    """
-    if prepared.checked is not None:
-        return simulator.simulate_checked(prepared.checked, params, sensors)
-    simulated = simulator.simulate(prepared.inputs, params)
-    missing = [s for s in sensors if s not in simulated.columns]
-    if missing:
-        raise KeyError(f"the simulator does not predict {missing}")
-    return simulated[list(sensors)].to_numpy(dtype=float)
-
-
-def squared_errors(prepared: PreparedWindow, predicted: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """Per-sensor sum of squared errors (K²) and valid-sample counts of ``predicted``
-    (samples, sensors; K, as :func:`predict_window` returns); ValueError on NaN output."""
-    valid = ~np.isnan(prepared.measured)
-    if not np.isfinite(predicted[valid]).all():
-        raise ValueError("the simulator returned non-finite temperatures")
-    error = np.where(valid, predicted - np.where(valid, prepared.measured, 0.0), 0.0)
-    return (error**2).sum(axis=0), valid.sum(axis=0)
-
-
-def _weights(sensors: Sequence[str], weights: Mapping[str, float] | Sequence[float] | None
-             ) -> np.ndarray:
-    if weights is None:
-        result = np.ones(len(sensors))
-    elif isinstance(weights, Mapping):
-        unknown = set(weights) - set(sensors)
-        if unknown:
-            raise ValueError(f"weights for unselected sensor(s) {sorted(unknown)}")
-        result = np.array([float(weights.get(s, 1.0)) for s in sensors])
-    else:
-        result = np.asarray(weights, dtype=float)
-        if result.shape != (len(sensors),):
-            raise ValueError(f"expected {len(sensors)} weights, got {len(result)}")
-    if not (np.isfinite(result).all() and (result >= 0).all() and result.sum() > 0):
-        raise ValueError("weights must be finite, ≥ 0 and not all zero")
-    return result
 
 
 @dataclass(frozen=True)
@@ -438,32 +261,27 @@ class CalibrationProblem(Problem):
 
     ``windows``: DataFrames (weight 1 each, one instrument set) or a
     :class:`~steamtwin.calibration.windowset.WindowSet` (its load-band weights, per-window σ,
-    one instrument set per source file); ``sigma``: measurement error per sensor (K) for
-    windows that do not bring their own (default 1 K); ``priors``: name →
-    :class:`ParameterPrior` for every parameter, or None; ``sensor_bias``: None (no bias
-    terms), :data:`THERMOCOUPLE_BIAS` or sensor → β (K) (module docstring).
-    Variables ``x`` = (flow, friction, heat-transfer coefficient), dimensionless, within
-    ``bounds`` (default :data:`PARAMETER_BOUNDS`). Each generation's candidates go to
-    ``evaluator`` as one batch (see :mod:`steamtwin.calibration.evaluation`; ``None``
-    evaluates in this process). ``n_evaluations`` and ``n_penalised`` count evaluations;
-    ``last_error`` keeps the last rejection's reason.
+    one instrument set per source file); ``settings``: the objective's
+    :class:`~steamtwin.calibration.settings.ObjectiveSettings` (sensors, weights, bounds,
+    priors, σ for windows that do not bring their own, sensor biases, window policy; its
+    ``tempering`` is the calibrator's to apply, see
+    :func:`~steamtwin.calibration.calibrator.apply_tempering`). Variables ``x`` = (flow,
+    friction, heat-transfer coefficient), dimensionless, within the settings' bounds. Each
+    generation's candidates go to ``evaluator`` as one batch (see
+    :mod:`steamtwin.calibration.evaluation`; ``None`` evaluates in this process).
+    ``n_evaluations`` and ``n_penalised`` count evaluations; ``last_error`` keeps the last
+    rejection's reason.
     """
 
-    def __init__(self, simulator: Simulator, windows: Sequence[pd.DataFrame], *,
-                 bounds: Mapping[str, tuple[float, float]] | None = None,
-                 sensors: Sequence[str] = DEFAULT_SENSORS,
-                 weights: Mapping[str, float] | Sequence[float] | None = None,
-                 max_input_gap_s: float = MAX_INPUT_GAP_S, evaluator: object = None,
-                 min_samples: int = MIN_WINDOW_SAMPLES,
-                 sigma: Mapping[str, float] | None = None,
-                 priors: Mapping[str, ParameterPrior] | None = None,
-                 sensor_bias: str | Mapping[str, float] | None = None) -> None:
+    def __init__(self, simulator: Simulator, windows: Sequence[pd.DataFrame],
+                 settings: ObjectiveSettings, *, evaluator: object = None) -> None:
+        if not isinstance(settings, ObjectiveSettings):
+            raise TypeError(f"settings must be an ObjectiveSettings "
+                            f"(got {type(settings).__name__})")
         if isinstance(windows, pd.DataFrame) or len(windows) == 0:
             raise ValueError("windows must be a non-empty list of DataFrames")
         frames, names, sample_weights, sigmas, groups = _window_parts(windows)
-        sensors = tuple(sensors)
-        if not sensors or len(set(sensors)) != len(sensors):
-            raise ValueError("sensors must be a non-empty list of distinct signal names")
+        sensors = tuple(settings.sensors)
         unknown = [s for s in sensors if s not in simulator.output_signals]
         if unknown:
             raise ValueError(f"sensor(s) {unknown} are not predicted by the simulator "
@@ -472,17 +290,17 @@ class CalibrationProblem(Problem):
             raise ValueError(f"sensors {list(sensors)}: give at least one temperature; a "
                              "pressure is a witness beside them, not the calibration's target")
         prepared = [
-            replace(prepare_window(w, simulator, sensors, max_input_gap_s, name=name,
-                                   min_samples=min_samples),
-                    weight=weight, sigma=_sigma(sensors, own if own is not None else sigma,
-                                                name), group=group)
+            replace(prepare_window(w, simulator, sensors, settings.max_input_gap_s, name=name,
+                                   min_samples=settings.min_samples),
+                    weight=weight, sigma=settings.sensor_sigma(own, name), group=group)
             for w, name, weight, own, group in zip(frames, names, sample_weights, sigmas,
                                                    groups, strict=True)
         ]
-        prepared = tuple(_with_bias_spread(prepared, sensors, sensor_bias))
-        self.objective = Objective(simulator, prepared, sensors, _weights(sensors, weights),
-                                   _priors(priors))
-        self.parameter_bounds = check_bounds(bounds)
+        prepared = tuple(with_bias_spread(prepared, sensors, settings.sensor_bias))
+        self.settings = settings
+        self.objective = Objective(simulator, prepared, sensors, settings.sensor_weights(),
+                                   settings.prior_tuple())
+        self.parameter_bounds = check_bounds(settings.bounds)
         self.evaluator = evaluator
         self.n_evaluations = 0
         self.n_penalised = 0
@@ -566,96 +384,19 @@ def _window_parts(windows: object) -> tuple[list[pd.DataFrame], list[str], list[
             [None] * len(frames), [0] * len(frames))
 
 
-THERMOCOUPLE_BIAS = "thermocouple"
-"""``sensor_bias`` value: β from IEC 60584-1 class 1 for every temperature sensor (module
-docstring), and a pressure transmitter's (:data:`TRANSMITTER_BIAS_FRACTION`) for a pressure."""
-
-
-def thermocouple_bias_spread(temperature_k: float) -> float:
-    """β (K) of a class-1 thermocouple's bias at ``temperature_k`` (K): the IEC 60584-1
-    class-1 tolerance max(1.5 K, 0.004·|t °C|) read as a uniform bound, divided by √3."""
-    return max(1.5, 0.004 * abs(temperature_k - 273.15)) / np.sqrt(3.0)
-
-
-#: β of a pressure transmitter's calibration error as a fraction of its reading: IEC 60770-1
-#: accuracy class 0.1 (±0.1 %, of a span taken as the reading) read as a uniform bound, /√3.
-TRANSMITTER_BIAS_FRACTION = 0.001 / np.sqrt(3.0)
-
-
-def _bias_spread(name: str, mean_reading: float) -> float:
-    """β of a sensor's bias under the :data:`THERMOCOUPLE_BIAS` rule: a thermocouple's
-    (K), a pressure transmitter's (Pa), none for anything else."""
-    unit = SIGNALS[name].si_unit if name in SIGNALS else ""
-    if unit == "K":
-        return thermocouple_bias_spread(mean_reading)
-    if unit == "Pa":
-        return TRANSMITTER_BIAS_FRACTION * abs(mean_reading)
-    return 0.0
-
-
-def _with_bias_spread(windows: list[PreparedWindow], sensors: tuple[str, ...],
-                      sensor_bias: str | Mapping[str, float] | None) -> list[PreparedWindow]:
-    """Set each window's β per sensor: None, the thermocouple rule (from the group's mean
-    measured temperature of each temperature sensor) or a mapping sensor → β (K)."""
-    if sensor_bias is None:
-        return windows
-    if isinstance(sensor_bias, str):
-        if sensor_bias != THERMOCOUPLE_BIAS:
-            raise ValueError(f"sensor_bias must be None, {THERMOCOUPLE_BIAS!r} or a mapping "
-                             f"sensor → β in K (got {sensor_bias!r})")
-        spread: dict[int, np.ndarray] = {}
-        for group in {w.group for w in windows}:
-            measured = np.vstack([w.measured for w in windows if w.group == group])
-            spread[group] = np.array([
-                _bias_spread(name, float(np.nanmean(measured[:, j])))
-                for j, name in enumerate(sensors)])
-        return [replace(w, bias_spread=spread[w.group]) for w in windows]
-    unknown = sorted(set(sensor_bias) - set(sensors))
-    values = np.array([float(sensor_bias.get(name, 0.0)) for name in sensors])
-    if unknown or not (np.isfinite(values).all() and (values >= 0).all()):
-        raise ValueError(f"sensor_bias: expected β ≥ 0 K for selected sensors {list(sensors)} "
-                         f"(got {dict(sensor_bias)})")
-    return [replace(w, bias_spread=values) for w in windows]
-
-
-def _sigma(sensors: Sequence[str], sigma: Mapping[str, float] | None, name: str
-           ) -> np.ndarray | None:
-    """Per-sensor σ (K) in ``sensors`` order; 1 K for a sensor not given; None if none given."""
-    if sigma is None:
-        return None
-    values = np.array([float(sigma.get(s, 1.0)) for s in sensors])
-    if not (np.isfinite(values).all() and (values > 0).all()):
-        raise ValueError(f"{name}: measurement errors σ must be finite numbers > 0 K "
-                         f"(got {dict(zip(sensors, values.tolist(), strict=True))})")
-    return values
-
-
-def _priors(priors: Mapping[str, ParameterPrior] | None) -> tuple[ParameterPrior, ...] | None:
-    if priors is None:
-        return None
-    unknown = sorted(set(priors) - set(PARAMETER_NAMES))
-    missing = [n for n in PARAMETER_NAMES if n not in priors]
-    if unknown or missing:
-        raise ValueError(f"priors: give one per parameter {list(PARAMETER_NAMES)} "
-                         f"(unknown {unknown}, missing {missing})")
-    return tuple(priors[name] for name in PARAMETER_NAMES)
-
 
 def window_rmse(simulator: Simulator, windows: Sequence[pd.DataFrame],
-                params: ModelParameters | None = None, *,
-                sensors: Sequence[str] = DEFAULT_SENSORS,
-                weights: Mapping[str, float] | Sequence[float] | None = None,
-                max_input_gap_s: float = MAX_INPUT_GAP_S,
-                min_samples: int = MIN_WINDOW_SAMPLES) -> pd.DataFrame:
-    """Per-window RMSE breakdown (K) for reports.
+                params: ModelParameters | None = None,
+                settings: ObjectiveSettings | None = None) -> pd.DataFrame:
+    """Per-window RMSE breakdown (K) for reports, over ``settings``' sensors, weights and
+    window policy (default :class:`ObjectiveSettings`; priors and σ play no part here).
 
     One row per window: ``start``, ``end``, ``rmse`` (weighted, K; NaN if the simulator
     rejects the window, reason in ``error``), ``rmse:<sensor>`` (K), ``samples``,
     ``filled_rows``, ``dropped_rows`` and ``excluded:<sensor>`` (NaN measured samples).
     """
     params = params or ModelParameters()
-    problem = CalibrationProblem(simulator, windows, sensors=sensors, weights=weights,
-                                 max_input_gap_s=max_input_gap_s, min_samples=min_samples)
+    problem = CalibrationProblem(simulator, windows, settings or ObjectiveSettings())
     rows = []
     for prepared in problem.windows:
         row: dict[str, object] = {

@@ -16,7 +16,7 @@ from __future__ import annotations
 import json
 import os
 import threading
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable
 from dataclasses import asdict
 from pathlib import Path
 from typing import Any
@@ -24,19 +24,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from steamtwin.calibration.calibrator import ProgressCallback
+from steamtwin.calibration.calibrator import apply_tempering
 from steamtwin.calibration.evaluation import make_evaluator
-from steamtwin.calibration.ga import make_ga
-from steamtwin.calibration.objective import (
-    DEFAULT_SENSORS,
-    MAX_INPUT_GAP_S,
-    MIN_WINDOW_SAMPLES,
-    PARAMETER_NAMES,
-    PENALTY_RMSE,
-    CalibrationProblem,
-)
-from steamtwin.model.parameters import ModelParameters, ParameterPrior
+from steamtwin.calibration.ga import check_integer, make_ga
+from steamtwin.calibration.objective import PENALTY_RMSE, CalibrationProblem
+from steamtwin.calibration.settings import PARAMETER_NAMES, ObjectiveSettings, check_random_state
+from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import Simulator
+from steamtwin.progress import ProgressCallback
 
 __all__ = ["OnlineCalibrator", "ParameterStore", "append_chunk", "replay_chunks"]
 
@@ -110,45 +105,33 @@ class OnlineCalibrator:
     warm-started ones. After :meth:`update`/:meth:`run`: ``trajectory_`` (one row per update,
     indexed by the window's end: the three parameters, ``rmse`` (K) of the new set and
     ``rmse_previous`` (K) of the set it replaced on the same window, ``evaluations``,
-    ``error``), ``params_`` (current), ``n_evaluations_``. ``priors``, ``sigma`` and
-    ``sensor_bias`` as for :class:`~steamtwin.calibration.Calibrator` (default None here: each
-    update fits the plain RMSE, as before; with priors every update is a MAP fit and a
-    parameter the last window cannot see stays near its prior instead of wandering; ``rmse``
-    and ``rmse_previous`` of the trajectory are then the posterior scores the update compared).
+    ``error``), ``params_`` (current), ``n_evaluations_``. ``objective``: the objective's
+    :class:`~steamtwin.calibration.settings.ObjectiveSettings`, as for
+    :class:`~steamtwin.calibration.calibrator.Calibrator` (default: without priors, each update
+    fits the plain RMSE; with priors every update is a MAP fit, its likelihood tempered as the
+    settings say, and a parameter the last window cannot see stays near its prior instead of
+    wandering; ``rmse`` and ``rmse_previous`` of the trajectory are then the posterior scores
+    the update compared). Update ``k`` (from 0) seeds its GA with ``random_state + k``.
     """
 
-    def __init__(self, simulator: Simulator, *, window_s: float = 3600.0,
-                 every_s: float = 1800.0, population: int = 20, generations: int = 8,
-                 first_generations: int = 25,
-                 bounds: Mapping[str, tuple[float, float]] | None = None,
-                 sensors: Sequence[str] = DEFAULT_SENSORS,
-                 weights: Mapping[str, float] | Sequence[float] | None = None, seed: int = 0,
+    def __init__(self, simulator: Simulator, *, objective: ObjectiveSettings | None = None,
+                 window_s: float = 3600.0, every_s: float = 1800.0, population: int = 20,
+                 generations: int = 8, first_generations: int = 25, random_state: int = 0,
                  workers: int | None = 1, scheduler: Any = None,
-                 store: ParameterStore | None = None, progress: ProgressCallback | None = None,
-                 max_input_gap_s: float = MAX_INPUT_GAP_S,
-                 min_samples: int = MIN_WINDOW_SAMPLES,
-                 priors: Mapping[str, ParameterPrior] | None = None,
-                 sigma: Mapping[str, float] | None = None,
-                 sensor_bias: str | Mapping[str, float] | None = None) -> None:
+                 store: ParameterStore | None = None,
+                 progress: ProgressCallback | None = None) -> None:
         self.simulator = simulator
+        self.objective = objective
         self.window_s = window_s
         self.every_s = every_s
         self.population = population
         self.generations = generations
         self.first_generations = first_generations
-        self.bounds = bounds
-        self.sensors = sensors
-        self.weights = weights
-        self.seed = seed
+        self.random_state = random_state
         self.workers = workers
         self.scheduler = scheduler
         self.store = store
         self.progress = progress
-        self.max_input_gap_s = max_input_gap_s
-        self.min_samples = min_samples
-        self.priors = priors
-        self.sigma = sigma
-        self.sensor_bias = sensor_bias
 
     # -- state ------------------------------------------------------------------------------
 
@@ -158,9 +141,13 @@ class OnlineCalibrator:
             if not (isinstance(value, int | float) and np.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive number of seconds (got {value!r})")
         for name, low in (("population", 2), ("generations", 1), ("first_generations", 1)):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < low:
-                raise ValueError(f"{name} must be an integer ≥ {low} (got {value!r})")
+            check_integer(name, getattr(self, name), low)
+        self._random_state = check_random_state(self.random_state)
+        objective = self.objective
+        if not isinstance(objective, ObjectiveSettings | None):
+            raise TypeError(f"OnlineCalibrator: objective must be ObjectiveSettings or None "
+                            f"(got {type(objective).__name__})")
+        self._settings = ObjectiveSettings(priors=None) if objective is None else objective
         self.store_ = self.store if self.store is not None else ParameterStore()
         self.store_.swap(self.store_.get())  # the live file exists from the start
         self._buffer = pd.DataFrame()
@@ -218,11 +205,8 @@ class OnlineCalibrator:
         row: dict[str, object] = {"time": end, "error": ""}
         current = self.store_.get()
         try:
-            problem = CalibrationProblem(self.simulator, [data], bounds=self.bounds,
-                                         sensors=self.sensors, weights=self.weights,
-                                         max_input_gap_s=self.max_input_gap_s,
-                                         min_samples=self.min_samples, sigma=self.sigma,
-                                         priors=self.priors, sensor_bias=self.sensor_bias)
+            problem = CalibrationProblem(self.simulator, [data], self._settings)
+            apply_tempering(problem)
         except ValueError as error:
             return {**row, **asdict(current), "rmse": np.nan, "rmse_previous": np.nan,
                     "evaluations": 0, "error": str(error)}
@@ -232,7 +216,7 @@ class OnlineCalibrator:
                             initial_population=start)
         generations = self.first_generations if first else self.generations
         algorithm.setup(problem, termination=("n_gen", generations),
-                        seed=int(self.seed) + len(self._rows), verbose=False)
+                        seed=self._random_state + len(self._rows), verbose=False)
         evaluator = make_evaluator(self.workers, self.scheduler)
         evaluator.start(problem.objective)
         problem.evaluator = evaluator

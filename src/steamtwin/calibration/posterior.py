@@ -1,6 +1,10 @@
 """Parameter uncertainty: the Laplace (Gauss–Newton) posterior at the MAP, a Gauss–Newton MAP
 fit, and a random-walk Metropolis check.
 
+(Over 500 lines for a reason: one method — the intervals of a calibration. Its parts share the
+priors' normal coordinates, the standardised residuals' Jacobian and the residual time τ, and a
+fifth of the module is this docstring, the method's statement with its sources.)
+
 Coordinates
     Each parameter is handled in its prior's normal coordinate θ (x for a normal prior, ln x
     for a log-normal one), where the prior is N(m, s²); intervals are computed there and mapped
@@ -100,9 +104,9 @@ from scipy.optimize import least_squares
 from scipy.stats import t as student_t
 
 from steamtwin.calibration.identifiability import integrated_time
-from steamtwin.calibration.objective import (
-    PARAMETER_NAMES,
-    Objective,
+from steamtwin.calibration.objective import Objective
+from steamtwin.calibration.settings import PARAMETER_NAMES
+from steamtwin.calibration.windowprep import (
     checked_inputs,
     predict_window,
     thermocouple_bias_spread,
@@ -556,11 +560,11 @@ def fit_map(objective: Objective, start: ModelParameters | None = None,
 
 
 def metropolis(log_posterior: Callable[[np.ndarray], float], start: np.ndarray,
-               covariance: np.ndarray, n_steps: int, *, seed: int = 0) -> np.ndarray:
+               covariance: np.ndarray, n_steps: int, *, random_state: int = 0) -> np.ndarray:
     """Random-walk Metropolis chain (n_steps, d) from ``start`` with proposal covariance
     (2.38²/d)·``covariance`` (module docstring); ``log_posterior`` returns −inf outside the
     support."""
-    random = np.random.default_rng(seed)
+    random = np.random.default_rng(random_state)
     d = len(start)
     factor = np.linalg.cholesky(2.38**2 / d * np.asarray(covariance, dtype=float))
     chain = np.empty((n_steps, d))

@@ -19,14 +19,15 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from steamtwin.calibration.objective import DEFAULT_SENSORS, window_rmse
+from steamtwin.calibration.objective import window_rmse
 from steamtwin.calibration.posterior import Posterior
+from steamtwin.calibration.settings import DEFAULT_SENSORS, ObjectiveSettings
 from steamtwin.calibration.windowset import WindowSet
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import Simulator
 
 __all__ = ["band_rmse_table", "convergence_figure", "ga_sensitivity_table", "parameter_table",
-           "rmse_table", "temperature_comparison_figure", "trajectory_figure"]
+           "rmse_table", "temperature_comparison_figure", "trajectory_figure", "write_trajectory"]
 
 _LABELS = {"control_stage_temperature": "control-stage steam",
            "hp_exhaust_temperature": "HP-exhaust steam",
@@ -40,12 +41,11 @@ def rmse_table(simulator: Simulator, conditions: Mapping[str, Sequence[pd.DataFr
 
     ``conditions`` maps a name (e.g. "30 % load") to its windows; per-sensor RMSEs follow.
     """
+    settings = ObjectiveSettings(sensors=sensors, min_samples=min_samples)
     rows = []
     for name, windows in conditions.items():
-        before = window_rmse(simulator, windows, ModelParameters(), sensors=sensors,
-                             min_samples=min_samples)
-        after = window_rmse(simulator, windows, params, sensors=sensors,
-                            min_samples=min_samples)
+        before = window_rmse(simulator, windows, ModelParameters(), settings)
+        after = window_rmse(simulator, windows, params, settings)
         row: dict[str, object] = {"condition": name, "samples": int(after["samples"].sum())}
         row["rmse_empirical_K"] = _pooled(before, "rmse")
         row["rmse_calibrated_K"] = _pooled(after, "rmse")
@@ -169,6 +169,20 @@ def temperature_comparison_figure(simulator: Simulator, window: pd.DataFrame,
     figure.tight_layout()
     figure.savefig(path, dpi=120)
     return path
+
+
+def write_trajectory(trajectory: pd.DataFrame, folder: str | Path,
+                     time_zone: str | None = None) -> tuple[Path, Path]:
+    """An online calibration's trajectory as ``trajectory.csv`` and ``trajectory.png``
+    (:func:`trajectory_figure`) in ``folder``, its times converted to ``time_zone`` (the
+    data's own, e.g. the tag map's ``historian.time_zone``; None: as they are); returns both
+    paths."""
+    folder = Path(folder)
+    if time_zone:
+        trajectory = trajectory.set_axis(trajectory.index.tz_convert(time_zone))
+    table = folder / "trajectory.csv"
+    trajectory.to_csv(table)
+    return table, trajectory_figure(trajectory, folder / "trajectory.png")
 
 
 def trajectory_figure(trajectory: pd.DataFrame, path: str | Path,

@@ -20,19 +20,18 @@ ch. 3 and 7; Regis & Shoemaker 2005 for RBF surrogates):
 5. Repeat 2–4 until the best model-evaluated RMSE has improved by less than
    ``improvement_tolerance`` for ``patience`` rounds, or ``max_evaluations`` is spent.
 
-The result is always a model-evaluated point, never a surrogate prediction; ``n_evaluations_``
-is what the model was asked for. What is minimised is the calibration objective's score — the
-negative log posterior's monotone transform with the default priors (the MAP), the RMSE with
-``priors=None`` (:mod:`~steamtwin.calibration.objective`) — and the Laplace posterior at the
-result (for a ``WindowSet`` also the cluster-robust one over its load bands, the wider per
-parameter) gives the intervals, as for the GA.
+The result is always a model-evaluated point, never a surrogate prediction; the calibrator's
+``n_evaluations_`` is what the model was asked for. What is minimised is the calibration
+objective's score — the negative log posterior's monotone transform with the default priors
+(the MAP), the RMSE with ``priors=None`` (:mod:`~steamtwin.calibration.objective`) — and the
+Laplace posterior at the result (for a ``WindowSet`` also the cluster-robust one over its load
+bands, the wider per parameter) gives the intervals, as for the GA.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
-from pathlib import Path
-from typing import Any
+from collections.abc import Mapping
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -41,30 +40,13 @@ from pymoo.optimize import minimize
 from scipy.interpolate import RBFInterpolator
 from scipy.stats import qmc
 
-from steamtwin.calibration.calibrator import (
-    ProgressCallback,
-    apply_tempering,
-    check_calibration_result,
-    check_common_settings,
-    posterior_at,
-    write_parameters,
-)
-from steamtwin.calibration.evaluation import make_evaluator
-from steamtwin.calibration.ga import check_ga_settings, make_ga
-from steamtwin.calibration.identifiability import check_identifiability
-from steamtwin.calibration.objective import (
-    DEFAULT_SENSORS,
-    MAX_INPUT_GAP_S,
-    MIN_WINDOW_SAMPLES,
-    PARAMETER_NAMES,
-    PENALTY_RMSE,
-    CalibrationProblem,
-    fitness,
-)
-from steamtwin.model.parameters import DEFAULT_PRIORS, ParameterPrior
-from steamtwin.model.simulator import Simulator
+from steamtwin.calibration.ga import check_ga_settings, check_integer, make_ga
+from steamtwin.calibration.objective import PENALTY_RMSE, CalibrationProblem, fitness
+from steamtwin.calibration.search import SearchResult
+from steamtwin.calibration.settings import PARAMETER_NAMES
+from steamtwin.progress import ProgressCallback
 
-__all__ = ["SurrogateCalibrator"]
+__all__ = ["SurrogateSearch"]
 
 _MIN_SEPARATION = 1e-4  # unit-cube distance below which a candidate repeats an evaluated point
 _CANDIDATE_SEPARATION = 0.02  # between infill points of one batch (unit cube)
@@ -82,66 +64,37 @@ class _SurrogateProblem(Problem):
         out["F"] = self.surrogate(np.atleast_2d(x))[:, None]
 
 
-class SurrogateCalibrator:
-    """Calibrate with far fewer model runs: GA on an RBF surrogate with model-run infill.
-
-    Same objective (``priors``, ``sigma``, ``sensor_bias``, ``tempering``, window sets), bounds
-    and evaluators as :class:`~steamtwin.calibration.Calibrator`. After :meth:`fit`:
-    ``params_``, ``rmse_`` (K, model-evaluated), ``score_``, ``posterior_``,
-    ``sensor_offsets_`` (as :class:`~steamtwin.calibration.calibrator.Calibrator`'s),
-    ``tempering_``,
-    ``n_evaluations_`` (model runs),
-    ``history_`` (per round: model runs so far, best RMSE and fitness, the surrogate's own
-    prediction at its optimum, best parameters), ``samples_`` (every model-evaluated point and
-    its RMSE).
+@dataclass(frozen=True)
+class SurrogateSearch:
+    """Far fewer model runs: the GA on an RBF surrogate with model-run infill (module
+    docstring). ``initial_samples``: the Latin-hypercube design (None: 10 per variable);
+    ``infill_per_round``: model runs per round; ``max_evaluations``: the model-run budget;
+    ``patience`` rounds without an improvement of more than ``improvement_tolerance`` (in the
+    objective's score, K without priors) end the search; ``population`` × ``generations``: the
+    GA on the surrogate. Arguments outside their range raise ``ValueError`` naming the
+    argument, here. The result's ``history`` has one row per round (model runs so far, best
+    score and fitness, the surrogate's own prediction at its optimum, best parameters),
+    ``samples`` every model-evaluated point and its score.
     """
 
-    def __init__(self, simulator: Simulator, *,
-                 bounds: Mapping[str, tuple[float, float]] | None = None,
-                 sensors: Sequence[str] = DEFAULT_SENSORS,
-                 weights: Mapping[str, float] | Sequence[float] | None = None,
-                 initial_samples: int | None = None, infill_per_round: int = 4,
-                 max_evaluations: int = 400, patience: int = 8,
-                 improvement_tolerance: float = 0.002, population: int = 50,
-                 generations: int = 100, seed: int = 0, workers: int | None = None,
-                 scheduler: Any = None, progress: ProgressCallback | None = None,
-                 max_input_gap_s: float = MAX_INPUT_GAP_S,
-                 min_samples: int = MIN_WINDOW_SAMPLES,
-                 priors: Mapping[str, ParameterPrior] | None = DEFAULT_PRIORS,
-                 sigma: Mapping[str, float] | None = None,
-                 sensor_bias: str | Mapping[str, float] | None = None,
-                 tempering: float | str = "auto") -> None:
-        self.simulator = simulator
-        self.bounds = bounds
-        self.sensors = sensors
-        self.weights = weights
-        self.initial_samples = initial_samples
-        self.infill_per_round = infill_per_round
-        self.max_evaluations = max_evaluations
-        self.patience = patience
-        self.improvement_tolerance = improvement_tolerance
-        self.population = population
-        self.generations = generations
-        self.seed = seed
-        self.workers = workers
-        self.scheduler = scheduler
-        self.progress = progress
-        self.max_input_gap_s = max_input_gap_s
-        self.min_samples = min_samples
-        self.priors = priors
-        self.sigma = sigma
-        self.sensor_bias = sensor_bias
-        self.tempering = tempering
+    initial_samples: int | None = None
+    infill_per_round: int = 4
+    max_evaluations: int = 400
+    patience: int = 8
+    improvement_tolerance: float = 0.002
+    population: int = 50
+    generations: int = 100
 
-    def _validate(self, n_var: int) -> int:
-        """Check every argument, one message each, before any work; the initial design size."""
-        initial = 10 * n_var if self.initial_samples is None else self.initial_samples
-        for name, value, low in (("initial_samples", initial, n_var + 2),
+    mode = "surrogate"
+    """The name of the strategy in the parameters file (``calibration.mode``)."""
+
+    def __post_init__(self) -> None:
+        initial = self.design_size()
+        for name, value, low in (("initial_samples", initial, len(PARAMETER_NAMES) + 2),
                                  ("infill_per_round", self.infill_per_round, 1),
                                  ("patience", self.patience, 1),
                                  ("generations", self.generations, 1)):
-            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < low:
-                raise ValueError(f"{name} must be an integer ≥ {low} (got {value!r})")
+            check_integer(name, value, low)
         least = int(initial) + int(self.infill_per_round)
         if isinstance(self.max_evaluations, bool) or not isinstance(
                 self.max_evaluations, int | np.integer) or self.max_evaluations < least:
@@ -153,109 +106,80 @@ class SurrogateCalibrator:
                 0.0 <= tolerance < float("inf")):
             raise ValueError(f"improvement_tolerance must be a finite number ≥ 0 K "
                              f"(got {tolerance!r})")
-        check_ga_settings(n_var, population=self.population)
-        check_common_settings(seed=self.seed, max_input_gap_s=self.max_input_gap_s,
-                              min_samples=self.min_samples)
-        return int(initial)
+        check_ga_settings(len(PARAMETER_NAMES), population=self.population)
 
-    def fit(self, windows: Sequence[pd.DataFrame]) -> SurrogateCalibrator:
-        """Calibrate against measured windows (canonical SI signals); returns self.
+    def design_size(self) -> int | None:
+        """Points of the initial design: ``initial_samples``, default 10 per variable
+        (Loeppky, Sacks & Welch 2009)."""
+        return 10 * len(PARAMETER_NAMES) if self.initial_samples is None \
+            else self.initial_samples
 
-        Arguments outside their range raise ``ValueError`` naming the argument; a run in which
-        no model run gave a finite RMSE raises
-        :class:`~steamtwin.calibration.calibrator.CalibrationError`.
-        """
-        initial = self._validate(len(PARAMETER_NAMES))
-        problem = CalibrationProblem(self.simulator, windows, bounds=self.bounds,
-                                     sensors=self.sensors, weights=self.weights,
-                                     max_input_gap_s=self.max_input_gap_s,
-                                     min_samples=self.min_samples, sigma=self.sigma,
-                                     priors=self.priors, sensor_bias=self.sensor_bias)
-        self.tempering_ = apply_tempering(problem, self.tempering)
+    def record(self) -> dict[str, object]:
+        """What the parameters file records of the search."""
+        return {"initial_samples": self.initial_samples,
+                "infill_per_round": self.infill_per_round,
+                "max_evaluations": self.max_evaluations}
+
+    def run(self, problem: CalibrationProblem, *, random_state: int,
+            progress: ProgressCallback | None = None, resume: bool = False,
+            settings: Mapping[str, object] | None = None) -> SearchResult:
+        """Run the surrogate loop on ``problem`` (its evaluator started); it has no
+        checkpoint (``resume`` is refused) and no use for the calibrator's ``settings``."""
+        if resume:
+            raise ValueError("resume continues a GA run; the surrogate mode has no checkpoint")
         n_var = problem.n_var
         low, high = np.asarray(problem.xl, float), np.asarray(problem.xu, float)
-        random = np.random.default_rng(self.seed)
-        evaluator = make_evaluator(self.workers, self.scheduler)
-        evaluator.start(problem.objective)
-        problem.evaluator = evaluator
-        unit = qmc.LatinHypercube(d=n_var, seed=random).random(initial)
-        values = np.empty(0)
-        points = np.empty((0, n_var))
+        random = np.random.default_rng(random_state)
+        unit = qmc.LatinHypercube(d=n_var, seed=random).random(int(self.design_size()))
+        points, values = _evaluate(problem, unit, low, high, np.empty((0, n_var)), np.empty(0))
         rows: list[dict[str, object]] = []
-        try:
-            points, values = self._evaluate(problem, unit, low, high, points, values)
-            stale, best, round_number = 0, float(values.min()), 0
-            while points.shape[0] < self.max_evaluations and stale < self.patience:
-                round_number += 1
-                surrogate = _fit_surrogate(points, values)
-                result = minimize(
-                    _SurrogateProblem(surrogate, n_var),
-                    make_ga(n_var, population=self.population),
-                    termination=("n_gen", self.generations),
-                    seed=int(random.integers(2**31 - 1)), verbose=False)
-                budget = min(self.infill_per_round, self.max_evaluations - points.shape[0])
-                infill = _infill(result.pop.get("X"), result.pop.get("F")[:, 0], points,
-                                 values, budget, random)
-                if infill.shape[0] == 0:
-                    break  # the surrogate has nothing new to ask the model
-                points, values = self._evaluate(problem, infill, low, high, points, values)
-                improved = best - float(values.min()) > self.improvement_tolerance
-                best = min(best, float(values.min()))
-                stale = 0 if improved else stale + 1
-                rows.append(self._history_row(round_number, points, values, low, high,
-                                              float(np.exp(result.F[0]))))
-                if self.progress is not None:
-                    self.progress(min(1.0, points.shape[0] / self.max_evaluations),
-                                  f"surrogate round {round_number}: {points.shape[0]} model "
-                                  f"runs, best RMSE {best:.3f} K")
-        finally:
-            problem.evaluator = None
-            evaluator.close()
-        best_index = int(np.argmin(values))
-        best_x = low + points[best_index] * (high - low)
-        result = problem.objective.evaluate(best_x)
-        check_calibration_result(result.rmse, problem)
-        self.params_ = problem.parameters(best_x)
-        self.rmse_, self.score_ = result.rmse, result.value
-        self.posterior_ = posterior_at(problem, self.params_, result, windows)
-        self.sensor_offsets_ = problem.objective.sensor_offsets(self.params_)
-        self.n_evaluations_ = problem.n_evaluations
-        self.n_penalised_ = problem.n_penalised
-        self.history_ = pd.DataFrame(rows).set_index("round") if rows else pd.DataFrame()
-        self.samples_ = pd.DataFrame(low + points * (high - low), columns=list(PARAMETER_NAMES))
-        self.samples_["score"] = values
-        self.identifiability_ = check_identifiability(problem, self.params_, self.rmse_)
-        return self
+        stale, best, round_number = 0, float(values.min()), 0
+        while points.shape[0] < self.max_evaluations and stale < self.patience:
+            round_number += 1
+            surrogate = _fit_surrogate(points, values)
+            result = minimize(
+                _SurrogateProblem(surrogate, n_var), make_ga(n_var, population=self.population),
+                termination=("n_gen", self.generations),
+                seed=int(random.integers(2**31 - 1)), verbose=False)
+            budget = min(self.infill_per_round, self.max_evaluations - points.shape[0])
+            infill = _infill(result.pop.get("X"), result.pop.get("F")[:, 0], points, values,
+                             budget, random)
+            if infill.shape[0] == 0:
+                break  # the surrogate has nothing new to ask the model
+            points, values = _evaluate(problem, infill, low, high, points, values)
+            improved = best - float(values.min()) > self.improvement_tolerance
+            best = min(best, float(values.min()))
+            stale = 0 if improved else stale + 1
+            rows.append(_history_row(round_number, points, values, low, high,
+                                     float(np.exp(result.F[0]))))
+            if progress is not None:
+                progress(min(1.0, points.shape[0] / self.max_evaluations),
+                         f"surrogate round {round_number}: {points.shape[0]} model runs, "
+                         f"best RMSE {best:.3f} K")
+        samples = pd.DataFrame(low + points * (high - low), columns=list(PARAMETER_NAMES))
+        samples["score"] = values
+        return SearchResult(
+            x=low + points[int(np.argmin(values))] * (high - low),
+            history=pd.DataFrame(rows).set_index("round") if rows else pd.DataFrame(),
+            samples=samples)
 
-    @staticmethod
-    def _evaluate(problem: CalibrationProblem, unit: np.ndarray, low: np.ndarray,
-                  high: np.ndarray, points: np.ndarray, values: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray]:
-        rmse = problem.evaluate_candidates(low + unit * (high - low))
-        return np.vstack([points, unit]), np.concatenate([values, rmse])
 
-    @staticmethod
-    def _history_row(round_number: int, points: np.ndarray, values: np.ndarray,
-                     low: np.ndarray, high: np.ndarray, predicted: float) -> dict[str, object]:
-        best = int(np.argmin(values))
-        x = low + points[best] * (high - low)
-        return {"round": round_number, "evaluations": int(points.shape[0]),
-                "best_rmse": float(values[best]), "best_fitness": fitness(float(values[best])),
-                "surrogate_optimum_rmse": predicted,
-                **dict(zip(PARAMETER_NAMES, (float(v) for v in x), strict=True))}
+def _evaluate(problem: CalibrationProblem, unit: np.ndarray, low: np.ndarray,
+              high: np.ndarray, points: np.ndarray, values: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """The model's score at each unit-cube row of ``unit``, appended to the data so far."""
+    rmse = problem.evaluate_candidates(low + unit * (high - low))
+    return np.vstack([points, unit]), np.concatenate([values, rmse])
 
-    def save(self, path: str | Path) -> tuple[Path, Path]:
-        """Write the parameters JSON and the per-round history CSV (``<stem>.history.csv``)."""
-        if not hasattr(self, "params_"):
-            raise RuntimeError("SurrogateCalibrator is not fitted; call fit(windows) first")
-        settings = {"mode": "surrogate", "seed": self.seed,
-                    "initial_samples": self.initial_samples,
-                    "infill_per_round": self.infill_per_round,
-                    "max_evaluations": self.max_evaluations, "score": self.score_,
-                    "tempering": self.tempering_}
-        return write_parameters(path, self.params_, self.rmse_, self.sensors,
-                                self.n_evaluations_, settings, self.history_, self.priors,
-                                self.posterior_, self.sensor_offsets_)
+
+def _history_row(round_number: int, points: np.ndarray, values: np.ndarray,
+                 low: np.ndarray, high: np.ndarray, predicted: float) -> dict[str, object]:
+    best = int(np.argmin(values))
+    x = low + points[best] * (high - low)
+    return {"round": round_number, "evaluations": int(points.shape[0]),
+            "best_rmse": float(values[best]), "best_fitness": fitness(float(values[best])),
+            "surrogate_optimum_rmse": predicted,
+            **dict(zip(PARAMETER_NAMES, (float(v) for v in x), strict=True))}
 
 
 def _fit_surrogate(points: np.ndarray, values: np.ndarray) -> RBFInterpolator:

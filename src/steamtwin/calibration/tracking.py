@@ -35,17 +35,18 @@ from dataclasses import asdict
 import numpy as np
 import pandas as pd
 
-from steamtwin.calibration.objective import (
-    DEFAULT_SENSORS,
-    MAX_INPUT_GAP_S,
-    PARAMETER_NAMES,
-    CalibrationProblem,
-)
+from steamtwin.calibration.objective import CalibrationProblem
 from steamtwin.calibration.online import ParameterStore, append_chunk, replay_chunks
 from steamtwin.calibration.posterior import (
     FLOW_MEASUREMENT_UNCERTAINTY,
     fit_map,
     laplace_posterior,
+)
+from steamtwin.calibration.settings import (
+    DEFAULT_SENSORS,
+    MAX_INPUT_GAP_S,
+    PARAMETER_NAMES,
+    ObjectiveSettings,
 )
 from steamtwin.calibration.windowset import measurement_sigma
 from steamtwin.dcs.tagmap import TagMap
@@ -278,10 +279,10 @@ class ParameterTracker:
         priors = {name: self._prior(i, _HELD_SPREAD**2 if self._held[i] else self._variance[i])
                   for i, name in enumerate(PARAMETER_NAMES)}
         try:
-            problem = CalibrationProblem(self.simulator, [data], sensors=self._sensors,
-                                         sigma=self.sigma, priors=priors,
-                                         max_input_gap_s=self.max_input_gap_s,
+            settings = ObjectiveSettings(sensors=self._sensors, sigma=self.sigma,
+                                         priors=priors, max_input_gap_s=self.max_input_gap_s,
                                          min_samples=MIN_STEP_SAMPLES)
+            problem = CalibrationProblem(self.simulator, [data], settings)
             objective = problem.objective
             estimate = fit_map(objective, self._params(), priors)
             posterior = laplace_posterior(objective, estimate, priors)

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from steamtwin.calibration.objective import MAX_INPUT_GAP_S, MIN_WINDOW_SAMPLES
+from steamtwin.calibration.settings import MAX_INPUT_GAP_S, MIN_WINDOW_SAMPLES
 from steamtwin.dcs.windows import find_windows, load_fraction, select_window
 from steamtwin.model.simulator import INPUT_SIGNALS
 

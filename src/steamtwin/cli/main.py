@@ -15,7 +15,8 @@ from typing import Any
 import typer
 from typer.core import TyperGroup
 
-from steamtwin.cli.calibrate import calibrate, calibrate_online
+from steamtwin.cli.calibrate import calibrate
+from steamtwin.cli.calibrate_online import calibrate_online
 from steamtwin.cli.dcs import dcs_app
 from steamtwin.cli.demo import demo
 from steamtwin.cli.geometry import geometry_app

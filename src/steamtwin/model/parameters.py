@@ -225,7 +225,7 @@ class ModelParameters:
         The file is one JSON object in either form:
 
         * ``{"parameters": {...}, "bounds": {...}, "calibration": {...}}`` — what
-          :meth:`to_json`, calibration (``Calibrator.save``, ``SurrogateCalibrator.save``) and the
+          :meth:`to_json`, calibration (``Calibrator.save``, whatever its search) and the
           online :class:`~steamtwin.calibration.online.ParameterStore` write;
         * ``{"flow_coefficient": ..., "friction_coefficient": ...,
           "heat_transfer_coefficient": ...}`` — the coefficients at the top level, by hand.

@@ -22,7 +22,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from steamtwin.calibration.objective import prepare_window
+from steamtwin.calibration.windowprep import prepare_window
 from steamtwin.model.sensor_setup import SensorSetup
 from steamtwin.model.simulator import Simulator
 from steamtwin.rom.figure import field_comparison_figure

@@ -44,15 +44,15 @@ NOISY_INPUT = "main_steam_temperature"
 """The input the noise is added to (K)."""
 
 
-def _unit_noise(samples: int, repeats: int, seed: int) -> np.ndarray:
+def _unit_noise(samples: int, repeats: int, random_state: int) -> np.ndarray:
     """Standard-normal draws (repeats, samples), the first sample of each repeat zero."""
-    noise = np.random.default_rng(seed).standard_normal((repeats, samples))
+    noise = np.random.default_rng(random_state).standard_normal((repeats, samples))
     noise[:, 0] = 0.0
     return noise
 
 
 def _check(simulator: Simulator, inputs: pd.DataFrame, sigmas_K: Sequence[float], repeats: int,
-           seed: int) -> tuple[float, ...]:
+           random_state: int) -> tuple[float, ...]:
     if not isinstance(inputs, pd.DataFrame) or len(inputs) < 2:
         raise ValueError("inputs must be a DataFrame of canonical SI signals with ≥ 2 rows")
     if NOISY_INPUT not in simulator.input_signals or NOISY_INPUT not in inputs.columns:
@@ -61,7 +61,7 @@ def _check(simulator: Simulator, inputs: pd.DataFrame, sigmas_K: Sequence[float]
     sigmas = tuple(float(s) for s in sigmas_K)
     if not sigmas or not all(np.isfinite(s) and s > 0.0 for s in sigmas):
         raise ValueError(f"sigmas_K must be finite standard deviations > 0 K (got {sigmas_K!r})")
-    for name, value in (("repeats", repeats), ("seed", seed)):
+    for name, value in (("repeats", repeats), ("random_state", random_state)):
         if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 0:
             raise ValueError(f"{name} must be an integer ≥ 0 (got {value!r})")
     if repeats < 1:
@@ -81,20 +81,20 @@ def _deviation(simulator: Simulator, inputs: pd.DataFrame, params: ModelParamete
 def noise_propagation(simulator: Simulator, inputs: pd.DataFrame,
                       params: ModelParameters | None = None, *,
                       sigmas_K: Sequence[float] = (0.5, 1.0), repeats: int = 4,
-                      seed: int = 0) -> pd.DataFrame:
+                      random_state: int = 0) -> pd.DataFrame:
     """Deviation of every output signal when white noise of σ (K) is added to the main-steam
     temperature (see the module docstring for the method and the physics to expect).
 
     One row per (``sigma_K``, ``output``), pooled over ``repeats`` noisy runs and all samples:
     ``mean_abs_deviation``, ``max_abs_deviation`` and ``rms_deviation`` (unit of the output:
-    K, Pa, W) and ``gain`` = rms_deviation/σ (output unit per K). The same ``seed`` gives the
-    same table. Runs 1 + repeats·len(sigmas_K) simulations.
+    K, Pa, W) and ``gain`` = rms_deviation/σ (output unit per K). The same ``random_state``
+    gives the same table. Runs 1 + repeats·len(sigmas_K) simulations.
     """
-    sigmas = _check(simulator, inputs, sigmas_K, repeats, seed)
+    sigmas = _check(simulator, inputs, sigmas_K, repeats, random_state)
     params = params or ModelParameters()
     clean = simulator.simulate(inputs, params)[list(simulator.output_signals)].to_numpy(
         dtype=float)
-    unit = _unit_noise(len(inputs), int(repeats), int(seed))
+    unit = _unit_noise(len(inputs), int(repeats), int(random_state))
     rows = []
     for sigma in sigmas:
         deviation = np.concatenate([_deviation(simulator, inputs, params, clean, sigma * draw)
@@ -110,12 +110,12 @@ def noise_propagation(simulator: Simulator, inputs: pd.DataFrame,
 
 def noise_figure(simulator: Simulator, inputs: pd.DataFrame, path: str | Path,
                  params: ModelParameters | None = None, *, sigma_K: float = 1.0,
-                 minutes: float = 5.0, seed: int = 0,
+                 minutes: float = 5.0, random_state: int = 0,
                  outputs: Sequence[str] = ("hp_exhaust_temperature",
                                            "hp_inner_casing_temperature")) -> Path:
     """Write a PNG of the first ``minutes`` of ``inputs``: the main-steam temperature noise (K)
     above, the deviation of ``outputs`` (temperatures, K) from the noise-free run below."""
-    _check(simulator, inputs, (sigma_K,), 1, seed)
+    _check(simulator, inputs, (sigma_K,), 1, random_state)
     unknown = [name for name in outputs if name not in simulator.output_signals]
     if unknown or not outputs:
         raise ValueError(f"outputs must be some of {list(simulator.output_signals)} "
@@ -129,7 +129,7 @@ def noise_figure(simulator: Simulator, inputs: pd.DataFrame, path: str | Path,
     params = params or ModelParameters()
     clean = simulator.simulate(window, params)[list(simulator.output_signals)].to_numpy(
         dtype=float)
-    noise = float(sigma_K) * _unit_noise(len(window), 1, int(seed))[0]
+    noise = float(sigma_K) * _unit_noise(len(window), 1, int(random_state))[0]
     deviation = _deviation(simulator, window, params, clean, noise)
     minute = seconds[: len(window)] / 60.0
     path = Path(path)

@@ -65,11 +65,11 @@ from matplotlib.figure import Figure
 from SALib.analyze import sobol as sobol_analyze
 from SALib.sample import sobol as sobol_sample
 
-from steamtwin.calibration.calibrator import ProgressCallback
 from steamtwin.calibration.evaluation import Evaluator
-from steamtwin.calibration.objective import PARAMETER_NAMES, check_bounds
+from steamtwin.calibration.settings import PARAMETER_NAMES, check_bounds, check_random_state
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import Simulator
+from steamtwin.progress import ProgressCallback
 
 __all__ = [
     "CONF_LEVEL",
@@ -258,7 +258,7 @@ def sobol_indices(simulator: Simulator, inputs: pd.DataFrame, *,
                   outputs: Sequence[str] = DEFAULT_OUTPUTS,
                   statistics: Sequence[str] = DEFAULT_STATISTICS,
                   bounds: Mapping[str, tuple[float, float]] | None = None,
-                  n_base: int = 256, seed: int = 0, evaluator: Evaluator | None = None,
+                  n_base: int = 256, random_state: int = 0, evaluator: Evaluator | None = None,
                   progress: ProgressCallback | None = None) -> SobolResult:
     """Sobol' indices (S1, ST with intervals) of the three parameters for ``outputs``.
 
@@ -271,8 +271,8 @@ def sobol_indices(simulator: Simulator, inputs: pd.DataFrame, *,
     choose a window the whole box can run (the flow coefficient's low end cannot pass rated
     flow at full load). ``evaluator``: an unstarted evaluator from
     :mod:`steamtwin.calibration.evaluation` (process pool, Dask), started with this job and
-    closed here; default in this process. The same ``seed`` gives the same result on any
-    evaluator.
+    closed here; default in this process. The same ``random_state`` gives the same result on
+    any evaluator.
     """
     outputs = _check_choice(outputs, simulator.output_signals, "outputs")
     statistics = _check_choice(statistics, tuple(STATISTICS), "statistics")
@@ -280,8 +280,6 @@ def sobol_indices(simulator: Simulator, inputs: pd.DataFrame, *,
             or n_base & (n_base - 1)):
         raise ValueError(f"n_base must be a power of 2 ≥ 2 (the Sobol' sequence's balance "
                          f"needs it; got {n_base!r})")
-    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
-        raise ValueError(f"seed must be an integer ≥ 0 (got {seed!r})")
     limits = check_bounds(bounds)
     if not isinstance(inputs, pd.DataFrame) or inputs.empty:
         raise ValueError("inputs must be a non-empty DataFrame of canonical SI signals")
@@ -290,7 +288,7 @@ def sobol_indices(simulator: Simulator, inputs: pd.DataFrame, *,
         raise ValueError(f"inputs lack column(s) {missing}")
     problem = {"num_vars": len(PARAMETER_NAMES), "names": list(PARAMETER_NAMES),
                "bounds": [list(limits[name]) for name in PARAMETER_NAMES]}
-    rng = np.random.default_rng(int(seed))
+    rng = np.random.default_rng(check_random_state(random_state))
     samples = sobol_sample.sample(problem, int(n_base), calc_second_order=False, seed=rng)
     # SALib's analyze treats seed 0 as "no seed": draw the bootstrap's seed from 1 up
     bootstrap_seed = int(rng.integers(1, 2**31))
