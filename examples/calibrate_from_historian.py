@@ -34,7 +34,7 @@ import warnings
 from pathlib import Path
 
 import steamtwin
-from steamtwin.dcs.plant import PlantTruth, run_plant, write_plant
+from steamtwin.dcs.plant import run_plant, write_plant
 
 
 def main() -> None:
@@ -68,7 +68,7 @@ def main() -> None:
     for warning in caught:  # e.g. the identifiability check: a parameter the data cannot fix
         print(f"  note: {warning.message}")
 
-    truth = PlantTruth().parameters  # the plant's hidden parameters, for comparison only
+    truth = run.truth.parameters  # the plant's hidden parameters, for comparison only
     print(f"calibrated on {len(twin.windows_)} window(s), "
           f"RMSE {twin.initial_rmse_:.2f} K → {twin.calibrator_.rmse_:.2f} K")
     print(f"{'parameter':<28}{'value':>8}{'95 % interval':>20}{'plant truth':>13}")
