@@ -25,6 +25,9 @@ import griffe
 ROLE = re.compile(
     r":(?:py:)?(?:class|func|meth|mod|attr|data|exc|obj|const):`(?P<body>[^`]+)`")
 EXPLICIT = re.compile(r"^(?P<title>.*?)\s*<(?P<target>[^>]+)>$")
+LITERAL = re.compile(r"(?P<before>\S?)(?P<space>[ \t]*)::\n(?=[ \t]*\n)")
+"""reST's ``text::`` before a blank line and an indented block (which Markdown shows as code
+too): ``text:``; a lone ``::`` goes."""
 
 
 def _find(root: griffe.Object, path: str) -> griffe.Object | griffe.Alias | None:
@@ -87,7 +90,12 @@ def _rewrite(root: griffe.Object, scope: griffe.Object, text: str, lazy: dict[st
             return code
         return f'<autoref identifier="{resolved}" optional>{code}</autoref>'
 
-    return ROLE.sub(replace, text)
+    def literal(match: re.Match[str]) -> str:
+        if match["before"] and not match["space"]:
+            return f"{match['before']}:\n"
+        return f"{match['before']}\n"
+
+    return LITERAL.sub(literal, ROLE.sub(replace, text))
 
 
 class SphinxRoles(griffe.Extension):
