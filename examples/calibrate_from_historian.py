@@ -19,10 +19,10 @@ What it shows: the chain a user runs on their own unit's data, on data the twin 
 A 10-minute hold identifies the flow coefficient (the control-stage pressure is its witness)
 but not heat transfer, whose interval stays wide: the script says so.
 
-How long: ``--quick`` (a 15-minute hold, the last 10 minutes fitted, 40 model runs) about 15 s
-on a 2-core machine after the first run (the first compiles the model, about a minute); the
-default (a 2-hour hold, the steady hold and the ramp found automatically, 400 model runs) a few
-minutes.
+How long (CPU time, measured on a 2-core x86_64): ``--quick`` (a 15-minute hold, the last 10
+minutes fitted, 40 model runs) about 9 s once the model is compiled (the very first run
+compiles it, about a minute, and caches it); the default (a 2-hour hold, the steady hold and
+the ramp found automatically, 400 model runs) a few minutes.
 
     python examples/calibrate_from_historian.py --quick --out calibrate-output
 """

@@ -22,8 +22,9 @@ on a blade whose exact shape is known, so the reconstruction's error can be meas
 Your own scan enters at step 2 (``read_point_cloud`` reads PLY/PCD/XYZ views) or, already
 fused, at step 3.
 
-How long: ``--quick`` (20 000 scan points, 20 000 deviation samples) about 30 s on a 2-core
-machine; the default (the method's 150 000 points) a few minutes.
+How long (CPU time, measured on a 2-core x86_64): ``--quick`` (20 000 scan points, 20 000
+deviation samples) about 25 s; the default (the method's 150 000 points, 100 000 samples) about
+a minute (docs/benchmarks.md, "Geometry").
 
     python examples/reconstruct_blade.py --quick --out blade-output [--row hp5]
 """

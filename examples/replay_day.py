@@ -18,9 +18,9 @@ played as a stream, sample by sample, as ``steamtwin serve`` does with a ``repla
    control-stage and HP-exhaust temperatures with their residuals over the day, and a table
    of each monitored signal's residual RMS (``residuals.csv``; K, or Pa for the pressure).
 
-How long: ``--quick`` (the day's holds shortened to a tenth and every ramp at 5 %/min: about
-2.7 h of 1-s samples) about 15 s on a 2-core machine; the default (the full 24 h, 86 400
-samples) about a minute.
+How long (CPU time, measured on a 2-core x86_64): ``--quick`` (the day's holds shortened to a
+tenth and every ramp at 5 %/min: 2.7 h of 1-s samples) about 11 s; the default (the full
+24 h, 86 400 samples) a few minutes.
 
     python examples/replay_day.py --quick --out replay-output [--twin calibrate-output/twin]
 """
@@ -51,8 +51,8 @@ UNIT = "unit-1"
 PLOTTED = {"control_stage_temperature": "control-stage temperature",
            "hp_exhaust_temperature": "HP-exhaust temperature"}
 WARM_UP_S = 600.0
-"""Left out of the residual statistics: the stream starts the metal at the first sample's
-steady state, which the plant's metal (after its own history) is not quite in."""
+"""Left out of the residual statistics (s): the twin starts its metal and sensors in the first
+sample's steady state and needs a few minutes to settle (the figure shows it)."""
 
 
 def main() -> None:
@@ -76,7 +76,8 @@ def main() -> None:
             else steamtwin.Twin.from_spec("reference"))
     print(f"twin: {twin}")
     tag_map = load_tag_map(files["tag_map"])
-    model = monitoring_model(twin.spec, "fom", True, tag_map, twin.offsets)  # plant's sensors
+    model = monitoring_model(twin.spec, monitor="fom", sensor_lag=True, tag_map=tag_map,
+                             offsets=twin.offsets)  # the FOM read through the plant's sensors
     database = args.out / "live.duckdb"
     database.unlink(missing_ok=True)  # a rerun starts over (the twin would resume after it)
     with LiveHistorian(database) as historian:
@@ -96,7 +97,7 @@ def main() -> None:
             continue
         residual = series.loc[steady, column].dropna().to_numpy(dtype=float)
         rows.append({"signal": signal, "unit": "Pa" if signal.endswith("pressure") else "K",
-                     "samples": len(residual), "mean": residual.mean(),
+                     "samples": len(residual), "mean": float(residual.mean()),
                      "rms": float(np.sqrt(np.mean(residual**2))),
                      "max_abs": float(np.abs(residual).max())})
     table = pd.DataFrame(rows)
