@@ -16,7 +16,7 @@ on a blade whose exact shape is known, so the reconstruction's error can be meas
    B-spline surface and closed by the caps: ``blade.stl`` (binary, m, watertight).
 4. The STL's deviation from the exact blade (mean, RMS, 95th percentile, max, Hausdorff),
    the row metrics (chord, stagger, throat …) of the reconstructed sections against the exact
-   ones, and the deviation map (``deviation_map.png``) are printed and written
+   ones, and the deviation map (``deviation.png``) are printed and written
    (``deviation.json``, ``deviation.csv``).
 
 Your own scan enters at step 2 (``read_point_cloud`` reads PLY/PCD/XYZ views) or, already
@@ -94,7 +94,7 @@ def main() -> None:
               f"{row['unit']}")
     report_json, _ = write_report(fidelity, args.out / "deviation")  # .json and .csv
     print(f"deviation report: {report_json}")
-    figure = write_deviation_map(reconstruction, args.out / "deviation_map.png", blade)
+    figure = write_deviation_map(reconstruction, args.out / "deviation.png", blade)
     print(f"deviation map: {figure}")
 
 

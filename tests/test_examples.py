@@ -119,7 +119,7 @@ def test_reconstruct_blade_writes_a_watertight_stl_close_to_the_exact_blade(exam
     assert deviation["rms"] < 0.02 and deviation["hausdorff"] < 0.2  # 0.005 / 0.06 measured
     throat = next(row for row in report["metrics"] if row["metric"] == "throat")
     assert abs(throat["error"]) < 0.05  # mm; 0.002 measured
-    assert (out / "deviation_map.png").stat().st_size > 10_000
+    assert (out / "deviation.png").stat().st_size > 10_000
     assert len(read_point_cloud(out / "fused.ply")) > 5_000
 
 
