@@ -104,7 +104,7 @@ def main() -> None:
             "fitted per load": per_load})
         calibrated = {}
         for scenario in ("deep-peak-30", "deep-peak-50"):
-            hold = run_plant(scenario, seed=0, truth=truth).measured.iloc[-7200:]
+            hold = run_plant(scenario, random_state=0, truth=truth).measured.iloc[-7200:]
             start = time.perf_counter()
             ga = Calibrator(twin, population=population, generations=generations,
                             seed=0).fit([hold])

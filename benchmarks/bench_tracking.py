@@ -39,7 +39,7 @@ from steamtwin.spec import load_spec
 def track_day(truth: PlantTruth, hours: float | None, folder: Path) -> tuple[pd.DataFrame,
                                                                             pd.DataFrame]:
     """The tracker's trajectory over the plant's day and the measured load (fraction)."""
-    run = run_plant("day", hours=hours, seed=0, truth=truth)
+    run = run_plant("day", hours=hours, random_state=0, truth=truth)
     paths = write_plant(run, folder)
     history = load_history(paths["historian"], paths["tag_map"], accept_errors=True)
     spec = load_spec("reference")

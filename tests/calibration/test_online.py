@@ -18,7 +18,7 @@ def fouling_day():
     """The 'day' scenario; deposits lower the flow coefficient 0.965 → 0.93 from 11:30 to 12:00."""
     truth = PlantTruth(drift=ParameterDrift(at_hours=11.5, over_hours=0.5,
                                             target=ModelParameters(0.93, 1.3, 1.4)))
-    return run_plant("day", truth=truth, seed=2)
+    return run_plant("day", truth=truth, random_state=2)
 
 
 def test_online_calibration_tracks_fouling(reference_model, fouling_day, tmp_path):

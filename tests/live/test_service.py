@@ -26,7 +26,7 @@ QUERY = "SELECT unit, time, source, signal, value, flag FROM series ORDER BY ALL
 @pytest.fixture(scope="module")
 def plant(tmp_path_factory):
     truth = PlantTruth(faults=FaultConfig(dropout_rate_per_h=3, spike_rate_per_h=6))
-    run = run_plant("deep-peak-50", hours=0.25, seed=8, truth=truth)
+    run = run_plant("deep-peak-50", hours=0.25, random_state=8, truth=truth)
     paths = write_plant(run, tmp_path_factory.mktemp("plant"), file_format="csv")
     return run, paths
 

@@ -18,7 +18,7 @@ from steamtwin.dcs.tagmap import load_tag_map, write_tag_map
 
 @pytest.fixture(scope="module")
 def plant_files(tmp_path_factory):
-    run = run_plant("deep-peak-50", hours=0.1, seed=2)
+    run = run_plant("deep-peak-50", hours=0.1, random_state=2)
     return write_plant(run, tmp_path_factory.mktemp("plant"), file_format="csv"), run
 
 

@@ -54,7 +54,7 @@ def measured() -> pd.DataFrame:
     truth = PlantTruth(main_steam_schedule=None, reheat_schedule=None)
     parts = []
     for load, days_before in ((30, 1), (50, 0)):
-        frame = run_plant(f"deep-peak-{load}", hours=0.25, seed=load, truth=truth).measured
+        frame = run_plant(f"deep-peak-{load}", hours=0.25, random_state=load, truth=truth).measured
         parts.append(frame.set_axis(frame.index - pd.Timedelta(days=days_before)))
     return pd.concat(parts)
 

@@ -200,8 +200,6 @@ _TAG_RANGES: dict[str, tuple[float, float]] = {
     "load": (0.0, 700.0),
 }
 
-"""``progress(fraction_done, message)``, fraction in 0…1."""
-
 
 # ------------------------------------------------------------------------------------------
 # truth and structure
@@ -804,17 +802,17 @@ def plant_sensor_models(truth: PlantTruth) -> dict[str, SensorModel]:
     return models
 
 
-def run_plant(scenario: str, *, hours: float | None = None, seed: int = 0,
+def run_plant(scenario: str, *, hours: float | None = None, random_state: int = 0,
               truth: PlantTruth = PlantTruth(), progress: ProgressCallback | None = None,
               ramp_rate: float | None = None,
               instruments: pd.DataFrame | None = None,
               sensor_faults: Sequence[SensorFault] = ()) -> PlantRun:
     """Run the virtual plant through ``scenario`` (a key of :data:`SCENARIOS`).
 
-    ``hours`` overrides the long hold (h); ``seed`` seeds the instruments' generator;
+    ``hours`` overrides the long hold (h); ``random_state`` seeds the instruments' generator;
     ``ramp_rate`` (%/min, 1–5) overrides the scenario's ramps; ``instruments``: an earlier
     run's ``injected.sensors`` — the same instruments (calibration errors and drift rates) on
-    another day, with noise and faults drawn from ``seed``; ``sensor_faults``: faults
+    another day, with noise and faults drawn from ``random_state``; ``sensor_faults``: faults
     scheduled on purpose after the instruments (drift, bias step, stuck reading;
     :mod:`steamtwin.dcs.sensor_faults`), recorded in ``injected.faults``. Raises ``KeyError``
     listing the scenarios for an unknown name.
@@ -846,8 +844,9 @@ def run_plant(scenario: str, *, hours: float | None = None, seed: int = 0,
     report(0.8, "instruments")
     sensed = [name for name in KKS_TAGS if name in spec.sensors]
     true_frame = inputs.join(outputs)[sensed]
-    measurement = measure(true_frame, plant_sensor_models(truth), np.random.default_rng(seed),
-                          faults=truth.faults, instruments=instruments)
+    measurement = measure(true_frame, plant_sensor_models(truth),
+                          np.random.default_rng(random_state), faults=truth.faults,
+                          instruments=instruments)
     measured, injected = measurement.measured, measurement.injected
     if sensor_faults:
         measured, scheduled = apply_sensor_faults(measured, sensor_faults)

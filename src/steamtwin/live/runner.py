@@ -8,6 +8,7 @@ import asyncio
 import contextlib
 import dataclasses
 import logging
+import signal
 
 from steamtwin.dcs.tagmap import load_tag_map
 from steamtwin.live.config import ServiceConfig, UnitConfig
@@ -20,7 +21,7 @@ from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.rom.romfile import load_rom
 from steamtwin.spec import load_spec
 
-__all__ = ["build_unit", "run_service"]
+__all__ = ["build_unit", "run_service", "stop_on_signals"]
 
 LOG = logging.getLogger("steamtwin.live")
 
@@ -73,6 +74,18 @@ async def _run_unit(twin: LiveTwin, source: Source, stop: asyncio.Event,
              twin.name, summary.samples, summary.without_twin, summary.alarms,
              summary.findings)
     return summary
+
+
+def stop_on_signals() -> asyncio.Event:
+    """An event that SIGINT (Ctrl-C) or SIGTERM sets: the clean stop of a service run from the
+    command line. Call it inside the running event loop; where the loop takes no signal
+    handlers (Windows, a thread other than the main one) only its owner sets the event."""
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        with contextlib.suppress(NotImplementedError, RuntimeError):
+            loop.add_signal_handler(signum, stop.set)
+    return stop
 
 
 async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None
