@@ -31,7 +31,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from steamtwin.dcs.plant import ParameterDrift, PlantTruth, plant_tag_map, run_plant
+from steamtwin.dcs.plant import plant_tag_map, run_plant
+from steamtwin.dcs.plant_model import ParameterDrift, PlantTruth
 from steamtwin.dcs.sensor_faults import apply_sensor_faults, parse_sensor_fault
 from steamtwin.live.gate import StreamGate, gate_options
 from steamtwin.live.residuals import (

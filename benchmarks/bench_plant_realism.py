@@ -30,7 +30,8 @@ from scipy.optimize import least_squares
 
 from steamtwin.calibration import Calibrator
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
-from steamtwin.dcs.plant import TWIN_EQUIVALENT_LOADS, PlantTruth, plant_steady_states, run_plant
+from steamtwin.dcs.plant import run_plant
+from steamtwin.dcs.plant_model import TWIN_EQUIVALENT_LOADS, PlantTruth, plant_steady_states
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS

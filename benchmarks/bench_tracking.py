@@ -31,7 +31,8 @@ import pandas as pd
 
 from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
 from steamtwin.dcs.history import load_history
-from steamtwin.dcs.plant import ParameterDrift, PlantTruth, run_plant, write_plant
+from steamtwin.dcs.plant import run_plant, write_plant
+from steamtwin.dcs.plant_model import ParameterDrift, PlantTruth
 from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.spec import load_spec
 

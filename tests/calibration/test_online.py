@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from steamtwin.calibration.online import OnlineCalibrator, ParameterStore
-from steamtwin.dcs.plant import ParameterDrift, PlantTruth, run_plant
+from steamtwin.dcs.plant import run_plant
+from steamtwin.dcs.plant_model import ParameterDrift, PlantTruth
 from steamtwin.model.parameters import ModelParameters
 
 

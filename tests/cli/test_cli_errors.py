@@ -343,7 +343,7 @@ VALUES = ["{tags}", "{missing}", "{binary}", "{folder}", "{gbk}", "{naive}", "{e
 def _stub_the_work(monkeypatch) -> None:
     """Replace every command's expensive step by :func:`_work_started`."""
     import steamtwin.cli.demo as demo_cli
-    import steamtwin.cli.plant as plant_cli
+    import steamtwin.cli.plant_options as plant_cli
     import steamtwin.geometry.assembly as assembly
     import steamtwin.geometry.meshing as meshing
     import steamtwin.geometry.preprocess as preprocess

@@ -9,18 +9,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from steamtwin.dcs.plant import (
-    KKS_TAGS,
+from steamtwin.dcs.plant import KKS_TAGS, SCENARIOS, PlantRun, load_demand, run_plant, write_plant
+from steamtwin.dcs.plant_model import (
     PLANT_METAL_NODES,
-    SCENARIOS,
     PlantModel,
-    PlantRun,
     PlantTruth,
     generator_power,
-    load_demand,
     plant_spec,
-    run_plant,
-    write_plant,
 )
 from steamtwin.dcs.readers import read_historian
 from steamtwin.dcs.sensors import FaultConfig, default_sensor_models

@@ -8,7 +8,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from steamtwin.dcs.plant import PlantTruth, plant_tag_map, run_plant
+from steamtwin.dcs.plant import plant_tag_map, run_plant
+from steamtwin.dcs.plant_model import PlantTruth
 from steamtwin.dcs.quality import Flag, clean
 from steamtwin.dcs.sensors import FaultConfig
 from steamtwin.live.gate import StreamGate, gate_options

@@ -10,7 +10,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from steamtwin.dcs.plant import PlantTruth, plant_tag_map, run_plant, write_plant
+from steamtwin.dcs.plant import plant_tag_map, run_plant, write_plant
+from steamtwin.dcs.plant_model import PlantTruth
 from steamtwin.dcs.sensors import FaultConfig
 from steamtwin.live.gate import StreamGate, gate_options
 from steamtwin.live.historian import LiveHistorian

@@ -117,7 +117,7 @@ def test_errors_are_reported(tmp_path):
 
 
 def test_build_passes_the_accuracy_options(tmp_path, monkeypatch):
-    import steamtwin.rom.build as build_module
+    import steamtwin.rom.workflow as workflow_module
 
     seen = {}
 
@@ -125,7 +125,7 @@ def test_build_passes_the_accuracy_options(tmp_path, monkeypatch):
         seen.update(options)
         raise ValueError("stop here")
 
-    monkeypatch.setattr(build_module, "build_rom", fake_build_rom)
+    monkeypatch.setattr(workflow_module, "build_rom", fake_build_rom)
     runner = CliRunner()
     common = ["build", "--snapshots", "8", "--element-size", "0.006", "--out",
               str(tmp_path / "rom.npz")]

@@ -15,7 +15,8 @@ import typer
 from typer.testing import CliRunner
 
 from steamtwin.cli.validate import validate
-from steamtwin.dcs.plant import PlantTruth, plant_tag_map, run_plant
+from steamtwin.dcs.plant import plant_tag_map, run_plant
+from steamtwin.dcs.plant_model import PlantTruth
 from steamtwin.dcs.readers import canonical_to_historian
 from steamtwin.dcs.tagmap import TagMap, TagSpec, write_tag_map
 from steamtwin.geometry.meshing import blade_volume_mesh
