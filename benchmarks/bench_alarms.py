@@ -31,7 +31,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from steamtwin.dcs.plant import ParameterDrift, PlantTruth, plant_tag_map, run_plant
+from steamtwin.dcs.plant import plant_tag_map, run_plant
+from steamtwin.dcs.plant_model import ParameterDrift, PlantTruth
 from steamtwin.dcs.sensor_faults import apply_sensor_faults, parse_sensor_fault
 from steamtwin.live.gate import StreamGate, gate_options
 from steamtwin.live.residuals import (
@@ -133,16 +134,16 @@ def main() -> None:
     params = ModelParameters()
     cases = []
     for seed in (0, 1, 2):
-        clean = _plant(args.cache, f"clean{seed}", lambda s=seed: run_plant("day", seed=s))
+        clean = _plant(args.cache, f"clean{seed}", lambda s=seed: run_plant("day", random_state=s))
         calib = _plant(args.cache, f"calib{seed}", lambda c=clean: run_plant(
-            "day", seed=100, instruments=c["sensors"]))
+            "day", random_state=100, instruments=c["sensors"]))
         cases.append((f"clean seed {seed}", clean, calib, None))
         if seed == 0:
             drifted, _ = apply_sensor_faults(clean["measured"], [parse_sensor_fault(DRIFT)])
             cases.append(("exhaust TC drift 2 K/h @12 h", {**clean, "measured": drifted},
                           calib, ("sensor_fault", "hp_exhaust_temperature")))
             fouled = _plant(args.cache, "fouling0", lambda: run_plant(
-                "day", seed=0, truth=_fouling_truth()))
+                "day", random_state=0, truth=_fouling_truth()))
             cases.append(("flow coefficient −2 % @12 h", fouled, calib,
                           ("degradation", "flow_coefficient")))
     fitted: dict[int, tuple[ResidualMonitor, pd.DataFrame]] = {}

@@ -61,9 +61,9 @@ def main() -> None:
     unseen: dict[str, pd.DataFrame] = {}
     unseen_floor: dict[str, float] = {}
     for scenario in arguments.scenario:
-        run = run_plant(scenario, seed=0)
+        run = run_plant(scenario, random_state=0)
         hold = run.measured.iloc[-7200:]
-        other = run_plant(scenario, seed=1)
+        other = run_plant(scenario, random_state=1)
         unseen[scenario] = other.measured.iloc[-7200:]
         unseen_floor[scenario] = _instrument_error(unseen[scenario], other.true_outputs)
         instrument = _instrument_error(hold, run.true_outputs)
@@ -114,7 +114,7 @@ def instrument_draws(scenarios: list[str], seeds: list[int]) -> None:
     print("|---|---|---|---|---|---|")
     for scenario in scenarios:
         for seed in seeds:
-            run = run_plant(scenario, seed=seed)
+            run = run_plant(scenario, random_state=seed)
             hold = run.measured.iloc[-7200:]
             true = run.true_outputs.loc[hold.index]
             biases = " / ".join(f"{float(np.nanmean(hold[s] - true[s])):+.2f}"

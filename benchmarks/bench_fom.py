@@ -51,7 +51,7 @@ def main() -> None:
     frames["same ramp with sensor noise on every input"] = noisy
     # what the GA evaluates: the virtual plant's 2-h hold at 30 % load as its DCS recorded it
     frames["deep-peak-30 hold as recorded (virtual plant, seed 0)"] = run_plant(
-        "deep-peak-30", seed=0).measured.iloc[-SAMPLES:]
+        "deep-peak-30", random_state=0).measured.iloc[-SAMPLES:]
     for name, frame in frames.items():
         diagnostics = model.simulate_detailed(frame, stages=False).diagnostics
         times = []

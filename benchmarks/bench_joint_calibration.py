@@ -57,7 +57,7 @@ def main() -> None:
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python "
           f"{platform.python_version()}; plant 'day', instruments seed {arguments.seed}")
     start = time.perf_counter()
-    run = run_plant("day", seed=arguments.seed)
+    run = run_plant("day", random_state=arguments.seed)
     print(f"plant day: {time.perf_counter() - start:.0f} s, {len(run.measured)} samples")
     measured, true = run.measured, run.true_outputs
     sigma = {s: float(np.nanstd((measured[s] - true[s]).to_numpy())) for s in DEFAULT_SENSORS}

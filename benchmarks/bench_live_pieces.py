@@ -51,7 +51,7 @@ def main() -> None:
     parser.add_argument("--block", type=int, default=600)
     parser.add_argument("--out", type=Path, default=Path(tempfile.gettempdir()) / "steamtwin-bench")
     args = parser.parse_args()
-    run = run_plant("day", seed=0)
+    run = run_plant("day", random_state=0)
     measured = run.measured.iloc[:int(args.hours * 3600)]
     seconds = len(measured)
     options = gate_options(plant_tag_map(), run.injected.sensors)

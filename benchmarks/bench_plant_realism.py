@@ -30,7 +30,8 @@ from scipy.optimize import least_squares
 
 from steamtwin.calibration import Calibrator, GeneticSearch
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
-from steamtwin.dcs.plant import TWIN_EQUIVALENT_LOADS, PlantTruth, plant_steady_states, run_plant
+from steamtwin.dcs.plant import run_plant
+from steamtwin.dcs.plant_model import TWIN_EQUIVALENT_LOADS, PlantTruth, plant_steady_states
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
@@ -104,7 +105,7 @@ def main() -> None:
             "fitted per load": per_load})
         calibrated = {}
         for scenario in ("deep-peak-30", "deep-peak-50"):
-            hold = run_plant(scenario, seed=0, truth=truth).measured.iloc[-7200:]
+            hold = run_plant(scenario, random_state=0, truth=truth).measured.iloc[-7200:]
             start = time.perf_counter()
             ga = Calibrator(twin, search=GeneticSearch(population=population,
                                                        generations=generations)).fit([hold])

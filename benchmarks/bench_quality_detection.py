@@ -74,7 +74,7 @@ def main() -> None:
         parser.error("--draws ≥ 1 and 0 < --hours ≤ 24")
 
     begin = time.perf_counter()
-    run = run_plant("day", seed=0)
+    run = run_plant("day", random_state=0)
     true = run.true_inputs.join(run.true_outputs)[list(KKS_TAGS)]
     true = true.iloc[: round(arguments.hours * 3600) + 1]
     signals = list(true.columns)

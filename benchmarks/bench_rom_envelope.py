@@ -132,7 +132,7 @@ def main() -> None:
     for layout in ("lhs", "corners", "bands"):
         refused = []
         for seed in range(5):
-            plan = design_conditions(reference, 32, seed=seed, layout=layout)
+            plan = design_conditions(reference, 32, random_state=seed, layout=layout)
             bad = 0
             for i in range(len(plan)):
                 try:
@@ -155,7 +155,7 @@ def main() -> None:
     print("\n2. virtual plant, scenario day (24 h), samples flagged out-of-domain / "
           "extrapolated")
     folder = Path(tempfile.mkdtemp(prefix="bench-rom-envelope-"))
-    run = run_plant("day", seed=1)
+    run = run_plant("day", random_state=1)
     paths = write_plant(run, folder)
     history = load_history(paths["historian"], paths["tag_map"], required=list(ROM_INPUTS),
                            accept_errors=True)

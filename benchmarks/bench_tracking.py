@@ -31,7 +31,8 @@ import pandas as pd
 
 from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
 from steamtwin.dcs.history import load_history
-from steamtwin.dcs.plant import ParameterDrift, PlantTruth, run_plant, write_plant
+from steamtwin.dcs.plant import run_plant, write_plant
+from steamtwin.dcs.plant_model import ParameterDrift, PlantTruth
 from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.spec import load_spec
 
@@ -39,7 +40,7 @@ from steamtwin.spec import load_spec
 def track_day(truth: PlantTruth, hours: float | None, folder: Path) -> tuple[pd.DataFrame,
                                                                             pd.DataFrame]:
     """The tracker's trajectory over the plant's day and the measured load (fraction)."""
-    run = run_plant("day", hours=hours, seed=0, truth=truth)
+    run = run_plant("day", hours=hours, random_state=0, truth=truth)
     paths = write_plant(run, folder)
     history = load_history(paths["historian"], paths["tag_map"], accept_errors=True)
     spec = load_spec("reference")

@@ -101,7 +101,7 @@ def _cleaned(run) -> pd.DataFrame:
 
 
 def _draw(spec, rated: float, seed: int, sensors: tuple[str, ...], quick: bool) -> dict:
-    day = run_plant("day", seed=seed)
+    day = run_plant("day", random_state=seed)
     measured, true = _cleaned(day), day.true_outputs
     sigma = {s: float(np.nanstd((day.measured[s] - true[s]).to_numpy())) for s in sensors}
     spread = {s: thermocouple_bias_spread(float(measured[s].mean())) for s in DEFAULT_SENSORS}
@@ -140,7 +140,7 @@ def _draw(spec, rated: float, seed: int, sensors: tuple[str, ...], quick: bool) 
     result["true_biases"] = {s: float(day.injected.sensors.loc[s, "bias"])
                              for s in DEFAULT_SENSORS}
 
-    other = run_plant("day-2", seed=1000 + seed, instruments=day.injected.sensors)
+    other = run_plant("day-2", random_state=1000 + seed, instruments=day.injected.sensors)
     unseen, unseen_true = _cleaned(other), other.true_outputs
     whole = prepare_window(unseen, model, DEFAULT_SENSORS, name="day-2")
     twin = pd.DataFrame(predict_window(model, whole, params, DEFAULT_SENSORS),

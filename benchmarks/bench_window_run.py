@@ -142,7 +142,7 @@ def main() -> None:
     model = FullOrderModel(spec)
     _ = model.design_
     start = time.perf_counter()
-    run = run_plant("day", seed=0)
+    run = run_plant("day", random_state=0)
     print(f"plant day: {time.perf_counter() - start:.0f} s")
     windows = [w for w in find_calibration_windows(run.measured, spec.design.generator_power)
                if w.kind == "steady"]

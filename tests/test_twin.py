@@ -37,7 +37,7 @@ TRUE_FLOW = 0.965  # PlantTruth's default flow coefficient (steamtwin.dcs.plant)
 
 @pytest.fixture(scope="module")
 def plant() -> PlantRun:
-    return run_plant("deep-peak-50", hours=0.25, seed=1)
+    return run_plant("deep-peak-50", hours=0.25, random_state=1)
 
 
 @pytest.fixture(scope="module")

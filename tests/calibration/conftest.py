@@ -52,7 +52,7 @@ def linear_window() -> pd.DataFrame:
 
 @pytest.fixture(scope="session")
 def plant_run() -> PlantRun:
-    return run_plant("deep-peak-50", hours=0.25, seed=1)
+    return run_plant("deep-peak-50", hours=0.25, random_state=1)
 
 
 @pytest.fixture(scope="session")

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from steamtwin.calibration.online import OnlineCalibrator, ParameterStore
-from steamtwin.dcs.plant import ParameterDrift, PlantTruth, run_plant
+from steamtwin.dcs.plant import run_plant
+from steamtwin.dcs.plant_model import ParameterDrift, PlantTruth
 from steamtwin.model.parameters import ModelParameters
 
 
@@ -18,7 +19,7 @@ def fouling_day():
     """The 'day' scenario; deposits lower the flow coefficient 0.965 → 0.93 from 11:30 to 12:00."""
     truth = PlantTruth(drift=ParameterDrift(at_hours=11.5, over_hours=0.5,
                                             target=ModelParameters(0.93, 1.3, 1.4)))
-    return run_plant("day", truth=truth, seed=2)
+    return run_plant("day", truth=truth, random_state=2)
 
 
 def test_online_calibration_tracks_fouling(reference_model, fouling_day, tmp_path):

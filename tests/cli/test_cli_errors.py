@@ -14,13 +14,13 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
-import steamtwin.cli.simulate as simulate_cli
+import steamtwin.model.simulate_file as simulate_file
 from steamtwin.cli.main import EXIT_CODES, app
-from steamtwin.cli.simulate import in_file_terms
 from steamtwin.dcs.plant import KKS_TAGS, plant_tag_map
 from steamtwin.dcs.tagmap import write_tag_map
 from steamtwin.geometry.pointcloud import write_point_cloud
 from steamtwin.model.fom import INPUT_RANGES, InputError
+from steamtwin.model.simulate_file import in_file_terms
 
 runner = CliRunner()
 HEADER = "time,main_steam_pressure,main_steam_temperature,main_steam_flow,hp_exhaust_pressure\n"
@@ -82,7 +82,7 @@ def test_an_exception_escaping_a_command_is_one_line_and_an_exit_code(
     def fail(turbine):
         raise error
 
-    monkeypatch.setattr(simulate_cli, "load_spec", fail)
+    monkeypatch.setattr(simulate_file, "load_spec", fail)
     args = ["simulate", "--inputs", "in.csv", "--out", str(tmp_path / "o.csv")]
     result = runner.invoke(app, args)
     assert result.exit_code == code
@@ -214,7 +214,7 @@ def _naive_inputs(path: Path, stamps: list[str]) -> Path:
 
 
 def test_naive_timestamps_are_refused_without_a_time_zone(tmp_path, monkeypatch):
-    monkeypatch.setattr(simulate_cli, "FullOrderModel", _work_started)
+    monkeypatch.setattr(simulate_file, "FullOrderModel", _work_started)
     inputs = _naive_inputs(tmp_path / "local.csv", ["2026-03-01T10:00:00+08:00",
                                                    "2026-03-01 10:00:01", "2026-03-01 10:00:02"])
     result = runner.invoke(app, ["simulate", "--inputs", str(inputs), "--out",
@@ -255,7 +255,7 @@ def test_time_zone_option(tmp_path, monkeypatch, zone, stamp, expected):
         seen["reached"] = True
         raise _WorkStarted("stop")
 
-    monkeypatch.setattr(simulate_cli, "FullOrderModel", model)
+    monkeypatch.setattr(simulate_file, "FullOrderModel", model)
     inputs = _naive_inputs(tmp_path / "in.csv", [stamp])
     result = runner.invoke(app, ["simulate", "--inputs", str(inputs), "--out",
                                  str(tmp_path / "o.csv"), "--time-zone", zone])
@@ -306,7 +306,7 @@ def test_dcs_check_names_any_bad_data_file(tmp_path, kind):
 
 
 def test_simulate_names_an_inputs_file_that_is_not_utf8(tmp_path, monkeypatch):
-    monkeypatch.setattr(simulate_cli, "FullOrderModel", _work_started)
+    monkeypatch.setattr(simulate_file, "FullOrderModel", _work_started)
     inputs = tmp_path / "gbk.csv"
     inputs.write_bytes((HEADER.replace("time", "时间") + "0,16.7,538,1800,3.9\n").encode("gbk"))
     result = runner.invoke(app, ["simulate", "--inputs", str(inputs), "--out",
@@ -343,7 +343,7 @@ VALUES = ["{tags}", "{missing}", "{binary}", "{folder}", "{gbk}", "{naive}", "{e
 def _stub_the_work(monkeypatch) -> None:
     """Replace every command's expensive step by :func:`_work_started`."""
     import steamtwin.cli.demo as demo_cli
-    import steamtwin.cli.plant as plant_cli
+    import steamtwin.cli.plant_options as plant_cli
     import steamtwin.geometry.assembly as assembly
     import steamtwin.geometry.meshing as meshing
     import steamtwin.geometry.preprocess as preprocess
@@ -351,7 +351,7 @@ def _stub_the_work(monkeypatch) -> None:
     import steamtwin.geometry.scanner as scanner
     import steamtwin.geometry.uncertainty as uncertainty
 
-    for module, name in [(simulate_cli, "FullOrderModel"), (demo_cli, "run_demo"),
+    for module, name in [(simulate_file, "FullOrderModel"), (demo_cli, "run_demo"),
                          (plant_cli, "run_plant"), (scanner, "scan_blade"),
                          (preprocess, "preprocess_views"), (reconstruct, "reconstruct_blade"),
                          (meshing, "blade_volume_mesh"), (meshing, "mesh_stl"),

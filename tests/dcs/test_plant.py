@@ -9,18 +9,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from steamtwin.dcs.plant import (
-    KKS_TAGS,
+from steamtwin.dcs.plant import KKS_TAGS, SCENARIOS, PlantRun, load_demand, run_plant, write_plant
+from steamtwin.dcs.plant_model import (
     PLANT_METAL_NODES,
-    SCENARIOS,
     PlantModel,
-    PlantRun,
     PlantTruth,
     generator_power,
-    load_demand,
     plant_spec,
-    run_plant,
-    write_plant,
 )
 from steamtwin.dcs.readers import read_historian
 from steamtwin.dcs.sensors import FaultConfig, default_sensor_models
@@ -35,12 +30,12 @@ HOLD_HOURS = 0.2  # 12-min holds keep the suite fast
 def faulty_run() -> PlantRun:
     """A short run with many dropouts and spikes, so the round trip sees NaNs."""
     faults = FaultConfig(dropout_rate_per_h=20.0, spike_rate_per_h=20.0)
-    return run_plant("deep-peak-50", hours=0.05, seed=3, truth=PlantTruth(faults=faults))
+    return run_plant("deep-peak-50", hours=0.05, random_state=3, truth=PlantTruth(faults=faults))
 
 
 @pytest.fixture(scope="module")
 def hold_runs() -> dict[str, PlantRun]:
-    return {name: run_plant(name, hours=HOLD_HOURS, seed=7)
+    return {name: run_plant(name, hours=HOLD_HOURS, random_state=7)
             for name in ("deep-peak-30", "deep-peak-50")}
 
 
@@ -141,9 +136,9 @@ def test_measured_noise_matches_sensor_sigma(hold_runs: dict[str, PlantRun]) -> 
 
 
 def test_reproducible_with_seed() -> None:
-    first = run_plant("deep-peak-30", hours=0.02, seed=11)
-    second = run_plant("deep-peak-30", hours=0.02, seed=11)
-    other = run_plant("deep-peak-30", hours=0.02, seed=12)
+    first = run_plant("deep-peak-30", hours=0.02, random_state=11)
+    second = run_plant("deep-peak-30", hours=0.02, random_state=11)
+    other = run_plant("deep-peak-30", hours=0.02, random_state=12)
     pd.testing.assert_frame_equal(first.measured, second.measured)
     pd.testing.assert_frame_equal(first.injected.sensors, second.injected.sensors)
     pd.testing.assert_frame_equal(first.true_outputs, other.true_outputs)
@@ -177,9 +172,10 @@ def test_second_day_holds_other_loads() -> None:
 def test_same_instruments_on_another_day() -> None:
     """``instruments`` keeps an earlier run's calibration errors and drift rates and draws the
     noise anew; without it, the seed decides everything as before."""
-    first = run_plant("deep-peak-30", hours=0.02, seed=11)
-    again = run_plant("deep-peak-30", hours=0.02, seed=12, instruments=first.injected.sensors)
-    other = run_plant("deep-peak-30", hours=0.02, seed=12)
+    first = run_plant("deep-peak-30", hours=0.02, random_state=11)
+    again = run_plant("deep-peak-30", hours=0.02, random_state=12,
+                      instruments=first.injected.sensors)
+    other = run_plant("deep-peak-30", hours=0.02, random_state=12)
     columns = ["bias_fraction", "drift_rate"]
     pd.testing.assert_frame_equal(again.injected.sensors[columns],
                                   first.injected.sensors[columns])

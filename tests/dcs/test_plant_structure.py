@@ -13,14 +13,14 @@ from scipy.linalg import eigh
 from scipy.optimize import brentq
 from scipy.special import j0, j1, y0, y1
 
-from steamtwin.dcs.plant import (
+from steamtwin.dcs.plant import plant_sensor_models
+from steamtwin.dcs.plant_model import (
     TWIN_EQUIVALENT_LOADS,
     PlantModel,
     PlantTruth,
     boiler_temperature,
     bored_rotor,
     plant_model,
-    plant_sensor_models,
     plant_steady_states,
     poppet_valve_characteristic,
     tip_leakage_fractions,

@@ -183,7 +183,7 @@ def test_estimators_without_evidence():
 
 @pytest.fixture(scope="module")
 def plant_truth() -> pd.DataFrame:
-    run = run_plant("deep-peak-50", hours=1.0, seed=0)
+    run = run_plant("deep-peak-50", hours=1.0, random_state=0)
     return run.true_inputs.join(run.true_outputs)[list(KKS_TAGS)]
 
 

@@ -85,8 +85,8 @@ def test_a_stuck_reading_holds_the_last_good_value(start, length):
 
 def test_the_virtual_plant_records_scheduled_faults():
     fault = SensorFault("hp_exhaust_temperature", "drift", start_s=60.0, size=2.0)
-    clean = run_plant("deep-peak-50", hours=0.02, seed=4)
-    faulted = run_plant("deep-peak-50", hours=0.02, seed=4, sensor_faults=[fault])
+    clean = run_plant("deep-peak-50", hours=0.02, random_state=4)
+    faulted = run_plant("deep-peak-50", hours=0.02, random_state=4, sensor_faults=[fault])
     difference = (faulted.measured - clean.measured)["hp_exhaust_temperature"].dropna()
     t = (difference.index - clean.measured.index[0]).total_seconds().to_numpy()
     assert np.allclose(difference.to_numpy(), np.clip((t - 60.0) * 2.0 / 3600.0, 0, None),

@@ -8,7 +8,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from steamtwin.dcs.plant import PlantTruth, plant_tag_map, run_plant
+from steamtwin.dcs.plant import plant_tag_map, run_plant
+from steamtwin.dcs.plant_model import PlantTruth
 from steamtwin.dcs.quality import Flag, clean
 from steamtwin.dcs.sensors import FaultConfig
 from steamtwin.live.gate import StreamGate, gate_options
@@ -20,7 +21,7 @@ def faulty():
     instruments' noise and resolution given, as a tag map can)."""
     truth = PlantTruth(faults=FaultConfig(dropout_rate_per_h=2, spike_rate_per_h=8,
                                           stuck_rate_per_h=2, stuck_median_s=120))
-    run = run_plant("deep-peak-50", hours=0.3, seed=3, truth=truth)
+    run = run_plant("deep-peak-50", hours=0.3, random_state=3, truth=truth)
     measured = run.measured
     options = gate_options(plant_tag_map(), run.injected.sensors)
     batch = clean(measured, nominal_step_s=1.0, out_of_range_error_fraction=1.0, **options)

@@ -21,7 +21,7 @@ from steamtwin.live.runner import run_service
 
 @pytest.fixture(scope="module")
 def plant(tmp_path_factory):
-    run = run_plant("deep-peak-50", hours=0.05, seed=6)
+    run = run_plant("deep-peak-50", hours=0.05, random_state=6)
     folder = tmp_path_factory.mktemp("plant")
     return run, write_plant(run, folder, file_format="parquet"), folder
 

@@ -10,7 +10,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from steamtwin.dcs.plant import PlantTruth, plant_tag_map, run_plant, write_plant
+from steamtwin.dcs.plant import plant_tag_map, run_plant, write_plant
+from steamtwin.dcs.plant_model import PlantTruth
 from steamtwin.dcs.sensors import FaultConfig
 from steamtwin.live.gate import StreamGate, gate_options
 from steamtwin.live.historian import LiveHistorian
@@ -26,7 +27,7 @@ QUERY = "SELECT unit, time, source, signal, value, flag FROM series ORDER BY ALL
 @pytest.fixture(scope="module")
 def plant(tmp_path_factory):
     truth = PlantTruth(faults=FaultConfig(dropout_rate_per_h=3, spike_rate_per_h=6))
-    run = run_plant("deep-peak-50", hours=0.25, seed=8, truth=truth)
+    run = run_plant("deep-peak-50", hours=0.25, random_state=8, truth=truth)
     paths = write_plant(run, tmp_path_factory.mktemp("plant"), file_format="csv")
     return run, paths
 

@@ -25,7 +25,7 @@ INSECURE = OpcUaSecurity(allow_insecure=True)
 
 @pytest.fixture(scope="module")
 def plant(tmp_path_factory):
-    run = run_plant("deep-peak-50", hours=0.01, seed=5)
+    run = run_plant("deep-peak-50", hours=0.01, random_state=5)
     paths = write_plant(run, tmp_path_factory.mktemp("plant"), file_format="csv")
     return run, paths
 

@@ -12,11 +12,14 @@ from hypothesis import strategies as st
 
 from steamtwin.model.design_check import (
     DEFAULT_LOADS,
+    LINE_COLUMNS,
     DesignError,
+    check_design,
     checked_loads,
     consistency_problems,
     design_line,
     design_point,
+    line_in_engineering_units,
     valve_openings,
 )
 from steamtwin.model.fom import FullOrderModel
@@ -189,3 +192,28 @@ def test_a_temperature_schedule_missing_the_design_temperature_is_a_problem(refe
     if problems:
         assert "temperature_schedule gives 541.0 °C at rated load" in found[0]
         assert "design.main_steam_temperature is 538.0 °C" in found[0]
+
+
+def test_line_in_engineering_units_converts_every_column(reference_spec, reference_model):
+    line = design_line(reference_spec, (1.0, 0.5), model=reference_model)
+    shown = line_in_engineering_units(reference_spec, line)
+    assert list(shown.index) == [100.0, 50.0] and shown.index.name == "load_pct"
+    np.testing.assert_allclose(shown["main_steam_pressure_MPa"], line["main_steam_pressure"] / 1e6)
+    np.testing.assert_allclose(shown["hp_exhaust_temperature_degC"],
+                               line["hp_exhaust_temperature"] - 273.15)
+    np.testing.assert_allclose(shown["main_steam_flow_t_per_h"], line["main_steam_flow"] * 3.6)
+    np.testing.assert_allclose(shown["GV1_opening_pct"], line["GV1_opening"] * 100)
+    assert len(shown.columns) == len(LINE_COLUMNS) + len(reference_spec.control_stage.valves)
+
+
+def test_check_design_stops_at_the_consistency_problems(reference_spec):
+    result = check_design(_all_valves_open(reference_spec))
+    assert len(result.problems) == 1 and "every governing valve is open" in result.problems[0]
+    assert result.point is None and result.line is None and result.residuals is None
+
+
+def test_check_design_runs_the_point_and_the_line(reference_spec):
+    result = check_design(reference_spec, (1.0, 0.5))
+    assert result.problems == [] and result.residuals is None
+    assert list(result.line.index) == [1.0, 0.5]
+    assert abs(result.point.loc["hp_exhaust_temperature", "difference"]) < 1e-3

@@ -14,13 +14,18 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from steamtwin.dcs.plant import PlantModel, PlantTruth, gland_leakage_fraction, plant_spec
+from steamtwin.dcs.plant_model import PlantModel, PlantTruth, gland_leakage_fraction, plant_spec
 from steamtwin.model.design_check import design_line
 from steamtwin.model.design_fit import (
+    ACCEPTANCE_BAND,
     FIT_PARAMETERS,
+    RESIDUALS,
+    DesignFit,
     DesignFitError,
     fit_design,
     fitted_spec_toml,
+    given_value,
+    outside_band,
     point_residuals,
 )
 from steamtwin.model.operating import operating_point
@@ -294,3 +299,41 @@ def test_fit_on_the_derived_kit_meets_every_point_within_the_band(kit_fit):
     assert kit_fit.bound_reached("admission_loss_multiplier") == "lower"
     assert kit_fit.bound_reached("reynolds_exponent") is None
     assert kit_fit.wall_time_s < 60.0  # measured ~5 s alone
+
+
+def test_outside_band_names_each_residual_beyond_the_acceptance_band():
+    residuals = pd.DataFrame(
+        {"control_stage_pressure_pct": [0.49, -0.51, np.nan],
+         "control_stage_temperature_k": [np.nan, 0.2, 1.5],
+         "hp_exhaust_temperature_k": [-1.01, 1.0, 0.0]},
+        index=pd.Index(["THA", "50 %", "30 %"], name="point"))
+    assert outside_band(residuals) == ["THA (hp_exhaust_temperature -1.01 K)",
+                                       "50 % (control_stage_pressure -0.51 %)",
+                                       "30 % (control_stage_temperature +1.50 K)"]
+    assert outside_band(residuals.iloc[:0]) == []
+    assert set(ACCEPTANCE_BAND) == set(RESIDUALS)
+
+
+def test_given_value_is_the_kit_figure_behind_each_residual():
+    point = _point(1.0, {"main_steam_pressure": 16.7e6, "main_steam_temperature": 811.15,
+                         "main_steam_flow": 500.0, "hp_exhaust_pressure": 3.6e6},
+                   p1=12.0e6, t1=None, t_exhaust=590.0)
+    assert given_value(point, "control_stage_pressure_pct") == 12.0e6
+    assert given_value(point, "control_stage_temperature_k") is None
+    assert given_value(point, "hp_exhaust_temperature_k") == 590.0
+    with pytest.raises(ValueError, match="expected one of"):
+        given_value(point, "hp_power")
+
+
+def test_spec_toml_writes_the_fitted_laws_into_the_spec_text():
+    text = resources.files("steamtwin.spec").joinpath("data", "reference.toml").read_text(
+        encoding="utf-8")
+    empty = pd.DataFrame()
+    fit = DesignFit(part_load=PERTURBED, initial_part_load=PartLoad(), parameters=(),
+                    initial_residuals=empty, residuals=empty, sensitivity=empty,
+                    identified_share=empty, singular_values=np.zeros(0), rank=0,
+                    condition_number=1.0, unidentified=(), evaluations=0, wall_time_s=0.0,
+                    message="")
+    written = fit.spec_toml(text)
+    assert written == fitted_spec_toml(text, PERTURBED)
+    assert parse_spec(written).part_load == PERTURBED

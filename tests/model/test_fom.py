@@ -311,7 +311,7 @@ def test_default_convergence_is_far_below_dcs_resolution(reference_model, refere
 def test_casing_thermocouple_reading_converges_with_the_node_count(reference_model,
                                                                     reference_spec):
     """The thermocouple is read at a physical depth, so refining the wall changes it little."""
-    from steamtwin.dcs.plant import PlantModel
+    from steamtwin.dcs.plant_model import PlantModel
     from steamtwin.model.design import _thermocouple_position
 
     assert _thermocouple_position(0.225, 8, 0.014) == (-1, pytest.approx(0.014 / 0.0140625))

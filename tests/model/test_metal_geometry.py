@@ -20,7 +20,7 @@ from scipy.linalg import expm
 from scipy.optimize import brentq
 from scipy.special import j0, j1, jn_zeros, y0, y1
 
-from steamtwin.dcs.plant import plant_spec
+from steamtwin.dcs.plant_model import plant_spec
 from steamtwin.model.design import (
     METAL_NODES,
     _plane_wall,

@@ -18,7 +18,7 @@ def coarse_blade(reference_spec):
 
 @pytest.fixture(scope="session")
 def blade_snapshots(reference_spec, reference_model, coarse_blade) -> SnapshotSet:
-    conditions = design_conditions(reference_spec, 16, seed=0)
+    conditions = design_conditions(reference_spec, 16, random_state=0)
     return generate_snapshots(reference_spec, coarse_blade, conditions, max_workers=1)
 
 

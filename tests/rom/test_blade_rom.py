@@ -273,7 +273,8 @@ def test_dask_scheduler_gives_the_same_snapshots(reference_spec, coarse_blade, b
     with LocalCluster(n_workers=1, threads_per_worker=1, processes=False,
                       dashboard_address=None) as cluster:
         done = []
-        result = generate_snapshots(reference_spec, coarse_blade, conditions,
-                                    scheduler=cluster.scheduler_address, progress=done.append)
+        result = generate_snapshots(
+            reference_spec, coarse_blade, conditions, scheduler=cluster.scheduler_address,
+            progress=lambda fraction, message: done.append((fraction, message)))
     np.testing.assert_allclose(result.fields, blade_snapshots.fields[:2], atol=1e-6)
-    assert done[-1] == 1.0
+    assert done == [(0.5, "snapshot 1/2"), (1.0, "snapshot 2/2")]

@@ -18,7 +18,7 @@ from steamtwin.dcs.tagmap import load_tag_map, write_tag_map
 
 @pytest.fixture(scope="module")
 def plant_files(tmp_path_factory):
-    run = run_plant("deep-peak-50", hours=0.1, seed=2)
+    run = run_plant("deep-peak-50", hours=0.1, random_state=2)
     return write_plant(run, tmp_path_factory.mktemp("plant"), file_format="csv"), run
 
 
@@ -117,7 +117,7 @@ def test_errors_are_reported(tmp_path):
 
 
 def test_build_passes_the_accuracy_options(tmp_path, monkeypatch):
-    import steamtwin.rom.build as build_module
+    import steamtwin.rom.workflow as workflow_module
 
     seen = {}
 
@@ -125,7 +125,7 @@ def test_build_passes_the_accuracy_options(tmp_path, monkeypatch):
         seen.update(options)
         raise ValueError("stop here")
 
-    monkeypatch.setattr(build_module, "build_rom", fake_build_rom)
+    monkeypatch.setattr(workflow_module, "build_rom", fake_build_rom)
     runner = CliRunner()
     common = ["build", "--snapshots", "8", "--element-size", "0.006", "--out",
               str(tmp_path / "rom.npz")]

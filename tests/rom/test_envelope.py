@@ -262,7 +262,7 @@ def test_every_planned_condition_runs_and_spans_the_line(reference_spec, referen
     params = ModelParameters(flow_coefficient=flow_coefficient)
     envelope = _envelope(reference_spec, reference_model, params)
     conditions, _ = feasible_conditions(
-        reference_spec, design_conditions(reference_spec, 32, seed=seed, layout=layout,
+        reference_spec, design_conditions(reference_spec, 32, random_state=seed, layout=layout,
                                           envelope=envelope), params, model=reference_model)
     steady = conditions[list(INPUT_SIGNALS)].set_index(pd.Index(np.arange(len(conditions))
                                                                 * 1e12))

@@ -21,7 +21,7 @@ def low_rank(m: int, n: int, rank: int, seed: int = 0) -> tuple[np.ndarray, np.n
 @pytest.mark.parametrize("method", ["thin", "snapshots", "randomized"])
 def test_methods_agree_with_numpy_svd(method):
     data, _ = low_rank(40, 3000, 5)
-    basis = pod(data, method=method, max_rank=5, seed=1)
+    basis = pod(data, method=method, max_rank=5, random_state=1)
     centred = data - data.mean(axis=0)
     reference = np.linalg.svd(centred, compute_uv=False)[:5]
     np.testing.assert_allclose(basis.singular_values, reference, rtol=1e-6)

@@ -15,7 +15,8 @@ import typer
 from typer.testing import CliRunner
 
 from steamtwin.cli.validate import validate
-from steamtwin.dcs.plant import PlantTruth, plant_tag_map, run_plant
+from steamtwin.dcs.plant import plant_tag_map, run_plant
+from steamtwin.dcs.plant_model import PlantTruth
 from steamtwin.dcs.readers import canonical_to_historian
 from steamtwin.dcs.tagmap import TagMap, TagSpec, write_tag_map
 from steamtwin.geometry.meshing import blade_volume_mesh
@@ -54,7 +55,7 @@ def measured() -> pd.DataFrame:
     truth = PlantTruth(main_steam_schedule=None, reheat_schedule=None)
     parts = []
     for load, days_before in ((30, 1), (50, 0)):
-        frame = run_plant(f"deep-peak-{load}", hours=0.25, seed=load, truth=truth).measured
+        frame = run_plant(f"deep-peak-{load}", hours=0.25, random_state=load, truth=truth).measured
         parts.append(frame.set_axis(frame.index - pd.Timedelta(days=days_before)))
     return pd.concat(parts)
 

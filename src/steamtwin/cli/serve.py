@@ -3,15 +3,14 @@
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
-import signal
 from pathlib import Path
 
 import typer
 
-from steamtwin.live.config import load_config
-from steamtwin.live.runner import run_service
+from steamtwin.live.config import ServiceConfig, load_config
+from steamtwin.live.runner import run_service, stop_on_signals
+from steamtwin.live.service import LiveSummary
 
 
 def serve(
@@ -40,10 +39,5 @@ def serve(
     typer.echo(f"database: {settings.database}")
 
 
-async def _serve(settings):
-    stop = asyncio.Event()
-    loop = asyncio.get_running_loop()
-    for signum in (signal.SIGINT, signal.SIGTERM):
-        with contextlib.suppress(NotImplementedError, RuntimeError):
-            loop.add_signal_handler(signum, stop.set)
-    return await run_service(settings, stop)
+async def _serve(settings: ServiceConfig) -> dict[str, LiveSummary]:
+    return await run_service(settings, stop_on_signals())

@@ -1,4 +1,5 @@
-"""``steamtwin simulate``: run the full-order model over a CSV of boundary conditions.
+"""``steamtwin simulate``: run the full-order model over a CSV of boundary conditions
+(:func:`steamtwin.model.simulate_file.simulate_csv`).
 
 Errors name the inputs file, the column and the row as a data row (1-based, the header not
 counted) with its line in the file (data row + 1), and values in the file's units.
@@ -6,30 +7,17 @@ counted) with its line in the file (data row + 1), and values in the file's unit
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 from typing import NoReturn
 
-import numpy as np
-import pandas as pd
 import typer
 from rich.console import Console
 
 from steamtwin.cli.paths import prepare_output_file
-from steamtwin.dcs.canonical_csv import (
-    CsvFormatError,
-    parse_time_zone,
-    read_canonical_csv,
-    write_canonical_csv,
-)
-from steamtwin.dcs.signals import SIGNALS
-from steamtwin.model.fom import FullOrderModel, InputError
-from steamtwin.model.parameters import ModelParameters, ParameterError
-from steamtwin.model.simulator import INPUT_SIGNALS
-from steamtwin.spec import SpecError, load_spec
-from steamtwin.units import convert
-
-_DISPLAY_UNITS = {"degC": "°C"}
+from steamtwin.dcs.canonical_csv import CsvFormatError, parse_time_zone, write_canonical_csv
+from steamtwin.model.parameters import ParameterError
+from steamtwin.model.simulate_file import simulate_csv
+from steamtwin.spec import SpecError
 
 
 def simulate(
@@ -59,48 +47,14 @@ def simulate(
         zone = None if time_zone is None else parse_time_zone(time_zone)
     except ValueError as error:
         _fail(f"--time-zone {error}")
-    console = Console(stderr=True)
     try:
-        spec = load_spec(turbine)
-        parameters = ModelParameters.from_json(params) if params else ModelParameters()
-    except (SpecError, ParameterError) as error:
+        with Console(stderr=True).status("reading the inputs") as status:
+            outputs = simulate_csv(inputs, turbine=turbine, params_file=params, time_zone=zone,
+                                   progress=lambda _, message: status.update(message))
+    except (SpecError, ParameterError, CsvFormatError) as error:
         _fail(str(error))
-    try:
-        frame = read_canonical_csv(inputs, required=INPUT_SIGNALS, time_zone=zone)
-    except CsvFormatError as error:
-        _fail(str(error))
-    model = FullOrderModel(spec)
-    try:
-        checked = model.check_inputs(frame)  # before the model is prepared: bad rows fail fast
-        with console.status("preparing the model (the first run compiles it, ~20 s)"):
-            _ = model.design_
-        with console.status(f"simulating {len(frame)} samples"):
-            outputs = pd.DataFrame(model.simulate_checked(checked, parameters),
-                                   index=frame.index, columns=list(model.output_signals))
-    except InputError as error:
-        _fail(in_file_terms(error, inputs))
     write_canonical_csv(outputs, out)
     typer.echo(f"wrote {len(outputs)} samples of {', '.join(outputs.columns)} to {out}")
-
-
-def in_file_terms(error: InputError, path: Path) -> str:
-    """The model's input error re-worded for the CSV it came from: the file, the column, the
-    data row (1-based) with its line (data row + 1) and, for a range error, the value and the
-    limits in the file's units (MPa, °C, t/h)."""
-    if error.row is None:
-        return f"{path}: {error}"
-    where = f"column {error.column!r} " if error.column else ""
-    where += f"data row {error.row + 1} (line {error.row + 2})"
-    signal = SIGNALS.get(error.column or "")
-    if error.limits is None or error.value is None or signal is None:
-        return f"{path}: {where}: {error.reason}"
-    value, low, high = convert(np.array([error.value, *error.limits]), signal.si_unit,
-                               signal.wire_unit)
-    unit = _DISPLAY_UNITS.get(signal.wire_unit, signal.wire_unit)
-    shown = "an empty cell" if math.isnan(value) else f"{value:g} {unit}"
-    rows = "1 bad row" if error.count == 1 else f"{error.count} bad rows"
-    return (f"{path}: {where}: {shown} is not a number within [{low:g}, {high:g}] {unit} "
-            f"({rows})")
 
 
 def _fail(message: str) -> NoReturn:

@@ -1,5 +1,8 @@
 """Read plant historian exports (CSV or Parquet, wide or long) into canonical SI signals.
 
+Kept as one module because it is one job, one reader (``_Reader``) whose wide/long and
+CSV/Parquet paths share the same time parsing, unit conversion and counted notes.
+
 The reader translates columns/tags with a :class:`~steamtwin.dcs.tagmap.TagMap` and converts to the
 SI units of :data:`~steamtwin.dcs.signals.SIGNALS` (Pa, K, kg/s, W). It never sorts, drops or
 merges samples: rows stay in file order with duplicate and out-of-order timestamps kept (a quality

@@ -1,5 +1,8 @@
 """Tag maps: which historian column or tag is which canonical signal, in which unit.
 
+Kept as one module because it is one job, the tag-map format: its dataclasses, the TOML reader
+that validates every entry and the writer that must round-trip what the reader accepts.
+
 A plant historian names signals by plant tags (KKS such as ``10LBA10CP001``) in mixed units. A tag
 map (TOML) translates them to the canonical names of :data:`steamtwin.dcs.signals.SIGNALS`::
 

@@ -28,7 +28,6 @@ from __future__ import annotations
 import asyncio
 import math
 import time
-from collections.abc import Callable
 from dataclasses import dataclass
 from datetime import UTC, datetime
 
@@ -38,6 +37,7 @@ from asyncua import Server, ua
 
 from steamtwin.dcs.signals import SIGNALS
 from steamtwin.dcs.tagmap import TagMap
+from steamtwin.progress import ProgressCallback
 from steamtwin.units import convert
 
 __all__ = ["NAMESPACE_URI", "PlantServer", "PlantServerSettings", "plant_node_ids"]
@@ -96,12 +96,13 @@ class PlantServer:
     UA; use as ``async with PlantServer(...) as server: await server.publish()``.
 
     Signals the tag map does not cover are refused (ValueError naming them). ``published``
-    counts the samples sent so far; ``progress(done, total)`` is called after each sample.
+    counts the samples sent so far; ``progress(fraction, message)``
+    (:data:`steamtwin.progress.ProgressCallback`) is called after each sample.
     """
 
     def __init__(self, signals: pd.DataFrame, tag_map: TagMap,
                  settings: PlantServerSettings = PlantServerSettings(),
-                 progress: Callable[[int, int], None] | None = None) -> None:
+                 progress: ProgressCallback | None = None) -> None:
         self.signals = signals
         self.tag_map = tag_map
         self.settings = settings
@@ -209,5 +210,6 @@ class PlantServer:
             self.published = k + 1
             sent += 1
             if self.progress is not None:
-                self.progress(self.published, total)
+                self.progress(self.published / total,
+                              f"sample {self.published}/{total}")
         return sent

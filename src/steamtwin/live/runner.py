@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import signal
 
 from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
 from steamtwin.live.config import ServiceConfig, UnitConfig
@@ -20,7 +21,7 @@ from steamtwin.live.sources import OpcUaSecurity, OpcUaSource, ReplaySource, Sou
 from steamtwin.live.unit_model import unit_model
 from steamtwin.rom.romfile import load_rom
 
-__all__ = ["build_unit", "run_service"]
+__all__ = ["build_unit", "run_service", "stop_on_signals"]
 
 LOG = logging.getLogger("steamtwin.live")
 
@@ -80,6 +81,18 @@ async def _run_unit(twin: LiveTwin, source: Source, stop: asyncio.Event,
              "%d parameter swap(s)", twin.name, summary.samples, summary.without_twin,
              summary.alarms, summary.findings, summary.swaps)
     return summary
+
+
+def stop_on_signals() -> asyncio.Event:
+    """An event that SIGINT (Ctrl-C) or SIGTERM sets: the clean stop of a service run from the
+    command line. Call it inside the running event loop; where the loop takes no signal
+    handlers (Windows, a thread other than the main one) only its owner sets the event."""
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        with contextlib.suppress(NotImplementedError, RuntimeError):
+            loop.add_signal_handler(signum, stop.set)
+    return stop
 
 
 async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None

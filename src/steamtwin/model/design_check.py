@@ -5,25 +5,31 @@ A spec is a heat balance plus geometry; the full-order model derives its constan
 (only the HP-exhaust temperature is met by construction, through one efficiency scale). This
 module puts those predictions beside the spec's figures (:func:`design_point`), runs the model
 steady along the spec's sliding-pressure line (:func:`design_line`) and says, in plant terms, why
-a spec cannot be run at all (:func:`consistency_problems`). All values SI (Pa, K, kg/s, W).
+a spec cannot be run at all (:func:`consistency_problems`); :func:`check_design` does all three
+(and, given a thermal kit, the model at each of its points) as ``steamtwin turbine check`` does.
+All values SI (Pa, K, kg/s, W), except :func:`line_in_engineering_units`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
 import pandas as pd
 
 from steamtwin.errors import ModelError
+from steamtwin.model.design_fit import point_residuals
 from steamtwin.model.fom import FullOrderModel, InputError
 from steamtwin.model.operating import operating_point
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.spec import SpecError, TurbineSpec
+from steamtwin.spec.heat_balance import HeatBalance
 
-__all__ = ["DEFAULT_LOADS", "DesignError", "checked_loads", "consistency_problems",
-           "design_line", "design_point", "valve_openings"]
+__all__ = ["DEFAULT_LOADS", "LINE_COLUMNS", "DesignCheck", "DesignError", "check_design",
+           "checked_loads", "consistency_problems", "design_line", "design_point",
+           "line_in_engineering_units", "valve_openings"]
 
 DEFAULT_LOADS = (1.0, 0.75, 0.5, 0.4, 0.3)
 
@@ -72,9 +78,72 @@ _DESIGN_FAILURES = (
 )
 
 
+_KELVIN = 273.15
+
+#: Design-line columns in engineering units: SI column → (column with its unit, SI → that unit).
+LINE_COLUMNS: dict[str, tuple[str, Callable[[np.ndarray], np.ndarray]]] = {
+    "main_steam_pressure": ("main_steam_pressure_MPa", lambda x: x / 1e6),
+    "main_steam_temperature": ("main_steam_temperature_degC", lambda x: x - _KELVIN),
+    "main_steam_flow": ("main_steam_flow_t_per_h", lambda x: x * 3.6),
+    "control_stage_pressure": ("control_stage_pressure_MPa", lambda x: x / 1e6),
+    "control_stage_temperature": ("control_stage_temperature_degC", lambda x: x - _KELVIN),
+    "hp_exhaust_pressure": ("hp_exhaust_pressure_MPa", lambda x: x / 1e6),
+    "hp_exhaust_temperature": ("hp_exhaust_temperature_degC", lambda x: x - _KELVIN),
+    "hp_power": ("hp_power_MW", lambda x: x / 1e6),
+    "control_stage_efficiency": ("control_stage_efficiency_pct", lambda x: x * 100),
+    "admission_arc": ("admission_arc_pct", lambda x: x * 100),
+}
+
+
 class DesignError(ModelError):
     """The model cannot run a spec's design point or off-design line; the message says why and
     names the spec fields involved."""
+
+
+@dataclass(frozen=True)
+class DesignCheck:
+    """What :func:`check_design` found.
+
+    ``problems``: why the spec cannot pass its rated flow (empty: it can; then the rest is
+    filled). ``point``: :func:`design_point`; ``line``: :func:`design_line` (SI);
+    ``residuals``: model − kit per heat-balance point (``model.design_fit.point_residuals``;
+    % or K), None without a kit.
+    """
+
+    problems: list[str]
+    point: pd.DataFrame | None = None
+    line: pd.DataFrame | None = None
+    residuals: pd.DataFrame | None = None
+
+
+def check_design(spec: TurbineSpec, loads: Sequence[float] = DEFAULT_LOADS,
+                 heat_balance: HeatBalance | None = None) -> DesignCheck:
+    """Whether the model can pass the spec's rated flow and, if it can, its design point, its
+    steady off-design line at ``loads`` (fractions of rated load) and, given ``heat_balance``,
+    its residuals at every point of that thermal kit.
+
+    Raises :class:`DesignError` when the model cannot run one of the loads, and
+    ``DesignFitError`` (``model.design_fit``) when it cannot run a kit's point.
+    """
+    model = FullOrderModel(spec)
+    problems = consistency_problems(spec, model)
+    if problems:
+        return DesignCheck(problems)
+    point = design_point(spec, model=model)
+    line = design_line(spec, loads, model=model)
+    residuals = None if heat_balance is None else point_residuals(spec, heat_balance)
+    return DesignCheck([], point, line, residuals)
+
+
+def line_in_engineering_units(spec: TurbineSpec, line: pd.DataFrame) -> pd.DataFrame:
+    """The design line (:func:`design_line`) with the unit in each column name (MPa, degC,
+    t/h, MW, %; :data:`LINE_COLUMNS`, then ``<valve>_opening_pct``), indexed by ``load_pct``."""
+    shown = pd.DataFrame({name: convert(line[column].to_numpy())
+                          for column, (name, convert) in LINE_COLUMNS.items()})
+    for valve in spec.control_stage.valves:
+        shown[f"{valve.name}_opening_pct"] = line[f"{valve.name}_opening"].to_numpy() * 100
+    shown.insert(0, "load_pct", line.index.to_numpy() * 100)
+    return shown.set_index("load_pct")
 
 
 def consistency_problems(spec: TurbineSpec, model: FullOrderModel | None = None) -> list[str]:

@@ -35,8 +35,8 @@ from steamtwin.spec.heat_balance import HeatBalance, HeatBalancePoint
 from steamtwin.spec.schema import FIELD_BY_KEY
 from steamtwin.spec.turbine import PartLoad
 
-__all__ = ["FIT_PARAMETERS", "RESIDUALS", "DesignFit", "DesignFitError", "fit_design",
-           "fitted_spec_toml", "point_residuals"]
+__all__ = ["ACCEPTANCE_BAND", "FIT_PARAMETERS", "RESIDUALS", "DesignFit", "DesignFitError",
+           "fit_design", "fitted_spec_toml", "given_value", "outside_band", "point_residuals"]
 
 #: The part-load laws the fit adjusts by default (fields of :class:`PartLoad`).
 FIT_PARAMETERS: tuple[str, ...] = tuple(field.name for field in fields(PartLoad))
@@ -44,8 +44,12 @@ FIT_PARAMETERS: tuple[str, ...] = tuple(field.name for field in fields(PartLoad)
 #: Residual columns: model − heat balance, in % of the given pressure or in K.
 RESIDUALS = ("control_stage_pressure_pct", "control_stage_temperature_k",
              "hp_exhaust_temperature_k")
-# Acceptance band of issue 17 per residual (0.5 % in pressure, 1.0 K in temperature): the weights.
-_BAND = np.array([0.5, 1.0, 1.0])
+#: Acceptance band of issue 17 per residual column (0.5 % in pressure, 1.0 K in temperature):
+#: the fit's weights, and the limit beyond which :func:`outside_band` reports a point.
+ACCEPTANCE_BAND: dict[str, float] = {"control_stage_pressure_pct": 0.5,
+                                     "control_stage_temperature_k": 1.0,
+                                     "hp_exhaust_temperature_k": 1.0}
+_BAND = np.array([ACCEPTANCE_BAND[column] for column in RESIDUALS])
 _MODEL_COLUMNS = ("control_stage_pressure", "control_stage_temperature",
                   "hp_exhaust_temperature")
 # Finite-difference step on the range-scaled parameters: single-sample runs converge to 1e-10
@@ -106,6 +110,35 @@ class DesignFit:
     def fitted_spec(self, spec: TurbineSpec) -> TurbineSpec:
         """``spec`` with the fitted part-load laws."""
         return replace(spec, part_load=self.part_load)
+
+    def spec_toml(self, spec_text: str) -> str:
+        """The spec TOML ``spec_text`` with its ``[part_load]`` table replaced by the fitted
+        laws (:func:`fitted_spec_toml`)."""
+        return fitted_spec_toml(spec_text, self.part_load)
+
+
+def given_value(point: HeatBalancePoint, column: str) -> float | None:
+    """The heat-balance figure behind residual ``column`` (one of :data:`RESIDUALS`) at
+    ``point``: the control-stage pressure (Pa) or the control-stage / HP-exhaust temperature
+    (K); None where the point does not give it."""
+    if column == "control_stage_pressure_pct":
+        return point.control_stage_pressure_pa
+    if column == "control_stage_temperature_k":
+        return point.control_stage_temperature_k
+    if column == "hp_exhaust_temperature_k":
+        return point.hp_exhaust_temperature_k
+    raise ValueError(f"column {column!r}: expected one of {list(RESIDUALS)}")
+
+
+def outside_band(residuals: pd.DataFrame) -> list[str]:
+    """The residuals (rows by point label, columns :data:`RESIDUALS`) outside
+    :data:`ACCEPTANCE_BAND`, each as ``"<label> (<quantity> <±x.xx> <%|K>)"``; empty when
+    every finite residual lies within it."""
+    return [f"{label} ({column.rsplit('_', 1)[0]} {float(row[column]):+.2f} "
+            f"{'%' if column.endswith('pct') else 'K'})"
+            for label, row in residuals.iterrows() for column in RESIDUALS
+            if math.isfinite(float(row[column]))
+            and abs(float(row[column])) > ACCEPTANCE_BAND[column]]
 
 
 def point_residuals(spec: TurbineSpec, heat_balance: HeatBalance) -> pd.DataFrame:

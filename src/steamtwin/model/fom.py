@@ -1,5 +1,8 @@
 """The built-in full-order model (FOM) of the HP section: a :class:`Simulator`.
 
+Kept as one module because it is one class, :class:`FullOrderModel`, with the input checks and
+result types of its public methods.
+
 Quasi-steady stage-by-stage steam path (``steampath``) coupled to 1-D metal conduction of rotor
 and inner casing per stage group (``metal``), solved sample by sample in a compiled loop
 (``kernel``) with superheated-steam properties from spline tables of IAPWS-IF97

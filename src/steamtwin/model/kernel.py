@@ -1,5 +1,11 @@
 """The full-order model's time loop, compiled with numba.
 
+Kept as one module because it is one job, the compiled per-sample solve (steps 0–4 below),
+whose physics already lives in ``steampath``, ``metal`` and ``steam.tables``; cutting the solve
+itself across files would also let numba serve stale code, since its on-disk cache is not
+invalidated by changes to jitted callees in other files (numba docs, "Notes on Caching",
+caching limitations).
+
 At each sample the steam path is algebraic (quasi-steady); only the metal carries state. The
 loop therefore solves, sample by sample, warm-started from the previous sample:
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 import datetime as dt
 import platform
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from importlib import metadata
 from pathlib import Path
 
@@ -22,6 +22,7 @@ import pandas as pd
 from steamtwin.blade.mesh import checked_mesh
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import ModelParameters
+from steamtwin.progress import ProgressCallback
 from steamtwin.rom.envelope import (
     OperatingEnvelope,
     feasible_conditions,
@@ -64,8 +65,9 @@ def rom_envelope(spec: TurbineSpec, params: ModelParameters | None = None, *,
 def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = None, *,
               n_snapshots: int = 32, energy: float = 0.992,
               kernel: str = "thin_plate_spline", max_workers: int | None = None,
-              scheduler: str | None = None, seed: int = 0, layout: str = "lhs",
-              progress: Callable[[float], None] | None = None,
+              scheduler: str | None = None, random_state: int = 0,
+              layout: str = "lhs",
+              progress: ProgressCallback | None = None,
               projection_tolerance: float | None = 0.1, physics_features: bool = True,
               spec_toml: str | None = None, params_file: str | Path | None = None,
               parameter_intervals: Mapping[str, tuple[float, float]] | None = None,
@@ -95,7 +97,8 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
     model = FullOrderModel(spec)
     envelope = rom_envelope(spec, params, parameter_intervals=parameter_intervals,
                             observed=observed, params_source=params_source, model=model)
-    planned = design_conditions(spec, n_snapshots, seed=seed, layout=layout, envelope=envelope)
+    planned = design_conditions(spec, n_snapshots, random_state=random_state, layout=layout,
+                                envelope=envelope)
     conditions, replaced = feasible_conditions(spec, planned, params,
                                                params_source=params_source, model=model)
     anchors = observed_anchors(spec, envelope, conditions, params, model=model)
@@ -128,7 +131,7 @@ def build_rom(spec: TurbineSpec, mesh: object, params: ModelParameters | None = 
         "parameters_source": parameters_source(params_file),
         "blade_row": "control stage rotor (hp1)",
         "model_parameters": dataclasses.asdict(params),
-        "design": {"n_snapshots": n_snapshots, "seed": seed, "layout": layout,
+        "design": {"n_snapshots": n_snapshots, "seed": random_state, "layout": layout,
                    "load_levels": sorted({float(v) for v in conditions["load_level"]})},
         "envelope": {**envelope.describe(), "replaced": len(replaced),
                      "observed_anchors": len(anchors),

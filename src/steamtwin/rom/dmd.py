@@ -24,7 +24,6 @@ range (:mod:`steamtwin.rom.validation`), summarised separately over the ramp and
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -36,6 +35,7 @@ from steamtwin.blade.steam import SteamBoundary, control_stage_states
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.operating import load_profile_inputs, ramp_profile
 from steamtwin.model.parameters import ModelParameters
+from steamtwin.progress import ProgressCallback
 from steamtwin.rom.estimator import ExtrapolationWarning, PodRbfRom
 from steamtwin.rom.snapshots import ROM_INPUTS
 from steamtwin.spec import TurbineSpec
@@ -55,7 +55,7 @@ class Transient:
 def ramp_transient(spec: TurbineSpec, mesh: object, params: ModelParameters | None = None, *,
                    start_load: float = 1.0, end_load: float = 0.5, rate: float = 0.05,
                    hold_s: float = 600.0, step_s: float = 10.0,
-                   progress: Callable[[float], None] | None = None) -> Transient:
+                   progress: ProgressCallback | None = None) -> Transient:
     """FOM + transient FEM of a ramp between two holds of ``hold_s`` seconds each."""
     params = params or ModelParameters()
     load = ramp_profile(start_load, end_load, rate, hold_s, hold_s, step_seconds=step_s)
@@ -67,7 +67,8 @@ def ramp_transient(spec: TurbineSpec, mesh: object, params: ModelParameters | No
     initial = conduction.solve_steady(boundary.convection(states[0], params))
     times = np.arange(load.size) * step_s
     fields = conduction.solve_transient(lambda i: boundary.convection(states[i], params),
-                                        times, initial, progress=progress)
+                                        times, initial, progress=None if progress is None else (
+                                            lambda f: progress(f, "transient FEM")))
     conditions = inputs.reset_index(drop=True).copy()
     conditions["control_stage_pressure"] = outputs["control_stage_pressure"].to_numpy()
     conditions["load_fraction"] = load

@@ -1,5 +1,9 @@
 """The operating envelope a ROM's snapshots must cover, and snapshot conditions the model can run.
 
+Kept as one module because the envelope and the feasible snapshot conditions share the same
+steady model runs along the operating line (one-sample runs, flow bisection against the valves'
+capacity, errors naming the parameter).
+
 The ROM maps the DCS signals (main-steam pressure p0, temperature T0, control-stage pressure p1)
 to the blade field; a sample outside its snapshots is extrapolated or refused
 (:mod:`steamtwin.rom.reconstruction`). The envelope says, per load level, which p0, T0 and flow

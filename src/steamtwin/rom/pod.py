@@ -45,11 +45,11 @@ class PodBasis:
 
 
 def pod(snapshots: np.ndarray, method: str = "auto", max_rank: int | None = None,
-        seed: int | np.random.Generator | None = 0) -> PodBasis:
+        random_state: int | np.random.Generator | None = 0) -> PodBasis:
     """POD of ``snapshots`` (m, N) after subtracting their mean.
 
     ``max_rank`` caps the modes kept (for ``"randomized"`` it sets the sketch: default
-    min(m, 100)). ``seed`` feeds the randomized sketch only.
+    min(m, 100)). ``random_state`` feeds the randomized sketch only.
     """
     if method not in SVD_METHODS:
         raise ValueError(f"method must be one of {SVD_METHODS}, got {method!r}")
@@ -74,15 +74,16 @@ def pod(snapshots: np.ndarray, method: str = "auto", max_rank: int | None = None
         sigma = np.sqrt(np.maximum(eigenvalues[keep], 0.0))
         vt = (vectors[:, keep].T @ centred) / np.where(sigma > 0, sigma, 1.0)[:, None]
     else:
-        sigma, vt = _randomized_svd(centred, max_rank or min(m, 100), seed)
+        sigma, vt = _randomized_svd(centred, max_rank or min(m, 100), random_state)
     if max_rank is not None:
         sigma, vt = sigma[:max_rank], vt[:max_rank]
     return PodBasis(mean=mean, singular_values=sigma, modes=np.ascontiguousarray(vt),
                     total_energy=total)
 
 
-def _randomized_svd(matrix: np.ndarray, rank: int, seed) -> tuple[np.ndarray, np.ndarray]:
-    rng = np.random.default_rng(seed)
+def _randomized_svd(matrix: np.ndarray, rank: int, random_state: int | np.random.Generator | None
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(random_state)
     m, n = matrix.shape
     width = min(rank + OVERSAMPLING, m, n)
     sample = matrix.T @ rng.standard_normal((m, width))  # (N, width): range of the rows

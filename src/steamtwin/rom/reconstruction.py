@@ -24,7 +24,6 @@ item 3). A run of invalid samples interrupts a reading: the sensor restarts stea
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,6 +34,7 @@ import pandas as pd
 from steamtwin.blade.mesh import SolidMesh
 from steamtwin.model.measurement import check_time_constants, lag
 from steamtwin.model.sensor_setup import SensorSetup
+from steamtwin.progress import ProgressCallback
 from steamtwin.rom.estimator import ExtrapolationWarning
 from steamtwin.rom.romfile import BladeRom
 from steamtwin.steam.tables import lower_boundary_temperature
@@ -77,7 +77,7 @@ def predict_field(bundle: BladeRom, condition: dict[str, float] | np.ndarray) ->
 
 
 def predict_series(bundle: BladeRom, signals: pd.DataFrame, fields_every: int | None = None,
-                   progress: Callable[[float], None] | None = None,
+                   progress: ProgressCallback | None = None,
                    max_extrapolation: float = MAX_EXTRAPOLATION) -> SeriesPrediction:
     """Sensor and probe predictions for every row of ``signals`` (canonical names, SI).
 
@@ -132,7 +132,7 @@ def predict_series(bundle: BladeRom, signals: pd.DataFrame, fields_every: int | 
         for k, row in enumerate(chosen):
             fields[int(row)] = rom.reconstruct(coefficients[row])[0]
             if progress is not None:
-                progress((k + 1) / chosen.size)
+                progress((k + 1) / chosen.size, f"field {k + 1}/{chosen.size}")
     return SeriesPrediction(table, fields)
 
 

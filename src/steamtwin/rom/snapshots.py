@@ -27,7 +27,7 @@ FEM matrices once and reuses them for its tasks.
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass
 
@@ -42,6 +42,7 @@ from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.operating import hp_exhaust_pressure, operating_point
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
+from steamtwin.progress import ProgressCallback
 from steamtwin.rom.envelope import MINIMUM_LOAD, OperatingEnvelope, line_box
 from steamtwin.spec import TurbineSpec
 
@@ -62,7 +63,7 @@ def design_conditions(spec: TurbineSpec, n_snapshots: int = 32,
                       loads: Sequence[float] = LOAD_LEVELS,
                       pressure_variation: float = PRESSURE_VARIATION,
                       temperature_variation: float = TEMPERATURE_VARIATION,
-                      flow_variation: float = FLOW_VARIATION, seed: int = 0,
+                      flow_variation: float = FLOW_VARIATION, random_state: int = 0,
                       layout: str = "lhs", envelope: OperatingEnvelope | None = None
                       ) -> pd.DataFrame:
     """FOM input conditions (SI) of the design, one row per snapshot, with ``load_fraction``.
@@ -101,7 +102,7 @@ def design_conditions(spec: TurbineSpec, n_snapshots: int = 32,
                                 else levels[0]], middle])
     band_high = np.concatenate([middle, [MAXIMUM_FLOW_FRACTION]])
     top = spec.sliding_pressure.load_fraction[-1]
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(random_state)
     corners = np.array([[i, j, k] for i in (-1, 1) for j in (-1, 1) for k in (-1, 1)], float)
     n_levels = n_snapshots - len(points)
     counts = np.full(len(levels), n_levels // len(levels))
@@ -254,7 +255,7 @@ class SnapshotSet:
 def generate_snapshots(spec: TurbineSpec, mesh: object, conditions: pd.DataFrame,
                        params: ModelParameters | None = None, *, max_workers: int | None = None,
                        scheduler: str | None = None,
-                       progress: Callable[[float], None] | None = None) -> SnapshotSet:
+                       progress: ProgressCallback | None = None) -> SnapshotSet:
     """Solve the steady blade field at every row of ``conditions`` (FOM inputs, SI).
 
     ``scheduler`` (a Dask scheduler address) runs the tasks on that cluster; otherwise a local
@@ -271,7 +272,8 @@ def generate_snapshots(spec: TurbineSpec, mesh: object, conditions: pd.DataFrame
     def done(index: int, record: dict) -> None:
         records[index] = record
         if progress is not None:
-            progress(sum(r is not None for r in records) / len(records))
+            count = sum(r is not None for r in records)
+            progress(count / len(records), f"snapshot {count}/{len(records)}")
 
     if scheduler is not None:
         from distributed import Client  # a cluster is optional; import only when asked for

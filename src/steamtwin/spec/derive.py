@@ -1,5 +1,10 @@
 """Derive a complete turbine spec from an OEM thermal kit (heat-balance points).
 
+Kept as one module because the derivation writes each figure with the comment saying how it
+was obtained in the same step (the TOML blocks at the end compute the metal, sliding-pressure
+and temperature figures as they write them), so the rules, the derived figures and their
+commented text share every intermediate value.
+
 A plant engineer starts from the heat-balance diagrams, not from a stage table. This module turns
 a validated :class:`~steamtwin.spec.heat_balance.HeatBalance` into the TOML text of a complete
 spec (``docs/spec.md``), every derived figure followed by a comment saying how it was obtained:

@@ -1,5 +1,8 @@
 """Read an OEM thermal kit — one design point per heat-balance diagram — from TOML.
 
+Kept as one module because it is one job, reading and checking a thermal kit: the checks on
+each point and between points (docs/heat-balance.md) share one error-naming helper (``_Fields``).
+
 A plant engineer's description of their unit starts from the thermal kit: heat-balance diagrams
 at VWO, THA, 75 %, 50 %, 40 %, 30 % load. This module reads them, with the few figures of the
 drawings the design model needs (``[machine]``), into frozen SI dataclasses and refuses anything

@@ -1,5 +1,8 @@
 """Read a turbine spec from TOML, validating every field and naming the offending one.
 
+Kept as one module because it is one job, validating a spec document table by table against
+:mod:`steamtwin.spec.schema`, with one error-naming helper (``_Table``) every table reader uses.
+
 Dimensional values are written with their unit (``"16.7 MPa"``, ``"538 degC"``, ``"1800 t/h"``)
 and converted to SI with pint; plain numbers are for dimensionless fields only. Each field's
 unit and valid range come from :mod:`steamtwin.spec.schema`, the table ``docs/spec.md`` is

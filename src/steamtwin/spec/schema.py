@@ -1,5 +1,8 @@
 """The turbine spec format: one table of every field, the single source of its rules.
 
+Kept as one module because :data:`FIELDS` is meant to be the one table of every spec field;
+its renderers (Markdown, JSON Schema) are short and read nothing else.
+
 :data:`FIELDS` lists each field of a turbine spec by its TOML path (``design.main_steam_pressure``,
 ``control_stage.valves[].admission_arc``, ``stages[].flow_capacity``; ``[]`` marks an array of
 tables) with its kind, SI unit, valid range, default, meaning and a hint where a plant engineer

@@ -1,5 +1,10 @@
 """Fast spline-based table look-up of superheated-steam properties for numba kernels.
 
+Kept as one module because the table build and the jitted look-ups share one grid layout (the
+transformed coordinates, cell polynomials and their packing), which must change together, and
+numba's cache does not notice changes to jitted callees in other files (numba docs, "Notes on
+Caching").
+
 The method follows the idea of the IAPWS Guideline on the Fast Calculation of Steam and Water
 Properties with the Spline-Based Table Look-up Method (SBTL), IAPWS G13-15 (2015): properties
 are sampled from the IAPWS-IF97 basic equation on a grid in transformed coordinates, each grid
