@@ -37,7 +37,8 @@ from bench_alarms import (
     _replay,
 )
 from steamtwin.calibration.tracking import ParameterTracker
-from steamtwin.dcs.plant import PlantTruth, plant_tag_map, run_plant
+from steamtwin.dcs.plant import plant_tag_map, run_plant
+from steamtwin.dcs.plant_model import PlantTruth
 from steamtwin.dcs.sensor_faults import apply_sensor_faults, parse_sensor_fault
 from steamtwin.live.gate import StreamGate, gate_options
 from steamtwin.live.historian import LiveHistorian
@@ -132,9 +133,9 @@ def main() -> None:
           "(error) | run |\n|---|---|---|---|---|---|")
     for name in wanted:
         seed = int(name[-1]) if name.startswith("clean") else 0
-        clean = _plant(args.cache, f"clean{seed}", lambda s=seed: run_plant("day", seed=s))
+        clean = _plant(args.cache, f"clean{seed}", lambda s=seed: run_plant("day", random_state=s))
         calib = _plant(args.cache, f"calib{seed}", lambda c=clean: run_plant(
-            "day", seed=100, instruments=c["sensors"]))
+            "day", random_state=100, instruments=c["sensors"]))
         if seed not in calibrated:
             calibrated[seed] = _calibration(model, calib)
         params, monitor = calibrated[seed]
@@ -145,7 +146,7 @@ def main() -> None:
                                                              "hp_exhaust_temperature")
         elif name == "fouling":
             case = _plant(args.cache, "fouling0", lambda: run_plant(
-                "day", seed=0, truth=_fouling_truth()))
+                "day", random_state=0, truth=_fouling_truth()))
             expected = ("degradation", "flow_coefficient")
         with tempfile.TemporaryDirectory() as folder:
             alarms, swaps, seconds = _run_case(model, case, params, monitor, Path(folder))

@@ -83,9 +83,9 @@ def main() -> None:
     params = ModelParameters()
     paths = {"historian": args.cache / "historian.parquet", "tag_map": args.cache / "tags.toml"}
     if not paths["historian"].exists():
-        run = run_plant("day", seed=0, hours=args.hours)
+        run = run_plant("day", random_state=0, hours=args.hours)
         write_plant(run, args.cache, file_format="parquet")
-        healthy = run_plant("day", seed=100, instruments=run.injected.sensors)
+        healthy = run_plant("day", random_state=100, instruments=run.injected.sensors)
         healthy.measured.to_parquet(args.cache / "healthy.parquet")
         run.injected.sensors.to_parquet(args.cache / "instruments.parquet")
     instruments = pd.read_parquet(args.cache / "instruments.parquet")

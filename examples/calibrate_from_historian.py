@@ -49,7 +49,7 @@ def main() -> None:
 
     hours, evaluations = (0.25, 40) if args.quick else (2.0, 400)
     print(f"virtual plant: deep-peak-50, {hours:g} h hold at 50 % load")
-    run = run_plant("deep-peak-50", hours=hours, seed=args.seed)
+    run = run_plant("deep-peak-50", hours=hours, random_state=args.seed)
     files = write_plant(run, args.out / "plant-data")
     print(f"  historian export {files['historian']} (tag map beside it)")
 

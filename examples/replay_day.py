@@ -67,7 +67,7 @@ def main() -> None:
     args = parser.parse_args()
 
     hours, ramp_rate = (0.25, 5.0) if args.quick else (None, None)
-    run = run_plant("day", hours=hours, ramp_rate=ramp_rate, seed=args.seed)
+    run = run_plant("day", hours=hours, ramp_rate=ramp_rate, random_state=args.seed)
     files = write_plant(run, args.out / "day")
     print(f"virtual plant: {len(run.measured)} samples of the 'day' scenario → "
           f"{files['historian']}")

@@ -18,7 +18,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import asdict
 from datetime import UTC, datetime
 from pathlib import Path
@@ -255,7 +255,7 @@ class Twin:
         intervals), Figure 7 (GA convergence), Figure 8 (temperatures before/after in the
         window closest to 50 % load, as the method shows it), the identifiability check and,
         with ``sensitivity``, Table 7 (nine more calibrations with the GA settings varied;
-        ``progress(message)`` names it).
+        ``progress(fraction, message)`` names it).
         """
         from steamtwin.calibration import Calibrator, GeneticSearch
         from steamtwin.calibration.report import (
@@ -354,8 +354,9 @@ class Twin:
 
     def build_rom(self, mesh: object | None = None, *, row: str = "hp1",
                   element_size: float | None = None, n_snapshots: int = 32,
-                  observed: History | None = None, seed: int = 0, workers: int | None = None,
-                  scheduler: str | None = None, progress: Callable[[float], None] | None = None,
+                  observed: History | None = None, random_state: int = 0,
+                  workers: int | None = None,
+                  scheduler: str | None = None, progress: ProgressCallback | None = None,
                   **options: Any) -> Twin:
         """Build the blade-temperature POD–RBF ROM with the twin's parameters; returns the twin.
 
@@ -371,12 +372,13 @@ class Twin:
 
             mesh = blade_volume_mesh(self.spec, row, element_size=element_size)
         bundle, _ = build_rom(self.spec, mesh, self.parameters, n_snapshots=n_snapshots,
-                              max_workers=workers, scheduler=scheduler, seed=seed,
+                              max_workers=workers, scheduler=scheduler,
+                              random_state=random_state,
                               progress=progress, spec_toml=self._spec_text(),
                               observed=None if observed is None else observed.data, **options)
         self.rom_ = bundle
         self._record(_step("build_rom", row=row if mesh is None else "given mesh",
-                           n_snapshots=n_snapshots, seed=seed,
+                           n_snapshots=n_snapshots, random_state=random_state,
                            modes=int(bundle.rom.n_modes_),
                            parameters=asdict(self.parameters)))
         return self
@@ -397,7 +399,7 @@ class Twin:
                  hours: float = 2.0, monitor: str = "fom", sensor_lag: bool = True,
                  field_check: bool = False, settings: Mapping[str, object] | None = None,
                  timings: Mapping[str, float] | None = None,
-                 progress: Callable[[str], None] | None = None) -> Any:
+                 progress: ProgressCallback | None = None) -> Any:
         """Replay the twin over measured windows and write the validation report into
         ``out_dir`` (:func:`steamtwin.validation.monitor.validate`); returns the
         :class:`~steamtwin.validation.html.ValidationReport` (also ``validation_``).
@@ -409,7 +411,7 @@ class Twin:
         lags unless ``sensor_lag`` is False, and the twin's sensor offsets. ``field_check``
         adds the FOM blade field at each window's mean conditions (Figure 9). ``settings``
         and ``timings`` (stage → s) of the caller head the report's own;
-        ``progress(message)`` names the stage.
+        ``progress(fraction, message)`` names the stage.
         """
         from steamtwin.dcs.windows import name_windows
         from steamtwin.validation.monitor import validate as run_validation
@@ -447,7 +449,7 @@ class Twin:
         if field_check:
             clock = time.perf_counter()
             if progress is not None:
-                progress("solving the FOM blade field at each window's conditions")
+                progress(0.2, "solving the FOM blade field at each window's conditions")
             reference = _reference_fields(bundle, self.spec, named)
             timings["FOM blade fields (Figure 9)"] = time.perf_counter() - clock
         offsets = self.offsets
@@ -462,7 +464,7 @@ class Twin:
             or "none (--params without sensor_offsets, or not given)",
         }
         if progress is not None:
-            progress("monitoring the windows and writing the report")
+            progress(0.5, "monitoring the windows and writing the report")
         report = run_validation(
             bundle, named, out_dir, settings=report_settings, timings=timings,
             field_check=reference, time_zone=zone,

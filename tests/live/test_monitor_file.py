@@ -29,7 +29,7 @@ from steamtwin.live.unit_model import unit_model
 
 @pytest.fixture(scope="module")
 def healthy(tmp_path_factory):
-    run = run_plant("deep-peak-50", hours=0.35, seed=11)
+    run = run_plant("deep-peak-50", hours=0.35, random_state=11)
     folder = tmp_path_factory.mktemp("healthy")
     return run, write_plant(run, folder, file_format="parquet"), folder
 

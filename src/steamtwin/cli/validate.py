@@ -125,7 +125,8 @@ def validate(
                 result = twin.validate(history, report, windows=window or (), hours=hours,
                                        monitor=monitor, sensor_lag=sensor_lag,
                                        field_check=field_check, settings=settings,
-                                       timings=timings, progress=status.update)
+                                       timings=timings,
+                                       progress=lambda _f, message: status.update(message))
     except DataQualityError as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(code=1) from None
