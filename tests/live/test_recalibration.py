@@ -161,7 +161,7 @@ def test_without_an_alarm_the_parameters_change_only_on_schedule(reference_spec,
     recalibration = LiveRecalibration(tracker, every_s=1200.0).start()
     swaps = []
     for first in range(0, len(data), 100):
-        swaps += recalibration.feed(data.iloc[first:first + 100])
+        swaps += recalibration.feed(data.iloc[first:first + 100], ModelParameters())
     # four tracker steps ran; one scheduled swap, 1200 s after the first sample
     assert len(tracker.trajectory_) == 4
     assert [swap.reason for swap in swaps] == ["schedule"]

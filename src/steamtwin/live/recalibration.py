@@ -12,7 +12,7 @@ second of model runs). The tracker's estimate becomes the *live* parameters only
   reset to its prior's (covariance resetting, Goodwin & Sin 1984, §3.3.2) so the next steps
   follow the change at the rate the data allow, and while the alarm is active — and for
   ``settle_steps`` steps after it ends, as the estimate gathers the data of the new state — every
-  step's estimate is swapped in.
+  step's estimate of the alarmed coefficient is swapped in (the others stay as they are).
 
 Swapping only then keeps the residuals the monitor judges anchored to one parameter set: a twin
 that re-fitted itself every ten minutes would absorb the very change the monitor is there to
@@ -72,10 +72,12 @@ class LiveRecalibration:
         self.tracker.start()
         return self
 
-    def feed(self, data: pd.DataFrame) -> list[ParameterSwap]:
-        """Take the good samples of a block (canonical SI signals; bad samples NaN); return the
-        swaps due: one per tracker step while a degradation alarm is active, else one when the
-        schedule comes due."""
+    def feed(self, data: pd.DataFrame, live: ModelParameters) -> list[ParameterSwap]:
+        """Take the good samples of a block (canonical SI signals; bad samples NaN) and the
+        ``live`` parameters; return the swaps due: while a degradation alarm is active, one per
+        tracker step with the alarmed coefficients replaced by the filter's estimate (the
+        others stay live: a step's data pull the others about in transients, and the monitor's
+        baseline holds for them); else, when the schedule comes due, the whole estimate."""
         if data.empty:
             return []
         if self._last_swap is None:
@@ -88,7 +90,8 @@ class LiveRecalibration:
             following = sorted({p for p, since in self._degraded.items() if end > since}
                                | set(self._settling))
             if following:
-                swaps.append(ParameterSwap(end, self.tracker.params_,
+                live = replace(live, **{p: getattr(self.tracker.params_, p) for p in following})
+                swaps.append(ParameterSwap(end, live,
                                            ",".join(f"degradation:{p}" for p in following)))
                 self._last_swap = end
             self._settling = {p: n - 1 for p, n in self._settling.items() if n > 1}

@@ -197,7 +197,7 @@ class LiveTwin:
         sensors = [s for s in self.monitored if s in data.columns and s in twin.columns]
         residual = data[sensors] - twin[sensors]
         alarms = [] if self.monitor is None else self._alarms(data, residual, final)
-        swaps = self.recalibration.feed(data) if self.recalibration is not None else []
+        swaps = [] if self.recalibration is None else self.recalibration.feed(data, self.params)
         if swaps:  # the new set applies from the next sample on
             self._swap(swaps[-1])
         flags = passed.flags.where(passed.flags != 0).astype(object)
