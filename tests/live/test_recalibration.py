@@ -114,16 +114,40 @@ def test_a_flow_step_is_flagged_as_degradation_and_followed_by_the_live_paramete
     block_sigma = {s: SIGMA[s] / np.sqrt(60.0) for s in SENSORS}
     monitor = ResidualMonitor(SENSORS, block_sigma, MonitorSettings()).fit(
         block_means(residual, 60.0)[list(SENSORS)])
-    tracker = ParameterTracker(model, sigma=SIGMA, priors=None, step_s=600.0)
-    twin = LiveTwin("unit1", model, start, StreamGate(gate_options(plant_tag_map())),
-                    LiveHistorian(tmp_path / "live.duckdb"), monitor=monitor,
-                    monitored=SENSORS, sensitivity=SensitivityCache(model, SENSORS),
-                    recalibration=LiveRecalibration(tracker, every_s=86_400.0)).start()
-    for first in range(0, len(data), 300):
-        frame = data.iloc[first:first + 300]
-        twin.process(SourceBlock(frame, pd.DataFrame(False, index=frame.index,
-                                                     columns=frame.columns)))
+    def live(path):
+        copy = ResidualMonitor(SENSORS, block_sigma, MonitorSettings()).set_state(
+            monitor.get_state())
+        return LiveTwin("unit1", model, start, StreamGate(gate_options(plant_tag_map())),
+                        LiveHistorian(path), monitor=copy, monitored=SENSORS,
+                        sensitivity=SensitivityCache(model, SENSORS),
+                        recalibration=LiveRecalibration(ParameterTracker(
+                            model, sigma=SIGMA, step_s=600.0), every_s=86_400.0)).start()
+
+    def feed(twin, last_sample=None):
+        last_sample = len(data) if last_sample is None else last_sample
+        for first in range(0, last_sample, 300):
+            frame = data.iloc[first:min(first + 300, last_sample)]
+            frame = frame[frame.index > (twin.resume_after() or frame.index[0] - pd.Timedelta(1))]
+            twin.process(SourceBlock(frame, pd.DataFrame(False, index=frame.index,
+                                                         columns=frame.columns)))
+
+    # a run that crashes 4 min after the step's alarm, then restarts from its last saved state
+    crashed = live(tmp_path / "crashed.duckdb")
+    feed(crashed, last_sample=step_at + 900)
+    crashed.close()
+    restarted = live(tmp_path / "crashed.duckdb")
+    assert restarted.resume_after() < data.index[step_at + 900 - 1]  # a state 10 min apart
+    feed(restarted)
+    restarted.finish()
+    # the uninterrupted run
+    twin = live(tmp_path / "live.duckdb")
+    feed(twin)
     twin.finish()
+    for query in ("SELECT * FROM series ORDER BY ALL", "SELECT * FROM parameters ORDER BY ALL",
+                  "SELECT * EXCLUDE (id) FROM alarms ORDER BY ALL"):
+        pd.testing.assert_frame_equal(restarted.historian.connection.execute(query).df(),
+                                      twin.historian.connection.execute(query).df())
+    restarted.close()
     first_id = int(twin.historian.alarms("unit1")["id"].iloc[0])
     twin.acknowledge(first_id, "operator A", pd.Timestamp("2026-01-01 02:00", tz="UTC"))
     with pytest.raises(KeyError, match="no alarm 999"):

@@ -21,13 +21,20 @@
    alarms started and ended, the parameter swaps, and the state (model, gate context, monitor,
    open block, J cache, filter, live parameters) — all in one transaction per block.
 
-Restart: a new LiveTwin on the same database continues from the last committed sample and
-state (:meth:`LiveTwin.resume_after` says from where the source must replay): no sample lost,
-none stored twice, and the stored series equal an uninterrupted run's (tested).
+Restart: the state is saved with the block that crosses each ``snapshot_every_s`` of data
+(default 10 min; serialising the gate's context, the filter's data and the rewind buffer every
+block would cost more than the model), and with the last block of a finished stream. A new
+LiveTwin on the same database continues from the last saved state
+(:meth:`LiveTwin.resume_after` says from where the source must replay): the samples between it
+and the last committed one are computed again — the chain is deterministic — but not stored
+again, so no sample is lost, none stored twice, and the stored series, alarms and swaps equal an
+uninterrupted run's (tested; checkpoint and replay, as a write-ahead log's recovery redoes
+what follows its checkpoint: Gray & Reuter, *Transaction Processing*, 1993, §11.3).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -76,7 +83,8 @@ class LiveTwin:
     ``gate``: the stream's quality gate; ``historian``: the open database; ``rom``: optional
     blade ROM (probe temperatures); ``monitor``: an optional fitted residual monitor;
     ``sensitivity``: J per load band for its degradation hypotheses (without it the monitor
-    tells sensor faults only); ``recalibration``: optional online recalibration.
+    tells sensor faults only); ``recalibration``: optional online recalibration;
+    ``snapshot_every_s``: data seconds between saved states (0: every block).
     """
 
     def __init__(self, name: str, model: FullOrderModel, params: ModelParameters,
@@ -84,7 +92,8 @@ class LiveTwin:
                  monitor: ResidualMonitor | None = None,
                  monitored: Sequence[str] = MONITORED,
                  sensitivity: SensitivityCache | None = None,
-                 recalibration: LiveRecalibration | None = None) -> None:
+                 recalibration: LiveRecalibration | None = None,
+                 snapshot_every_s: float = 600.0) -> None:
         self.name = name
         self.model = model
         self.params = params
@@ -98,12 +107,19 @@ class LiveTwin:
         self._state: StreamState | None = None
         self._blocks: BlockAccumulator | None = None
         self._rewind = RewindBuffer()
+        self.snapshot_every_s = snapshot_every_s
         self._started = False
+        self._replay_from: pd.Timestamp | None = None
+        self._committed: pd.Timestamp | None = None
+        self._last_snapshot: pd.Timestamp | None = None
 
     def start(self) -> LiveTwin:
-        """Open the historian and continue from its last committed state, if any."""
+        """Open the historian and continue from its last saved state, if any."""
+        if not (math.isfinite(self.snapshot_every_s) and self.snapshot_every_s >= 0.0):
+            raise ValueError(f"snapshot_every_s must be ≥ 0 s (got {self.snapshot_every_s!r})")
         self.historian.open()
         self._started = True
+        self._committed = self.historian.resume_time(self.name)
         if self.monitor is not None:
             self._blocks = BlockAccumulator(self.monitor.settings.block_s)
         if self.recalibration is not None:
@@ -111,7 +127,8 @@ class LiveTwin:
         latest = self.historian.latest_state(self.name)
         if latest is None:
             return self
-        _, document = latest
+        self._replay_from, document = latest
+        self._last_snapshot = self._replay_from
         if document.get("model") is not None:
             self._state = StreamState.from_dict(document["model"])
         self.gate.set_state(document.get("gate", {}))
@@ -138,8 +155,12 @@ class LiveTwin:
         self._started = False
 
     def resume_after(self) -> pd.Timestamp | None:
-        """The last committed sample (UTC): the source must replay what comes after it."""
-        return self.historian.resume_time(self.name)
+        """The time of the last saved state (UTC): the source must replay what comes after
+        it (what was stored after it is recomputed, not stored again)."""
+        if not self._started:
+            latest = self.historian.latest_state(self.name)
+            return None if latest is None else latest[0]
+        return self._replay_from
 
     async def run(self, source: Source) -> LiveSummary:
         """Process every block ``source`` yields, then what the gate still holds."""
@@ -159,9 +180,9 @@ class LiveTwin:
         summary.findings += len(block.findings)
         if len(block.frame) == 0:
             return summary
-        resume = self.resume_after()
+        resume = self._replay_from
         frame, bad = block.frame, block.bad
-        if resume is not None:  # a replay after a restart: what is stored is not taken again
+        if resume is not None and frame.index[0] <= resume:  # what the state has seen already
             keep = frame.index > resume
             frame, bad = frame[keep], bad[keep]
         if len(frame):
@@ -201,11 +222,25 @@ class LiveTwin:
         if swaps:  # the new set applies from the next sample on
             self._swap(swaps[-1])
         flags = passed.flags.where(passed.flags != 0).astype(object)
+        end = data.index[-1]
+        snapshot = final or self._last_snapshot is None or (
+            (end - self._last_snapshot).total_seconds() >= self.snapshot_every_s)
+        committed = self._committed
+        if committed is not None and data.index[0] <= committed:  # recomputed after a restart
+            new = data.index > committed
+            data, twin, residual, flags = data[new], twin[new], residual[new], flags[new]
+            complete = complete[new]
+            alarms = [a for a in alarms if (a.start if isinstance(a, Alarm) else a.end) > committed]
+            swaps = [s for s in swaps if s.time > committed]
+            if data.empty:
+                return
         summary.rows += self.historian.commit_block(
             self.name, {"measured": data, "twin": twin, "residual": residual}, flags,
-            state=self._snapshot(),
+            state=self._snapshot() if snapshot else None,
             events=BlockEvents(tuple(alarms),
                                tuple((s.time, swap_values(s), s.reason) for s in swaps)))
+        if snapshot:
+            self._last_snapshot = end
         summary.alarms += sum(isinstance(alarm, Alarm) for alarm in alarms)
         summary.swaps += len(swaps)
         summary.samples += len(data)
