@@ -7,6 +7,7 @@ engineering units plant engineers read (MPa, °C, t/h, MW).
 
 from __future__ import annotations
 
+import functools
 import re
 import tokenize
 from functools import lru_cache
@@ -76,7 +77,22 @@ def parse_quantity(text: str | float | int, expected_si_unit: str, where: str) -
 
 
 def convert(values: np.ndarray | float, from_unit: str, to_unit: str) -> np.ndarray:
-    """Convert numbers between units (e.g. ``"MPa"`` → ``"Pa"``, ``"degC"`` → ``"K"``)."""
+    """Convert numbers between units (e.g. ``"MPa"`` → ``"Pa"``, ``"degC"`` → ``"K"``).
+
+    The pair's units are parsed once (cached); a pure scale (every pair but the temperatures'
+    offsets) is read from pint once and applied as a product, an offset pair goes through pint;
+    a conversion the dimensions forbid raises pint's error."""
+    source, target, scale = _pair(from_unit, to_unit)
+    if scale is not None:
+        return np.asarray(values, dtype=float) * scale
+    quantity = unit_registry().Quantity(np.asarray(values, dtype=float), source)
+    return np.asarray(quantity.to(target).magnitude, dtype=float)
+
+
+@functools.lru_cache(maxsize=512)
+def _pair(from_unit: str, to_unit: str) -> tuple[object, object, float | None]:
     registry = unit_registry()
-    quantity = registry.Quantity(np.asarray(values, dtype=float), from_unit)
-    return np.asarray(quantity.to(to_unit).magnitude, dtype=float)
+    source, target = registry.Unit(from_unit), registry.Unit(to_unit)
+    zero = float(registry.Quantity(0.0, source).to(target).magnitude)
+    scale = float(registry.Quantity(1.0, source).to(target).magnitude)
+    return source, target, scale if zero == 0.0 else None
