@@ -78,8 +78,9 @@ async def _run_unit(twin: LiveTwin, source: Source, stop: asyncio.Event,
     if not stop.is_set():
         twin.finish(summary)  # a finished replay: no more look-ahead to wait for
     LOG.info("%s: %d samples stored (%d without a twin value), %d alarm(s), %d finding(s), "
-             "%d parameter swap(s)", twin.name, summary.samples, summary.without_twin,
-             summary.alarms, summary.findings, summary.swaps)
+             "%d parameter swap(s), %d sample(s) with extrapolated ROM probes", twin.name,
+             summary.samples, summary.without_twin, summary.alarms, summary.findings,
+             summary.swaps, summary.rom_extrapolated)
     return summary
 
 

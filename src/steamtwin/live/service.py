@@ -35,6 +35,7 @@ what follows its checkpoint: Gray & Reuter, *Transaction Processing*, 1993, §11
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -53,7 +54,8 @@ from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.model.stream_state import StreamState
-from steamtwin.rom.reconstruction import FLAG_INVALID, predict_series
+from steamtwin.rom.estimator import ExtrapolationWarning
+from steamtwin.rom.reconstruction import FLAG_EXTRAPOLATED, FLAG_INVALID, predict_series
 from steamtwin.rom.romfile import BladeRom
 
 __all__ = ["LiveSummary", "LiveTwin"]
@@ -66,7 +68,8 @@ MONITORED = ("control_stage_pressure", "control_stage_temperature", "hp_exhaust_
 @dataclass
 class LiveSummary:
     """What a run did: samples stored, samples without a twin value (an input missing), rows
-    written, alarms raised, findings the source and gate reported, parameter swaps."""
+    written, alarms raised, findings the source and gate reported, parameter swaps, and
+    samples whose ROM probes were extrapolated beyond the snapshots (flagged by the ROM)."""
 
     samples: int = 0
     without_twin: int = 0
@@ -74,6 +77,7 @@ class LiveSummary:
     alarms: int = 0
     findings: int = 0
     swaps: int = 0
+    rom_extrapolated: int = 0
 
 
 class LiveTwin:
@@ -211,7 +215,10 @@ class LiveTwin:
                                                               self._state)
             twin.loc[outputs.index, :] = outputs.to_numpy()
             if self.rom is not None:
-                probes = predict_series(self.rom, data[complete]).sensors
+                with warnings.catch_warnings():  # counted below, not a warning per block
+                    warnings.simplefilter("ignore", ExtrapolationWarning)
+                    probes = predict_series(self.rom, data[complete]).sensors
+                summary.rom_extrapolated += int(probes[FLAG_EXTRAPOLATED].sum())
                 valid = ~probes[FLAG_INVALID].to_numpy(dtype=bool)
                 for name in self.rom.probes:
                     twin.loc[probes.index[valid], name] = probes[name].to_numpy()[valid]
