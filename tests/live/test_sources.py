@@ -205,3 +205,64 @@ def test_bad_input_becomes_findings_and_the_source_goes_on():
     assert received["main_steam_pressure"].iloc[-1] == pytest.approx(25.0e6)  # still going
     assert received["control_stage_pressure"].isna().all()
     assert received["main_steam_flow"].isna().all()
+
+
+def test_a_burst_of_ten_thousand_values_is_named_and_the_source_goes_on():
+    """10 000 values of one tag within 2 s of source time (a server flushing its buffer):
+    the 1-s grid keeps the last value of each sample time, a finding names the tag and the
+    span, and the samples after the burst arrive as before."""
+    port = free_port()
+    endpoint = f"opc.tcp://127.0.0.1:{port}/burst/"
+    tag_map = plant_tag_map()
+
+    async def scenario():
+        server = Server()
+        await server.init()
+        server.set_endpoint(endpoint)
+        server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
+        index = await server.register_namespace("urn:burst")
+        variable = await server.nodes.objects.add_variable(ua.NodeId("P", index), "P", 0.0)
+        await server.write_attribute_value(variable.nodeid, ua.DataValue(
+            Value=ua.Variant(0.0, ua.VariantType.Double),
+            StatusCode=ua.StatusCode(ua.StatusCodes.BadWaitingForInitialData)))
+        import dataclasses
+
+        spec = dataclasses.replace(tag_map.signals["main_steam_pressure"],
+                                   node_id="nsu=urn:burst;s=P")
+        mapped = dataclasses.replace(tag_map, signals={"main_steam_pressure": spec})
+        await server.start()
+        source = OpcUaSource(endpoint, mapped, INSECURE, settle_s=0.5)
+        blocks: list = []
+        consumer = await _started(source, blocks)
+        base = datetime(2026, 3, 1, tzinfo=UTC)
+
+        async def write(value, when):
+            await server.write_attribute_value(variable.nodeid, ua.DataValue(
+                Value=ua.Variant(value, ua.VariantType.Double), SourceTimestamp=when))
+
+        await write(15.0, base - timedelta(seconds=10))  # subscribed once this one is back
+        while not len(_frame(blocks)):
+            await asyncio.sleep(0.05)
+        for k in range(10_000):  # 5 000 per second of source time
+            await write(16.0 + k * 1e-4, base + timedelta(microseconds=200 * k))
+        await asyncio.sleep(0.5)  # asyncua's server queues at most 10 000 values per item
+        for k in range(3, 8):  # then the usual one value per second
+            await write(20.0 + k, base + timedelta(seconds=k))
+        await asyncio.sleep(1.5)
+        source.close()
+        await consumer
+        await server.stop()
+        return blocks
+
+    blocks = asyncio.run(scenario())
+    findings = [f for block in blocks for f in block.findings if f.kind == "crowded"]
+    assert findings, "the burst went unreported"
+    assert all(f.tag == tag_map.signals["main_steam_pressure"].column for f in findings)
+    crowded = sum(int(f.message.split(": ")[1].split(" ")[0]) for f in findings)
+    late = [f for block in blocks for f in block.findings if f.kind == "backwards"]
+    received = _frame(blocks)["main_steam_pressure"]
+    # every value is accounted for: one per sample time kept, the rest counted as crowded or,
+    # when their sample time had been passed on already, as going backwards
+    assert crowded + len(late) + len(received) == 1 + 10_000 + 5
+    assert received.index.is_unique and received.index.is_monotonic_increasing
+    assert received.iloc[-1] == pytest.approx(27.0e6)  # the source went on after the burst

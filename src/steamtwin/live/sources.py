@@ -46,13 +46,22 @@ __all__ = ["OpcUaSecurity", "OpcUaSource", "ReplaySource", "Source", "SourceBloc
 #: a generous allowance for unsynchronised DCS clocks (IEC 61850-5 class T1 is 1 ms; a plant
 #: without time sync drifts by seconds per day).
 FUTURE_TOLERANCE_S = 5.0
+#: InfoType "DataValue" (bit 10) with the Overflow bit (bit 7) of an OPC UA StatusCode: the
+#: server's queue for the monitored item overflowed and values were lost (OPC UA Part 4,
+#: §7.39, Table 180).
+OVERFLOW_BITS = 0x480
+#: Values the server may queue per monitored item between two publishes: a burst of a few
+#: hours of 1-s samples (a server flushing a buffer after a network outage) fits; what does not
+#: is reported through OVERFLOW_BITS by a server that sets them.
+QUEUE_SIZE = 100_000
 _ARRIVED = "__arrived__"  # key of a pending sample's first arrival (monotonic s)
 
 
 @dataclass(frozen=True)
 class SourceFinding:
     """Something a source met and did not pass on as data: ``kind`` (e.g. "unknown_node",
-    "not_a_number", "backwards", "future", "unit_mismatch", "gap", "disconnected"), the
+    "not_a_number", "backwards", "future", "unit_mismatch", "gap", "disconnected",
+    "crowded" (several values on one sample time: a burst), "overflow"), the
     signal and its tag, the time it concerns and a sentence saying what happened."""
 
     kind: str
@@ -233,7 +242,7 @@ class OpcUaSource:
                     list(nodes.values()), ua.AttributeIds.Value,
                     mfilter=ua.DataChangeFilter(
                         Trigger=ua.DataChangeTrigger.StatusValueTimestamp),
-                    queuesize=10_000, sampling_interval=0)
+                    queuesize=QUEUE_SIZE, sampling_interval=0)
                 if last_emitted is not None:  # back-fill what was missed
                     for name, node in nodes.items():
                         history = await node.read_raw_history(
@@ -253,12 +262,14 @@ class OpcUaSource:
                     arrived = [(name, value)]
                     while not queue.empty():
                         arrived.append(queue.get_nowait())
+                    crowded: dict[str, list] = {}
                     for name, value in arrived:
                         if isinstance(value, ua.DataValue) and name is not None:
                             self._accept(name, value, pending, latest_per_signal,
-                                         last_emitted, findings)
+                                         last_emitted, findings, crowded=crowded)
                         elif value is not None and not isinstance(value, ua.DataValue):
                             raise ConnectionError(f"subscription status {value}")
+                    findings += self._crowded_findings(crowded)
                     block = self._settled(pending, latest_per_signal, findings)
                     if block is not None:
                         if len(block.frame):
@@ -320,9 +331,21 @@ class OpcUaSource:
                     f"map {spec.unit!r}; values are read in the tag map's unit"))
         return nodes, findings
 
+    def _crowded_findings(self, crowded: dict[str, list]) -> list[SourceFinding]:
+        """One finding per signal whose values fell on sample times already taken."""
+        found = []
+        for name, (count, first, last) in crowded.items():
+            spec = self.tag_map.signals[name]
+            found.append(SourceFinding(
+                "crowded", name, spec.column, first,
+                f"{name} ({spec.column}): {count} value(s) from {first} to {last} fell on "
+                f"sample times already taken (grid {self.resolution_s:g} s): a burst faster "
+                "than the grid; the last value of each sample time was kept"))
+        return found
+
     def _accept(self, name: str, value: ua.DataValue, pending: dict, latest: dict,
                 last_emitted: pd.Timestamp | None, findings: list[SourceFinding],
-                backfill: bool = False) -> None:
+                backfill: bool = False, crowded: dict[str, list] | None = None) -> None:
         spec = self.tag_map.signals[name]
         if value.StatusCode is not None and value.StatusCode.value == \
                 ua.StatusCodes.BadWaitingForInitialData:
@@ -360,8 +383,16 @@ class OpcUaSource:
             good = value.StatusCode is None or value.StatusCode.is_good()
             if not math.isfinite(number):
                 good = False
+        if value.StatusCode is not None and (
+                value.StatusCode.value & OVERFLOW_BITS) == OVERFLOW_BITS:
+            findings.append(SourceFinding("overflow", name, spec.column, stamp,
+                                          f"{name} ({spec.column}): the server's queue "
+                                          f"overflowed before {stamp}; values were lost there"))
         latest[name] = stamp
         row = pending.setdefault(stamp, {_ARRIVED: time.monotonic()})
+        if name in row and crowded is not None:
+            count, first, _ = crowded.get(name, (0, stamp, stamp))
+            crowded[name] = [count + 1, first, stamp]
         row[name] = (number, good)
 
     def _settled(self, pending: dict, latest: dict, findings: list[SourceFinding],
