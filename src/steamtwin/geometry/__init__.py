@@ -8,7 +8,8 @@ Submodules with heavy dependencies (open3d) are not imported here.
 """
 
 from steamtwin.geometry.meshing import MeshQuality, blade_volume_mesh, mesh_quality
-from steamtwin.geometry.profile import Blade, GeometryError, make_blade, row_design
+from steamtwin.geometry.pritchard import GeometryError
+from steamtwin.geometry.profile import Blade, make_blade, row_design
 from steamtwin.geometry.volume_mesh import (
     REGIONS,
     MeshError,

@@ -22,7 +22,9 @@ import numpy as np
 
 from steamtwin.errors import GeometryAreaError
 from steamtwin.geometry.fidelity import section_pitch, section_throat, truth_section
-from steamtwin.geometry.profile import HP_ROWS, ROWS, GeometryError, make_blade
+from steamtwin.geometry.pritchard import GeometryError
+from steamtwin.geometry.profile import make_blade
+from steamtwin.geometry.row_sizing import HP_ROWS, ROWS
 from steamtwin.geometry.uncertainty import CONTROL_STAGE_ROTOR, throat_area
 from steamtwin.spec import TurbineSpec, parse_spec
 
