@@ -11,8 +11,8 @@ from steamtwin.geometry.pritchard import GeometryError
 from steamtwin.geometry.profile import make_blade
 from steamtwin.geometry.uncertainty import (
     CONTROL_STAGE_ROTOR,
-    _sections,
     as_built_model,
+    exact_sections,
     propagated_stage,
     rebuilt_throat,
     scan_uncertainty,
@@ -24,7 +24,7 @@ def _exhaust(model) -> float:
 
 
 def test_rebuilt_section_without_noise_keeps_the_design_throat(hp1_blade) -> None:
-    radii, points, _ = _sections(hp1_blade, 1)
+    radii, points, _ = exact_sections(hp1_blade, 1)
     assert radii[0] == pytest.approx(hp1_blade.design.mean_radius)
     throat = rebuilt_throat(points[0], section_pitch(hp1_blade), 0.0)
     assert throat == pytest.approx(hp1_blade.profile.params.throat, abs=2e-6)

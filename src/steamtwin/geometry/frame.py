@@ -274,7 +274,7 @@ def estimate_blade_frame(points: np.ndarray, *, hub_end: str | None = None,
     ``keep_scan_frame`` keeps a scan frame that is already a blade frame (see the module
     docstring); ``random_state`` (a seed or a Generator) draws the :data:`SAMPLE_POINTS`
     whose normals are estimated. Raises
-    :class:`~steamtwin.geometry.segmentation.ReconstructionError` naming the problem (bad
+    :class:`~steamtwin.geometry.blade_cloud.ReconstructionError` naming the problem (bad
     cloud, no planar end faces).
     """
     if hub_end is not None and hub_end not in HUB_ENDS:

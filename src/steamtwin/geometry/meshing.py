@@ -254,7 +254,7 @@ SIDE_ORDER = ("suction_side", "leading_edge", "pressure_side", "trailing_edge")
 def mesh_stl(path: str | Path, *, element_size: float | None = None,
              progress: ProgressCallback | None = None) -> VolumeMesh:
     """Tetrahedral mesh of a blade STL written by
-    :func:`~steamtwin.geometry.reconstruct.write_stl` (see :func:`mesh_surface`).
+    :func:`~steamtwin.geometry.mesh_io.write_stl` (see :func:`mesh_surface`).
 
     An STL without region attributes (from other software) is labelled by segmenting points
     sampled on it (:func:`~steamtwin.geometry.segmentation.segment_blade`): each triangle takes

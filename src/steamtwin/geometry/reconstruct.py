@@ -7,7 +7,7 @@ blade without a nominal by :func:`~steamtwin.geometry.frame.estimate_blade_frame
 1. :func:`~steamtwin.geometry.segmentation.segment_blade`: normals, curvature, region growing,
    labels root/tip/pressure_side/suction_side/leading_edge/trailing_edge.
 2. Parameters of the side points: the turn fraction round the section from geodesic arc
-   length (:func:`~steamtwin.geometry.segmentation.section_turn`), mapped to the arc-length
+   length (:func:`~steamtwin.geometry.sections.section_turn`), mapped to the arc-length
    fraction ``s`` counted anticlockwise from the rear end (:func:`initial_parameters`);
    monotone round any section, also where a strongly cambered face is no graph over the
    chord, and unchanged by the twist and taper of a stacked blade.
@@ -151,7 +151,7 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
                       segmentation: Segmentation | None = None) -> Reconstruction:
     """Reconstruct a watertight blade from a cloud in the blade frame (m).
 
-    Raises :class:`~steamtwin.geometry.segmentation.ReconstructionError` naming the problem
+    Raises :class:`~steamtwin.geometry.blade_cloud.ReconstructionError` naming the problem
     (empty, too small or flat cloud; missing caps or edges; a surface that does not close; a
     surface that stands off the cloud or misses part of it, :func:`guarded`).
     ``segmentation``: the cloud's, when already computed.
@@ -243,7 +243,7 @@ def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.
     median section perimeter (m).
 
     The turn fraction θ of the segmentation (``Segmentation.turn``, from
-    :func:`~steamtwin.geometry.segmentation.section_turn`: geodesic arc length anticlockwise
+    :func:`~steamtwin.geometry.sections.section_turn`: geodesic arc length anticlockwise
     from the rear end over the perimeter) is monotone round any section — also where a strongly
     cambered face is no graph over the chord — and unchanged by twist and taper. θ is then
     mapped to the arc-length fraction measured on 9 thin slabs spread over the span: the medians

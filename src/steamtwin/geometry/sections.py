@@ -1,6 +1,6 @@
 """Order round the sections where the ring of a blade's side is broken at a thin edge.
 
-:func:`~steamtwin.geometry.segmentation.section_turn` measures the turn fraction round each
+:func:`~steamtwin.geometry.sections.section_turn` measures the turn fraction round each
 section by geodesic paths that start below the leading edge, run once round the section
 through the trailing edge and come back above it. At a thin, sparsely sampled edge (a
 0.15 mm radius at 0.23 mm spacing, issue 19's slender blade) the neighbour graph does not go

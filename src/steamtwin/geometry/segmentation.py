@@ -3,7 +3,7 @@
 The cloud is in the blade frame (m): x axial, y tangential, z = radius, sections are planes
 z = const. Steps:
 
-1. k-NN PCA per point (:func:`~steamtwin.geometry.preprocess.local_frames`, the estimate of
+1. k-NN PCA per point (:func:`~steamtwin.geometry.filters.local_frames`, the estimate of
    open3d's ``estimate_normals``): normal and surface variation λ0 / (λ0 + λ1 + λ2) (Pauly, Gross
    & Kobbelt 2002). Normals are oriented by propagation along a minimum spanning tree
    (Hoppe et al. 1992, SIGGRAPH) whose edges join only *tangential* neighbours — on a thin

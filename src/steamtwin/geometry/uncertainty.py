@@ -43,7 +43,7 @@ CONTROL_STAGE_ROTOR = ("not propagated: hp1 is the control-stage rotor; the mode
 def propagated_stage(row: str) -> int | None:
     """1-based pressure stage whose ``flow_capacity`` the throat of ``row`` scales: K − 1 for
     hpK (K = 2…13); None for the control-stage rotor hp1. Raises
-    :class:`~steamtwin.geometry.profile.GeometryError` for rows outside the HP model (ip…)."""
+    :class:`~steamtwin.geometry.pritchard.GeometryError` for rows outside the HP model (ip…)."""
     if row not in HP_ROWS:
         raise GeometryError(f"row {row!r} is not in the HP model (rows {HP_ROWS[0]}…"
                             f"{HP_ROWS[-1]}): its throat has no flow capacity to scale")
@@ -132,8 +132,10 @@ class UncertaintyResult:
                     self.nominal_hp_exhaust_temperature - 273.15}
 
 
-def _sections(blade: Blade, count: int) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray]]:
-    """Radii, exact section points (0.2 mm spacing) and their outward normals."""
+def exact_sections(blade: Blade, count: int
+                   ) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray]]:
+    """``count`` radii (m) evenly inside the span, the exact section points there (0.2 mm
+    spacing, m) and their outward unit normals."""
     outline, _ = blade.profile.sample(SCAN_SPACING)
     radii = np.linspace(blade.design.hub_radius, blade.design.tip_radius, count + 2)[1:-1]
     points, normals = [], []
@@ -170,10 +172,10 @@ def scan_uncertainty(blade: Blade, model: object, samples: int = 20, bound: floa
     each sample's ratio propagated through the row's own stage of ``model`` (a
     :class:`~steamtwin.model.fom.FullOrderModel`, :func:`as_built_model`) at its design point.
     The control-stage rotor hp1 gets the throat areas only (module docstring). Raises
-    :class:`~steamtwin.geometry.profile.GeometryError` for a row outside the HP model."""
+    :class:`~steamtwin.geometry.pritchard.GeometryError` for a row outside the HP model."""
     stage = propagated_stage(blade.row)
     rng = np.random.default_rng(random_state)
-    radii, points, normals = _sections(blade, sections)
+    radii, points, normals = exact_sections(blade, sections)
     pitches = [section_pitch(blade, float(r)) for r in radii]
     exact = np.array([rebuilt_throat(p, s, 0.0) for p, s in zip(points, pitches, strict=True)])
     area = throat_area(blade, radii, exact)
