@@ -108,12 +108,13 @@ def mls_smooth(points: np.ndarray, neighbours: int = 30, max_shift: float = 0.05
     return points + shift[:, None] * normals
 
 
-def median_spacing(points: np.ndarray, tree: cKDTree | None = None, samples: int = 5000
-                   ) -> float:
+def median_spacing(points: np.ndarray, tree: cKDTree | None = None, samples: int = 5000,
+                   stride: int | None = None) -> float:
     """Median distance (m) to the nearest other point, over up to ``samples`` points (every
-    ⌈n / samples⌉-th); ``tree`` a k-d tree of ``points`` when one exists already."""
+    ⌈n / samples⌉-th, or every ``stride``-th when given); ``tree`` a k-d tree of ``points``
+    when one exists already."""
     tree = tree if tree is not None else cKDTree(points)
-    step = max(1, math.ceil(len(points) / samples))
+    step = stride if stride is not None else max(1, math.ceil(len(points) / samples))
     return float(np.median(tree.query(points[::step], k=2)[0][:, 1]))
 
 

@@ -241,7 +241,8 @@ def register_views(views: Sequence[np.ndarray], settings: PreprocessSettings | N
     settings = settings or PreprocessSettings()
     reg = o3d.pipelines.registration
     count = len(views)
-    spacing = max(median_spacing(v) for v in views)
+    # every (n // 5000)-th point: the stride the registration's figures were measured with
+    spacing = max(median_spacing(v, stride=max(1, len(v) // 5000)) for v in views)
     # correspondences must reach the next point of a sparse view: at least 3 point spacings
     distance = max(settings.icp_distance, 3.0 * spacing)
     radius = max(2.0 * spacing, settings.icp_distance)
