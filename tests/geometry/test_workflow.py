@@ -58,7 +58,8 @@ def test_scan_and_preprocess_report_progress(reference_spec, tmp_path):
     calls = []
     scanned = scan_row(reference_spec, "hp1", tmp_path, points=4000, views=4, spheres=0,
                        random_state=5, progress=lambda f, m: calls.append((f, m)))
-    assert [f for f, _ in calls] == [0.25, 0.5, 0.75, 1.0] and all(isinstance(m, str) for _, m in calls)
+    assert [f for f, _ in calls] == [0.25, 0.5, 0.75, 1.0]
+    assert all(isinstance(m, str) and m for _, m in calls)
     assert json.loads((tmp_path / "scan.json").read_text())["sphere_radius"] is None
     calls.clear()
     from_folder = preprocess_scan(tmp_path, target_points=1000,
