@@ -24,9 +24,9 @@ import trimesh
 
 from steamtwin.geometry.cad_export import write_cad
 from steamtwin.geometry.fidelity import surface_deviation, surface_samples
-from steamtwin.geometry.mesh_input import read_mesh_cloud
+from steamtwin.geometry.mesh_io import read_mesh_cloud, write_stl
 from steamtwin.geometry.profile import make_blade, reference_surface
-from steamtwin.geometry.reconstruct import reconstruct_blade, write_stl
+from steamtwin.geometry.reconstruct import reconstruct_blade
 from steamtwin.geometry.row_metrics import blade_row_metrics, design_edge_rows
 from steamtwin.geometry.volume_mesh import gmsh_session
 from steamtwin.spec import load_spec
@@ -90,7 +90,7 @@ def main(row: str = "hp1", seed: int = 0) -> dict:
         figures["cloud_deviation"] = _deviation(blade, first)
         stl = write_stl(first, folder / "blade.stl")
         start = time.perf_counter()
-        cloud, sampling = read_mesh_cloud(stl, POINTS, rng=seed)
+        cloud, sampling = read_mesh_cloud(stl, POINTS, random_state=seed)
         second = reconstruct_blade(cloud)
         figures["mesh_source_s"] = time.perf_counter() - start
         figures["mesh_sampling"] = sampling.as_dict()

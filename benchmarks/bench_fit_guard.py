@@ -23,9 +23,9 @@ from pathlib import Path
 
 import numpy as np
 
+from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.fidelity import distances_to_mesh, surface_samples
 from steamtwin.geometry.reconstruct import reconstruct_blade
-from steamtwin.geometry.segmentation import ReconstructionError
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "geometry"))
 from test_fit_guard import foreign_blade, noisy_cloud  # the tests' construction

@@ -41,10 +41,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "geometry
 
 from foreign_blades import FAMILY, compare_with_exact, family_blade, laser_cloud, random_pose
 
+from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.frame import reconstruct_in_any_pose
 from steamtwin.geometry.reconstruct import Reconstruction, reconstruct_blade
 from steamtwin.geometry.scanner import EDGE_SAMPLES
-from steamtwin.geometry.segmentation import ReconstructionError
 
 LIMITS_MM = {"rms": 0.02, "max": 0.1, "worst": 0.5}
 """The issue's limits (mm): RMS and max of a passing STL; a watertight STL beyond ``worst``

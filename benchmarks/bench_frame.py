@@ -23,7 +23,8 @@ from scipy.spatial.transform import Rotation
 
 from steamtwin.geometry.fidelity import chord_line, sample_triangles, truth_section
 from steamtwin.geometry.frame import estimate_blade_frame
-from steamtwin.geometry.profile import ROWS, make_blade, reference_surface
+from steamtwin.geometry.profile import make_blade, reference_surface
+from steamtwin.geometry.row_sizing import ROWS
 from steamtwin.spec import load_spec
 
 

@@ -19,16 +19,16 @@ import time
 import numpy as np
 
 from steamtwin.geometry.fidelity import align_to_nominal, surface_deviation
+from steamtwin.geometry.filters import remove_statistical_outliers
+from steamtwin.geometry.mesh_io import write_stl
 from steamtwin.geometry.meshing import blade_volume_mesh, mesh_quality, mesh_stl
-from steamtwin.geometry.preprocess import (
-    PreprocessSettings,
-    pose_errors,
-    preprocess_views,
-    remove_statistical_outliers,
-    transform,
-)
+from steamtwin.geometry.preprocess import preprocess_views
+from steamtwin.geometry.preprocess_settings import PreprocessSettings
 from steamtwin.geometry.profile import Blade, make_blade
-from steamtwin.geometry.reconstruct import reconstruct_blade, reconstruction_fidelity, write_stl
+from steamtwin.geometry.reconstruct import reconstruct_blade
+from steamtwin.geometry.reconstruction_report import reconstruction_fidelity
+from steamtwin.geometry.registration import pose_errors
+from steamtwin.geometry.rigid import transform
 from steamtwin.geometry.scanner import ScannerSettings, planned_points, scan_blade
 from steamtwin.geometry.uncertainty import scan_uncertainty
 from steamtwin.model.fom import FullOrderModel
@@ -43,7 +43,7 @@ def main(row: str = "hp1", seed: int = 0, quick: bool = False, spheres: int = 4)
     start = time.perf_counter()
     figures["scan_points"] = planned_points(blade)  # 150k for hp1, more for the others
     scan = scan_blade(blade, ScannerSettings(points=figures["scan_points"], views=8,
-                                             reference_spheres=spheres), rng=seed)
+                                             reference_spheres=spheres), random_state=seed)
     figures["scan_s"] = time.perf_counter() - start
     figures["outlier_removal"] = _outlier_removal(np.concatenate([v.points for v in scan.views]))
 
@@ -102,7 +102,7 @@ def main(row: str = "hp1", seed: int = 0, quick: bool = False, spheres: int = 4)
     start = time.perf_counter()
     model = FullOrderModel(spec)
     _ = model.design_
-    study = scan_uncertainty(blade, model, samples=20, sections=3, rng=0)
+    study = scan_uncertainty(blade, model, samples=20, sections=3, random_state=0)
     figures["uncertainty_s"] = time.perf_counter() - start
     figures["uncertainty"] = study.as_dict()
     return figures

@@ -20,7 +20,7 @@ import json
 import warnings
 
 from bench_geometry import main as bench_row
-from steamtwin.geometry.profile import ROWS
+from steamtwin.geometry.row_sizing import ROWS
 from steamtwin.geometry.scanner import METHOD_SCAN_POINTS
 
 LIMITS = {"rms": 0.02, "max": 0.1, "chord": 0.05, "stagger": 0.1, "throat": 0.05,

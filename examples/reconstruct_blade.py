@@ -16,15 +16,13 @@ on a blade whose exact shape is known, so the reconstruction's error can be meas
    B-spline surface and closed by the caps: ``blade.stl`` (binary, m, watertight).
 4. The STL's deviation from the exact blade (mean, RMS, 95th percentile, max, Hausdorff),
    the row metrics (chord, stagger, throat …) of the reconstructed sections against the exact
-   ones, and the deviation map (``deviation.png``) are printed and written
-   (``deviation.json``, ``deviation.csv``).
+   ones, and the deviation map are printed and written (``deviation.json``, ``.csv``, ``.png``).
 
 Your own scan enters at step 2 (``read_point_cloud`` reads PLY/PCD/XYZ views) or, already
 fused, at step 3.
 
-How long (CPU time, measured on a 2-core x86_64): ``--quick`` (20 000 scan points, 20 000
-deviation samples) about 25 s; the default (the method's 150 000 points, 100 000 samples) about
-a minute (docs/benchmarks.md, "Geometry").
+How long (CPU time, measured on a 2-core x86_64): ``--quick`` (20 000 scan points) about
+30 s; the default (the method's 150 000 points) about a minute (docs/benchmarks.md, "Geometry").
 
     python examples/reconstruct_blade.py --quick --out blade-output [--row hp5]
 """
@@ -35,17 +33,14 @@ import argparse
 from pathlib import Path
 
 import steamtwin
-from steamtwin.geometry import make_blade
-from steamtwin.geometry.fidelity import align_to_nominal, write_report
 from steamtwin.geometry.pointcloud import write_point_cloud
-from steamtwin.geometry.preprocess import PreprocessSettings, preprocess_views, transform
-from steamtwin.geometry.reconstruct import (
-    reconstruct_blade,
-    reconstruction_fidelity,
-    write_deviation_map,
-    write_stl,
+from steamtwin.geometry.workflow import (
+    preprocess_scan,
+    reconstruct_cloud,
+    report_reconstruction,
+    scan_row,
+    write_blade_stl,
 )
-from steamtwin.geometry.scanner import ScannerSettings, scan_blade, write_scan
 
 
 def main() -> None:
@@ -58,44 +53,36 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0, help="seed of the virtual scanner")
     args = parser.parse_args()
 
-    points, samples = (20_000, 20_000) if args.quick else (150_000, 100_000)
-    blade = make_blade(steamtwin.load_spec("reference"), args.row)
-    scan = scan_blade(blade, ScannerSettings(points=points), rng=args.seed)
-    files = write_scan(scan, args.out / "scan")
-    print(f"scan of {args.row}: {sum(len(v.points) for v in scan.views)} points in "
-          f"{len(scan.views)} views → {files[0].parent}")
+    points = 20_000 if args.quick else 150_000
+    scan = scan_row(steamtwin.load_spec("reference"), args.row, args.out / "scan",
+                    points=points, random_state=args.seed)
+    print(f"scan of {args.row}: {scan.points} points in {len(scan.scan.views)} views → "
+          f"{args.out / 'scan'}")
 
-    spheres = scan.settings.sphere_radius if scan.settings.reference_spheres else None
-    fused, _, steps = preprocess_views(
-        [view.points for view in scan.views], PreprocessSettings(sphere_radius=spheres),
-        initial_poses=[view.tracked_pose for view in scan.views])
-    write_point_cloud(fused, args.out / "fused.ply")
+    fused = preprocess_scan(scan.scan)  # spheres, outliers, MLS, joint ICP, fusion
+    steps = fused.report
+    write_point_cloud(fused.cloud, args.out / "fused.ply")
     print(f"cleaned and registered: {sum(steps.spheres_found)} sphere sightings, "
           f"{sum(steps.outliers_removed)} outliers removed, {sum(steps.input_points)} → "
-          f"{len(fused)} points (joint ICP RMS {steps.joint_rms * 1e3:.4f} mm)")
+          f"{len(fused.cloud)} points (joint ICP RMS {steps.joint_rms * 1e3:.4f} mm)")
 
-    pose, _ = align_to_nominal(fused, blade)  # scan frame → blade frame
-    reconstruction = reconstruct_blade(transform(fused, pose))
-    stl = write_stl(reconstruction, args.out / "blade.stl")
-    summary = reconstruction.summary()
+    result = reconstruct_cloud(fused.cloud, scan.blade)  # best fit to the nominal, then fit
+    stl = write_blade_stl(result, args.out / "blade.stl")
+    summary = result.reconstruction.summary()
     print(f"reconstructed: {summary['triangles']} triangles, {summary['volume_cm3']:.3f} cm³ "
-          f"(exact blade {blade.volume * 1e6:.3f} cm³), side fit RMS "
+          f"(exact blade {scan.blade.volume * 1e6:.3f} cm³), side fit RMS "
           f"{summary['side_fit_rms_mm']:.4f} mm → {stl}")
 
-    fidelity = reconstruction_fidelity(blade, reconstruction.vertices,
-                                       reconstruction.triangles, samples=samples, rng=args.seed)
-    d = fidelity.deviation
+    report = report_reconstruction(result, args.out / "deviation", scan.blade)
+    d = report.fidelity.deviation
     print(f"deviation from the exact blade (mm): mean {d.mean * 1e3:.4f}, RMS "
           f"{d.rms * 1e3:.4f}, p95 {d.p95 * 1e3:.4f}, max {d.max * 1e3:.4f}, Hausdorff "
           f"{d.hausdorff * 1e3:.4f}")
     print("row metrics at mid-span (truth → measured):")
-    for row in fidelity.metric_rows():
+    for row in report.fidelity.metric_rows():
         print(f"  {row['metric']:<20}{row['truth']:>10.4f} → {row['measured']:>10.4f} "
               f"{row['unit']}")
-    report_json, _ = write_report(fidelity, args.out / "deviation")  # .json and .csv
-    print(f"deviation report: {report_json}")
-    figure = write_deviation_map(reconstruction, args.out / "deviation.png", blade)
-    print(f"deviation map: {figure}")
+    print(f"deviation report: {report.json}, {report.csv}; deviation map: {report.png}")
 
 
 if __name__ == "__main__":

@@ -594,35 +594,30 @@ def _sensitivity_stage(model: FullOrderModel, plant: _PlantData, params: ModelPa
 
 def _geometry_stage(spec: TurbineSpec, model: FullOrderModel, settings: DemoSettings,
                     out: Path, report: Callable[[float], None]) -> tuple[object, list[Section]]:
-    """Scan → fused cloud → B-spline surface → STL → fidelity → mesh → scan uncertainty."""
-    from steamtwin.geometry.fidelity import align_to_nominal
+    """Scan → fused cloud → B-spline surface → STL → fidelity → mesh → scan uncertainty, the
+    chain of :mod:`steamtwin.geometry.workflow` (as ``steamtwin geometry`` runs it)."""
+    from steamtwin.geometry.mesh_io import write_stl
     from steamtwin.geometry.meshing import mesh_quality, mesh_stl
-    from steamtwin.geometry.preprocess import PreprocessSettings, preprocess_views, transform
     from steamtwin.geometry.profile import make_blade
-    from steamtwin.geometry.reconstruct import (
-        reconstruct_blade,
+    from steamtwin.geometry.reconstruction_report import (
         reconstruction_fidelity,
         write_deviation_map,
-        write_stl,
     )
-    from steamtwin.geometry.scanner import ScannerSettings, scan_blade, write_scan
     from steamtwin.geometry.uncertainty import scan_uncertainty
     from steamtwin.geometry.volume_mesh import write_volume_mesh
+    from steamtwin.geometry.workflow import preprocess_scan, reconstruct_cloud, scan_row
 
-    blade = make_blade(spec, "hp1")
-    scan = scan_blade(blade, ScannerSettings(points=settings.scan_points), rng=settings.seed)
-    write_scan(scan, out / "scan-hp1")
+    scanned = scan_row(spec, "hp1", out / "scan-hp1", points=settings.scan_points,
+                       random_state=settings.seed)
+    blade, scan = scanned.blade, scanned.scan
     report(0.15)
-    fused, _, steps = preprocess_views(  # keeps 8/15 of the points: the method's 150k → 80k
-        [view.points for view in scan.views], PreprocessSettings(),
-        initial_poses=[view.tracked_pose for view in scan.views])
-    pose, _ = align_to_nominal(fused, blade)  # the scan's frame onto the blade frame
-    cloud = transform(fused, pose)
+    fused = preprocess_scan(scan)  # keeps 8/15 of the points: the method's 150k → 80k
+    steps = fused.report
     report(0.35)
-    reconstruction = reconstruct_blade(cloud)
+    reconstruction = reconstruct_cloud(fused.cloud, blade).reconstruction  # best fit to hp1
     stl = write_stl(reconstruction, out / "blade-hp1.stl")
     fidelity = reconstruction_fidelity(blade, reconstruction.vertices, reconstruction.triangles,
-                                       rng=settings.seed)
+                                       random_state=settings.seed)
     deviation_png = write_deviation_map(reconstruction, out / "deviation_map_hp1.png", blade)
     report(0.55)
     mesh = mesh_stl(stl, element_size=settings.mesh_element_size)  # from the STL, as a user would
@@ -633,7 +628,8 @@ def _geometry_stage(spec: TurbineSpec, model: FullOrderModel, settings: DemoSett
     # throat spread only); hp13, the last pressure-stage rotor, through its own stage
     uncertainty = [
         scan_uncertainty(make_blade(spec, row), model, samples=settings.uncertainty_samples,
-                         rng=settings.seed, progress=lambda f, k=k: report(0.7 + 0.15 * (k + f)))
+                         random_state=settings.seed,
+                         progress=lambda f, _message, k=k: report(0.7 + 0.15 * (k + f)))
         for k, row in enumerate(UNCERTAINTY_ROWS)]
     summary = reconstruction.summary()
     d = fidelity.deviation
@@ -643,7 +639,7 @@ def _geometry_stage(spec: TurbineSpec, model: FullOrderModel, settings: DemoSett
         {"step": "statistical outliers (50 neighbours, 2 σ)",
          "result": f"{sum(steps.outliers_removed)} removed"},
         {"step": "registration, fusion, downsampling",
-         "result": f"{sum(steps.input_points)} → {len(fused)} points"},
+         "result": f"{sum(steps.input_points)} → {len(fused.cloud)} points"},
         {"step": "region growing", "result": ", ".join(
             f"{name} {count}" for name, count in summary["patch_points"].items())},
         {"step": "B-spline surface", "result": f"side fit RMS {summary['side_fit_rms_mm']:.4f} "

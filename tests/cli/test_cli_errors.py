@@ -344,18 +344,13 @@ def _stub_the_work(monkeypatch) -> None:
     """Replace every command's expensive step by :func:`_work_started`."""
     import steamtwin.cli.demo as demo_cli
     import steamtwin.cli.plant_options as plant_cli
-    import steamtwin.geometry.assembly as assembly
-    import steamtwin.geometry.meshing as meshing
-    import steamtwin.geometry.preprocess as preprocess
-    import steamtwin.geometry.reconstruct as reconstruct
-    import steamtwin.geometry.scanner as scanner
-    import steamtwin.geometry.uncertainty as uncertainty
+    import steamtwin.geometry.workflow as workflow
 
     for module, name in [(simulate_file, "FullOrderModel"), (demo_cli, "run_demo"),
-                         (plant_cli, "run_plant"), (scanner, "scan_blade"),
-                         (preprocess, "preprocess_views"), (reconstruct, "reconstruct_blade"),
-                         (meshing, "blade_volume_mesh"), (meshing, "mesh_stl"),
-                         (assembly, "build_assembly"), (uncertainty, "scan_uncertainty")]:
+                         (plant_cli, "run_plant"), (workflow, "scan_blade"),
+                         (workflow, "preprocess_views"), (workflow, "reconstruct_blade"),
+                         (workflow, "blade_volume_mesh"), (workflow, "mesh_stl"),
+                         (workflow, "build_assembly"), (workflow, "scan_uncertainty")]:
         monkeypatch.setattr(module, name, _work_started)
 
 

@@ -19,8 +19,8 @@ from steamtwin.geometry.fidelity import (
     truth_section,
     write_report,
 )
-from steamtwin.geometry.preprocess import transform
 from steamtwin.geometry.profile import make_blade, reference_surface
+from steamtwin.geometry.rigid import transform
 
 
 @pytest.mark.parametrize("row", ["hp1", "hp9", "ip3"])

@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.fidelity import sample_triangles, surface_samples
 from steamtwin.geometry.fit_guard import (
     GuardSettings,
@@ -18,13 +19,9 @@ from steamtwin.geometry.fit_guard import (
     guard_surface,
     local_excursion,
 )
-from steamtwin.geometry.profile import _cap_triangles, reference_surface
-from steamtwin.geometry.reconstruct import (
-    ReconstructionSettings,
-    _regions_at,
-    reconstruct_blade,
-)
-from steamtwin.geometry.segmentation import ReconstructionError, segment_blade
+from steamtwin.geometry.profile import cap_triangles, reference_surface
+from steamtwin.geometry.reconstruct import ReconstructionSettings, reconstruct_blade, regions_at
+from steamtwin.geometry.segmentation import segment_blade
 from steamtwin.geometry.volume_mesh import REGIONS
 
 # --- a blade that is not ours ------------------------------------------------------------------
@@ -78,8 +75,8 @@ def foreign_blade(span: float, root_chord: float, tip_chord: float, stagger: tup
     for level in range(levels - 1):
         a, b = level * n + k, level * n + (k + 1) % n
         side += [np.column_stack([a, b, b + n]), np.column_stack([a, b + n, a + n])]
-    root = _cap_triangles(rings[0][:, :2])[:, ::-1]
-    tip = _cap_triangles(rings[-1][:, :2]) + (levels - 1) * n
+    root = cap_triangles(rings[0][:, :2])[:, ::-1]
+    tip = cap_triangles(rings[-1][:, :2]) + (levels - 1) * n
     return vertices, np.vstack([*side, root, tip])
 
 
@@ -107,7 +104,7 @@ def _planted(reconstruction, region: str, size: float):
     surface normal, the middle one by ``size`` (m), its neighbours along the span by half."""
     columns = len(reconstruction.ring_parameters)
     rows = len(reconstruction.vertices) // columns
-    where = np.flatnonzero(_regions_at(reconstruction.ring_parameters,
+    where = np.flatnonzero(regions_at(reconstruction.ring_parameters,
                                        reconstruction.boundaries) == REGIONS.index(region))
     column = where[len(where) // 2]
     vertices = reconstruction.vertices.copy()
@@ -170,7 +167,7 @@ def test_a_scan_hole_is_no_defect(dense_hp1) -> None:
     them tangentially, the guard stays quiet."""
     segmentation = dense_hp1.segmentation
     columns = len(dense_hp1.ring_parameters)
-    regions = _regions_at(dense_hp1.ring_parameters, dense_hp1.boundaries)
+    regions = regions_at(dense_hp1.ring_parameters, dense_hp1.boundaries)
     middle = len(dense_hp1.vertices) // columns // 2 * columns
     labels = segmentation.labels.copy()
     for region in ("suction_side", "trailing_edge"):
@@ -212,7 +209,7 @@ def test_the_guard_refuses_when_repairs_do_not_remove_the_defect(dense_hp1, monk
     def with_beak(*args, **kwargs):
         vertices, triangles, regions, ring_s = original(*args, **kwargs)
         columns = len(ring_s)
-        where = np.flatnonzero(_regions_at(ring_s, args[3]) == REGIONS.index("trailing_edge"))
+        where = np.flatnonzero(regions_at(ring_s, args[3]) == REGIONS.index("trailing_edge"))
         at = len(vertices) // columns // 2 * columns + where[len(where) // 2]
         vertices = vertices.copy()
         vertices[at, :2] += 0.9e-3 * args[0].outward_normals(
@@ -240,7 +237,8 @@ def slender_cloud() -> np.ndarray:
 def test_a_small_tip_cap_is_found(slender_cloud) -> None:
     """Noise splits the small tip face into smooth patches below the fixed 50 points (largest
     42 here); the cap minimum scaled to the cloud keeps them."""
-    from steamtwin.geometry.segmentation import oriented_normals, region_growing
+    from steamtwin.geometry.orientation import oriented_normals
+    from steamtwin.geometry.segmentation import region_growing
 
     tip = slender_cloud[:, 2] > 0.56 - 1e-6
     assert 80 <= np.sum(tip) <= 200  # the construction: ~120 points on the tip face
@@ -312,7 +310,7 @@ def _dented(reconstruction, region: str, depth: float, half_height: float = 2e-3
     surface normal by ``depth`` (m): a surface that misses a patch of the blade."""
     s = reconstruction.ring_parameters
     columns = len(s)
-    where = np.flatnonzero(_regions_at(s, reconstruction.boundaries) == REGIONS.index(region))
+    where = np.flatnonzero(regions_at(s, reconstruction.boundaries) == REGIONS.index(region))
     middle = s[where[len(where) // 2]]
     vertices = reconstruction.vertices.copy()
     z = vertices[:, 2]

@@ -14,6 +14,7 @@ from scipy.spatial.transform import Rotation
 from typer.testing import CliRunner
 
 from steamtwin.cli.geometry import geometry_app
+from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.fidelity import (
     align_to_nominal,
     blade_distance,
@@ -28,11 +29,11 @@ from steamtwin.geometry.frame import (
     nominal_starts,
     reconstruct_in_any_pose,
 )
+from steamtwin.geometry.mesh_io import read_stl
 from steamtwin.geometry.pointcloud import write_point_cloud
-from steamtwin.geometry.preprocess import transform
 from steamtwin.geometry.profile import Blade, make_blade, reference_surface
-from steamtwin.geometry.reconstruct import read_stl, reconstruct_blade
-from steamtwin.geometry.segmentation import ReconstructionError
+from steamtwin.geometry.reconstruct import reconstruct_blade
+from steamtwin.geometry.rigid import transform
 from steamtwin.spec import TurbineSpec, load_spec
 
 runner = CliRunner()

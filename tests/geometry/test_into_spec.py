@@ -17,7 +17,7 @@ from steamtwin.geometry.into_spec import (
     update_spec_from_scans,
 )
 from steamtwin.geometry.profile import make_blade
-from steamtwin.geometry.reconstruct import (
+from steamtwin.geometry.reconstruction_report import (
     reconstruction_fidelity,
     row_throat_area,
     write_reconstruction_report,

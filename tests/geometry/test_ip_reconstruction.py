@@ -10,11 +10,8 @@ import trimesh
 
 from steamtwin.geometry.fidelity import sample_triangles, truth_section
 from steamtwin.geometry.profile import Blade, make_blade, reference_surface
-from steamtwin.geometry.reconstruct import (
-    initial_parameters,
-    reconstruct_blade,
-    reconstruction_fidelity,
-)
+from steamtwin.geometry.reconstruct import initial_parameters, reconstruct_blade
+from steamtwin.geometry.reconstruction_report import reconstruction_fidelity
 from steamtwin.geometry.segmentation import segment_blade
 from steamtwin.geometry.volume_mesh import REGIONS
 from steamtwin.spec import TurbineSpec

@@ -6,20 +6,18 @@ import numpy as np
 import pytest
 
 from steamtwin.geometry.fidelity import distances_to_mesh
-from steamtwin.geometry.preprocess import (
-    KEPT_SHARE,
-    PreprocessSettings,
-    degeneracy_aware_icp,
+from steamtwin.geometry.filters import (
     feature_preserving_downsample,
     local_frames,
     mls_smooth,
     neighbour_mean_distances,
-    pose_errors,
-    preprocess_views,
     remove_statistical_outliers,
-    transform,
 )
+from steamtwin.geometry.preprocess import preprocess_views
+from steamtwin.geometry.preprocess_settings import KEPT_SHARE, PreprocessSettings
 from steamtwin.geometry.profile import reference_surface
+from steamtwin.geometry.registration import degeneracy_aware_icp, pose_errors
+from steamtwin.geometry.rigid import transform
 from steamtwin.geometry.scanner import ScannerSettings, scan_blade
 
 
@@ -30,7 +28,7 @@ def hp5_scan(reference_spec):
     blade = make_blade(reference_spec, "hp5")
     # without reference spheres: the registration of the blade alone (spheres: their own tests)
     return blade, scan_blade(blade, ScannerSettings(views=6, points=30_000, reference_spheres=0),
-                             rng=3)
+                             random_state=3)
 
 
 @pytest.fixture(scope="module")

@@ -11,15 +11,14 @@ import trimesh
 from hypothesis import given
 from hypothesis import strategies as st
 
-from steamtwin.geometry.profile import (
-    HP_ROWS,
+from steamtwin.geometry.pritchard import (
     SEGMENTS,
     GeometryError,
     PritchardParameters,
-    make_blade,
     pritchard_profile,
-    row_design,
 )
+from steamtwin.geometry.profile import make_blade, row_design
+from steamtwin.geometry.row_sizing import HP_ROWS
 from steamtwin.geometry.volume_mesh import REGIONS
 
 REFERENCE = PritchardParameters(
@@ -129,7 +128,7 @@ def test_section_transform_round_trips(hp1_blade) -> None:
 
 def test_ip_rows_are_a_consistent_estimate(reference_spec) -> None:
     from steamtwin.geometry.ip_rows import IP_REACTION, ip_expansion
-    from steamtwin.geometry.profile import IP_ROWS
+    from steamtwin.geometry.row_sizing import IP_ROWS
 
     designs = [row_design(reference_spec, row) for row in IP_ROWS]
     assert all(d.kind == "stator" and d.angular_speed == 0.0 for d in designs)

@@ -12,6 +12,7 @@ import trimesh
 from typer.testing import CliRunner
 
 from steamtwin.cli.geometry import geometry_app
+from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.bspline import AdaptiveSurfaceFit, clamped_knots
 from steamtwin.geometry.fidelity import (
     align_to_nominal,
@@ -21,22 +22,22 @@ from steamtwin.geometry.fidelity import (
     section_pitch,
     truth_section,
 )
+from steamtwin.geometry.mesh_io import read_stl, write_stl
+from steamtwin.geometry.mesh_sections import section_loops
 from steamtwin.geometry.meshing import label_triangles, mesh_stl
 from steamtwin.geometry.pointcloud import write_point_cloud
-from steamtwin.geometry.preprocess import PreprocessSettings, preprocess_views, transform
+from steamtwin.geometry.preprocess import preprocess_views
+from steamtwin.geometry.preprocess_settings import PreprocessSettings
 from steamtwin.geometry.profile import make_blade, reference_surface
-from steamtwin.geometry.reconstruct import (
-    ReconstructionSettings,
-    read_stl,
-    reconstruct_blade,
+from steamtwin.geometry.reconstruct import ReconstructionSettings, reconstruct_blade
+from steamtwin.geometry.reconstruction_report import (
     reconstruction_fidelity,
-    section_loops,
     write_deviation_map,
     write_reconstruction_report,
-    write_stl,
 )
+from steamtwin.geometry.rigid import transform
 from steamtwin.geometry.scanner import ScannerSettings, scan_blade
-from steamtwin.geometry.segmentation import ReconstructionError, segment_blade
+from steamtwin.geometry.segmentation import segment_blade
 from steamtwin.geometry.volume_mesh import REGIONS, read_volume_mesh
 
 runner = CliRunner()
@@ -68,7 +69,7 @@ def clean_reconstruction(clean_hp1):
 @pytest.fixture(scope="module")
 def chain(hp1_blade):
     """A 30k-point, 6-view scan → preprocessing → best fit to the nominal → reconstruction."""
-    scan = scan_blade(hp1_blade, ScannerSettings(views=6, points=30_000), rng=3)
+    scan = scan_blade(hp1_blade, ScannerSettings(views=6, points=30_000), random_state=3)
     fused, _, _ = preprocess_views([v.points for v in scan.views],
                                    PreprocessSettings(target_points=16_000),
                                    initial_poses=[v.tracked_pose for v in scan.views])
@@ -287,7 +288,7 @@ def test_sparse_scan_reconstructs_watertight(hp1_blade, seed: int) -> None:
     """12k-point 8-view scans (point spacing ≈ 0.64 mm, comparable to the 0.82 mm
     trailing-edge radius; ~1 % stray points up to 6 mm off): both folded before the robust
     refinement (per-span trimming, split only spans with enough points, fold check)."""
-    scan = scan_blade(hp1_blade, ScannerSettings(points=12_000), rng=seed)
+    scan = scan_blade(hp1_blade, ScannerSettings(points=12_000), random_state=seed)
     fused, _, _ = preprocess_views([v.points for v in scan.views],
                                    PreprocessSettings(target_points=6400),
                                    initial_poses=[v.tracked_pose for v in scan.views])

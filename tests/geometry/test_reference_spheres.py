@@ -8,12 +8,10 @@ import json
 import numpy as np
 import pytest
 
-from steamtwin.geometry.preprocess import (
-    PreprocessSettings,
-    pose_errors,
-    preprocess_views,
-    transform,
-)
+from steamtwin.geometry.preprocess import preprocess_views
+from steamtwin.geometry.preprocess_settings import PreprocessSettings
+from steamtwin.geometry.registration import pose_errors
+from steamtwin.geometry.rigid import transform
 from steamtwin.geometry.scanner import ScannerSettings, scan_blade, write_scan
 from steamtwin.geometry.targets import SphereFit, detect_spheres, fit_sphere, match_spheres
 
@@ -87,7 +85,7 @@ def test_spheres_are_matched_across_views_and_ambiguity_is_refused() -> None:
 
 def test_spheres_that_match_nothing_are_refused(hp1_blade) -> None:
     """Spheres found, but no two views agree on where one is (here: wrong starting poses)."""
-    scan = scan_blade(hp1_blade, ScannerSettings(views=2, points=6000), rng=2)
+    scan = scan_blade(hp1_blade, ScannerSettings(views=2, points=6000), random_state=2)
     wrong = [v.tracked_pose.copy() for v in scan.views]
     wrong[1][:3, 3] += [0.0, 0.01, 0.0]  # 10 mm off
     with pytest.raises(ValueError, match="none matches a sphere of another view"):
@@ -99,7 +97,7 @@ def test_without_spheres_the_scanner_is_the_old_one(hp1_blade) -> None:
     """``reference_spheres = 0`` gives the points of the scanner before the spheres (recorded
     from it: 2 views, 2000 points, seed 11)."""
     scan = scan_blade(hp1_blade, ScannerSettings(views=2, points=2000, reference_spheres=0),
-                      rng=11)
+                      random_state=11)
     old = [([[-0.01219432026663787, 0.01750330148491839, 0.11543356749236484],
               [-0.00922658917189723, -0.00245997705011559, 0.0940074885161816],
               [-0.01569299073157329, 0.00971573443405262, 0.1020852768215166]],
@@ -122,7 +120,7 @@ def test_without_spheres_the_scanner_is_the_old_one(hp1_blade) -> None:
 
 @pytest.fixture(scope="module")
 def sphere_scan(hp1_blade):
-    return scan_blade(hp1_blade, ScannerSettings(views=8, points=30_000), rng=1)
+    return scan_blade(hp1_blade, ScannerSettings(views=8, points=30_000), random_state=1)
 
 
 @pytest.fixture(scope="module")

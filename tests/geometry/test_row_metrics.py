@@ -107,7 +107,7 @@ def test_section_metrics_without_and_with_a_pitch() -> None:
 
 
 def test_blade_row_metrics_on_an_extruded_section() -> None:
-    from steamtwin.geometry.profile import _cap_triangles
+    from steamtwin.geometry.profile import cap_triangles
 
     polygon = lens_section(1.0e-3, 0.3e-3, 80e-3, 120e-3, stagger=math.radians(40.0))
     polygon = polygon[::4]
@@ -116,7 +116,7 @@ def test_blade_row_metrics_on_an_extruded_section() -> None:
     k = np.arange(n)
     side = np.vstack([np.column_stack([k, (k + 1) % n, (k + 1) % n + n]),
                       np.column_stack([k, (k + 1) % n + n, k + n])])
-    cap = _cap_triangles(polygon)
+    cap = cap_triangles(polygon)
     triangles = np.vstack([side, cap[:, ::-1], cap + n])
     sections = blade_row_metrics(vertices, triangles, blade_count=60)
     assert [s.name for s in sections] == ["hub", "mid", "tip"]

@@ -16,7 +16,7 @@ SETTINGS = ScannerSettings(views=6, points=24_000, outlier_share=0.02)
 
 @pytest.fixture(scope="module")
 def hp1_scan(hp1_blade):
-    return scan_blade(hp1_blade, SETTINGS, rng=7)
+    return scan_blade(hp1_blade, SETTINGS, random_state=7)
 
 
 def _in_blade_frame(view) -> np.ndarray:
@@ -39,7 +39,7 @@ def test_counts_outliers_and_reproducibility(hp1_scan, hp1_blade) -> None:
     assert total == SETTINGS.points
     share = sum(int(v.is_outlier.sum()) for v in hp1_scan.views) / total
     assert share == pytest.approx(0.02, abs=0.002)
-    again = scan_blade(hp1_blade, SETTINGS, rng=7)
+    again = scan_blade(hp1_blade, SETTINGS, random_state=7)
     np.testing.assert_array_equal(again.views[3].points, hp1_scan.views[3].points)
 
 
@@ -90,7 +90,7 @@ def _fused_points_across_edge(blade, points: int) -> float:
     smaller edge at the narrowest section, at the cloud's mean spacing over the blade area."""
     import trimesh
 
-    from steamtwin.geometry.preprocess import KEPT_SHARE
+    from steamtwin.geometry.preprocess_settings import KEPT_SHARE
     from steamtwin.geometry.profile import reference_surface
 
     vertices, triangles, _ = reference_surface(blade)

@@ -130,7 +130,7 @@ def test_order_by_faces_is_monotone_along_each_face_at_any_stagger(stagger):
 def test_section_turn_orders_a_sharp_edged_section_at_70_degrees_stagger():
     """The crescent's edges are sharp (no circle): the graph does not go round them, the ring
     is broken and section_turn falls back on the order by faces."""
-    from steamtwin.geometry.segmentation import section_turn
+    from steamtwin.geometry.sections import section_turn
 
     points, normals, pressure, along = crescent(8000, 70.0, seed=2)
     count = len(points)
@@ -151,7 +151,7 @@ def test_section_turn_orders_a_sharp_edged_section_at_70_degrees_stagger():
 def test_order_by_faces_refuses_a_face_not_reached_from_both_ends():
     """No neighbour pairs at all on the suction face: a ReconstructionError that says so, which
     section_turn turns into keeping the ring order, never a crash."""
-    from steamtwin.geometry.segmentation import ReconstructionError
+    from steamtwin.geometry.blade_cloud import ReconstructionError
 
     points, normals, pressure, _ = crescent(4000, 30.0)
     count = len(points)

@@ -1,14 +1,18 @@
 """Blade geometry: parametric ground truth, scans, reconstruction, assembly and meshes.
 
-- :mod:`~steamtwin.geometry.profile`: Pritchard blade sections, rows sized from the spec, blades.
-- :mod:`~steamtwin.geometry.volume_mesh`: the tetrahedral :class:`VolumeMesh` and its files.
-- :mod:`~steamtwin.geometry.meshing`: gmsh/HXT blade meshes and their quality.
-
-Submodules with heavy dependencies (open3d) are not imported here.
+The modules follow the chain (docs/architecture.md, "The geometry package by pipeline step"):
+ground truth (:mod:`.pritchard`, :mod:`.row_sizing`, :mod:`.ip_rows`, :mod:`.profile`), scan
+(:mod:`.scanner`, :mod:`.pointcloud`, :mod:`.mesh_io`), rigid motions (:mod:`.rigid`),
+preprocessing (:mod:`.filters`, :mod:`.targets`, :mod:`.registration`, :mod:`.multiview`,
+:mod:`.preprocess`), segmentation, surface fitting (:mod:`.reconstruct`), reports
+(:mod:`.fidelity`, :mod:`.row_metrics`, :mod:`.reconstruction_report`), meshes
+(:mod:`.volume_mesh`, :mod:`.meshing`) and the chain as a user runs it (:mod:`.workflow`).
+Here: the blade, its volume mesh and their errors.
 """
 
 from steamtwin.geometry.meshing import MeshQuality, blade_volume_mesh, mesh_quality
-from steamtwin.geometry.profile import Blade, GeometryError, make_blade, row_design
+from steamtwin.geometry.pritchard import GeometryError
+from steamtwin.geometry.profile import Blade, make_blade, row_design
 from steamtwin.geometry.volume_mesh import (
     REGIONS,
     MeshError,

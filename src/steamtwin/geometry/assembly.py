@@ -15,13 +15,14 @@ of revolution following the hub and tip radii (tip clearance 0.5 mm, casing wall
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from steamtwin.geometry.profile import HP_ROWS, IP_ROWS, Blade, make_blade
+from steamtwin.geometry.profile import Blade, make_blade
+from steamtwin.geometry.row_sizing import HP_ROWS, IP_ROWS
+from steamtwin.progress import ProgressCallback
 from steamtwin.spec import TurbineSpec
 
 ROW_PITCH_PER_AXIAL_CHORD = 2.5
@@ -78,7 +79,7 @@ def row_component(blade: Blade, x: float, spacing: float = 2e-3) -> Component:
 def revolve(profile: np.ndarray, name: str, sections: int = 180) -> Component:
     """Closed body of revolution of an (n, 2) (x, r) outline (closed by the axis when its ends
     lie on it, else by repeating its first point), with outward normals."""
-    import trimesh
+    import trimesh  # deferred: heavy import (~1-2 s), only the mesh steps pay it
 
     if profile[0, 1] > 0.0 or profile[-1, 1] > 0.0:
         profile = np.vstack([profile, profile[:1]])
@@ -92,7 +93,7 @@ def revolve(profile: np.ndarray, name: str, sections: int = 180) -> Component:
 
 def build_assembly(spec: TurbineSpec, rows: tuple[str, ...] = HP_ROWS + IP_ROWS,
                    spacing: float = 2e-3,
-                   progress: Callable[[float], None] | None = None) -> list[Component]:
+                   progress: ProgressCallback | None = None) -> list[Component]:
     """Rows, rotor and casing of ``spec`` (``spacing``: blade triangulation spacing, m)."""
     positions = row_positions(spec, rows)
     components, hub, tip = [], [], []
@@ -108,7 +109,7 @@ def build_assembly(spec: TurbineSpec, rows: tuple[str, ...] = HP_ROWS + IP_ROWS,
                 (x1 - 0.75 * blade.profile.params.axial_chord,
                  blade.design.tip_radius + TIP_CLEARANCE)]
         if progress is not None:
-            progress(0.9 * (k + 1) / len(rows))
+            progress(0.9 * (k + 1) / len(rows), f"row {row} placed")
     hub, tip = np.array(hub), np.array(tip)
     # rotor: axis -> hub line -> axis; casing: inner line at the tips, outer wall 0.1 m out
     rotor = np.vstack([[hub[0, 0], 0.0], hub, [hub[-1, 0], 0.0]])
@@ -117,7 +118,7 @@ def build_assembly(spec: TurbineSpec, rows: tuple[str, ...] = HP_ROWS + IP_ROWS,
     components.append(revolve(rotor, "rotor"))
     components.append(revolve(casing, "casing"))
     if progress is not None:
-        progress(1.0)
+        progress(1.0, "rotor and casing revolved")
     return components
 
 
@@ -125,7 +126,7 @@ def write_assembly(components: list[Component], path: str | Path,
                    per_component: bool = True) -> list[Path]:
     """Write the whole assembly as one binary STL and, optionally, one STL per component
     (``<stem>_<name>.stl`` beside it)."""
-    import trimesh
+    import trimesh  # deferred: heavy import (~1-2 s), only the mesh steps pay it
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

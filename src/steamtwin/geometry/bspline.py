@@ -31,6 +31,10 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
+from scipy.interpolate import BSpline, NdBSpline
+from scipy.sparse import csr_array, diags_array, eye_array, kron
+from scipy.sparse.linalg import spsolve
+from scipy.spatial import cKDTree
 
 DEGREE = 3
 #: Relative weight of the second-difference penalty (against the mean diagonal of AᵀA).
@@ -59,8 +63,6 @@ def _basis(x: np.ndarray, knots: np.ndarray, period: int | None = None
            ) -> tuple[np.ndarray, np.ndarray]:
     """Columns and values (n, k + 1) of the non-zero basis functions at ``x``; with ``period``
     the columns wrap modulo it."""
-    from scipy.interpolate import BSpline
-
     matrix = BSpline.design_matrix(x, knots, DEGREE)
     columns = matrix.indices.reshape(len(x), DEGREE + 1)
     values = matrix.data.reshape(len(x), DEGREE + 1)
@@ -81,8 +83,6 @@ class PeriodicSurface:
 
     @cached_property
     def _spline(self) -> object:
-        from scipy.interpolate import NdBSpline
-
         wrapped = np.concatenate([self.coefficients, self.coefficients[:DEGREE]], axis=0)
         return NdBSpline((periodic_knots(self.breaks), self.z_knots), wrapped, DEGREE)
 
@@ -131,8 +131,6 @@ class PeriodicSurface:
         """Whether a section curve at one of ``levels`` heights spread over the z knots (both
         ends included) crosses itself: a loop or swallowtail, as left by spans that too few
         points pin down. Each curve is a polyline of ``samples`` points."""
-        from scipy.spatial import cKDTree
-
         s = np.linspace(0.0, 1.0, samples, endpoint=False)
         for z in np.linspace(self.z_knots[0], self.z_knots[-1], levels):
             start = self(s, np.full(samples, z))
@@ -168,9 +166,6 @@ def fit_periodic_surface(s: np.ndarray, z: np.ndarray, xy: np.ndarray, breaks: n
     products of the s and z bases) and P a second-difference penalty in both directions scaled
     by ``smoothing`` (relative to the mean diagonal of AᵀWA; default :data:`PENALTY`).
     """
-    from scipy.sparse import csr_array, diags_array, eye_array, kron
-    from scipy.sparse.linalg import spsolve
-
     m, nz = len(breaks), len(z_knots) - DEGREE - 1
     cols_s, vals_s = _basis(np.mod(s, 1.0), periodic_knots(breaks), period=m)
     cols_z, vals_z = _basis(np.asarray(z, dtype=float), z_knots)
@@ -195,8 +190,6 @@ def fit_periodic_surface(s: np.ndarray, z: np.ndarray, xy: np.ndarray, breaks: n
 
 
 def _periodic_second_difference(m: int) -> object:
-    from scipy.sparse import csr_array
-
     i = np.arange(m)
     rows = np.concatenate([i, i, i])
     cols = np.concatenate([(i - 1) % m, i, (i + 1) % m])
@@ -205,8 +198,6 @@ def _periodic_second_difference(m: int) -> object:
 
 
 def _second_difference(n: int) -> object:
-    from scipy.sparse import csr_array
-
     if n < 3:
         return csr_array((1, n))
     i = np.arange(n - 2)

@@ -30,10 +30,12 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.interpolate import BSpline, NdBSpline
 
 from steamtwin.errors import GeometryAreaError
 from steamtwin.geometry.bspline import DEGREE, PeriodicSurface, periodic_knots
 from steamtwin.geometry.segmentation import CapPlane
+from steamtwin.geometry.volume_mesh import gmsh_session
 
 #: File suffixes written, by format.
 CAD_SUFFIXES = {".step": "STEP", ".stp": "STEP", ".igs": "IGES", ".iges": "IGES"}
@@ -62,8 +64,6 @@ class ClampedSurface:
 
     def __call__(self, u: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Points (n, 3) of the surface (m) at parameters ``u`` ∈ [0, 1] and ``v`` (m)."""
-        from scipy.interpolate import NdBSpline
-
         knots = (np.repeat(self.knots_u, self.multiplicities_u),
                  np.repeat(self.knots_v, self.multiplicities_v))
         spline = NdBSpline(knots, self.control_points, DEGREE)
@@ -86,8 +86,6 @@ class CadExport:
 def clamped_side(surface: PeriodicSurface) -> ClampedSurface:
     """The side surface as a clamped B-spline (exact: knot insertion at the seam, Piegl &
     Tiller §5.2), with z as third coordinate (Greville abscissae)."""
-    from scipy.interpolate import BSpline
-
     breaks, m = surface.breaks, len(surface.breaks)
     wrapped = np.concatenate([surface.coefficients, surface.coefficients[:DEGREE]], axis=0)
     spline = BSpline(periodic_knots(breaks), wrapped, DEGREE)
@@ -116,8 +114,6 @@ def write_cad(surface: PeriodicSurface, root: CapPlane, tip: CapPlane,
     Raises :class:`CadExportError` naming the file for an unknown suffix or when the kernel
     cannot build or write the faces.
     """
-    from steamtwin.geometry.volume_mesh import gmsh_session
-
     paths = [Path(p) for p in paths]
     for path in paths:
         if path.suffix.lower() not in CAD_SUFFIXES:

@@ -18,10 +18,14 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
+from matplotlib.path import Path as MplPath
 from scipy.optimize import minimize
 from scipy.spatial import ConvexHull, cKDTree
 
 from steamtwin.geometry.profile import Blade, reference_surface
+from steamtwin.geometry.registration import degeneracy_aware_icp
+from steamtwin.geometry.rigid import transform
+from steamtwin.geometry.volume_mesh import REGIONS
 
 METRICS = ("chord", "stagger", "max_thickness", "throat")
 METRIC_UNITS = {"chord": "mm", "stagger": "deg", "max_thickness": "mm", "throat": "mm"}
@@ -52,7 +56,7 @@ class SectionMetrics:
 
 
 def _scene(vertices: np.ndarray, triangles: np.ndarray) -> object:
-    import open3d as o3d
+    import open3d as o3d  # deferred: heavy import (~2 s), only the steps that use it pay
 
     scene = o3d.t.geometry.RaycastingScene()
     scene.add_triangles(o3d.core.Tensor(np.asarray(vertices, np.float32)),
@@ -67,7 +71,7 @@ def distances_to_mesh(points: np.ndarray, vertices: np.ndarray,
     Coordinates are shifted to the mesh centre before the single-precision query, so the
     rounding stays below 10 nm for parts up to a metre.
     """
-    import open3d as o3d
+    import open3d as o3d  # deferred: heavy import (~2 s), only the steps that use it pay
 
     centre = vertices.mean(axis=0)
     scene = _scene(vertices - centre, triangles)
@@ -82,9 +86,6 @@ def blade_distance(blade: Blade, points: np.ndarray) -> np.ndarray:
     the flat root and tip caps are measured analytically in double precision (their ear-clipped
     triangles are slivers that single-precision queries resolve only to ~10 µm).
     """
-    from matplotlib.path import Path as MplPath
-
-    from steamtwin.geometry.volume_mesh import REGIONS
 
     vertices, triangles, regions = reference_surface(blade)
     caps = (regions == REGIONS.index("root")) | (regions == REGIONS.index("tip"))
@@ -104,13 +105,14 @@ def blade_distance(blade: Blade, points: np.ndarray) -> np.ndarray:
 
 
 def surface_samples(vertices: np.ndarray, triangles: np.ndarray, count: int,
-                    rng: np.random.Generator) -> np.ndarray:
+                    random_state: np.random.Generator | int | None = 0) -> np.ndarray:
     """``count`` points uniformly distributed over a triangle mesh's area."""
-    return sample_triangles(vertices, triangles, count, rng)[0]
+    return sample_triangles(vertices, triangles, count, random_state)[0]
 
 
 def sample_triangles(vertices: np.ndarray, triangles: np.ndarray, count: int,
-                     rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                     random_state: np.random.Generator | int | None = 0
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``count`` points (m) uniformly distributed over a triangle mesh's area, the triangle
     each lies on and that triangle's unit normal (by the vertex order: outward on a
     consistently wound closed mesh). Triangle by area, then uniform barycentric coordinates
@@ -119,6 +121,7 @@ def sample_triangles(vertices: np.ndarray, triangles: np.ndarray, count: int,
     p = vertices[triangles]
     cross = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     area = 0.5 * np.linalg.norm(cross, axis=1)
+    rng = np.random.default_rng(random_state)
     pick = rng.choice(len(triangles), size=count, p=area / area.sum())
     u, v = rng.random(count), rng.random(count)
     flip = u + v > 1.0
@@ -130,14 +133,14 @@ def sample_triangles(vertices: np.ndarray, triangles: np.ndarray, count: int,
 
 def surface_deviation(blade: Blade, points: np.ndarray, vertices: np.ndarray | None = None,
                       triangles: np.ndarray | None = None, samples: int = 200_000,
-                      rng: np.random.Generator | int | None = 0) -> Deviation:
+                      random_state: np.random.Generator | int | None = 0) -> Deviation:
     """Deviation of measured ``points`` (blade frame, m) from the exact blade surface.
 
     mean/RMS/max are over the points; the Hausdorff distance also takes the exact surface's
     distance to the measured one, from ``samples`` points spread over the exact surface, to the
     measured mesh (``vertices``, ``triangles``) or, without a mesh, to the nearest point.
     """
-    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    rng = np.random.default_rng(random_state)
     ref_v, ref_t, _ = reference_surface(blade)
     forward = blade_distance(blade, points)
     truth_points = surface_samples(ref_v, ref_t, samples, rng)
@@ -164,8 +167,6 @@ def align_to_nominal(points: np.ndarray, blade: Blade, distance: float = 1.0e-3,
     data, :func:`~steamtwin.geometry.frame.nominal_starts`); fine: point-to-plane ICP against
     the nominal; the lowest residual wins.
     """
-    from steamtwin.geometry.preprocess import degeneracy_aware_icp, transform
-
     ref_v, ref_t, _ = reference_surface(blade)
     rng = np.random.default_rng(0)
     nominal = surface_samples(ref_v, ref_t, 30_000, rng)
@@ -203,7 +204,7 @@ def align_to_nominal(points: np.ndarray, blade: Blade, distance: float = 1.0e-3,
 def _face_normals_at(points: np.ndarray, vertices: np.ndarray,
                      triangles: np.ndarray) -> np.ndarray:
     """Outward normals of the mesh faces closest to ``points``."""
-    import open3d as o3d
+    import open3d as o3d  # deferred: heavy import (~2 s), only the steps that use it pay
 
     centre = vertices.mean(axis=0)
     scene = _scene(vertices - centre, triangles)
@@ -250,7 +251,7 @@ def chord_line(polygon: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
     length = np.linalg.norm(edges, axis=1)
     longest = int(np.argmax(length))
     first, second = hull[longest], hull[(longest + 1) % len(hull)]
-    diameter = _farthest_pair(hull)
+    diameter = farthest_pair(hull)
     concave = bool(length[longest] >= 0.5 * np.linalg.norm(diameter[1] - diameter[0]))
     if not concave:
         first, second = diameter
@@ -259,7 +260,7 @@ def chord_line(polygon: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
     return first, second, concave
 
 
-def _farthest_pair(hull: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def farthest_pair(hull: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The two hull points farthest apart: on a thinned hull first, then among the neighbours
     of that pair."""
     k = max(1, len(hull) // 800)
@@ -287,8 +288,6 @@ def section_metrics(polygon: np.ndarray, pitch: float | None) -> SectionMetrics:
     the largest inscribed circle; throat = shortest distance from the neighbour's trailing-edge
     region (its last 6 % of axial chord) to this section (the cascade throat, Pritchard 1985).
     """
-    from matplotlib.path import Path as MplPath
-
     polygon = np.asarray(polygon, dtype=np.float64)
     lead, trail, _ = chord_line(polygon)
     direction = (trail - lead) / np.linalg.norm(trail - lead)

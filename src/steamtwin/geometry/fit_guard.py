@@ -1,5 +1,8 @@
 """Two-way check of a reconstructed blade against its cloud: surface far from the data.
 
+Kept as one module because both directions of the check share one envelope measurement (the
+facing cloud points round each surface sample) and one report, which the repair reads whole.
+
 The fit's residuals measure one way, the cloud points far from the fitted surface. A beak
 beyond a thin trailing edge or a spike at a leading-edge nose is the other way: surface where
 there are no points, which no residual sees. This module measures it (the surface side of the
@@ -48,15 +51,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
+from scipy.sparse import coo_array
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
+from steamtwin.geometry.bspline import PeriodicSurface
+from steamtwin.geometry.scanner import EDGE_SAMPLES
 from steamtwin.geometry.segmentation import SIDE_REGIONS, Segmentation
 from steamtwin.geometry.volume_mesh import REGIONS
-
-if TYPE_CHECKING:
-    from steamtwin.geometry.reconstruct import Reconstruction
 
 #: Normal-consistent scale of the median absolute deviation (Gaussian: σ = 1.4826 × MAD).
 MAD_SCALE = 1.4826
@@ -67,6 +72,22 @@ FACING = math.radians(60.0)
 ENVELOPE = 4
 #: Span bands in which edges are measured: fifths of the span.
 SPAN_BANDS = 5
+
+
+class GuardedMesh(Protocol):
+    """What the guard reads of a reconstruction (a
+    :class:`~steamtwin.geometry.reconstruct.Reconstruction` is one; named structurally so that
+    the reconstruction can call its guard without the two modules importing each other)."""
+
+    vertices: np.ndarray  # (n, 3) m, the rings of the side grid root to tip, then the caps
+    triangles: np.ndarray  # (m, 3)
+    points: np.ndarray  # (p, 3) m, the input cloud
+    segmentation: Segmentation
+    surface: PeriodicSurface
+    residuals: np.ndarray  # (p,) m
+    inliers: np.ndarray  # (p,) bool
+    parameters: np.ndarray  # (p,) s of the side points
+    ring_parameters: np.ndarray  # s of the vertices of a ring
 
 
 @dataclass(frozen=True)
@@ -227,8 +248,6 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
     with its envelope points right on its normal line is judged to the noise, one across a gap
     in the points on an edge only to what the gap allows.
     """
-    from scipy.spatial import cKDTree
-
     candidates = min(3 * neighbours, len(cloud))
     if candidates < ENVELOPE:
         raise ValueError(f"the guard needs at least {ENVELOPE} cloud points, got {len(cloud)}")
@@ -280,7 +299,7 @@ def _flat(normals: np.ndarray) -> np.ndarray:
     return flat / np.maximum(np.linalg.norm(flat, axis=1, keepdims=True), 1e-12)
 
 
-def guard_surface(reconstruction: Reconstruction, settings: GuardSettings | None = None
+def guard_surface(reconstruction: GuardedMesh, settings: GuardSettings | None = None
                   ) -> GuardReport:
     """Excursions of the reconstruction's vertices from its cloud, the limit and the defects.
 
@@ -341,7 +360,7 @@ def mesh_distance(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarra
     """Unsigned distance (m) of ``points`` (n, 3; m) from a triangle mesh: open3d's
     ``RaycastingScene.compute_distance`` (closest point on the triangles, Embree BVH) in
     single precision about the mesh's centre — rounding below 0.1 µm for parts up to 1 m."""
-    import open3d as o3d
+    import open3d as o3d  # deferred: heavy import (~2 s), only the steps that use it pay
 
     centre = vertices.mean(axis=0)
     scene = o3d.t.geometry.RaycastingScene()
@@ -351,16 +370,12 @@ def mesh_distance(points: np.ndarray, vertices: np.ndarray, triangles: np.ndarra
     return scene.compute_distance(query).numpy().astype(np.float64)
 
 
-def coverage_gaps(reconstruction: Reconstruction, back_distance: np.ndarray, limit: float,
+def coverage_gaps(reconstruction: GuardedMesh, back_distance: np.ndarray, limit: float,
                   settings: GuardSettings) -> list[CoverageGap]:
     """The parts of the cloud the triangulation misses (module docstring): patch points
     farther than ``limit`` (m) from it (``back_distance``, m, NaN for unassigned points) whose
     neighbourhood is far as well, linked into groups; each group of at least
     ``settings.min_gap_points`` points is a gap, largest distance first."""
-    from scipy.sparse import coo_array
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
     assigned = np.flatnonzero(~np.isnan(back_distance))
     points = reconstruction.points[assigned]
     far = back_distance[assigned] > limit
@@ -399,7 +414,7 @@ def coverage_gaps(reconstruction: Reconstruction, back_distance: np.ndarray, lim
     return sorted(gaps, key=lambda g: -g.distance)
 
 
-def _chord_fraction(reconstruction: Reconstruction):
+def _chord_fraction(reconstruction: GuardedMesh):
     """Function of points (n, 3; m) → their position along the chord of the nearest ring of
     the triangulation (0 at the leading edge, 1 at the trailing edge): the projection on the
     line from the ring's leading-edge vertex (the middle of the leading-edge patch) to its
@@ -426,12 +441,9 @@ def _chord_fraction(reconstruction: Reconstruction):
     return along
 
 
-def _defects(reconstruction: Reconstruction, excursion: np.ndarray, limit: np.ndarray
+def _defects(reconstruction: GuardedMesh, excursion: np.ndarray, limit: np.ndarray
              ) -> list[Defect]:
     """Connected groups (over the triangle edges) of the vertices beyond their ``limit``."""
-    from scipy.sparse import coo_array
-    from scipy.sparse.csgraph import connected_components
-
     bad = excursion > limit
     if not np.any(bad):
         return []
@@ -510,8 +522,6 @@ def edge_sampling(points: np.ndarray, segmentation: Segmentation, edge: str,
     slabs three spacings high; the points per millimetre across the half circle are √ρ, ρ the
     patch's points over its area π·r × the band's height. Bands with fewer than 12 edge points
     are skipped."""
-    from steamtwin.geometry.scanner import EDGE_SAMPLES
-
     on = segmentation.labels == REGIONS.index(edge)
     side = segmentation.labels >= 0
     z_all = points[side, 2]

@@ -50,15 +50,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy.spatial import ConvexHull, cKDTree
 
-from steamtwin.geometry.segmentation import ReconstructionError, check_blade_cloud
-
-if TYPE_CHECKING:
-    from steamtwin.geometry.profile import Blade
-    from steamtwin.geometry.reconstruct import Reconstruction, ReconstructionSettings
+from steamtwin.geometry.blade_cloud import ReconstructionError, check_blade_cloud
+from steamtwin.geometry.fidelity import chord_line, farthest_pair, surface_samples
+from steamtwin.geometry.filters import local_frames
+from steamtwin.geometry.profile import Blade, reference_surface
+from steamtwin.geometry.reconstruct import Reconstruction, ReconstructionSettings, reconstruct_blade
 
 #: Points whose normals are estimated (a random subset of larger clouds): enough for an axis
 #: to 0.01° (the scatter matrix averages thousands of side normals), seconds of k-NN PCA.
@@ -234,8 +234,6 @@ def _slab(points: np.ndarray, height: np.ndarray, at: float, thickness: float,
           basis: np.ndarray, spacing: float) -> np.ndarray:
     """In-plane coordinates (n, 2; m) of the points within ``thickness`` / 2 of ``at`` along the
     axis, without isolated points (fewer than 4 others within 4 spacings: stray points)."""
-    from scipy.spatial import cKDTree
-
     chosen = points[np.abs(height - at) < 0.5 * thickness] @ basis.T
     if len(chosen) < 20:
         raise ReconstructionError(f"only {len(chosen)} points in the section at "
@@ -248,12 +246,9 @@ def _slab(points: np.ndarray, height: np.ndarray, at: float, thickness: float,
 def _feret(section: np.ndarray) -> float:
     """Robust largest width (m) of a section: the range of its points' projections on the
     line of the farthest pair, without the two most extreme points at each end."""
-    from scipy.spatial import ConvexHull
-
-    from steamtwin.geometry.fidelity import _farthest_pair
 
     hull = section[ConvexHull(section).vertices]
-    a, b = _farthest_pair(hull)
+    a, b = farthest_pair(hull)
     along = np.sort(section @ _unit(b - a))
     return float(along[-3] - along[2])
 
@@ -270,26 +265,24 @@ def _end_width(section: np.ndarray, end: np.ndarray, inward: np.ndarray, chord: 
 
 def estimate_blade_frame(points: np.ndarray, *, hub_end: str | None = None,
                          suction_side: str | None = None, keep_scan_frame: bool = True,
-                         rng: np.random.Generator | int | None = 0) -> BladeFrame:
+                         random_state: np.random.Generator | int | None = 0) -> BladeFrame:
     """Blade frame of a blade cloud (n, 3; m) in any pose.
 
     ``hub_end`` (one of :data:`HUB_ENDS`) overrides the hub/tip rules: the hub is the end the
     given scan axis points towards; ``suction_side`` (``"+y"`` or ``"-y"``, see the module
     docstring) lets the handedness decide hub and tip of an untapered, cambered blade;
     ``keep_scan_frame`` keeps a scan frame that is already a blade frame (see the module
-    docstring); ``rng`` draws the :data:`SAMPLE_POINTS` whose normals are estimated. Raises
-    :class:`~steamtwin.geometry.segmentation.ReconstructionError` naming the problem (bad
+    docstring); ``random_state`` (a seed or a Generator) draws the :data:`SAMPLE_POINTS`
+    whose normals are estimated. Raises
+    :class:`~steamtwin.geometry.blade_cloud.ReconstructionError` naming the problem (bad
     cloud, no planar end faces).
     """
-    from steamtwin.geometry.fidelity import chord_line
-    from steamtwin.geometry.preprocess import local_frames
-
     if hub_end is not None and hub_end not in HUB_ENDS:
         raise ValueError(f"hub_end must be one of {', '.join(HUB_ENDS)} (got {hub_end!r})")
     if suction_side is not None and suction_side not in SUCTION_SIDES:
         raise ValueError(f"suction_side must be '+y' or '-y' (got {suction_side!r})")
     points = check_blade_cloud(points)
-    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    rng = np.random.default_rng(random_state)
     sample = points[rng.permutation(len(points))[:SAMPLE_POINTS]]
     index, normals, _ = local_frames(sample, NEIGHBOURS)
     spacing = float(np.median(np.linalg.norm(sample[index[:, 1]] - sample, axis=1)))
@@ -428,8 +421,6 @@ def reconstruct_in_any_pose(points: np.ndarray, settings: ReconstructionSettings
     its vertices back to the scan frame. A cloud already in a blade frame is reconstructed as
     it is (``kept_scan_frame``).
     """
-    from steamtwin.geometry.reconstruct import reconstruct_blade
-
     if frame is None:
         frame = estimate_blade_frame(points, hub_end=hub_end, suction_side=suction_side)
     return reconstruct_blade(frame.to_blade(points), settings), frame
@@ -446,9 +437,6 @@ def nominal_starts(points: np.ndarray, blade: Blade, *, hub_end: str | None = No
     package's rows have their suction side towards +y); with hub and tip swapped as well when
     the cloud's ends are ambiguous. Starting poses for
     :func:`~steamtwin.geometry.fidelity.align_to_nominal`."""
-    from steamtwin.geometry.fidelity import surface_samples
-    from steamtwin.geometry.profile import reference_surface
-
     vertices, triangles, _ = reference_surface(blade)
     nominal_points = surface_samples(vertices, triangles, SAMPLE_POINTS, np.random.default_rng(0))
     nominal = estimate_blade_frame(nominal_points, suction_side="+y", keep_scan_frame=False)

@@ -2,9 +2,9 @@
 
 ``steamtwin geometry reconstruct … --report BASE`` writes ``BASE.json`` with the row's throat
 area N·∫o(r)dr of the measured and of the design blade (``throat_area``, from the throats at
-hub, mid-span and tip; :func:`~steamtwin.geometry.reconstruct.row_throat_area`). The Stodola
-constant of a stage scales with its throat area (Cooke 1985), so the ratio measured / design
-of rotor row hpK multiplies ``stages[K−1].flow_capacity`` (:func:`update_spec_from_scans`).
+hub, mid-span and tip; :func:`~steamtwin.geometry.reconstruction_report.row_throat_area`).
+The Stodola constant of a stage scales with its throat area (Cooke 1985), so the ratio measured
+/ design of rotor row hpK multiplies ``stages[K−1].flow_capacity`` (:func:`update_spec_from_scans`).
 The control-stage rotor hp1 sets no flow in the model (the nozzle groups do,
 :data:`~steamtwin.geometry.uncertainty.CONTROL_STAGE_ROTOR`) and IP rows are not in the HP
 model: both are listed as not applied. The spec TOML text is edited line by line, so its
@@ -22,7 +22,9 @@ import numpy as np
 
 from steamtwin.errors import GeometryAreaError
 from steamtwin.geometry.fidelity import section_pitch, section_throat, truth_section
-from steamtwin.geometry.profile import HP_ROWS, ROWS, GeometryError, make_blade
+from steamtwin.geometry.pritchard import GeometryError
+from steamtwin.geometry.profile import make_blade
+from steamtwin.geometry.row_sizing import HP_ROWS, ROWS
 from steamtwin.geometry.uncertainty import CONTROL_STAGE_ROTOR, throat_area
 from steamtwin.spec import TurbineSpec, parse_spec
 

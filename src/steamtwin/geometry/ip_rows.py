@@ -33,15 +33,16 @@ import math
 
 import numpy as np
 
-from steamtwin.geometry.profile import (
+from steamtwin.geometry.pritchard import GeometryError
+from steamtwin.geometry.row_sizing import (
     IP_ROWS,
     ZWEIFEL,
-    GeometryError,
     RowDesign,
-    _section_from_angles,
     free_vortex_angles,
+    section_from_angles,
 )
 from steamtwin.spec import TurbineSpec
+from steamtwin.steam import if97
 
 REHEAT_PRESSURE_LOSS = 0.10
 CROSSOVER_PRESSURE = 0.9e6  # Pa
@@ -55,8 +56,6 @@ IP_STATOR_EXIT_ANGLE = math.radians(16.0)  # from the wheel plane
 
 def ip_expansion(spec: TurbineSpec) -> dict[str, np.ndarray | float]:
     """States of the estimated IP expansion: per-stage inlet pressure/enthalpy, flow (SI)."""
-    from steamtwin.steam import if97
-
     design = spec.design
     p_in = design.hp_exhaust_pressure * (1.0 - REHEAT_PRESSURE_LOSS)
     t_in = design.main_steam_temperature
@@ -89,8 +88,6 @@ def ip_expansion(spec: TurbineSpec) -> dict[str, np.ndarray | float]:
 
 def _stator_exit_volume_flow(expansion: dict, k: int) -> float:
     """Volume flow (m³/s) at the exit of stator ``k``: (1 − Λ) of the stage drop spent there."""
-    from steamtwin.steam import if97
-
     p_in, p_out = expansion["pressure"][k], expansion["pressure"][k + 1]
     h_exit = (expansion["enthalpy"][k]
               - (1.0 - IP_REACTION) * IP_EFFICIENCY * float(expansion["stage_drop"]))
@@ -126,8 +123,8 @@ def ip_row_design(spec: TurbineSpec, row: str) -> RowDesign:
     return RowDesign(
         row=row,
         kind="stator",
-        mean_section=_section_from_angles(radius, count, float(inlet), float(outlet),
-                                          "reaction"),
+        mean_section=section_from_angles(radius, count, float(inlet), float(outlet),
+                                         "reaction"),
         hub_radius=radius - 0.5 * height,
         tip_radius=radius + 0.5 * height,
         taper_ratio=1.0,  # diaphragm nozzles are not centrifugally loaded: prismatic

@@ -11,13 +11,19 @@ sections cut from its surface (:func:`mesh_stl`, :func:`mesh_surface`).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.spatial import cKDTree
 
-from steamtwin.geometry.profile import SEGMENT_REGION, SEGMENTS, Blade, make_blade
+from steamtwin.geometry.blade_cloud import ReconstructionError
+from steamtwin.geometry.fidelity import surface_samples
+from steamtwin.geometry.mesh_io import read_stl
+from steamtwin.geometry.mesh_sections import section_loops
+from steamtwin.geometry.pritchard import SEGMENT_REGION, SEGMENTS
+from steamtwin.geometry.profile import Blade, make_blade
+from steamtwin.geometry.segmentation import segment_blade
 from steamtwin.geometry.volume_mesh import (
     REGIONS,
     MeshError,
@@ -27,6 +33,7 @@ from steamtwin.geometry.volume_mesh import (
     tetrahedron_volumes,
     validate,
 )
+from steamtwin.progress import ProgressCallback
 from steamtwin.spec import TurbineSpec
 
 #: Default element size: (blade volume / DEFAULT_CELLS)^(1/3), i.e. about this many size³ cells
@@ -69,7 +76,7 @@ def default_element_size(blade: Blade) -> float:
 
 
 def blade_volume_mesh(spec: TurbineSpec, row: str = "hp1", *, element_size: float | None = None,
-                      progress: Callable[[float], None] | None = None) -> VolumeMesh:
+                      progress: ProgressCallback | None = None) -> VolumeMesh:
     """Tetrahedral mesh of the ground-truth blade of ``row`` (m; frame of :class:`VolumeMesh`).
 
     ``element_size`` is the target edge length in m (None: :func:`default_element_size`, about
@@ -79,14 +86,14 @@ def blade_volume_mesh(spec: TurbineSpec, row: str = "hp1", *, element_size: floa
 
 
 def mesh_blade(blade: Blade, *, element_size: float | None = None,
-               progress: Callable[[float], None] | None = None) -> VolumeMesh:
+               progress: ProgressCallback | None = None) -> VolumeMesh:
     """Tetrahedral mesh of ``blade`` (see :func:`blade_volume_mesh`)."""
     size = default_element_size(blade) if element_size is None else float(element_size)
     chord = blade.profile.params.axial_chord
     if not (math.isfinite(size) and chord / 500.0 <= size <= chord):
         raise MeshError(f"element_size = {element_size!r} m is outside "
                         f"[{chord / 500.0:.3g}, {chord:.3g}] m for row {blade.row}")
-    report = progress or (lambda fraction: None)
+    report = progress or (lambda fraction, message: None)
     radii = np.linspace(blade.design.hub_radius, blade.design.tip_radius, LOFT_SECTIONS)
     lengths = blade.profile.segment_lengths()
     with gmsh_session() as gmsh:
@@ -109,13 +116,13 @@ def mesh_blade(blade: Blade, *, element_size: float | None = None,
         (volume,) = [tag for dim, tag in occ.addThruSections(wires, makeSolid=True,
                                                              makeRuled=False) if dim == 3]
         occ.synchronize()
-        report(0.2)
+        report(0.2, "solid lofted through the sections")
         face_region = _classify_faces(gmsh, blade, volume)
         points, tets, face_of_triangle = _mesh_volume(gmsh, volume, face_region, size)
-        report(0.9)
+        report(0.9, "volume meshed (HXT)")
     mesh = _assemble(points, tets, face_of_triangle)
     validate(mesh, f"volume mesh of {blade.row}")
-    report(1.0)
+    report(1.0, "mesh checked")
     return mesh
 
 
@@ -245,17 +252,14 @@ SIDE_ORDER = ("suction_side", "leading_edge", "pressure_side", "trailing_edge")
 
 
 def mesh_stl(path: str | Path, *, element_size: float | None = None,
-             progress: Callable[[float], None] | None = None) -> VolumeMesh:
+             progress: ProgressCallback | None = None) -> VolumeMesh:
     """Tetrahedral mesh of a blade STL written by
-    :func:`~steamtwin.geometry.reconstruct.write_stl` (see :func:`mesh_surface`).
+    :func:`~steamtwin.geometry.mesh_io.write_stl` (see :func:`mesh_surface`).
 
     An STL without region attributes (from other software) is labelled by segmenting points
     sampled on it (:func:`~steamtwin.geometry.segmentation.segment_blade`): each triangle takes
     the patch of the sample nearest its centre.
     """
-    from steamtwin.geometry.reconstruct import read_stl
-    from steamtwin.geometry.segmentation import ReconstructionError
-
     path = Path(path)
     try:
         vertices, triangles, regions = read_stl(path)
@@ -268,15 +272,11 @@ def mesh_stl(path: str | Path, *, element_size: float | None = None,
 
 
 def label_triangles(vertices: np.ndarray, triangles: np.ndarray, samples: int = 60_000,
-                    rng: int = 0) -> np.ndarray:
+                    random_state: int = 0) -> np.ndarray:
     """Region (index into REGIONS) of every triangle of a closed blade surface, from the
     segmentation of ``samples`` points spread over it; −1 where the nearest sample has none."""
-    from scipy.spatial import cKDTree
 
-    from steamtwin.geometry.fidelity import surface_samples
-    from steamtwin.geometry.segmentation import segment_blade
-
-    points = surface_samples(vertices, triangles, samples, np.random.default_rng(rng))
+    points = surface_samples(vertices, triangles, samples, random_state)
     labels = segment_blade(points).labels
     _, nearest = cKDTree(points).query(vertices[triangles].mean(axis=1))
     return labels[nearest]
@@ -284,7 +284,7 @@ def label_triangles(vertices: np.ndarray, triangles: np.ndarray, samples: int = 
 
 def mesh_surface(vertices: np.ndarray, triangles: np.ndarray, regions: np.ndarray, *,
                  element_size: float | None = None, name: str = "reconstructed blade",
-                 progress: Callable[[float], None] | None = None) -> VolumeMesh:
+                 progress: ProgressCallback | None = None) -> VolumeMesh:
     """Tetrahedral mesh (HXT) of a closed blade surface whose triangles carry REGIONS labels.
 
     Like :func:`mesh_blade`, the blade is lofted in OpenCASCADE through 7 sections: the root
@@ -294,10 +294,8 @@ def mesh_surface(vertices: np.ndarray, triangles: np.ndarray, regions: np.ndarra
     regions; each face takes the region of the surface triangle nearest its centre.
     ``element_size`` (m; None: (volume / DEFAULT_CELLS)^(1/3)). Raises :class:`MeshError`.
     """
-    import trimesh
+    import trimesh  # deferred: heavy import (~1-2 s), only the mesh steps pay it
 
-    from steamtwin.geometry.reconstruct import section_loops
-    from steamtwin.geometry.segmentation import ReconstructionError
 
     vertices = np.asarray(vertices, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64)
@@ -308,7 +306,7 @@ def mesh_surface(vertices: np.ndarray, triangles: np.ndarray, regions: np.ndarra
     surface = trimesh.Trimesh(vertices, triangles, process=False)
     if not (surface.is_watertight and surface.volume > 0.0):
         raise MeshError(f"{name}: the surface is not closed with outward normals")
-    report = progress or (lambda fraction: None)
+    report = progress or (lambda fraction, message: None)
     root_rim = _rim(vertices, triangles, regions, REGIONS.index("root"))
     tip_rim = _rim(vertices, triangles, regions, REGIONS.index("tip"))
     chord = float(np.max(np.linalg.norm(root_rim[0][:, None, :2] - root_rim[0][None, ::7, :2],
@@ -335,13 +333,13 @@ def mesh_surface(vertices: np.ndarray, triangles: np.ndarray, regions: np.ndarra
         (volume,) = [tag for dim, tag in occ.addThruSections(wires, makeSolid=True,
                                                              makeRuled=False) if dim == 3]
         occ.synchronize()
-        report(0.2)
+        report(0.2, "solid lofted through the sections")
         face_region = _classify_by_surface(gmsh, volume, vertices, triangles, regions, name)
         points, tets, face_of_triangle = _mesh_volume(gmsh, volume, face_region, size)
-        report(0.9)
+        report(0.9, "volume meshed (HXT)")
     mesh = _assemble(points, tets, face_of_triangle)
     validate(mesh, f"volume mesh of {name}")
-    report(1.0)
+    report(1.0, "mesh checked")
     return mesh
 
 
@@ -424,7 +422,7 @@ def _classify_by_surface(gmsh: object, volume: int, vertices: np.ndarray,
     """Region of every face of the lofted volume: the two flattest in z are the root (lower)
     and tip caps; a side face takes the region of the surface triangle nearest its parametric
     centre (which may lie off a curved cap's outline, never off a side face)."""
-    import open3d as o3d
+    import open3d as o3d  # deferred: heavy import (~2 s), only the steps that use it pay
 
     faces = [face for _, face in gmsh.model.getBoundary([(3, volume)], oriented=False)]
     boxes = np.array([gmsh.model.getBoundingBox(2, face) for face in faces])

@@ -28,6 +28,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.sparse import coo_array
+from scipy.sparse.csgraph import breadth_first_order, connected_components, minimum_spanning_tree
+from scipy.spatial import cKDTree
+
+from steamtwin.geometry.filters import local_frames, median_spacing
 
 #: Tube radius round a ray, in median nearest-neighbour spacings h: a surface crossed by the
 #: ray leaves about ln 2 · 2.5² = 4.3 points of a Poisson sample of that spacing in the tube's
@@ -53,6 +58,9 @@ MAD_NORMAL = 0.6745
 NOISE_NEIGHBOURS = 4
 #: Largest surface variation of a sample point, as a quantile of the cloud's: flat points only.
 FLAT_QUANTILE = 0.5
+#: Nearest neighbours joined in the graph of :func:`section_turn`: few enough that an edge does
+#: not reach across a thin trailing edge (~1.4 point spacings), many enough to join all points.
+GRAPH_NEIGHBOURS = 8
 
 
 def ray_crossings(points: np.ndarray, origins: np.ndarray, directions: np.ndarray,
@@ -61,8 +69,6 @@ def ray_crossings(points: np.ndarray, origins: np.ndarray, directions: np.ndarra
     to ``length``, m) crosses the surface sampled by ``points`` (m): the hits are the points
     within :data:`TUBE` × ``spacing`` of the ray, and hits closer than twice the tube radius
     along the ray count as one crossing."""
-    from scipy.spatial import cKDTree
-
     tree = tree if tree is not None else cKDTree(points)
     radius = TUBE * spacing
     steps = np.arange(START * spacing, length + radius, radius)
@@ -95,16 +101,14 @@ def parity_votes(points: np.ndarray, normals: np.ndarray, samples: np.ndarray, s
 
 def part_orientation(points: np.ndarray, normals: np.ndarray, variation: np.ndarray,
                      part: np.ndarray, spacing: float, length: float,
-                     rng: np.random.Generator | int = 0) -> np.ndarray:
+                     random_state: np.random.Generator | int = 0) -> np.ndarray:
     """Per part of ``part`` (connected parts of consistently oriented normals): +1 where its
     normals point outward, −1 where they point inward, 0 undecided, by the parity votes
     (rays ``length``, m) of up to :data:`SAMPLES_PER_PART` of its points in the flatter half
     of the cloud. A part is decided when at least :data:`MIN_VOTES` samples vote and
     :data:`MAJORITY` of those agree; smaller parts (below :data:`MIN_PART` points) and
     undecided ones are left to the caller."""
-    from scipy.spatial import cKDTree
-
-    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    rng = np.random.default_rng(random_state)
     parts = int(part.max()) + 1
     sizes = np.bincount(part, minlength=parts)
     flat = variation <= np.quantile(variation, FLAT_QUANTILE)
@@ -142,11 +146,96 @@ def sheet_offset_bound(points: np.ndarray, normals: np.ndarray, index: np.ndarra
     return max(SHEET_SPACINGS * gap, SHEET_NOISE * noise)
 
 
-def median_spacing(points: np.ndarray, tree: object | None = None, samples: int = 5000
-                   ) -> float:
-    """Median distance (m) to the nearest other point, over up to ``samples`` points."""
-    from scipy.spatial import cKDTree
+def neighbour_chords(points: np.ndarray, index: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Candidate graph edges: every point ``i`` with each of its :data:`GRAPH_NEIGHBOURS`
+    nearest neighbours ``j`` (``index`` row 0 is the point itself), the chord p_j − p_i and its
+    length (m)."""
+    nearest = index[:, 1:GRAPH_NEIGHBOURS + 1]
+    i = np.repeat(np.arange(len(points)), nearest.shape[1])
+    j = nearest.ravel()
+    chord = points[j] - points[i]
+    return i, j, chord, np.linalg.norm(chord, axis=1)
 
-    tree = tree if tree is not None else cKDTree(points)
-    step = max(1, math.ceil(len(points) / samples))
-    return float(np.median(tree.query(points[::step], k=2)[0][:, 1]))
+
+def oriented_normals(points: np.ndarray, neighbours: int = 20
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Neighbour indices (n, k), outward unit normals (n, 3) and surface variation (n,).
+
+    Orientation: Hoppe et al. (1992) propagation over a minimum spanning tree with weights
+    1 − |n_i·n_j| (:func:`_propagate`), restricted to tangential neighbour pairs (the chord
+    between them within 30° of both tangent planes); every connected part of the tree then
+    points the majority of its normals away from the cloud's centroid. That vote fails where
+    the tree joins the opposite faces of a thin edge (it passes one face's orientation to the
+    other, inverted) or the centroid lies outside the section: a second, strict tree also
+    leaves out the pairs farther than
+    :func:`~steamtwin.geometry.orientation.sheet_offset_bound` from each other's tangent
+    plane, and each of its parts that ray parity decides
+    (:func:`~steamtwin.geometry.orientation.part_orientation`, rays over the section plane's
+    extent) and that the first orientation inverted for the most part is turned as parity
+    says; the other points keep the first orientation.
+    """
+    index, normals, variation = local_frames(points, neighbours)
+    count = len(points)
+    i, j, chord, length = neighbour_chords(points, index)
+    along_i = np.abs(np.einsum("ij,ij->i", normals[i], chord))
+    along_j = np.abs(np.einsum("ij,ij->i", normals[j], chord))
+    tangential = (length > 0.0) & (along_i < 0.5 * length) & (along_j < 0.5 * length)
+    # the strict tree does not join the opposite faces of a thin edge either (normals
+    # antiparallel, the chord tangential, but each point off the other's tangent plane by the
+    # edge's thickness)
+    # every part of the tangential tree points the majority of its normals away from the
+    # cloud's centroid
+    flip, part = _propagate(normals, i[tangential], j[tangential], count)
+    by_centroid = np.where(flip[:, None], -normals, normals)
+    outward = np.einsum("ij,ij->i", by_centroid, points - points.mean(axis=0)) > 0.0
+    votes = np.bincount(part, weights=np.where(outward, 1.0, -1.0))
+    by_centroid = np.where((votes[part] < 0.0)[:, None], -by_centroid, by_centroid)
+    # the strict tree does not join the opposite faces of a thin edge (normals antiparallel,
+    # the chord tangential, but each point off the other's tangent plane by the edge's
+    # thickness); its parts that ray parity decides are turned by it (a thin cambered
+    # section's pressure side faces the cloud's centroid, issue 19)
+    bound = sheet_offset_bound(points, normals, index)
+    strict = tangential & (along_i < bound) & (along_j < bound)
+    flip, part = _propagate(normals, i[strict], j[strict], count)
+    by_parts = np.where(flip[:, None], -normals, normals)
+    sign = part_orientation(points, by_parts, variation, part, median_spacing(points),
+                            float(np.linalg.norm(np.ptp(points[:, :2], axis=0))))
+    # a decided part overrides the centroid vote only where that inverted most of it (a whole
+    # face): elsewhere the two differ at a few points of uncertain orientation, which keep the
+    # first
+    agree = np.einsum("ij,ij->i", by_parts * sign[part, None], by_centroid) > 0.0
+    inverted = np.bincount(part, weights=~agree, minlength=len(sign)) > 0.5 * np.bincount(
+        part, minlength=len(sign))
+    override = (sign != 0) & inverted
+    normals = np.where(override[part, None], by_parts * sign[part, None], by_centroid)
+    return index, normals, variation
+
+
+def _propagate(normals: np.ndarray, i: np.ndarray, j: np.ndarray, count: int
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Hoppe et al. (1992) orientation propagation over the minimum spanning tree of the
+    neighbour pairs ``(i, j)`` with weights 1 − |n_i·n_j|: which normals to turn so that each
+    agrees with its parent in the tree, and the connected part of every point."""
+    lo, hi = np.minimum(i, j), np.maximum(i, j)
+    _, unique = np.unique(lo * count + hi, return_index=True)
+    lo, hi = lo[unique], hi[unique]
+    weight = 1.0 - np.abs(np.einsum("ij,ij->i", normals[lo], normals[hi])) + 1e-9
+    tree = minimum_spanning_tree(coo_array((weight, (lo, hi)), shape=(count, count)).tocsr())
+    parts, part = connected_components(tree, directed=False)
+    # one breadth-first pass over the forest: a virtual root joined to one node of every part
+    first = np.unique(part, return_index=True)[1]
+    tree = tree.tocoo()
+    rows = np.concatenate([tree.row, np.full(parts, count)])
+    cols = np.concatenate([tree.col, first])
+    forest = coo_array((np.ones(len(rows)), (rows, cols)), shape=(count + 1, count + 1)).tocsr()
+    order, predecessor = breadth_first_order(forest, count, directed=False)
+    order = order[1:]
+    parent = predecessor[order]
+    agree = np.ones(len(order), dtype=bool)
+    inner = parent != count
+    agree[inner] = np.einsum("ij,ij->i", normals[order[inner]], normals[parent[inner]]) >= 0.0
+    flipped = [False] * (count + 1)  # parents come before their children in ``order``
+    for node, up, same in zip(order.tolist(), parent.tolist(), agree.tolist(), strict=True):
+        flipped[node] = flipped[up] != (not same)
+    return np.array(flipped[:count]), part

@@ -1,5 +1,8 @@
 """Reading and writing point clouds (PLY, PCD, XYZ), with checks that name the file.
 
+Kept as one module because the three readers share the header scanning, the row parsing and the
+error messages that name file, line and element; apart they would repeat them.
+
 Clouds are (n, 3) float64 arrays in metres. A file in millimetres is read with
 ``unit_scale=1e-3``; a cloud whose size is implausible for a turbine part in metres is refused
 with a hint rather than silently misread.
@@ -465,7 +468,7 @@ def _read_pcd(path: Path, data: bytes) -> np.ndarray:
 
 def _read_pcd_compressed(path: Path, body: bytes, points: int, row_size: int) -> np.ndarray:
     """Points of an LZF-compressed PCD body, decoded by open3d after its sizes were checked."""
-    import open3d as o3d
+    import open3d as o3d  # deferred: heavy import (~2 s), only the steps that use it pay
 
     if len(body) < 8:
         raise PointCloudError(f"{path}: the file ends before the compressed block's sizes")
@@ -549,7 +552,7 @@ def write_point_cloud(points: np.ndarray, path: str | Path) -> None:
     if suffix == ".xyz":
         np.savetxt(path, points, fmt="%.17g")
         return
-    import open3d as o3d
+    import open3d as o3d  # deferred: heavy import (~2 s), only the steps that use it pay
 
     cloud = o3d.geometry.PointCloud(o3d.utility.Vector3dVector(points))
     with o3d.utility.VerbosityContextManager(o3d.utility.VerbosityLevel.Error):

@@ -7,7 +7,7 @@ blade without a nominal by :func:`~steamtwin.geometry.frame.estimate_blade_frame
 1. :func:`~steamtwin.geometry.segmentation.segment_blade`: normals, curvature, region growing,
    labels root/tip/pressure_side/suction_side/leading_edge/trailing_edge.
 2. Parameters of the side points: the turn fraction round the section from geodesic arc
-   length (:func:`~steamtwin.geometry.segmentation.section_turn`), mapped to the arc-length
+   length (:func:`~steamtwin.geometry.sections.section_turn`), mapped to the arc-length
    fraction ``s`` counted anticlockwise from the rear end (:func:`initial_parameters`);
    monotone round any section, also where a strongly cambered face is no graph over the
    chord, and unchanged by the twist and taper of a stacked blade.
@@ -24,27 +24,26 @@ blade without a nominal by :func:`~steamtwin.geometry.frame.estimate_blade_frame
    planes, and closed by ear-clipped caps; trimesh checks that it is watertight, consistently
    wound and of positive volume.
 
-The patch of every triangle is written into the binary STL's per-triangle attribute word
-(region index + 1 of :data:`~steamtwin.geometry.volume_mesh.REGIONS`, 0 = none); STL readers
-that do not know this ignore it.
+The patch of every triangle is kept in ``Reconstruction.regions``; :func:`~steamtwin.geometry.
+mesh_io.write_stl` writes it into the STL, :mod:`.reconstruction_report` reports the result.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from pathlib import Path
 
 import numpy as np
 
+from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.bspline import AdaptiveSurfaceFit, PeriodicSurface, clamped_knots
-from steamtwin.geometry.fidelity import FidelityReport
 from steamtwin.geometry.fit_guard import GuardReport, GuardSettings, guard_surface, refusal_message
-from steamtwin.geometry.profile import Blade
+from steamtwin.geometry.mesh_sections import check_closed
+from steamtwin.geometry.pritchard import GeometryError
+from steamtwin.geometry.profile import cap_triangles
 from steamtwin.geometry.segmentation import (
     SIDE_REGIONS,
     CapPlane,
-    ReconstructionError,
     Segmentation,
     SegmentationSettings,
     fit_cap_plane,
@@ -121,7 +120,7 @@ class Reconstruction:
     @property
     def volume(self) -> float:
         """Enclosed volume (m³)."""
-        import trimesh
+        import trimesh  # deferred: heavy import (~1-2 s), only the mesh steps pay it
 
         return float(trimesh.Trimesh(self.vertices, self.triangles, process=False).volume)
 
@@ -152,7 +151,7 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
                       segmentation: Segmentation | None = None) -> Reconstruction:
     """Reconstruct a watertight blade from a cloud in the blade frame (m).
 
-    Raises :class:`~steamtwin.geometry.segmentation.ReconstructionError` naming the problem
+    Raises :class:`~steamtwin.geometry.blade_cloud.ReconstructionError` naming the problem
     (empty, too small or flat cloud; missing caps or edges; a surface that does not close; a
     surface that stands off the cloud or misses part of it, :func:`guarded`).
     ``segmentation``: the cloud's, when already computed.
@@ -244,7 +243,7 @@ def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.
     median section perimeter (m).
 
     The turn fraction θ of the segmentation (``Segmentation.turn``, from
-    :func:`~steamtwin.geometry.segmentation.section_turn`: geodesic arc length anticlockwise
+    :func:`~steamtwin.geometry.sections.section_turn`: geodesic arc length anticlockwise
     from the rear end over the perimeter) is monotone round any section — also where a strongly
     cambered face is no graph over the chord — and unchanged by twist and taper. θ is then
     mapped to the arc-length fraction measured on 9 thin slabs spread over the span: the medians
@@ -448,8 +447,6 @@ def triangulate(surface: PeriodicSurface, root: CapPlane, tip: CapPlane,
     Returns ``(vertices (n, 3) ring by ring, triangles (m, 3) outward, region per triangle,
     s of the vertices of a ring)``.
     """
-    from steamtwin.geometry.profile import GeometryError, _cap_triangles
-
     z_mid = 0.5 * (surface.z_knots[0] + surface.z_knots[-1])
     probe = np.linspace(0.0, 1.0, 64, endpoint=False)
     z_root = float(np.mean(_rim(surface, root, probe, z_mid)))
@@ -472,11 +469,11 @@ def triangulate(surface: PeriodicSurface, root: CapPlane, tip: CapPlane,
         tris += [np.column_stack([a, b, b + n]), np.column_stack([a, b + n, a + n])]
     side = np.concatenate(tris)
     middle = np.mod(s + 0.5 * np.diff(np.append(s, 1.0 + s[0])), 1.0)
-    column_region = _regions_at(middle, boundaries)
+    column_region = regions_at(middle, boundaries)
     side_region = np.tile(np.repeat(column_region[None, :], 2, axis=0).ravel(), levels - 1)
     try:
-        cap = _cap_triangles(vertices[:n, :2])
-        cap_top = _cap_triangles(vertices[-n:, :2])
+        cap = cap_triangles(vertices[:n, :2])
+        cap_top = cap_triangles(vertices[-n:, :2])
     except GeometryError as error:
         raise ReconstructionError(f"a cap outline of the fitted surface is not a simple "
                                   f"polygon ({error}): the fitted side folds over itself — is "
@@ -488,261 +485,10 @@ def triangulate(surface: PeriodicSurface, root: CapPlane, tip: CapPlane,
     return vertices, triangles.astype(np.int64), regions.astype(np.int64), s
 
 
-def _regions_at(s: np.ndarray, boundaries: dict[str, float]) -> np.ndarray:
+def regions_at(s: np.ndarray, boundaries: dict[str, float]) -> np.ndarray:
     """Side region (REGIONS index) at parameters ``s``."""
     starts = sorted((value, key.split("|")[1]) for key, value in boundaries.items())
     values = np.array([v for v, _ in starts])
     names = [name for _, name in starts]
     position = np.searchsorted(values, np.mod(s, 1.0), side="right") - 1  # −1: before the first
     return np.array([REGIONS.index(names[p]) for p in position])
-
-
-def check_closed(vertices: np.ndarray, triangles: np.ndarray) -> None:
-    """Raise :class:`ReconstructionError` unless the triangulation is a watertight, consistently
-    wound surface enclosing a positive volume."""
-    import trimesh
-
-    mesh = trimesh.Trimesh(vertices, triangles, process=False)
-    problems = []
-    if not mesh.is_watertight:
-        problems.append("not watertight")
-    if not mesh.is_winding_consistent:
-        problems.append("inconsistent winding")
-    if not mesh.volume > 0.0:
-        problems.append(f"volume {mesh.volume:.3g} m³ is not positive")
-    if problems:
-        raise ReconstructionError("the reconstructed surface is " + ", ".join(problems))
-
-
-def section_loops(vertices: np.ndarray, triangles: np.ndarray, height: float
-                  ) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Closed loops where the plane z = ``height`` cuts a closed triangle mesh, longest first.
-
-    Each loop is ``(points (n, 2) x-y in m, face (n,))``: the piece from point i to point i + 1
-    lies on triangle ``face[i]``. A vertex on the plane counts as above it, so every cut
-    triangle has exactly two cut edges; each edge's point is computed once and the loops follow
-    the mesh's own edge-face topology.
-    """
-    above = vertices[:, 2] >= height
-    corners = triangles[:, [[0, 1], [1, 2], [2, 0]]]  # (m, 3, 2)
-    cut = above[corners[..., 0]] != above[corners[..., 1]]
-    faces = np.flatnonzero(cut.sum(axis=1) == 2)
-    if faces.size == 0:
-        raise ReconstructionError(f"the mesh does not reach the plane z = {height:.6g} m")
-    pairs = np.sort(corners[faces][cut[faces]].reshape(-1, 2), axis=1)  # two cut edges per face
-    unique, edge_of = np.unique(pairs, axis=0, return_inverse=True)
-    edge_of = edge_of.reshape(-1, 2)
-    a, b = vertices[unique[:, 0]], vertices[unique[:, 1]]
-    t = (height - a[:, 2]) / (b[:, 2] - a[:, 2])
-    crossing = a[:, :2] + t[:, None] * (b[:, :2] - a[:, :2])
-    # every cut edge joins the two cut faces that share it
-    if np.any(np.bincount(edge_of.ravel(), minlength=len(unique)) != 2):
-        raise ReconstructionError(f"the cut at z = {height:.6g} m is not closed: the mesh has "
-                                  "holes")
-    order = np.argsort(edge_of.ravel(), kind="stable")
-    owners = (order // 2).reshape(-1, 2)  # the two cut faces of every cut edge
-    visited = np.zeros(len(faces), dtype=bool)
-    loops = []
-    for start in range(len(faces)):
-        if visited[start]:
-            continue
-        chain, face_ids = [], []
-        face, edge = start, edge_of[start, 0]
-        while not visited[face]:
-            visited[face] = True
-            chain.append(edge)
-            face_ids.append(faces[face])
-            edge = edge_of[face, 1] if edge_of[face, 0] == edge else edge_of[face, 0]
-            face = owners[edge, 1] if owners[edge, 0] == face else owners[edge, 0]
-        loops.append((crossing[chain], np.array(face_ids)))
-    return sorted(loops, key=lambda loop: -len(loop[0]))
-
-
-# --- files ---------------------------------------------------------------------------------------
-
-
-def write_stl(reconstruction: Reconstruction, path: str | Path) -> Path:
-    """Write the triangulation as binary STL (m) with the region of each triangle in its
-    attribute word (REGIONS index + 1)."""
-    import trimesh
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    mesh = trimesh.Trimesh(reconstruction.vertices, reconstruction.triangles, process=False)
-    data = bytearray(trimesh.exchange.stl.export_stl(mesh))
-    records = np.frombuffer(data, dtype=np.uint8, offset=84).reshape(-1, 50)
-    records[:, 48:50] = np.frombuffer((reconstruction.regions + 1).astype("<u2").tobytes(),
-                                      dtype=np.uint8).reshape(-1, 2)
-    path.write_bytes(bytes(data))
-    return path
-
-
-def read_stl(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-    """Vertices (m), triangles and regions (None when the file carries none) of a binary or
-    ASCII STL; vertices are merged. Raises :class:`ReconstructionError` naming the file."""
-    import trimesh
-
-    path = Path(path)
-    if not path.is_file():
-        raise ReconstructionError(f"{path}: no such STL file")
-    try:
-        mesh = trimesh.load_mesh(path, file_type="stl", process=False)
-    except Exception as error:  # trimesh raises assorted errors on malformed files
-        raise ReconstructionError(f"{path}: not a readable STL: {error}") from None
-    if len(mesh.faces) == 0:
-        raise ReconstructionError(f"{path}: the STL holds no triangles")
-    regions = None
-    raw = path.read_bytes()
-    count = int.from_bytes(raw[80:84], "little") if len(raw) >= 84 else -1
-    if len(raw) == 84 + 50 * count == 84 + 50 * len(mesh.faces):
-        words = np.frombuffer(raw, dtype=np.uint8, offset=84).reshape(-1, 50)[:, 48:50]
-        attribute = words.copy().view("<u2").ravel().astype(np.int64)
-        if np.all((attribute >= 1) & (attribute <= len(REGIONS))):
-            regions = attribute - 1
-    mesh.merge_vertices()
-    return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, np.int64), regions
-
-
-# --- fidelity ------------------------------------------------------------------------------------
-
-
-def reconstruction_fidelity(blade: Blade, vertices: np.ndarray, triangles: np.ndarray,
-                            samples: int = 100_000, rng: np.random.Generator | int | None = 0,
-                            extra: dict | None = None) -> FidelityReport:
-    """Deviation of a reconstructed surface from the exact blade and its row metrics.
-
-    The deviation is measured at ``samples`` points spread uniformly over the reconstructed
-    triangles (and back from as many on the exact surface for the Hausdorff distance); row
-    metrics of the sections at :data:`METRIC_SECTIONS` against the exact sections there — the
-    report's ``truth``/``measured`` are the mid-span ones, all three are in ``extra``.
-    """
-    from steamtwin.geometry.fidelity import (
-        section_metrics,
-        section_pitch,
-        surface_deviation,
-        surface_samples,
-        truth_section,
-    )
-
-    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    points = surface_samples(vertices, triangles, samples, rng)
-    deviation = surface_deviation(blade, points, vertices, triangles, samples=samples, rng=rng)
-    sections = {}
-    for name, fraction in METRIC_SECTIONS:
-        radius = blade.design.hub_radius + fraction * blade.design.span
-        pitch = section_pitch(blade, radius)
-        truth = section_metrics(truth_section(blade, radius), pitch)
-        measured = section_metrics(section_loops(vertices, triangles, radius)[0][0], pitch)
-        sections[name] = (radius, truth, measured)
-    _, truth, measured = sections["mid"]
-    report = FidelityReport(blade.row, deviation, truth, measured, dict(extra or {}))
-    report.extra["throat_area"] = row_throat_area(
-        blade, np.array([radius for radius, _, _ in sections.values()]),
-        np.array([t.throat for _, t, _ in sections.values()]),
-        np.array([m.throat for _, _, m in sections.values()]))
-    report.extra["sections"] = [
-        {"section": name, "radius_mm": radius * 1e3,
-         "metrics": FidelityReport(blade.row, deviation, t, m, {}).metric_rows()}
-        for name, (radius, t, m) in sections.items()]
-    return report
-
-
-def row_throat_area(blade: Blade, radii: np.ndarray, design: np.ndarray, measured: np.ndarray
-                    ) -> dict[str, float | list[float]]:
-    """The row's throat area N·∫o(r)dr of the design blade and of the measured one, from the
-    throats (m) at ``radii`` (m), and their ratio — the multiplier of the stage's flow capacity
-    (:func:`~steamtwin.geometry.uncertainty.throat_area`); report units mm²."""
-    from steamtwin.geometry.uncertainty import throat_area
-
-    design_area = throat_area(blade, radii, design)
-    measured_area = throat_area(blade, radii, measured)
-    return {"design_mm2": design_area * 1e6, "measured_mm2": measured_area * 1e6,
-            "ratio": measured_area / design_area,
-            "radii_mm": [float(r) * 1e3 for r in radii]}
-
-
-def write_reconstruction_report(report: FidelityReport, path: str | Path) -> tuple[Path, Path]:
-    """:func:`~steamtwin.geometry.fidelity.write_report`, with the hub and tip metrics added to
-    the CSV as ``<metric>@hub`` / ``<metric>@tip`` rows and, when the report has it, the row's
-    throat area (:func:`row_throat_area`) as a ``throat_area`` row in mm²."""
-    import csv
-
-    from steamtwin.geometry.fidelity import write_report
-
-    json_path, csv_path = write_report(report, path)
-    with csv_path.open("a", newline="", encoding="utf-8") as handle:
-        writer = csv.DictWriter(handle, fieldnames=["metric", "unit", "truth", "measured",
-                                                    "error"])
-        for section in report.extra.get("sections", []):
-            if section["section"] == "mid":
-                continue
-            for row in section["metrics"]:
-                writer.writerow({**row, "metric": f"{row['metric']}@{section['section']}"})
-        if "throat_area" in report.extra:
-            area = report.extra["throat_area"]
-            writer.writerow({"metric": "throat_area", "unit": "mm2",
-                             "truth": area["design_mm2"], "measured": area["measured_mm2"],
-                             "error": area["measured_mm2"] - area["design_mm2"]})
-    return json_path, csv_path
-
-
-def write_deviation_map(reconstruction: Reconstruction, path: str | Path,
-                        blade: Blade | None = None) -> Path:
-    """PNG of the side unrolled (arc length round the mid-span section from the trailing edge ×
-    radius, mm): the fit residual of every side point and, with the exact ``blade``, the
-    distance of the reconstructed surface from it; colours in mm, patch boundaries marked."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from steamtwin.geometry.fidelity import blade_distance
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    surface = reconstruction.surface
-    fine = np.linspace(0.0, 1.0, 4001)
-    curve = surface(fine, 0.5 * (surface.z_knots[0] + surface.z_knots[-1]))
-    arc = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(curve, axis=0), axis=1))])
-
-    def unrolled(s: np.ndarray) -> np.ndarray:
-        return np.interp(s, fine, arc) * 1e3
-
-    panels = 2 if blade is not None else 1
-    figure, axes = plt.subplots(panels, 1, figsize=(11, 3.6 * panels), squeeze=False)
-    chosen = ~np.isnan(reconstruction.parameters) & reconstruction.inliers
-    residual = reconstruction.residuals[chosen] * 1e3
-    limit = float(np.percentile(np.abs(residual), 99.0))
-    image = axes[0, 0].scatter(unrolled(reconstruction.parameters[chosen]),
-                               reconstruction.points[chosen, 2] * 1e3, c=residual, s=1.0,
-                               cmap="coolwarm", vmin=-limit, vmax=limit, rasterized=True)
-    figure.colorbar(image, ax=axes[0, 0], label="fit residual (mm, + outside)")
-    axes[0, 0].set_title("side points: distance from the fitted B-spline surface")
-    if blade is not None:
-        columns = reconstruction.ring_parameters
-        rings = reconstruction.vertices.reshape(-1, len(columns), 3)
-        deviation = blade_distance(blade, rings.reshape(-1, 3)).reshape(rings.shape[:2]) * 1e3
-        image = axes[1, 0].pcolormesh(np.broadcast_to(unrolled(columns), deviation.shape),
-                                      rings[:, :, 2] * 1e3, deviation, shading="gouraud",
-                                      cmap="viridis", vmin=0.0,
-                                      vmax=float(np.percentile(deviation, 99.5)),
-                                      rasterized=True)
-        figure.colorbar(image, ax=axes[1, 0], label="deviation (mm)")
-        axes[1, 0].set_title(f"reconstructed surface: distance from the exact blade "
-                             f"{blade.row}")
-    starts = sorted((value, key.split("|")[1]) for key, value in
-                    reconstruction.boundaries.items())
-    for ax in axes[:, 0]:
-        for k, (value, name) in enumerate(starts):
-            end = starts[k + 1][0] if k + 1 < len(starts) else starts[0][0] + 1.0
-            ax.axvline(float(unrolled(np.array([value]))[0]), color="k", lw=0.5, ls="--")
-            middle = float(unrolled(np.array([np.mod(0.5 * (value + end), 1.0)]))[0])
-            ax.annotate(name.replace("_", " "), (middle, 1.0), ha="center", va="bottom",
-                        xycoords=("data", "axes fraction"), fontsize=7)
-        ax.set_xlim(0.0, arc[-1] * 1e3)
-        ax.set_xlabel("arc length from the trailing edge, anticlockwise (mm)")
-        ax.set_ylabel("radius z (mm)")
-    figure.tight_layout()
-    figure.savefig(path, dpi=120)
-    plt.close(figure)
-    return path

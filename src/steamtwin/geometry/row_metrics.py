@@ -18,14 +18,19 @@ arc stops there —, and its circle is refined by geometric (orthogonal distance
 
 from __future__ import annotations
 
+import csv
+import json
 import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.optimize import least_squares
 
-from steamtwin.geometry.fidelity import chord_line, section_metrics
+from steamtwin.geometry.fidelity import chord_line, section_metrics, truth_section
+from steamtwin.geometry.mesh_sections import section_loops
 from steamtwin.geometry.profile import Blade
+from steamtwin.geometry.reconstruct import METRIC_SECTIONS
 
 #: Span fractions of the measured sections (as the reconstruction report's hub, mid, tip).
 SPAN_SECTIONS = (("hub", 0.05), ("mid", 0.5), ("tip", 0.95))
@@ -100,8 +105,6 @@ def fit_circle(points: np.ndarray) -> tuple[np.ndarray, float]:
 def refine_circle(points: np.ndarray, centre: np.ndarray, radius: float
                   ) -> tuple[np.ndarray, float]:
     """Geometric least-squares circle (Gander, Golub & Strebel 1994) from a start circle."""
-    from scipy.optimize import least_squares
-
     def residual(c: np.ndarray) -> np.ndarray:
         return np.linalg.norm(points - c[:2], axis=1) - c[2]
 
@@ -187,8 +190,6 @@ def blade_row_metrics(vertices: np.ndarray, triangles: np.ndarray,
     """Metrics of a closed blade triangulation (m, blade frame) at ``sections`` (name, span
     fraction between the lowest and highest vertex). The throat needs the pitch: a fixed
     ``pitch`` (m) or ``blade_count`` N (pitch 2πz/N at radius z); with neither it is NaN."""
-    from steamtwin.geometry.reconstruct import section_loops
-
     if blade_count is not None and pitch is not None:
         raise ValueError("give blade_count or pitch, not both")
     if blade_count is not None and blade_count < 1:
@@ -216,9 +217,6 @@ def design_edge_rows(blade: Blade, vertices: np.ndarray, triangles: np.ndarray
     """Leading- and trailing-edge radii (mm) of a reconstructed triangulation (m, blade frame)
     against the exact sections of ``blade``, at the reconstruction report's sections
     (``<metric>@<section>`` rows: truth, measured, error)."""
-    from steamtwin.geometry.fidelity import truth_section
-    from steamtwin.geometry.reconstruct import METRIC_SECTIONS, section_loops
-
     rows = []
     for name, fraction in METRIC_SECTIONS:
         radius = blade.design.hub_radius + fraction * blade.design.span
@@ -237,9 +235,6 @@ def write_row_metrics(sections: list[RowSection], path: str | Path, extra: dict 
     """Write the metrics of a blade without a nominal row as ``<path>.json`` (``row_metrics``
     per section, plus ``extra``) and ``<path>.csv`` (``<metric>@<section>`` rows, measured
     only; mm, deg)."""
-    import csv
-    import json
-
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     json_path, csv_path = path.with_suffix(".json"), path.with_suffix(".csv")
@@ -263,9 +258,6 @@ def append_report_rows(json_path: Path, csv_path: Path, key: str,
                        rows: list[dict[str, float | str]]) -> None:
     """Add ``rows`` (``CSV_FIELDS``) to a written report: under ``key`` in the JSON and at the
     end of the CSV."""
-    import csv
-    import json
-
     document = json.loads(json_path.read_text(encoding="utf-8"))
     document[key] = rows
     json_path.write_text(json.dumps(document, indent=2, default=float), encoding="utf-8")

@@ -22,14 +22,16 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
-from steamtwin.geometry.preprocess import KEPT_SHARE
+from steamtwin.geometry.pointcloud import write_point_cloud
+from steamtwin.geometry.preprocess_settings import KEPT_SHARE
 from steamtwin.geometry.profile import Blade, reference_surface
+from steamtwin.geometry.rigid import rotation_about
+from steamtwin.progress import ProgressCallback
 
 #: Files of a scan folder: views as ``view_00.ply`` …, settings in ``scan.json`` and the hidden
 #: truth (view poses, reference-sphere centres) in ``truth/poses.json``; reconstruction must not
@@ -189,7 +191,7 @@ class Scan:
 def blade_raycasting_scene(blade: Blade) -> object:
     """An open3d ``RaycastingScene`` holding the exact blade surface (see
     :func:`~steamtwin.geometry.profile.reference_surface`)."""
-    import open3d as o3d
+    import open3d as o3d  # deferred: heavy import (~2 s), only the steps that use it pay
 
     vertices, triangles, _ = reference_surface(blade)
     scene = o3d.t.geometry.RaycastingScene()
@@ -271,21 +273,21 @@ def _sphere_discs(camera: np.ndarray, centre: np.ndarray, spheres: np.ndarray, r
 
 
 def scan_blade(blade: Blade, settings: ScannerSettings | None = None,
-               rng: np.random.Generator | int | None = None,
-               progress: Callable[[float], None] | None = None) -> Scan:
-    """Scan ``blade`` with the virtual scanner (seeded by ``rng``: a Generator or a seed).
+               random_state: np.random.Generator | int | None = None,
+               progress: ProgressCallback | None = None) -> Scan:
+    """Scan ``blade`` with the virtual scanner (seeded by ``random_state``: a Generator or a seed).
 
     Rays aim at random points, uniformly distributed over the target plane's disc that holds
     the blade and over the discs that hold the reference spheres' outlines; each ray ends at
     the nearest of the blade (open3d ray casting) and the spheres (exact intersection). Rays
     are cast until the blade has its points; a sphere keeps the hits of the same rays.
     """
-    import open3d as o3d
+    import open3d as o3d  # deferred: heavy import (~2 s), only the steps that use it pay
 
     settings = settings or ScannerSettings()
     settings.validate()
-    seed = rng if isinstance(rng, int) else None
-    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+    seed = random_state if isinstance(random_state, int) else None
+    rng = np.random.default_rng(random_state)
     scene = blade_raycasting_scene(blade)
     vertices, _, _ = blade.surface_mesh(2e-3)
     centre = 0.5 * (vertices.min(axis=0) + vertices.max(axis=0))
@@ -356,7 +358,7 @@ def scan_blade(blade: Blade, settings: ScannerSettings | None = None,
         views.append(ScanView(points=local, pose=pose, tracked_pose=tracked,
                               is_outlier=is_outlier, camera=camera, sphere_index=sphere_index))
         if progress is not None:
-            progress((k + 1) / len(cameras))
+            progress((k + 1) / len(cameras), f"view {k + 1}/{len(cameras)} scanned")
     return Scan(row=blade.row, views=tuple(views), settings=settings, seed=seed,
                 sphere_centres=spheres)
 
@@ -388,8 +390,7 @@ def _perturbed(pose: np.ndarray, angle: float, offset: float,
     """``pose`` rotated by ``angle`` about a random axis and shifted by ``offset`` (m)."""
     axis = rng.normal(size=3)
     axis /= np.linalg.norm(axis)
-    k = np.array([[0.0, -axis[2], axis[1]], [axis[2], 0.0, -axis[0]], [-axis[1], axis[0], 0.0]])
-    rotation = np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * k @ k
+    rotation = rotation_about(axis, angle)
     direction = rng.normal(size=3)
     out = pose.copy()
     out[:3, :3] = rotation @ pose[:3, :3]
@@ -412,8 +413,6 @@ def write_scan(scan: Scan, folder: str | Path, file_format: str = "ply") -> list
     """Write the views as ``view_NN.ply``/``.pcd``, ``scan.json`` (settings, the scanner's
     tracked poses and the nominal ``sphere_radius``, m, null without spheres) and the hidden
     ``truth/poses.json`` (poses, sphere centres in the blade frame, points per sphere)."""
-    from steamtwin.geometry.pointcloud import write_point_cloud
-
     if file_format not in ("ply", "pcd"):
         raise ValueError(f"file_format must be 'ply' or 'pcd' (got {file_format!r})")
     folder = Path(folder)

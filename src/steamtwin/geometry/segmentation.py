@@ -3,7 +3,7 @@
 The cloud is in the blade frame (m): x axial, y tangential, z = radius, sections are planes
 z = const. Steps:
 
-1. k-NN PCA per point (:func:`~steamtwin.geometry.preprocess.local_frames`, the estimate of
+1. k-NN PCA per point (:func:`~steamtwin.geometry.filters.local_frames`, the estimate of
    open3d's ``estimate_normals``): normal and surface variation λ0 / (λ0 + λ1 + λ2) (Pauly, Gross
    & Kobbelt 2002). Normals are oriented by propagation along a minimum spanning tree
    (Hoppe et al. 1992, SIGGRAPH) whose edges join only *tangential* neighbours — on a thin
@@ -34,32 +34,22 @@ z = const. Steps:
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial import ConvexHull, QhullError, cKDTree
 
-from steamtwin.errors import GeometryAreaError
-from steamtwin.geometry.pointcloud import PointCloudError, check_point_cloud
+from steamtwin.geometry.blade_cloud import MIN_POINTS, ReconstructionError, check_blade_cloud
+from steamtwin.geometry.orientation import oriented_normals
+from steamtwin.geometry.sections import section_chords, section_turn
 from steamtwin.geometry.volume_mesh import REGIONS
 
 #: Label of points that belong to no patch.
 UNASSIGNED = -1
-#: Fewest points a blade cloud must have to be reconstructed.
-MIN_POINTS = 2000
 SIDE_REGIONS = ("pressure_side", "suction_side", "leading_edge", "trailing_edge")
 #: A point whose k-th neighbour is farther than this multiple of the median is isolated.
 ISOLATED = 3.0
-#: Nearest neighbours joined in the graph of :func:`section_turn`: few enough that an edge does
-#: not reach across a thin trailing edge (~1.4 point spacings), many enough to join all points.
-GRAPH_NEIGHBOURS = 8
-#: Passes of neighbour averaging of the path lengths in :func:`section_turn`.
-SMOOTHING_PASSES = 3
-
-
-class ReconstructionError(GeometryAreaError):
-    """A cloud that cannot be segmented or reconstructed; the message names the problem."""
 
 
 @dataclass(frozen=True)
@@ -128,136 +118,6 @@ class Segmentation:
         counts = {name: int(np.sum(self.labels == k)) for k, name in enumerate(REGIONS)}
         counts["unassigned"] = int(np.sum(self.labels == UNASSIGNED))
         return counts
-
-
-def check_blade_cloud(points: np.ndarray, source: str = "point cloud") -> np.ndarray:
-    """Validate a cloud for reconstruction: finite, at least :data:`MIN_POINTS` points, not flat.
-
-    Raises :class:`ReconstructionError` naming the problem.
-    """
-    try:
-        points = check_point_cloud(points, source)
-    except PointCloudError as error:
-        raise ReconstructionError(str(error)) from None
-    if len(points) < MIN_POINTS:
-        raise ReconstructionError(f"{source}: only {len(points)} points; reconstructing a "
-                                  f"blade needs at least {MIN_POINTS}")
-    centred = points - points.mean(axis=0)
-    singular = np.linalg.svd(centred[:: max(1, len(points) // 20000)], compute_uv=False)
-    if singular[2] < 1e-3 * singular[0]:
-        raise ReconstructionError(f"{source}: the cloud is flat (all points within "
-                                  f"{singular[2] / math.sqrt(len(centred)) * 1e3:.3g} mm of a "
-                                  "plane), not a blade")
-    return points
-
-
-def neighbour_chords(points: np.ndarray, index: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Candidate graph edges: every point ``i`` with each of its :data:`GRAPH_NEIGHBOURS`
-    nearest neighbours ``j`` (``index`` row 0 is the point itself), the chord p_j − p_i and its
-    length (m)."""
-    nearest = index[:, 1:GRAPH_NEIGHBOURS + 1]
-    i = np.repeat(np.arange(len(points)), nearest.shape[1])
-    j = nearest.ravel()
-    chord = points[j] - points[i]
-    return i, j, chord, np.linalg.norm(chord, axis=1)
-
-
-def oriented_normals(points: np.ndarray, neighbours: int = 20
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Neighbour indices (n, k), outward unit normals (n, 3) and surface variation (n,).
-
-    Orientation: Hoppe et al. (1992) propagation over a minimum spanning tree with weights
-    1 − |n_i·n_j| (:func:`_propagate`), restricted to tangential neighbour pairs (the chord
-    between them within 30° of both tangent planes); every connected part of the tree then
-    points the majority of its normals away from the cloud's centroid. That vote fails where
-    the tree joins the opposite faces of a thin edge (it passes one face's orientation to the
-    other, inverted) or the centroid lies outside the section: a second, strict tree also
-    leaves out the pairs farther than
-    :func:`~steamtwin.geometry.orientation.sheet_offset_bound` from each other's tangent
-    plane, and each of its parts that ray parity decides
-    (:func:`~steamtwin.geometry.orientation.part_orientation`, rays over the section plane's
-    extent) and that the first orientation inverted for the most part is turned as parity
-    says; the other points keep the first orientation.
-    """
-    from steamtwin.geometry.orientation import (
-        median_spacing,
-        part_orientation,
-        sheet_offset_bound,
-    )
-    from steamtwin.geometry.preprocess import local_frames
-
-    index, normals, variation = local_frames(points, neighbours)
-    count = len(points)
-    i, j, chord, length = neighbour_chords(points, index)
-    along_i = np.abs(np.einsum("ij,ij->i", normals[i], chord))
-    along_j = np.abs(np.einsum("ij,ij->i", normals[j], chord))
-    tangential = (length > 0.0) & (along_i < 0.5 * length) & (along_j < 0.5 * length)
-    # the strict tree does not join the opposite faces of a thin edge either (normals
-    # antiparallel, the chord tangential, but each point off the other's tangent plane by the
-    # edge's thickness)
-    # every part of the tangential tree points the majority of its normals away from the
-    # cloud's centroid
-    flip, part = _propagate(normals, i[tangential], j[tangential], count)
-    by_centroid = np.where(flip[:, None], -normals, normals)
-    outward = np.einsum("ij,ij->i", by_centroid, points - points.mean(axis=0)) > 0.0
-    votes = np.bincount(part, weights=np.where(outward, 1.0, -1.0))
-    by_centroid = np.where((votes[part] < 0.0)[:, None], -by_centroid, by_centroid)
-    # the strict tree does not join the opposite faces of a thin edge (normals antiparallel,
-    # the chord tangential, but each point off the other's tangent plane by the edge's
-    # thickness); its parts that ray parity decides are turned by it (a thin cambered
-    # section's pressure side faces the cloud's centroid, issue 19)
-    bound = sheet_offset_bound(points, normals, index)
-    strict = tangential & (along_i < bound) & (along_j < bound)
-    flip, part = _propagate(normals, i[strict], j[strict], count)
-    by_parts = np.where(flip[:, None], -normals, normals)
-    sign = part_orientation(points, by_parts, variation, part, median_spacing(points),
-                            float(np.linalg.norm(np.ptp(points[:, :2], axis=0))))
-    # a decided part overrides the centroid vote only where that inverted most of it (a whole
-    # face): elsewhere the two differ at a few points of uncertain orientation, which keep the
-    # first
-    agree = np.einsum("ij,ij->i", by_parts * sign[part, None], by_centroid) > 0.0
-    inverted = np.bincount(part, weights=~agree, minlength=len(sign)) > 0.5 * np.bincount(
-        part, minlength=len(sign))
-    override = (sign != 0) & inverted
-    normals = np.where(override[part, None], by_parts * sign[part, None], by_centroid)
-    return index, normals, variation
-
-
-def _propagate(normals: np.ndarray, i: np.ndarray, j: np.ndarray, count: int
-               ) -> tuple[np.ndarray, np.ndarray]:
-    """Hoppe et al. (1992) orientation propagation over the minimum spanning tree of the
-    neighbour pairs ``(i, j)`` with weights 1 − |n_i·n_j|: which normals to turn so that each
-    agrees with its parent in the tree, and the connected part of every point."""
-    from scipy.sparse import coo_array
-    from scipy.sparse.csgraph import (
-        breadth_first_order,
-        connected_components,
-        minimum_spanning_tree,
-    )
-
-    lo, hi = np.minimum(i, j), np.maximum(i, j)
-    _, unique = np.unique(lo * count + hi, return_index=True)
-    lo, hi = lo[unique], hi[unique]
-    weight = 1.0 - np.abs(np.einsum("ij,ij->i", normals[lo], normals[hi])) + 1e-9
-    tree = minimum_spanning_tree(coo_array((weight, (lo, hi)), shape=(count, count)).tocsr())
-    parts, part = connected_components(tree, directed=False)
-    # one breadth-first pass over the forest: a virtual root joined to one node of every part
-    first = np.unique(part, return_index=True)[1]
-    tree = tree.tocoo()
-    rows = np.concatenate([tree.row, np.full(parts, count)])
-    cols = np.concatenate([tree.col, first])
-    forest = coo_array((np.ones(len(rows)), (rows, cols)), shape=(count + 1, count + 1)).tocsr()
-    order, predecessor = breadth_first_order(forest, count, directed=False)
-    order = order[1:]
-    parent = predecessor[order]
-    agree = np.ones(len(order), dtype=bool)
-    inner = parent != count
-    agree[inner] = np.einsum("ij,ij->i", normals[order[inner]], normals[parent[inner]]) >= 0.0
-    flipped = [False] * (count + 1)  # parents come before their children in ``order``
-    for node, up, same in zip(order.tolist(), parent.tolist(), agree.tolist(), strict=True):
-        flipped[node] = flipped[up] != (not same)
-    return np.array(flipped[:count]), part
 
 
 def principal_curvature(points: np.ndarray, normals: np.ndarray, index: np.ndarray) -> np.ndarray:
@@ -341,8 +201,6 @@ def segment_blade(points: np.ndarray, settings: SegmentationSettings | None = No
     """Normals, curvature, region-growing segments and patch labels of a blade cloud (m, blade
     frame). Raises :class:`ReconstructionError` when the cloud is empty, too small, flat, or
     shows no root or tip cap."""
-    from scipy.spatial import cKDTree
-
     settings = settings or SegmentationSettings()
     points = check_blade_cloud(points)
     index, normals, variation = oriented_normals(points, settings.neighbours)
@@ -400,8 +258,6 @@ def cap_patch_minimum(points: np.ndarray, spacing: float) -> int:
     nearest-neighbour distance h, the fewest points per m² that give that median (a Poisson
     sample; a regular one has more) — so the minimum errs small.
     """
-    from scipy.spatial import ConvexHull, QhullError, cKDTree
-
     z = points[:, 2]
     density = math.log(2.0) / (math.pi * spacing**2)
     expected = []
@@ -444,52 +300,6 @@ def _caps(points: np.ndarray, normals: np.ndarray, segments: np.ndarray
                 "faces scanned?)")
         planes.append(fit_cap_plane(points[np.isin(segments, chosen)]))
     return planes[0], planes[1]
-
-
-def section_chords(points: np.ndarray, mask: np.ndarray, slab: float
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Front and rear ends (x-y) of the sections, at every point's z.
-
-    The ends are the most upstream and the most downstream points (smallest and largest axial
-    x): on a Pritchard section they lie on the leading- and trailing-edge circles whatever the
-    stagger and camber (each edge arc faces through the axial direction), where the farthest
-    pair of points may end on the bulge of a strongly cambered suction side. The points under
-    ``mask`` are cut into slabs ``slab`` (m) high; in each, stray points (the 4th nearest
-    neighbour in the slab farther than 4 × the slab's median) are set aside and each end is the
-    mean of the three extreme points. The ends of all slabs are then fitted by cubics in z,
-    dropping slabs more than 3 robust standard deviations off (a hole in the scan or a stray
-    point moves one slab's end). Returns ``(front (n, 2), rear (n, 2), slab centres)``.
-    """
-    from scipy.spatial import cKDTree
-
-    z = points[mask, 2]
-    edges = np.arange(z.min(), z.max() + slab, slab)
-    centres, ends = [], []
-    for lo, hi in itertools.pairwise(edges):
-        xy = points[mask][(z >= lo) & (z < hi), :2]
-        if len(xy) < 20:
-            continue
-        fourth = cKDTree(xy).query(xy, k=5)[0][:, -1]
-        xy = xy[fourth < 4.0 * np.median(fourth)]
-        order = np.argsort(xy[:, 0])
-        centres.append(0.5 * (lo + hi))
-        ends.append(np.concatenate([xy[order[:3]].mean(axis=0), xy[order[-3:]].mean(axis=0)]))
-    if len(centres) < 2:
-        raise ReconstructionError("too few side points to find the sections' chords")
-    centres, ends = np.array(centres), np.array(ends)
-    scale = max(float(np.ptp(centres)), 1e-9)
-    u = (centres - centres.mean()) / scale
-    degree = min(3, len(centres) - 1)
-    keep = np.ones(len(centres), dtype=bool)
-    for _ in range(4):
-        coef = np.polynomial.polynomial.polyfit(u[keep], ends[keep], degree)
-        miss = np.linalg.norm(ends - np.polynomial.polynomial.polyval(u, coef).T, axis=1)
-        bound = 3.0 * 1.4826 * np.median(miss[keep]) + 1e-6 * scale
-        if np.array_equal(miss < bound, keep) or (miss < bound).sum() <= degree:
-            break
-        keep = miss < bound
-    fitted = np.polynomial.polynomial.polyval((points[:, 2] - centres.mean()) / scale, coef).T
-    return fitted[:, :2], fitted[:, 2:], centres
 
 
 def _label_sides(points: np.ndarray, normals: np.ndarray, curvature: np.ndarray,
@@ -539,149 +349,6 @@ def _label_sides(points: np.ndarray, normals: np.ndarray, curvature: np.ndarray,
     return float(np.median(chord[side])), turn, perimeter
 
 
-def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mask: np.ndarray,
-                 front: np.ndarray, rear: np.ndarray, seed_radius: float, slab: float
-                 ) -> tuple[np.ndarray, np.ndarray]:
-    """Turn fraction θ ∈ [0, 1) of the points under ``mask`` round their section (arc length
-    anticlockwise, seen from the tip, from the section's rear end, over the perimeter) and the
-    perimeter (m) at every point; NaN elsewhere. ``front`` and ``rear`` are the sections' most
-    upstream and most downstream points (x-y at every point's z, m); ``seed_radius`` (m) is
-    about the k-th neighbour distance, ``slab`` (m) the height of the slabs along the span.
-
-    Arc lengths are geodesic distances on the surface, approximated by shortest paths through
-    a neighbour graph (Dijkstra 1959; graph distances converge to geodesic ones on densely
-    sampled surfaces, Tenenbaum, de Silva & Langford 2000, Science 290). Edges join each point
-    to those of its :data:`GRAPH_NEIGHBOURS` nearest neighbours whose outward normals,
-    projected on the section plane, agree within 75° and whose chord lies within 45° of both
-    tangent planes. The front end's outward normal is −x, so the points just below it (smaller
-    y) lie anticlockwise of it: the graph is cut along the line y = y_front within
-    2 ``seed_radius`` of the front end (the section crosses it there once, at right angles), and
-    the paths start from the points within ``seed_radius`` below the cut, run once round the
-    section and end at those above it. The distance d from the start (averaged
-    :data:`SMOOTHING_PASSES` times over each point and its graph neighbours) is the arc length
-    anticlockwise from the front end; the perimeter P is d plus the distance to the front end
-    at the end points (median per slab along the span). From θ' = d / P and the rear end's θ'_r
-    (median of the points within ``seed_radius`` of it, per slab: it moves with the twist),
-    θ = (θ' − θ'_r) / (1 − θ'_r) · (1 − a) on the suction side and 1 − a + θ' / θ'_r · a on the
-    pressure side, a the median θ'_r: each face keeps a fixed share of the turn along the span,
-    the rear end at θ = 0 and the front end at 1 − a, as the chordwise turn fraction kept them
-    at 0 and 0.5. The cut is at the leading edge, whose circle spans several point spacings;
-    at a thin trailing edge k-NN normals straddle both faces and an edge may cut across, which
-    only shortens the paths beyond it by part of the circle. Unlike the chordwise position, θ
-    is monotone round any section, however strongly cambered, and unchanged by twist and
-    taper. Points the graph does not reach (strays) take the θ of their nearest reached point.
-    Where the ring is broken — no seam across y = y_front at the front end (high stagger), the
-    paths do not come back, or the order jumps between the faces
-    (:func:`~steamtwin.geometry.sections.tour_ratio` above
-    :data:`~steamtwin.geometry.sections.BROKEN_TOUR`), as at a thin edge sampled too sparsely
-    for the graph to go round it — the order by faces
-    (:func:`~steamtwin.geometry.sections.two_face_turn`) is taken instead, when it follows the
-    sections better.
-    """
-    from scipy.sparse import coo_array
-    from scipy.sparse.csgraph import dijkstra
-    from scipy.spatial import cKDTree
-
-    from steamtwin.geometry.sections import BROKEN_TOUR, tour_ratio, two_face_turn
-
-    count = len(points)
-    i, j, chord, length = neighbour_chords(points, index)
-    # the normals' directions in the section plane: next to the cap rims the k-NN normals of
-    # both faces tilt towards ±z, where they would agree across a thin trailing edge
-    flat = np.column_stack([normals[:, :2], np.zeros(count)])
-    flat /= np.maximum(np.linalg.norm(flat, axis=1, keepdims=True), 1e-12)
-    along_i = np.abs(np.einsum("ij,ij->i", flat[i], chord))
-    along_j = np.abs(np.einsum("ij,ij->i", flat[j], chord))
-    agree = np.einsum("ij,ij->i", flat[i], flat[j]) > math.cos(math.radians(75.0))
-    tangential = (along_i < math.sqrt(0.5) * length) & (along_j < math.sqrt(0.5) * length)
-    edge = mask[i] & mask[j] & (length > 0.0) & agree & tangential
-    pair = np.minimum(i, j)[edge] * count + np.maximum(i, j)[edge]
-    _, unique = np.unique(pair, return_index=True)  # a mutual neighbour pair once
-    lo, hi, length = i[edge][unique], j[edge][unique], length[edge][unique]
-    graph_edges = (lo, hi, length)  # for the order by faces, should the ring be broken
-    offset = np.linalg.norm(points[:, :2] - front, axis=1)
-    below = points[:, 1] < front[:, 1]
-    # cut the ring along the line y = y_front across the leading edge
-    cut = (below[lo] != below[hi]) & (np.minimum(offset[lo], offset[hi]) < 2.0 * seed_radius)
-    lo, hi, length = lo[~cut], hi[~cut], length[~cut]
-    seam = mask & (offset < seed_radius)
-    start, end = np.flatnonzero(seam & below), np.flatnonzero(seam & ~below)
-    if start.size == 0 or end.size == 0:
-        # no seam across the line y = y_front (a section staggered so far that both faces
-        # leave the front end upwards or downwards): the order by faces, cut along the chord
-        return two_face_turn(points, normals, mask, *graph_edges, front, rear, seed_radius,
-                             slab)
-    origin = count  # a virtual source joined to the seam points below the cut
-    rows = np.concatenate([lo, hi, np.full(start.size, origin)])
-    cols = np.concatenate([hi, lo, start])
-    weights = np.concatenate([length, length, offset[start] + 1e-12])
-    graph = coo_array((weights, (rows, cols)), shape=(count + 1, count + 1)).tocsr()
-    distance = dijkstra(graph, indices=origin)[:count]
-    reached = mask & np.isfinite(distance)
-    # the zig-zag of the paths through noisy points varies from point to point: average d over
-    # each point and its graph neighbours (d is linear along the surface, the mean keeps it)
-    near = reached[lo] & reached[hi]
-    adjacency = coo_array((np.ones(2 * near.sum()), (np.concatenate([lo[near], hi[near]]),
-                                                     np.concatenate([hi[near], lo[near]]))),
-                          shape=(count, count)).tocsr()
-    degree = np.asarray(adjacency.sum(axis=1)).ravel() + 1.0
-    smooth = np.where(reached, distance, 0.0)
-    for _ in range(SMOOTHING_PASSES):
-        smooth = (smooth + adjacency @ smooth) / degree
-    distance = np.where(reached, smooth, np.inf)
-    closing = end[np.isfinite(distance[end])]
-    if closing.size == 0 or np.mean(reached[mask]) < 0.9:
-        return two_face_turn(points, normals, mask, *graph_edges, front, rear, seed_radius,
-                             slab)
-    perimeter = np.full(count, np.nan)
-    perimeter[mask] = _slab_median(points[closing, 2], distance[closing] + offset[closing],
-                                   points[mask, 2], slab)
-    turn = np.full(count, np.nan)
-    turn[reached] = np.mod(distance[reached] / perimeter[reached], 1.0)
-    missed = mask & ~reached
-    if np.any(missed):
-        _, nearest = cKDTree(points[reached]).query(points[missed])
-        turn[missed] = turn[reached][nearest]
-    near_rear = mask & (np.linalg.norm(points[:, :2] - rear, axis=1) < seed_radius)
-    if not np.any(near_rear):
-        raise ReconstructionError("no side points at the rear end of the sections: is the "
-                                  "trailing edge scanned?")
-    # the rear end's turn along the span (it moves with the twist), then both faces stretched
-    # to fixed shares so that the rear end is at θ = 0 and the front end at 1 − share
-    rear_turn = np.clip(_slab_median(points[near_rear, 2], turn[near_rear], points[mask, 2],
-                                     slab), 0.05, 0.95)
-    share = float(np.median(rear_turn))
-    front_based = turn[mask]
-    turn[mask] = np.where(front_based >= rear_turn,
-                          (front_based - rear_turn) / (1.0 - rear_turn) * (1.0 - share),
-                          1.0 - share + front_based / rear_turn * share)
-    # a ring broken at a thin, sparse edge leaves the order jumping between the faces: then
-    # the order by faces, when it follows the sections better
-    ratio = tour_ratio(points, mask, turn, perimeter, seed_radius)
-    if ratio > BROKEN_TOUR:
-        try:
-            by_faces = two_face_turn(points, normals, mask, *graph_edges, front, rear,
-                                     seed_radius, slab)
-        except ReconstructionError:
-            return turn, perimeter
-        if tour_ratio(points, mask, *by_faces, seed_radius) < ratio:
-            return by_faces
-    return turn, perimeter
-
-
-def _slab_median(z: np.ndarray, values: np.ndarray, at: np.ndarray, slab: float) -> np.ndarray:
-    """Medians of ``values`` in slabs ``slab`` (m) high along z, interpolated linearly (held
-    beyond the end slabs) at the heights ``at``; slabs with fewer than 3 values are skipped."""
-    edges = np.arange(z.min(), z.max() + slab, slab)
-    which = np.clip(np.searchsorted(edges, z, side="right") - 1, 0, len(edges) - 1)
-    counts = np.bincount(which, minlength=len(edges))
-    full = np.flatnonzero(counts >= 3)
-    if full.size == 0:
-        return np.full(len(at), float(np.median(values)))
-    medians = [float(np.median(values[which == k])) for k in full]
-    return np.interp(at, edges[full] + 0.5 * slab, medians)
-
-
 def _smooth_labels(labels: np.ndarray, index: np.ndarray, side: np.ndarray) -> None:
     """One majority vote of the side labels over each side point's neighbours (in place)."""
     side_ids = np.array([REGIONS.index(name) for name in SIDE_REGIONS])
@@ -709,8 +376,6 @@ def _nearest_along_span(points: np.ndarray, source: np.ndarray, target: np.ndarr
                         ) -> np.ndarray:
     """Index of the nearest ``source`` point of every ``target`` point, with z shrunk tenfold
     so that the same place of the section a little further along the span wins."""
-    from scipy.spatial import cKDTree
-
     scale = np.array([1.0, 1.0, 0.1])
     _, nearest = cKDTree(points[source] * scale).query(points[target] * scale)
     return np.flatnonzero(source)[nearest]

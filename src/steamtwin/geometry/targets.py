@@ -21,8 +21,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from itertools import combinations, permutations
 
 import numpy as np
+from scipy.spatial import cKDTree
+
+from steamtwin.geometry.rigid import kabsch, pose_matrix, transform
 
 
 @dataclass(frozen=True)
@@ -91,8 +95,6 @@ def free_radius_fit(points: np.ndarray, start: np.ndarray, radius: float,
 
 def _oriented_normals(points: np.ndarray, neighbours: int = 15) -> np.ndarray:
     """Unit normals by local PCA, turned towards the camera at the origin."""
-    from scipy.spatial import cKDTree
-
     _, index = cKDTree(points).query(points, k=neighbours, workers=-1)
     nbr = points[index] - points[index].mean(axis=1, keepdims=True)
     _, vectors = np.linalg.eigh(np.einsum("nki,nkj->nij", nbr, nbr))
@@ -117,8 +119,6 @@ def detect_spheres(points: np.ndarray, radius: float, tolerance: float = 0.1e-3,
     and the free-radius fit lies within ``radius_tolerance`` (relative) of ``radius``. At most
     ``attempts`` candidate clusters are tried. Returns the fits, largest first.
     """
-    from scipy.spatial import cKDTree
-
     points = np.asarray(points, dtype=np.float64)
     if radius <= 0.0 or tolerance <= 0.0:
         raise ValueError(f"sphere radius and tolerance must be positive (got {radius}, "
@@ -255,8 +255,6 @@ def poses_from_spheres(fits: Sequence[Sequence[SphereFit]], tolerance: float = 0
 def _pair_from_centres(source: np.ndarray, target: np.ndarray, tolerance: float
                        ) -> tuple[int, np.ndarray] | None:
     """(matched spheres, 4×4 source -> target) from sphere centres, or None."""
-    from itertools import combinations, permutations
-
     d_source = np.linalg.norm(source[:, None] - source[None], axis=2)
     d_target = np.linalg.norm(target[:, None] - target[None], axis=2)
     for size in range(min(len(source), len(target)), 2, -1):
@@ -271,12 +269,8 @@ def _pair_from_centres(source: np.ndarray, target: np.ndarray, tolerance: float
         if found:
             order, picked = found[0]
             p, q = source[order], target[picked]
-            cp, cq = p.mean(axis=0), q.mean(axis=0)
-            u, _, vt = np.linalg.svd((p - cp).T @ (q - cq))
-            rotation = vt.T @ np.diag([1.0, 1.0, np.sign(np.linalg.det(vt.T @ u.T))]) @ u.T
-            pose = np.eye(4)
-            pose[:3, :3], pose[:3, 3] = rotation, cq - rotation @ cp
-            if np.linalg.norm(p @ rotation.T + pose[:3, 3] - q, axis=1).max() > tolerance:
+            pose = pose_matrix(*kabsch(p, q))
+            if np.linalg.norm(transform(p, pose) - q, axis=1).max() > tolerance:
                 return None  # the distances agree but only for a mirror image
             return size, pose
     return None

@@ -20,14 +20,18 @@ does not represent, so the study reports hp1's throat-area spread and no tempera
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.interpolate import splev, splprep
 
 from steamtwin.geometry.fidelity import section_pitch, section_throat
-from steamtwin.geometry.profile import HP_ROWS, Blade, GeometryError
+from steamtwin.geometry.pritchard import GeometryError
+from steamtwin.geometry.profile import Blade
+from steamtwin.geometry.row_sizing import HP_ROWS
+from steamtwin.model.design import DesignConstants
+from steamtwin.model.fom import FullOrderModel
+from steamtwin.progress import ProgressCallback
 
 SCAN_SPACING = 0.2e-3  # m, point spacing of the simulated section scans
 #: Why the control-stage rotor's throat error is not propagated (see the module docstring).
@@ -39,7 +43,7 @@ CONTROL_STAGE_ROTOR = ("not propagated: hp1 is the control-stage rotor; the mode
 def propagated_stage(row: str) -> int | None:
     """1-based pressure stage whose ``flow_capacity`` the throat of ``row`` scales: K − 1 for
     hpK (K = 2…13); None for the control-stage rotor hp1. Raises
-    :class:`~steamtwin.geometry.profile.GeometryError` for rows outside the HP model (ip…)."""
+    :class:`~steamtwin.geometry.pritchard.GeometryError` for rows outside the HP model (ip…)."""
     if row not in HP_ROWS:
         raise GeometryError(f"row {row!r} is not in the HP model (rows {HP_ROWS[0]}…"
                             f"{HP_ROWS[-1]}): its throat has no flow capacity to scale")
@@ -53,9 +57,6 @@ def as_built_model(model: object, stage: int, ratio: float) -> object:
     kept — the efficiency scale and the nozzle area the design step found for the unmodified
     spec. Rebuilding the model from the modified spec would re-solve the efficiency scale and
     meet the design exhaust temperature again, hiding the change at the design point."""
-    from steamtwin.model.design import DesignConstants
-    from steamtwin.model.fom import FullOrderModel
-
     stages = list(model.spec.stages)
     if not 1 <= stage <= len(stages):
         raise GeometryError(f"pressure stage {stage} is not in turbine {model.spec.name!r} "
@@ -131,8 +132,10 @@ class UncertaintyResult:
                     self.nominal_hp_exhaust_temperature - 273.15}
 
 
-def _sections(blade: Blade, count: int) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray]]:
-    """Radii, exact section points (0.2 mm spacing) and their outward normals."""
+def exact_sections(blade: Blade, count: int
+                   ) -> tuple[np.ndarray, list[np.ndarray], list[np.ndarray]]:
+    """``count`` radii (m) evenly inside the span, the exact section points there (0.2 mm
+    spacing, m) and their outward unit normals."""
     outline, _ = blade.profile.sample(SCAN_SPACING)
     radii = np.linspace(blade.design.hub_radius, blade.design.tip_radius, count + 2)[1:-1]
     points, normals = [], []
@@ -163,16 +166,16 @@ def throat_area(blade: Blade, radii: np.ndarray, throats: np.ndarray) -> float:
 
 
 def scan_uncertainty(blade: Blade, model: object, samples: int = 20, bound: float = 0.05e-3,
-                     sections: int = 3, rng: np.random.Generator | int | None = 0,
-                     progress: Callable[[float], None] | None = None) -> UncertaintyResult:
+                     sections: int = 3, random_state: np.random.Generator | int | None = 0,
+                     progress: ProgressCallback | None = None) -> UncertaintyResult:
     """Monte Carlo of the throat area of ``blade``'s row under ±``bound`` (m) scan errors,
     each sample's ratio propagated through the row's own stage of ``model`` (a
     :class:`~steamtwin.model.fom.FullOrderModel`, :func:`as_built_model`) at its design point.
     The control-stage rotor hp1 gets the throat areas only (module docstring). Raises
-    :class:`~steamtwin.geometry.profile.GeometryError` for a row outside the HP model."""
+    :class:`~steamtwin.geometry.pritchard.GeometryError` for a row outside the HP model."""
     stage = propagated_stage(blade.row)
-    rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
-    radii, points, normals = _sections(blade, sections)
+    rng = np.random.default_rng(random_state)
+    radii, points, normals = exact_sections(blade, sections)
     pitches = [section_pitch(blade, float(r)) for r in radii]
     exact = np.array([rebuilt_throat(p, s, 0.0) for p, s in zip(points, pitches, strict=True)])
     area = throat_area(blade, radii, exact)
@@ -189,7 +192,7 @@ def scan_uncertainty(blade: Blade, model: object, samples: int = 20, bound: floa
             outputs = as_built_model(model, stage, float(ratio)).simulate(inputs)
             temperatures.append(float(outputs["hp_exhaust_temperature"].iloc[0]))
         if progress is not None:
-            progress((k + 1) / samples)
+            progress((k + 1) / samples, f"sample {k + 1}/{samples}")
     propagation = (CONTROL_STAGE_ROTOR if stage is None
                    else f"stages[{stage}].flow_capacity scaled by the row's throat-area ratio")
     return UncertaintyResult(row=blade.row, bound=bound, throat_area_ratio=np.array(ratios),

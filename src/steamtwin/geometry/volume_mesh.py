@@ -99,7 +99,7 @@ def validate(mesh: VolumeMesh, source: str = "volume mesh") -> None:
 @contextlib.contextmanager
 def gmsh_session() -> Iterator[object]:
     """An initialised, silent gmsh with a fresh model; finalises only what it initialised."""
-    import gmsh
+    import gmsh  # deferred: optional heavy library (a C++ kernel), only meshing pays it
 
     started = not gmsh.isInitialized()
     if started:
@@ -130,7 +130,7 @@ def write_volume_mesh(mesh: VolumeMesh, path: str | Path) -> None:
     validate(mesh, str(path))
     path.parent.mkdir(parents=True, exist_ok=True)
     if suffix == ".vtu":
-        import meshio
+        import meshio  # deferred: ~0.5 s import, only .vtu files need it
 
         cells = [("tetra", mesh.tetrahedra), ("triangle", mesh.boundary_triangles)]
         region = [np.full(len(mesh.tetrahedra), -1, dtype=np.int64),
@@ -221,7 +221,7 @@ def _group_elements(gmsh: object, dim: int, tag: int, element_type: int,
 
 
 def _read_vtu(path: Path) -> VolumeMesh:
-    import meshio
+    import meshio  # deferred: ~0.5 s import, only .vtu files need it
 
     try:
         data = meshio.read(path)

@@ -1,4 +1,10 @@
-"""Fused triangle meshes (STL, OBJ, PLY with faces) as input to the reconstruction.
+"""Surface-mesh files of the blade and geometry code: fused triangle meshes (STL, OBJ, PLY with
+faces) read as input to the reconstruction, and the reconstruction's own binary STL with a region
+per triangle (:func:`write_stl`, :func:`read_stl`).
+
+The per-triangle region is written into the binary STL's attribute word (region index + 1 of
+:data:`~steamtwin.geometry.volume_mesh.REGIONS`, 0 = none); STL readers that do not know this
+ignore it. (The tetrahedral meshes' .msh/.vtu files are in :mod:`.volume_mesh`.)
 
 Scanner software often delivers its fused result as a triangle mesh rather than a cloud. The
 mesh is read with trimesh, checked (triangles present, finite coordinates, triangles of
@@ -15,10 +21,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Protocol
 
 import numpy as np
 
+from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.pointcloud import PointCloudError, check_point_cloud
+from steamtwin.geometry.volume_mesh import REGIONS
 
 #: Suffixes of triangle-mesh files (a .ply counts only when it holds faces).
 MESH_SUFFIXES = (".stl", ".obj", ".ply")
@@ -81,7 +90,7 @@ def read_mesh(path: str | Path, unit_scale: float = 1.0) -> tuple[np.ndarray, np
     mesh, vertices merged. Raises :class:`MeshInputError` naming the file when it is missing,
     unreadable, has no triangles or non-finite coordinates (zero-area triangles and the size
     are checked by :func:`mesh_to_cloud`)."""
-    import trimesh
+    import trimesh  # deferred: heavy import (~1-2 s), only the mesh steps pay it
 
     path = Path(path)
     suffix = path.suffix.lower()
@@ -114,13 +123,14 @@ def read_mesh(path: str | Path, unit_scale: float = 1.0) -> tuple[np.ndarray, np
 
 
 def mesh_to_cloud(vertices: np.ndarray, triangles: np.ndarray, samples: int = DEFAULT_SAMPLES,
-                  include_vertices: bool = False, rng: np.random.Generator | int | None = 0,
+                  include_vertices: bool = False,
+                  random_state: np.random.Generator | int | None = 0,
                   source: str = "mesh") -> tuple[np.ndarray, MeshSampling]:
     """Cloud (n, 3; m) of ``samples`` points spread uniformly by area over the triangles,
     plus the vertices when ``include_vertices``; and what was done. Zero-area triangles are
     left out; a mesh of only such triangles, or a cloud of implausible size (wrong units: read
     a file in mm with ``unit_scale=1e-3``), raises :class:`MeshInputError` naming ``source``."""
-    import trimesh
+    import trimesh  # deferred: heavy import (~1-2 s), only the mesh steps pay it
 
     if samples < 1:
         raise MeshInputError(f"{source}: samples must be a positive count (got {samples})")
@@ -130,7 +140,8 @@ def mesh_to_cloud(vertices: np.ndarray, triangles: np.ndarray, samples: int = DE
     if np.all(degenerate):
         raise MeshInputError(f"{source}: all {len(triangles)} triangles have zero area")
     mesh = trimesh.Trimesh(vertices, triangles[~degenerate], process=False)
-    seed = rng if isinstance(rng, int | None) else int(rng.integers(2**31))
+    seed = (random_state if isinstance(random_state, int | None)
+            else int(random_state.integers(2**31)))
     points, _ = trimesh.sample.sample_surface(mesh, samples, seed=seed)
     used = np.unique(triangles[~degenerate])
     cloud = np.vstack([points, vertices[used]]) if include_vertices else np.asarray(points)
@@ -143,8 +154,59 @@ def mesh_to_cloud(vertices: np.ndarray, triangles: np.ndarray, samples: int = DE
 
 def read_mesh_cloud(path: str | Path, samples: int = DEFAULT_SAMPLES,
                     include_vertices: bool = False, unit_scale: float = 1.0,
-                    rng: np.random.Generator | int | None = 0
+                    random_state: np.random.Generator | int | None = 0
                     ) -> tuple[np.ndarray, MeshSampling]:
     """:func:`read_mesh` then :func:`mesh_to_cloud`: the cloud (m) of a mesh file."""
     vertices, triangles = read_mesh(path, unit_scale)
-    return mesh_to_cloud(vertices, triangles, samples, include_vertices, rng, str(path))
+    return mesh_to_cloud(vertices, triangles, samples, include_vertices, random_state, str(path))
+
+
+class RegionMesh(Protocol):
+    """A closed triangle mesh with a region per triangle — what :func:`write_stl` writes (a
+    :class:`~steamtwin.geometry.reconstruct.Reconstruction` is one)."""
+
+    vertices: np.ndarray  # (n, 3), m
+    triangles: np.ndarray  # (m, 3) vertex indices, outward
+    regions: np.ndarray  # (m,) indices into REGIONS
+
+
+def write_stl(reconstruction: RegionMesh, path: str | Path) -> Path:
+    """Write the triangulation as binary STL (m) with the region of each triangle in its
+    attribute word (REGIONS index + 1)."""
+    import trimesh  # deferred: heavy import (~1-2 s), only the mesh steps pay it
+
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    mesh = trimesh.Trimesh(reconstruction.vertices, reconstruction.triangles, process=False)
+    data = bytearray(trimesh.exchange.stl.export_stl(mesh))
+    records = np.frombuffer(data, dtype=np.uint8, offset=84).reshape(-1, 50)
+    records[:, 48:50] = np.frombuffer((reconstruction.regions + 1).astype("<u2").tobytes(),
+                                      dtype=np.uint8).reshape(-1, 2)
+    path.write_bytes(bytes(data))
+    return path
+
+
+def read_stl(path: str | Path) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """Vertices (m), triangles and regions (None when the file carries none) of a binary or
+    ASCII STL; vertices are merged. Raises :class:`ReconstructionError` naming the file."""
+    import trimesh  # deferred: heavy import (~1-2 s), only the mesh steps pay it
+
+    path = Path(path)
+    if not path.is_file():
+        raise ReconstructionError(f"{path}: no such STL file")
+    try:
+        mesh = trimesh.load_mesh(path, file_type="stl", process=False)
+    except Exception as error:  # trimesh raises assorted errors on malformed files
+        raise ReconstructionError(f"{path}: not a readable STL: {error}") from None
+    if len(mesh.faces) == 0:
+        raise ReconstructionError(f"{path}: the STL holds no triangles")
+    regions = None
+    raw = path.read_bytes()
+    count = int.from_bytes(raw[80:84], "little") if len(raw) >= 84 else -1
+    if len(raw) == 84 + 50 * count == 84 + 50 * len(mesh.faces):
+        words = np.frombuffer(raw, dtype=np.uint8, offset=84).reshape(-1, 50)[:, 48:50]
+        attribute = words.copy().view("<u2").ravel().astype(np.int64)
+        if np.all((attribute >= 1) & (attribute <= len(REGIONS))):
+            regions = attribute - 1
+    mesh.merge_vertices()
+    return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, np.int64), regions

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from steamtwin.geometry.fidelity import distances_to_mesh
-from steamtwin.geometry.mesh_input import (
+from steamtwin.geometry.mesh_io import (
     MeshInputError,
     is_mesh_file,
     mesh_to_cloud,
@@ -47,7 +47,8 @@ def test_mesh_files_become_clouds_on_the_surface(tmp_path, suffix: str) -> None:
 def test_samples_are_area_uniform() -> None:
     """The share of points on the caps equals the caps' share of the area (binomial bound)."""
     mesh = _cylinder()
-    cloud, _ = mesh_to_cloud(np.asarray(mesh.vertices), np.asarray(mesh.faces), 40_000, rng=1)
+    cloud, _ = mesh_to_cloud(np.asarray(mesh.vertices), np.asarray(mesh.faces), 40_000,
+                             random_state=1)
     on_caps = np.isclose(np.abs(cloud[:, 2] - 0.53), 0.03, atol=1e-9)
     caps = 2.0 * 0.5 * 128 * 0.02**2 * np.sin(2.0 * np.pi / 128)  # two 128-gons
     share = caps / (caps + float(
