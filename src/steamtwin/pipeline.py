@@ -477,7 +477,7 @@ class _PlantData:
 def _read_back(run: PlantRun, folder: Path) -> tuple[History, Section]:
     """The run's historian file and tag map, read and cleaned as a user's export is."""
     files = write_plant(run, folder)
-    history = load_history(files["historian"], files["tags"])
+    history = load_history(files["historian"], files["tag_map"])
     source = folder.name.removeprefix("plant-")
     return history, quality_section(history.report, f"Data quality of the {source} run "
                                     "(DCS cleaning: what was rejected and why)",
