@@ -221,12 +221,11 @@ class _Clock:
     @contextmanager
     def stage(self, name: str) -> Iterator[Callable[..., None]]:
         start = time.perf_counter()
-        share = 1.0 / len(self.stages)
-        offset = self.stages.index(name) * share
+        index = self.stages.index(name)
 
         def report(fraction: float, message: str = "") -> None:
             if self.progress is not None:
-                done = offset + share * min(max(float(fraction), 0.0), 1.0)
+                done = (index + min(max(float(fraction), 0.0), 1.0)) / len(self.stages)
                 self.progress(done, f"{name}: {message}" if message else name)
 
         report(0.0)
@@ -469,7 +468,7 @@ class _PlantData:
     calibration: dict[str, History]  # condition → the whole deep-peak run, read and cleaned
     holds: dict[str, pd.DataFrame]  # condition → its hold (the last hold_hours)
     validation: History  # the day run, read and cleaned
-    validation_spans: list[tuple[pd.Timestamp, pd.Timestamp]]  # its 30 % and 50 % holds
+    validation_spans: dict[str, tuple[pd.Timestamp, pd.Timestamp]]  # its 30/50 % holds
     ramp: pd.DataFrame  # the 50 % run from 90 % demand down to 30 min into the hold
     sections: list[Section]
 
@@ -502,7 +501,7 @@ def _plant_stage(settings: DemoSettings, out: Path, report: Callable[..., None])
                     seed=settings.random_state)
     history, quality = _read_back(day, out / "plant-day")
     sections.append(quality)
-    spans = []
+    spans = {}
     demand = day.true_inputs["load_demand"]  # the dispatch schedule: where the holds are
     for load in VALIDATION_LOADS:
         at_level = np.isclose(demand.to_numpy(), load)
@@ -512,7 +511,7 @@ def _plant_stage(settings: DemoSettings, out: Path, report: Callable[..., None])
         if longest.sum() < samples:
             raise RuntimeError(f"the day run has no {load:.0%} hold of {settings.hold_hours:g} h")
         hold_index = demand.index[longest][-samples:]
-        spans.append((hold_index[0], hold_index[-1]))
+        spans[f"{round(load * 100)} % load"] = (hold_index[0], hold_index[-1])
     report(1.0, "day")
     return _PlantData(calibration, holds, history, spans, ramp, sections)
 

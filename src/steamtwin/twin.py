@@ -420,7 +420,8 @@ class Twin:
         return tuple(needed)
 
     def validate(self, history: History, out_dir: str | Path, *,
-                 windows: Sequence[str | tuple[pd.Timestamp, pd.Timestamp]] = (),
+                 windows: Sequence[str | tuple[pd.Timestamp, pd.Timestamp]]
+                 | Mapping[str, str | tuple[pd.Timestamp, pd.Timestamp]] = (),
                  hours: float = 2.0, monitor: str = "fom", sensor_lag: bool = True,
                  field_check: Any = False, settings: Mapping[str, object] | None = None,
                  timings: Mapping[str, float] | None = None,
@@ -430,8 +431,9 @@ class Twin:
         ``out_dir`` (:func:`steamtwin.validation.monitor.validate`); returns the
         :class:`~steamtwin.validation.html.ValidationReport` (also ``validation_``).
 
-        Windows: the ``windows`` spans, else the last ``hours`` (h) of every steady-load span
-        (± 2 % of rated) of at least ``hours``, named by mean load. Blade temperatures come
+        Windows: the ``windows`` spans (a mapping: name → span, the names the report uses),
+        else the last ``hours`` (h) of every steady-load span (± 2 % of rated) of at least
+        ``hours``; named by mean load unless named. Blade temperatures come
         from the ROM; the steam-path temperatures from the FOM with the ROM's parameters
         (``monitor="fom"``) or the ROM (``"rom"``), either read through the tag map's sensors:
         lags unless ``sensor_lag`` is False, and the twin's sensor offsets. ``field_check``
@@ -464,7 +466,8 @@ class Twin:
                              "search for steady windows needs; map the generator load in the "
                              "tag map or pass --window START/END")
         duration = hours * 3600.0
-        picked = history.windows(rated, given=windows, min_steady_s=duration,
+        spans = list(windows.values()) if isinstance(windows, Mapping) else list(windows)
+        picked = history.windows(rated, given=spans, min_steady_s=duration,
                                  max_steady_s=duration, tolerance=STEADY_TOLERANCE, ramps=False)
         if not picked:
             raise ValueError(f"no steady-load span of {hours:g} h found in the data; pass "
@@ -472,7 +475,8 @@ class Twin:
         zone = history.tag_map.time_zone
         frames = [w.data.set_axis(w.data.index.tz_convert(zone)) if zone else w.data
                   for w in picked]
-        named = name_windows(frames, rated)
+        named = (dict(zip(windows, frames, strict=True)) if isinstance(windows, Mapping)
+                 else name_windows(frames, rated))
         _check_windows(bundle, named)
         timings["window selection"] = time.perf_counter() - clock
         reference = None if field_check is False else field_check
