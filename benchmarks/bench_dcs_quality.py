@@ -16,7 +16,7 @@ import time
 import numpy as np
 import pandas as pd
 
-from steamtwin.dcs.quality import check_quality, clean
+from steamtwin.dcs.quality import QualityOptions, check_quality, clean
 
 SECONDS = 86_400
 COLUMNS = 50
@@ -63,13 +63,14 @@ def synthetic_day(seed: int = 1) -> tuple[pd.DataFrame, dict[str, tuple[float, f
 
 def main() -> None:
     frame, ranges = synthetic_day()
+    options = QualityOptions(ranges=ranges, source="bench")
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
           f"Python {platform.python_version()}")
     print(f"frame: {frame.shape[0]} rows × {frame.shape[1]} columns = {frame.size / 1e6:.2f} M "
           "values")
     for name, call in (
-        ("check_quality", lambda: check_quality(frame, ranges=ranges, source="bench")),
-        ("clean", lambda: clean(frame, ranges=ranges, source="bench")),
+        ("check_quality", lambda: check_quality(frame, options)),
+        ("clean", lambda: clean(frame, options)),
     ):
         times = []
         for _ in range(REPEATS):
@@ -79,7 +80,7 @@ def main() -> None:
         report = result if name == "check_quality" else result.report
         print(f"{name}: median {statistics.median(times):.2f} s, min {min(times):.2f} s "
               f"({len(report.findings)} findings, {len(report.errors)} errors)")
-    print(check_quality(frame, ranges=ranges, source="bench").to_text())
+    print(check_quality(frame, options).to_text())
 
 
 if __name__ == "__main__":

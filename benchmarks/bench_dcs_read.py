@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from steamtwin.dcs.quality import check_quality
+from steamtwin.dcs.quality import QualityOptions, check_quality
 from steamtwin.dcs.readers import read_historian
 from steamtwin.dcs.tagmap import parse_tag_map
 
@@ -76,9 +76,9 @@ def _time_read_and_check(path: Path, tag_map) -> tuple[float, int]:
     for _ in range(REPEATS):
         start = time.perf_counter()
         data = read_historian(path, tag_map)
-        report = check_quality(pd.concat([data.signals, data.extras], axis=1),
-                               tag_names={s: spec.column for s, spec in tag_map.signals.items()},
-                               source=str(path))
+        options = QualityOptions(
+            tag_names={s: spec.column for s, spec in tag_map.signals.items()}, source=str(path))
+        report = check_quality(pd.concat([data.signals, data.extras], axis=1), options)
         runs.append(time.perf_counter() - start)
         findings = len(report.findings)
     return statistics.median(runs), findings

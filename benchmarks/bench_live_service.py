@@ -2,7 +2,8 @@
 time for gate + FOM + ROM + residuals + DuckDB on one core, memory flat from hour 1 to 24).
 
 The virtual plant's 24-h ``day`` (seed 0, 1-s samples) is written as a Parquet historian and
-replayed at ``--speed max`` (``live.ReplaySource``, 60-sample blocks) through one
+replayed at ``--speed max`` (``live.ReplaySource``, ``--block`` samples a block, default 60)
+through one
 ``live.LiveTwin`` with everything on: the streaming gate, the streamed FOM read through the
 typical thermocouple lags, the blade ROM's probe temperatures (hp1, built here on a coarse mesh
 at the design coefficients), residuals with the monitor fitted on a healthy day (``day`` seed
@@ -14,7 +15,7 @@ Prints CPU seconds (process time, every thread) and wall seconds for the day and
 multiples of real time, the resident memory (``/proc/self/statm``, not the peak) at each data
 hour, the growth from hour 1 to hour 24, and what the database holds.
 
-Run: taskset -c 0 python benchmarks/bench_live_service.py [--cache DIR] [--hours 24]
+Run: taskset -c 0 python benchmarks/bench_live_service.py [--cache DIR] [--hours 24] [--block 60]
 """
 
 from __future__ import annotations
@@ -76,6 +77,8 @@ def main() -> None:
     parser.add_argument("--cache", type=Path,
                         default=Path(tempfile.gettempdir()) / "live-service-cache")
     parser.add_argument("--hours", type=float, default=None, help="default: the whole day")
+    parser.add_argument("--block", type=int, default=60,
+                        help="samples per source block (the service's block_samples)")
     args = parser.parse_args()
     args.cache.mkdir(parents=True, exist_ok=True)
     spec = load_spec("reference")
@@ -109,7 +112,7 @@ def main() -> None:
                         sensitivity=SensitivityCache(model, monitor.sensors),
                         recalibration=LiveRecalibration(tracker))
         source = _Metered(ReplaySource(paths["historian"], tag_map, speed=None,
-                                       block_samples=60))
+                                       block_samples=args.block))
         cpu, wall = time.process_time(), time.perf_counter()
         summary = asyncio.run(twin.run(source))
         cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
@@ -129,7 +132,7 @@ def main() -> None:
               f"{source.rss[hours[-1]] - source.rss[1]:+.0f} MB")
     if len(alarms):
         print(alarms[["kind", "signal", "start", "end"]].to_string())
-    print(f"load average {os.getloadavg()[0]:.1f}")
+    print(f"block {args.block} samples; load average {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

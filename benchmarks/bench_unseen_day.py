@@ -49,7 +49,7 @@ from steamtwin.calibration.windowprep import (
 )
 from steamtwin.calibration.windowset import WindowSet, find_calibration_windows
 from steamtwin.dcs.plant import run_plant
-from steamtwin.dcs.quality import clean
+from steamtwin.dcs.quality import QualityOptions, clean
 from steamtwin.dcs.windows import find_steady_windows, select_window
 from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.spec import load_spec
@@ -97,7 +97,8 @@ def main() -> None:
 
 
 def _cleaned(run) -> pd.DataFrame:
-    return clean(run.measured, required=("load",), source=f"plant {run.scenario}").data
+    options = QualityOptions(required=("load",), source=f"plant {run.scenario}")
+    return clean(run.measured, options).data
 
 
 def _draw(spec, rated: float, seed: int, sensors: tuple[str, ...], quick: bool) -> dict:

@@ -1,31 +1,40 @@
-"""The end-to-end run behind ``steamtwin demo``, stage by stage, on the built-in reference unit.
+"""The end-to-end run behind ``steamtwin demo``, stage by stage, on the Python API.
 
-Stages (each timed; every number in the report is computed in the run):
+Every stage goes through the calls a Python user makes — :class:`steamtwin.Twin`
+(``from_spec``, ``simulate``, ``calibrate``, ``build_rom``, ``held_out_fields``, ``validate``,
+``save``) and :func:`steamtwin.load_history` on the virtual plant's historian files — on any
+turbine spec (built-in name or TOML path) and blade row. Stages (each timed; every number in the
+report is computed in the run):
 
 1. **Full-order model**: design point against the spec's heat balance, the off-design line at
    30/50/75/100 % load, a 100 → 30 % ramp with three heat-transfer settings.
-2. **Geometry**: virtual scan of the first HP rotor blade (hp1) → cleaning and registration →
-   B-spline surface → watertight STL → deviation and row metrics against the exact blade →
-   tetrahedral mesh of the *reconstructed* blade (the mesh the blade ROM is built on) → the
-   scan-uncertainty study per row (±0.05 mm → the row's throat → its stage → HP-exhaust
-   temperature; hp1 and hp13).
-3. **Virtual plant**: the ``deep-peak-30`` and ``deep-peak-50`` runs (10 min at 100 %, ramp at
-   3 %/min, hold) for calibration, and a ``day`` of load following with the same instruments
-   (same seed: same sensor errors, another day) for validation; all cleaned as the DCS layer
-   does (spikes and out-of-range samples rejected and counted, nothing filled).
-4. **Calibration** on both deep-peak runs, ramps included (the heat-transfer coefficient acts
-   only in ramps): surrogate-assisted by default, the method's GA (P 50 × G 200) in full mode;
-   Table 6 on the two holds, Figure 8, the identifiability check; Table 7 and Figure 7 from GA
-   runs (quick mode: G = 10 on windows thinned to 10 s, stated in the report).
-5. **Blade ROM** built on the reconstructed mesh with the calibrated parameters; Figure 9 and
-   its errors at held-out conditions the ROM was not built on.
-6. **Monitoring**: the ROM replayed over the ``day`` run's 30 % and 50 % holds (data neither
+2. **Geometry**: virtual scan of the blade row → cleaning and registration → B-spline surface
+   → watertight STL → deviation and row metrics against the exact blade → tetrahedral mesh of
+   the *reconstructed* blade (the mesh the blade ROM is built on) → the scan-uncertainty study
+   per row (±0.05 mm → the row's throat → its stage → HP-exhaust temperature; hp1 and hp13).
+3. **Virtual plant** (the built-in reference unit's: the plant stages need that spec): the
+   ``deep-peak-30`` and ``deep-peak-50`` runs (10 min at 100 %, ramp at 3 %/min, hold) for
+   calibration, and a ``day`` of load following with the same instruments (same seed: same
+   sensor errors, another day) for validation; written as historian files and read back with
+   :func:`~steamtwin.dcs.history.load_history` (cleaned as the DCS layer does: spikes and
+   out-of-range samples rejected and counted, nothing filled).
+4. **Calibration** (:meth:`Twin.calibrate`) on both deep-peak runs, ramps and holds:
+   surrogate-assisted by default, the method's GA (P 50 × G 200) in full mode; Table 6 on the
+   two holds, Figure 8, the identifiability check; Table 7 and Figure 7 from GA runs (quick
+   mode: G = 10 on windows thinned to 10 s, stated in the report).
+5. **Blade ROM** (:meth:`Twin.build_rom`) on the reconstructed mesh with the calibrated
+   parameters; Figure 9 and its errors at held-out conditions the ROM was not built on.
+6. **Monitoring** (:meth:`Twin.validate`): the day run's 30 % and 50 % holds (data neither
    the calibration nor the ROM saw): Table 5, Table 8, Figure 10.
 7. **Sensitivity**: Sobol' indices of the three parameters on the 50 % run's ramp, and the
    propagation of main-steam temperature noise (σ = 0.5 and 1.0 K) on the 50 % hold.
 
-:func:`run_demo` writes everything into one folder with ``report.html``/``report.json``; the
-library never prints — progress goes to a callback.
+:func:`run_demo` writes everything into one folder: the twin (:meth:`Twin.save`: ``spec.toml``,
+``params.json``, ``rom.npz``, ``twin.json``) and ``report.html``/``report.json``; the library
+never prints — progress goes to a :data:`~steamtwin.progress.ProgressCallback`.
+
+(Over 500 lines for a reason: one function per stage, in the order of the run, so the report's
+chain reads top to bottom in one file; what a stage computes lives in the library it calls.)
 """
 
 from __future__ import annotations
@@ -43,7 +52,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from steamtwin.calibration import Calibrator, GeneticSearch, SurrogateSearch
+from steamtwin.calibration import Calibrator, GeneticSearch
 from steamtwin.calibration.evaluation import make_evaluator
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
 from steamtwin.calibration.report import (
@@ -52,22 +61,21 @@ from steamtwin.calibration.report import (
     rmse_table,
     temperature_comparison_figure,
 )
+from steamtwin.dcs.history import History, load_history
 from steamtwin.dcs.plant import PlantRun, plant_tag_map, run_plant, write_plant
-from steamtwin.dcs.quality import clean
 from steamtwin.dcs.tagmap import write_tag_map
 from steamtwin.live.config import ServiceConfig, SourceConfig, UnitConfig
 from steamtwin.live.historian import LiveHistorian
 from steamtwin.live.plant_server import PlantServer, PlantServerSettings, plant_node_ids
 from steamtwin.live.runner import run_service
 from steamtwin.model.fom import FullOrderModel
-from steamtwin.model.measurement import TYPICAL_TIME_CONSTANTS_S
 from steamtwin.model.operating import load_profile_inputs, ramp_profile
 from steamtwin.model.parameters import ModelParameters
-from steamtwin.rom.build import build_rom
+from steamtwin.progress import ProgressCallback
 from steamtwin.rom.estimator import ExtrapolationWarning
-from steamtwin.rom.romfile import save_rom
-from steamtwin.rom.snapshots import design_conditions, generate_snapshots
 from steamtwin.spec import TurbineSpec, load_spec
+from steamtwin.spec.fingerprint import spec_hash
+from steamtwin.twin import Twin
 from steamtwin.validation.html import (
     FigureSection,
     NotesSection,
@@ -75,7 +83,6 @@ from steamtwin.validation.html import (
     TableSection,
     ValidationReport,
 )
-from steamtwin.validation.monitor import validate
 from steamtwin.validation.noise import noise_figure, noise_propagation
 from steamtwin.validation.sensitivity import sobol_indices
 from steamtwin.validation.tables import quality_section
@@ -86,10 +93,19 @@ STAGES: tuple[str, ...] = (
     "full-order model", "geometry", "virtual plant", "calibration", "GA sensitivity (Table 7)",
     "blade ROM", "Sobol indices and noise propagation", "live twin", "monitoring and report",
 )
-"""Stage names in order, as passed to the progress callback."""
+"""Stage names in order; each progress message starts with its stage's name."""
 
-ProgressCallback = Callable[[str, float], None]
-"""``progress(stage, fraction)``: the fraction (0–1) done of the named stage."""
+#: Stage → the stages it needs. "monitoring and report" always runs (it writes the report);
+#: it monitors when the virtual plant and the blade ROM ran. The blade ROM is built on the
+#: reconstructed mesh when the geometry stage ran, else on the exact blade's.
+NEEDS: dict[str, tuple[str, ...]] = {
+    "calibration": ("virtual plant",),
+    "GA sensitivity (Table 7)": ("calibration",),
+    "Sobol indices and noise propagation": ("virtual plant",),
+}
+#: Stages on the virtual plant, which simulates the built-in reference unit.
+PLANT_STAGES = ("virtual plant", "calibration", "GA sensitivity (Table 7)",
+                "Sobol indices and noise propagation", "live twin")
 
 VALIDATION_LOADS = (0.30, 0.50)
 #: Rows of the demo's scan-uncertainty study, each through its own stage.
@@ -98,9 +114,18 @@ UNCERTAINTY_ROWS = ("hp1", "hp13")
 
 @dataclass(frozen=True)
 class DemoSettings:
-    """Sizes of the demo's stages. :meth:`quick` (the default), :meth:`full` (the method's)."""
+    """Sizes of the demo's stages. :meth:`quick` (the default), :meth:`full` (the method's).
+
+    ``spec``: a built-in turbine's name or a spec TOML path; ``row``: the blade row scanned,
+    reconstructed and modelled by the ROM (one of the spec's :attr:`Twin.blade_rows`, checked
+    by :func:`run_demo`); ``stages``: the stages to run (:data:`STAGES`; each with the stages
+    it needs, :data:`NEEDS`; the plant stages need the reference unit's spec).
+    """
 
     mode: str = "quick"
+    spec: str | Path = "reference"
+    row: str = "hp1"
+    stages: tuple[str, ...] = STAGES
     hold_hours: float = 2.0  # h, the holds of the plant runs and the validation windows
     scan_points: int = 60_000  # virtual scan, all views
     mesh_element_size: float | None = None  # m; None: the mesher's default for the blade
@@ -115,7 +140,7 @@ class DemoSettings:
     held_out: int = 4  # FOM fields at conditions the ROM was not built on (Figure 9)
     sobol_n_base: int = 64
     noise_repeats: int = 2
-    seed: int = 0
+    random_state: int = 0
     workers: int | None = None  # local processes; None: every core
 
     @classmethod
@@ -145,12 +170,35 @@ class DemoSettings:
             raise ValueError(f"{bad} must be ≥ 1")
         if self.held_out < 4 or self.snapshots < 4:
             raise ValueError("snapshots and held_out must be ≥ 4 (one per load level)")
+        unknown = [stage for stage in self.stages if stage not in STAGES]
+        if unknown:
+            raise ValueError(f"stages {unknown} unknown; the demo's stages: {list(STAGES)}")
+        for stage in self.stages:
+            lacking = [need for need in NEEDS.get(stage, ()) if need not in self.stages]
+            if lacking:
+                raise ValueError(f"stage {stage!r} needs {lacking}: add it to stages")
+        ordered = tuple(stage for stage in STAGES
+                        if stage in self.stages or stage == "monitoring and report")
+        object.__setattr__(self, "stages", ordered)
+
+    def twin(self) -> Twin:
+        """The twin of :attr:`spec`, with :attr:`row` and the plant stages checked against it
+        (ValueError listing the spec's rows, or the stages the spec can run)."""
+        twin = Twin.from_spec(self.spec)
+        twin.blade_design(self.row)
+        plant = [stage for stage in self.stages if stage in PLANT_STAGES]
+        if plant and spec_hash(twin.spec) != spec_hash(load_spec("reference")):
+            raise ValueError(
+                f"stages {plant} run the virtual plant, which simulates the built-in reference "
+                f"unit, not spec {twin.spec.name!r} ({self.spec}); leave them out (stages="
+                f"{[s for s in self.stages if s not in PLANT_STAGES]})")
+        return twin
 
 
 @dataclass
 class DemoResult:
     """What a run produced: the report (``report.html``, ``report.json`` in ``out``), the
-    calibrated parameters, the tables by name and the stage timings (s)."""
+    twin (saved in ``out``), its parameters, the tables by name and the stage timings (s)."""
 
     out: Path
     report: ValidationReport
@@ -158,22 +206,27 @@ class DemoResult:
     tables: dict[str, pd.DataFrame] = field(default_factory=dict)
     timings: dict[str, float] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
+    twin: Twin | None = None
 
 
 class _Clock:
-    """Stage timings and progress reports."""
+    """Stage timings, and the run's progress: each stage an equal share of [0, 1], each
+    message starting with the stage's name."""
 
-    def __init__(self, progress: ProgressCallback | None) -> None:
+    def __init__(self, progress: ProgressCallback | None, stages: tuple[str, ...]) -> None:
         self.timings: dict[str, float] = {}
         self.progress = progress
+        self.stages = stages
 
     @contextmanager
-    def stage(self, name: str) -> Iterator[Callable[[float], None]]:
+    def stage(self, name: str) -> Iterator[Callable[..., None]]:
         start = time.perf_counter()
+        index = self.stages.index(name)
 
-        def report(fraction: float) -> None:
+        def report(fraction: float, message: str = "") -> None:
             if self.progress is not None:
-                self.progress(name, min(max(fraction, 0.0), 1.0))
+                done = (index + min(max(float(fraction), 0.0), 1.0)) / len(self.stages)
+                self.progress(done, f"{name}: {message}" if message else name)
 
         report(0.0)
         yield report
@@ -183,64 +236,88 @@ class _Clock:
 
 def run_demo(out: str | Path, settings: DemoSettings | None = None,
              progress: ProgressCallback | None = None) -> DemoResult:
-    """Run every stage on the reference unit and write the report into ``out``."""
+    """Run the selected stages (all by default) on ``settings.spec`` and ``settings.row`` and
+    write the twin and the report into ``out``.
+
+    ``progress(fraction, message)``: the share of the run done (each stage an equal part) and
+    a message starting with the stage's name (:data:`STAGES`). ValueError before any work for
+    an unknown row (listing the spec's rows) or plant stages on another spec than the
+    reference unit's.
+    """
     settings = settings or DemoSettings.quick()
+    twin = settings.twin()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    clock = _Clock(progress)
-    spec = load_spec("reference")
-    model = FullOrderModel(spec)
-    # the twin compared with DCS readings predicts readings: its thermocouples' lag included
-    twin = FullOrderModel(spec, sensor_time_constants=TYPICAL_TIME_CONSTANTS_S)
+    clock = _Clock(progress, settings.stages)
+    run = set(settings.stages)
     sections: list[Section] = []
     messages: list[str] = []
+    plant = mesh = reference = None
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", IdentifiabilityWarning)
         warnings.simplefilter("always", ExtrapolationWarning)
-        with clock.stage("full-order model") as report:
-            sections += _model_stage(spec, model, out, report)
-        with clock.stage("geometry") as report:
-            mesh, geometry_sections = _geometry_stage(spec, model, settings, out, report)
-            sections += geometry_sections
-        with clock.stage("virtual plant") as report:
-            plant = _plant_stage(spec, settings, out, report)
-            sections += plant.sections
-        with clock.stage("calibration") as report:
-            calibrator, calibration_sections = _calibration_stage(twin, plant, settings, out,
-                                                                  report)
-            sections += calibration_sections
-        with clock.stage("GA sensitivity (Table 7)") as report:
-            sections += _table7_stage(twin, plant, settings, out, report)
-        with clock.stage("blade ROM") as report:
-            bundle, reference = _rom_stage(spec, mesh, calibrator.params_, settings, out,
-                                           report)
-        with clock.stage("Sobol indices and noise propagation") as report:
-            sections += _sensitivity_stage(model, plant, calibrator.params_, settings, out,
-                                           report)
-        with clock.stage("live twin") as report:
-            sections += _live_stage(calibrator.params_, settings, out, report)
+        if "full-order model" in run:
+            with clock.stage("full-order model") as report:
+                sections += _model_stage(twin, out, report)
+        if "geometry" in run:
+            with clock.stage("geometry") as report:
+                mesh, geometry_sections = _geometry_stage(twin.spec, twin.full_order_model,
+                                                          settings, out, report)
+                sections += geometry_sections
+        if "virtual plant" in run:
+            with clock.stage("virtual plant") as report:
+                plant = _plant_stage(settings, out, report)
+                sections += plant.sections
+        if "calibration" in run:
+            with clock.stage("calibration") as report:
+                sections += _calibration_stage(twin, plant, settings, out, report)
+        if "GA sensitivity (Table 7)" in run:
+            with clock.stage("GA sensitivity (Table 7)") as report:
+                sections += _table7_stage(twin, plant, settings, out, report)
+        if "blade ROM" in run:
+            with clock.stage("blade ROM") as report:
+                reference = _rom_stage(twin, mesh, settings, report,
+                                       held_out="virtual plant" in run)
+        if "Sobol indices and noise propagation" in run:
+            with clock.stage("Sobol indices and noise propagation") as report:
+                sections += _sensitivity_stage(twin, plant, settings, out, report)
+        if "live twin" in run:
+            with clock.stage("live twin") as report:
+                sections += _live_stage(twin, settings, out, report)
         with clock.stage("monitoring and report") as report:
+            twin.save(out)
             for warning in caught:
                 messages.append(f"{warning.category.__name__}: {warning.message}")
             if messages:
                 sections.append(NotesSection("Warnings raised during the run", tuple(messages)))
-            result = validate(
-                bundle, plant.validation, out,
-                title="steamtwin demo: reference 600 MW unit, end to end",
-                settings={**asdict(settings), "turbine": spec.name,
-                          "calibration data": "deep-peak-30 and deep-peak-50 runs (ramp + "
-                          f"{settings.hold_hours:g}-h hold), instruments seed {settings.seed}",
-                          "validation data": f"day run, last {settings.hold_hours:g} h of the "
-                          "30 % and 50 % holds, same instruments",
-                          "thermocouple time constants of the twin (s)":
-                              TYPICAL_TIME_CONSTANTS_S},
-                timings=clock.timings, field_check=reference, extra_sections=sections,
-                simulator=twin, time_zone=plant_tag_map().time_zone)
+            result = _report(twin, plant, reference, sections, settings, clock.timings, out)
             report(1.0)
     result.timings = {**result.timings, **clock.timings}  # the last stage's time included
     result.write(out)
-    return DemoResult(out=out, report=result, params=calibrator.params_,
-                      tables=result.tables, timings=dict(clock.timings), warnings=messages)
+    return DemoResult(out=out, report=result, params=twin.parameters, tables=result.tables,
+                      timings=dict(clock.timings), warnings=messages, twin=twin)
+
+
+def _report(twin: Twin, plant: _PlantData | None, reference: object, sections: list[Section],
+            settings: DemoSettings, timings: dict[str, float], out: Path) -> ValidationReport:
+    """The monitoring replay of the day run's holds (:meth:`Twin.validate`) heading the
+    stages' sections; without the plant or the ROM, those sections alone."""
+    title = f"steamtwin demo: {twin.spec.name}, blade {settings.row}, end to end"
+    header = {**asdict(settings), "turbine": twin.spec.name}
+    if plant is None or twin.blade_rom is None:
+        report = ValidationReport(title, settings=header, timings=dict(timings))
+        for section in sections:
+            report.add(section)
+        return report
+    return twin.validate(
+        plant.validation, out, windows=plant.validation_spans, hours=settings.hold_hours,
+        field_check=reference if reference is not None else False, title=title,
+        settings={**header,
+                  "calibration data": "deep-peak-30 and deep-peak-50 runs (ramp + "
+                  f"{settings.hold_hours:g}-h hold), instruments seed {settings.random_state}",
+                  "validation data": f"day run, last {settings.hold_hours:g} h of the "
+                  "30 % and 50 % holds, same instruments"},
+        timings=timings, extra_sections=sections)
 
 
 # ------------------------------------------------------------------------------------------
@@ -251,16 +328,16 @@ LIVE_HOURS = 0.1
 """Length of the live stage's hold (h): the deep-peak-50 ramp and a short hold, over OPC UA."""
 
 
-def _live_stage(params: ModelParameters, settings: DemoSettings, out: Path,
-                report: Callable[[float], None]) -> list[Section]:
+def _live_stage(twin: Twin, settings: DemoSettings, out: Path,
+                report: Callable[..., None]) -> list[Section]:
     """The virtual plant published over OPC UA on loopback, the live service reading it with
     the calibrated parameters into ``out/live.duckdb``: what was stored, what the twin said."""
-    run = run_plant("deep-peak-50", hours=LIVE_HOURS, seed=settings.seed + 1000)
+    run = run_plant("deep-peak-50", hours=LIVE_HOURS, random_state=settings.random_state + 1000)
     report(0.3)
     tags = out / "live-tags.toml"
     write_tag_map(plant_node_ids(plant_tag_map()), tags)
     params_path = out / "live-params.json"
-    params.to_json(params_path)
+    twin.parameters.to_json(params_path)
     with socket.socket() as probe:  # a free loopback port
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
@@ -268,7 +345,7 @@ def _live_stage(params: ModelParameters, settings: DemoSettings, out: Path,
     database = out / "live.duckdb"
     database.unlink(missing_ok=True)
     config = ServiceConfig(database=database, source=out / "live (demo)", units=(UnitConfig(
-        name="unit1", turbine="reference", tags=tags, params=params_path, block_samples=60,
+        name="unit1", turbine=str(settings.spec), tags=tags, params=params_path, block_samples=60,
         source=SourceConfig("opcua", endpoint=server_settings.endpoint,
                             allow_insecure=True)),))
 
@@ -305,12 +382,14 @@ def _live_stage(params: ModelParameters, settings: DemoSettings, out: Path,
                          "last minute waits for the gate's look-ahead when the stage stops")]
 
 
+
+
 # ------------------------------------------------------------------------------------------
 # 1. full-order model
 
 
-def _model_stage(spec: TurbineSpec, model: FullOrderModel, out: Path,
-                 report: Callable[[float], None]) -> list[Section]:
+def _model_stage(twin: Twin, out: Path, report: Callable[..., None]) -> list[Section]:
+    spec, model = twin.spec, twin.full_order_model
     design = model.simulate_detailed(model.design_inputs(), stages=False).diagnostics.iloc[0]
     heat_balance = spec.design
     check = pd.DataFrame([
@@ -324,17 +403,17 @@ def _model_stage(spec: TurbineSpec, model: FullOrderModel, out: Path,
          "model": design.hp_power / 1e6},
     ])
     check["difference"] = check["model"] - check["spec"]
-    report(0.3)
+    report(0.3, "design point")
     loads = [0.30, 0.50, 0.75, 1.00]
     line = pd.concat(  # each load its own run: a steady state, metal in equilibrium
         [model.simulate_detailed(load_profile_inputs(spec, [load]), stages=False).diagnostics
          for load in loads], ignore_index=True)
     line.insert(0, "load_fraction", loads)
-    report(0.6)
+    report(0.6, "off-design line")
     ramp_inputs = load_profile_inputs(spec, ramp_profile(1.0, 0.3, 0.03, 600.0, 7200.0))
-    ramps = {h: model.simulate(ramp_inputs, ModelParameters(heat_transfer_coefficient=h))
+    ramps = {h: twin.simulate(ramp_inputs, ModelParameters(heat_transfer_coefficient=h))
              for h in (0.5, 1.0, 2.0)}
-    figure = _ramp_figure(ramp_inputs, ramps, out / "ramp_simulation.png")
+    figure = _ramp_figure(ramp_inputs, ramps, out / "ramp_simulation.png", spec.name)
     return [
         TableSection("design_point", check, "Design point of the full-order model against the "
                      "spec's heat balance"),
@@ -359,7 +438,8 @@ def _off_design_table(line: pd.DataFrame) -> pd.DataFrame:
     })
 
 
-def _ramp_figure(inputs: pd.DataFrame, runs: dict[float, pd.DataFrame], path: Path) -> Path:
+def _ramp_figure(inputs: pd.DataFrame, runs: dict[float, pd.DataFrame], path: Path,
+                 turbine: str) -> Path:
     minutes = (inputs.index - inputs.index[0]).total_seconds() / 60.0
     figure = Figure(figsize=(9, 9))
     axes = figure.subplots(3, 1, sharex=True)
@@ -373,7 +453,7 @@ def _ramp_figure(inputs: pd.DataFrame, runs: dict[float, pd.DataFrame], path: Pa
     axes[2].set_ylabel("inner-casing metal (°C)")
     axes[2].set_xlabel("time (min)")
     axes[2].legend()
-    figure.suptitle("Reference unit: ramp 100 % → 30 % load at 3 %/min (full-order model)")
+    figure.suptitle(f"{turbine}: ramp 100 % → 30 % load at 3 %/min (full-order model)")
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     return path
@@ -385,42 +465,43 @@ def _ramp_figure(inputs: pd.DataFrame, runs: dict[float, pd.DataFrame], path: Pa
 
 @dataclass
 class _PlantData:
-    calibration: dict[str, pd.DataFrame]  # condition → whole cleaned deep-peak run
+    calibration: dict[str, History]  # condition → the whole deep-peak run, read and cleaned
     holds: dict[str, pd.DataFrame]  # condition → its hold (the last hold_hours)
-    validation: dict[str, pd.DataFrame]  # condition → day-run hold
+    validation: History  # the day run, read and cleaned
+    validation_spans: dict[str, tuple[pd.Timestamp, pd.Timestamp]]  # its 30/50 % holds
     ramp: pd.DataFrame  # the 50 % run from 90 % demand down to 30 min into the hold
     sections: list[Section]
 
 
-def _cleaned(run: PlantRun, source: str) -> tuple[pd.DataFrame, Section]:
-    result = clean(run.measured, source=source)
-    return result.data, quality_section(result.report, f"Data quality of the {source} run "
-                                        "(DCS cleaning: what was rejected and why)",
-                                        name=f"data_quality_{source}")
+def _read_back(run: PlantRun, folder: Path) -> tuple[History, Section]:
+    """The run's historian file and tag map, read and cleaned as a user's export is."""
+    files = write_plant(run, folder)
+    history = load_history(files["historian"], files["tag_map"])
+    source = folder.name.removeprefix("plant-")
+    return history, quality_section(history.report, f"Data quality of the {source} run "
+                                    "(DCS cleaning: what was rejected and why)",
+                                    name=f"data_quality_{source}")
 
 
-def _plant_stage(spec: TurbineSpec, settings: DemoSettings, out: Path,
-                 report: Callable[[float], None]) -> _PlantData:
+def _plant_stage(settings: DemoSettings, out: Path, report: Callable[..., None]) -> _PlantData:
     samples = round(settings.hold_hours * 3600.0)
     calibration, holds, sections = {}, {}, []
     for k, load in enumerate(VALIDATION_LOADS):
         name = f"{round(load * 100)} % load"
-        run = run_plant(f"deep-peak-{round(load * 100)}", hours=settings.hold_hours,
-                        seed=settings.seed)
-        write_plant(run, out / f"plant-deep-peak-{round(load * 100)}")
-        data, quality = _cleaned(run, f"deep-peak-{round(load * 100)}")
-        calibration[name] = data
-        holds[name] = data.iloc[-samples:]
+        scenario = f"deep-peak-{round(load * 100)}"
+        run = run_plant(scenario, hours=settings.hold_hours, random_state=settings.random_state)
+        history, quality = _read_back(run, out / f"plant-{scenario}")
+        calibration[name] = history
+        holds[name] = history.data.iloc[-samples:]
         sections.append(quality)
         if load == 0.50:
-            ramp = _ramp_window(run, data)
-        report((k + 1) / 4.0)
+            ramp = _ramp_window(run, history.data)
+        report((k + 1) / 4.0, scenario)
     day = run_plant("day", hours=max(settings.hold_hours * 1.25, settings.hold_hours + 0.25),
-                    seed=settings.seed)
-    write_plant(day, out / "plant-day")
-    data, quality = _cleaned(day, "day")
+                    random_state=settings.random_state)
+    history, quality = _read_back(day, out / "plant-day")
     sections.append(quality)
-    validation = {}
+    spans = {}
     demand = day.true_inputs["load_demand"]  # the dispatch schedule: where the holds are
     for load in VALIDATION_LOADS:
         at_level = np.isclose(demand.to_numpy(), load)
@@ -430,10 +511,9 @@ def _plant_stage(spec: TurbineSpec, settings: DemoSettings, out: Path,
         if longest.sum() < samples:
             raise RuntimeError(f"the day run has no {load:.0%} hold of {settings.hold_hours:g} h")
         hold_index = demand.index[longest][-samples:]
-        validation[f"{round(load * 100)} % load"] = data.loc[
-            (data.index >= hold_index[0]) & (data.index <= hold_index[-1])]
-    report(1.0)
-    return _PlantData(calibration, holds, validation, ramp, sections)
+        spans[f"{round(load * 100)} % load"] = (hold_index[0], hold_index[-1])
+    report(1.0, "day")
+    return _PlantData(calibration, holds, history, spans, ramp, sections)
 
 
 def _ramp_window(run: PlantRun, data: pd.DataFrame) -> pd.DataFrame:
@@ -453,27 +533,22 @@ def _ramp_window(run: PlantRun, data: pd.DataFrame) -> pd.DataFrame:
 # 4. calibration
 
 
-def _calibration_stage(model: FullOrderModel, plant: _PlantData, settings: DemoSettings,
-                       out: Path, report: Callable[[float], None]
-                       ) -> tuple[Calibrator, list[Section]]:
-    windows = list(plant.calibration.values())
-    if settings.calibration == "ga":
-        calibrator = Calibrator(model, search=GeneticSearch(population=settings.population,
-                                                            generations=settings.generations),
-                                random_state=settings.seed, workers=settings.workers,
-                                progress=lambda fraction, _: report(0.9 * fraction))
-    else:
-        calibrator = Calibrator(model, search=SurrogateSearch(max_evaluations=settings.evaluations),
-                                random_state=settings.seed, workers=settings.workers)
-    calibrator.fit(windows)
-    calibrator.save(out / "params.json")
-    report(0.9)
-    table6 = rmse_table(model, {name: [hold] for name, hold in plant.holds.items()},
-                        calibrator.params_)
-    figure8 = temperature_comparison_figure(model, plant.holds["50 % load"], calibrator.params_,
+def _calibration_stage(twin: Twin, plant: _PlantData, settings: DemoSettings, out: Path,
+                       report: Callable[..., None]) -> list[Section]:
+    """:meth:`Twin.calibrate` on both deep-peak runs: their ramps and their holds."""
+    hold_s = settings.hold_hours * 3600.0
+    twin.calibrate(list(plant.calibration.values()), method=settings.calibration,
+                   min_steady_s=0.5 * hold_s, max_steady_s=hold_s,
+                   population=settings.population, generations=settings.generations,
+                   max_evaluations=settings.evaluations, random_state=settings.random_state,
+                   workers=settings.workers,
+                   progress=lambda fraction, message="": report(0.9 * fraction, message))
+    report(0.9, "Table 6, Figure 8")
+    model, calibrator, p = twin.model_, twin.calibrator_, twin.params_
+    table6 = rmse_table(model, {name: [hold] for name, hold in plant.holds.items()}, p)
+    figure8 = temperature_comparison_figure(model, plant.holds["50 % load"], p,
                                             out / "figure8_temperatures.png",
                                             title="Predicted vs measured, 50 % load (Figure 8)")
-    p = calibrator.params_
     intervals = calibrator.posterior_.table()
     parameters = pd.DataFrame([
         {"parameter": name, "calibrated": getattr(p, name),
@@ -486,16 +561,16 @@ def _calibration_stage(model: FullOrderModel, plant: _PlantData, settings: DemoS
     method = (f"GA P {settings.population} × G {settings.generations}"
               if settings.calibration == "ga" else
               f"surrogate-assisted GA, ≤ {settings.evaluations} model runs")
-    return calibrator, [
+    return [
         TableSection("table6_rmse", table6.reset_index(),
                      f"Table 6 — RMSE (K) of the three DCS temperatures on the "
                      f"{settings.hold_hours:g}-h holds with empirical constants (1, 1, 1) and "
                      "calibrated, and the reduction"),
         TableSection("calibrated_parameters", parameters,
                      f"Calibrated parameters (MAP under the default priors; {method}, "
-                     f"{calibrator.n_evaluations_} model runs, on both deep-peak runs incl. "
-                     "their ramps), their 95 % posterior (Laplace) and prior intervals, and "
-                     "whether the data identify them"),
+                     f"{calibrator.n_evaluations_} model runs, on both deep-peak runs' "
+                     f"{len(twin.windows_)} windows: ramps and holds), their 95 % posterior "
+                     "(Laplace) and prior intervals, and whether the data identify them"),
         TableSection("identifiability", calibrator.identifiability_.reset_index(),
                      "Identifiability check of the calibrated parameters"),
         FigureSection(figure8, "Figure 8 — predicted vs measured temperatures at 50 % load, "
@@ -503,14 +578,15 @@ def _calibration_stage(model: FullOrderModel, plant: _PlantData, settings: DemoS
     ]
 
 
-def _table7_stage(model: FullOrderModel, plant: _PlantData, settings: DemoSettings, out: Path,
-                  report: Callable[[float], None]) -> list[Section]:
+def _table7_stage(twin: Twin, plant: _PlantData, settings: DemoSettings, out: Path,
+                  report: Callable[..., None]) -> list[Section]:
     step = settings.table7_thinning_s
-    windows = [frame.iloc[::step] for frame in plant.calibration.values()]
+    windows = [history.data.iloc[::step] for history in plant.calibration.values()]
     base = {"population": settings.population, "generations": settings.table7_generations}
     # thinned windows run in milliseconds: starting a process pool per GA run would cost more
     # than it saves
     workers = settings.workers if step == 1 else 1
+    model = twin.model_  # the calibration's model, read through the plant's sensors
     fitted: dict[tuple, Calibrator] = {}
     runs = 8  # at most: the base and seven variations
 
@@ -518,8 +594,9 @@ def _table7_stage(model: FullOrderModel, plant: _PlantData, settings: DemoSettin
         key = tuple(sorted(setting.items()))
         if key not in fitted:
             fitted[key] = Calibrator(model, search=GeneticSearch(**setting),
-                                     random_state=settings.seed, workers=workers).fit(windows)
-            report(len(fitted) / runs)
+                                     random_state=settings.random_state,
+                                     workers=workers).fit(windows)
+            report(len(fitted) / runs, f"GA run {len(fitted)}")
         return fitted[key]
 
     with warnings.catch_warnings():
@@ -542,35 +619,38 @@ def _table7_stage(model: FullOrderModel, plant: _PlantData, settings: DemoSettin
 # 5. blade ROM
 
 
-def _rom_stage(spec: TurbineSpec, mesh: object, params: ModelParameters,
-               settings: DemoSettings, out: Path, report: Callable[[float], None]):
-    bundle, _ = build_rom(spec, mesh, params, n_snapshots=settings.snapshots,
-                          max_workers=settings.workers, seed=settings.seed,
-                          progress=lambda f: report(0.7 * f))
-    save_rom(bundle, out / "rom.npz")
-    held_out = design_conditions(spec, settings.held_out, seed=settings.seed + 1000)
-    reference = generate_snapshots(spec, mesh, held_out, params, max_workers=settings.workers,
-                                   progress=lambda f: report(0.7 + 0.3 * f))
-    return bundle, reference
+def _rom_stage(twin: Twin, mesh: object | None, settings: DemoSettings,
+               report: Callable[..., None], *, held_out: bool) -> object | None:
+    """:meth:`Twin.build_rom` on the reconstructed mesh (None: the exact blade row's, meshed
+    at ``mesh_element_size``) with the twin's parameters (the calibrated ones when calibration
+    ran); returns the held-out FOM fields of Figure 9 when they are wanted (``held_out``)."""
+    twin.build_rom(mesh, row=settings.row, element_size=settings.mesh_element_size,
+                   n_snapshots=settings.snapshots, workers=settings.workers,
+                   random_state=settings.random_state,
+                   progress=lambda fraction, message="": report(0.7 * fraction, message))
+    if not held_out:
+        return None
+    return twin.held_out_fields(
+        settings.held_out, random_state=settings.random_state + 1000, workers=settings.workers,
+        progress=lambda fraction, message="": report(0.7 + 0.3 * fraction, message))
 
 
 # ------------------------------------------------------------------------------------------
 # 7. sensitivity
 
 
-def _sensitivity_stage(model: FullOrderModel, plant: _PlantData, params: ModelParameters,
-                       settings: DemoSettings, out: Path,
-                       report: Callable[[float], None]) -> list[Section]:
-    sobol = sobol_indices(model, plant.ramp, n_base=settings.sobol_n_base,
-                          random_state=settings.seed,
+def _sensitivity_stage(twin: Twin, plant: _PlantData, settings: DemoSettings, out: Path,
+                       report: Callable[..., None]) -> list[Section]:
+    model, params, seed = twin.full_order_model, twin.parameters, settings.random_state
+    sobol = sobol_indices(model, plant.ramp, n_base=settings.sobol_n_base, random_state=seed,
                           evaluator=make_evaluator(settings.workers, None),
-                          progress=lambda fraction, _: report(0.8 * fraction))
+                          progress=lambda fraction, message="": report(0.8 * fraction, message))
     sobol_png = sobol.figure(out / "sobol_indices.png")
     hold = plant.holds["50 % load"].ffill().bfill()
     noise = noise_propagation(model, hold, params, repeats=settings.noise_repeats,
-                              random_state=settings.seed)
+                              random_state=seed)
     noise_png = noise_figure(model, hold, out / "noise_propagation.png", params,
-                             random_state=settings.seed)
+                             random_state=seed)
     report(1.0)
     return [
         TableSection("sobol_indices", sobol.table().reset_index(),
@@ -593,7 +673,7 @@ def _sensitivity_stage(model: FullOrderModel, plant: _PlantData, params: ModelPa
 
 
 def _geometry_stage(spec: TurbineSpec, model: FullOrderModel, settings: DemoSettings,
-                    out: Path, report: Callable[[float], None]) -> tuple[object, list[Section]]:
+                    out: Path, report: Callable[..., None]) -> tuple[object, list[Section]]:
     """Scan → fused cloud → B-spline surface → STL → fidelity → mesh → scan uncertainty, the
     chain of :mod:`steamtwin.geometry.workflow` (as ``steamtwin geometry`` runs it)."""
     from steamtwin.geometry.mesh_io import write_stl
@@ -607,28 +687,29 @@ def _geometry_stage(spec: TurbineSpec, model: FullOrderModel, settings: DemoSett
     from steamtwin.geometry.volume_mesh import write_volume_mesh
     from steamtwin.geometry.workflow import preprocess_scan, reconstruct_cloud, scan_row
 
-    scanned = scan_row(spec, "hp1", out / "scan-hp1", points=settings.scan_points,
-                       random_state=settings.seed)
+    row = settings.row
+    scanned = scan_row(spec, row, out / f"scan-{row}", points=settings.scan_points,
+                       random_state=settings.random_state)
     blade, scan = scanned.blade, scanned.scan
     report(0.15)
     fused = preprocess_scan(scan)  # keeps 8/15 of the points: the method's 150k → 80k
     steps = fused.report
     report(0.35)
-    reconstruction = reconstruct_cloud(fused.cloud, blade).reconstruction  # best fit to hp1
-    stl = write_stl(reconstruction, out / "blade-hp1.stl")
+    reconstruction = reconstruct_cloud(fused.cloud, blade).reconstruction  # best fit to row
+    stl = write_stl(reconstruction, out / f"blade-{row}.stl")
     fidelity = reconstruction_fidelity(blade, reconstruction.vertices, reconstruction.triangles,
-                                       random_state=settings.seed)
-    deviation_png = write_deviation_map(reconstruction, out / "deviation_map_hp1.png", blade)
+                                       random_state=settings.random_state)
+    deviation_png = write_deviation_map(reconstruction, out / f"deviation_map_{row}.png", blade)
     report(0.55)
     mesh = mesh_stl(stl, element_size=settings.mesh_element_size)  # from the STL, as a user would
-    write_volume_mesh(mesh, out / "blade-hp1.msh")
+    write_volume_mesh(mesh, out / f"blade-{row}.msh")
     quality = mesh_quality(mesh)
     report(0.7)
     # per row: hp1, the reconstructed control-stage rotor, sets no flow in the model (its
     # throat spread only); hp13, the last pressure-stage rotor, through its own stage
     uncertainty = [
         scan_uncertainty(make_blade(spec, row), model, samples=settings.uncertainty_samples,
-                         random_state=settings.seed,
+                         random_state=settings.random_state,
                          progress=lambda f, _message, k=k: report(0.7 + 0.15 * (k + f)))
         for k, row in enumerate(UNCERTAINTY_ROWS)]
     summary = reconstruction.summary()
@@ -658,7 +739,7 @@ def _geometry_stage(spec: TurbineSpec, model: FullOrderModel, settings: DemoSett
                             for row in section["metrics"]])
     spread = [study.as_dict() for study in uncertainty]
     return mesh, [
-        TableSection("geometry_chain", chain, f"Reverse geometric modelling of blade hp1: "
+        TableSection("geometry_chain", chain, f"Reverse geometric modelling of blade {row}: "
                      f"the chain and what each step did (STL: {stl.name})"),
         TableSection("geometry_fidelity", deviation, "Deviation of the reconstructed surface "
                      "from the exact blade (mm)"),

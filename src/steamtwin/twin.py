@@ -152,18 +152,55 @@ class Twin:
 
     # -- model ------------------------------------------------------------------------------
 
-    def simulate(self, inputs: pd.DataFrame) -> pd.DataFrame:
+    @property
+    def full_order_model(self) -> FullOrderModel:
+        """The spec's full-order model (ideal sensors), built once: what :meth:`simulate` runs;
+        its design point and detailed runs (``simulate_detailed``) for a user who wants them."""
+        model = getattr(self, "_model", None)
+        if model is None:
+            model = self._model = FullOrderModel(self.spec)
+        return model
+
+    @property
+    def blade_rows(self) -> tuple[str, ...]:
+        """The blade rows this spec sizes (``hp1``…, ``ip1``…): what :meth:`build_rom`'s
+        ``row`` and the geometry chain accept for this turbine (each row sized: seconds)."""
+        from steamtwin.errors import SteamtwinError
+        from steamtwin.geometry.profile import ROWS, row_design
+
+        rows = []
+        for row in ROWS:
+            try:
+                row_design(self.spec, row)
+            except (SteamtwinError, ValueError):
+                continue
+            rows.append(row)
+        return tuple(rows)
+
+    def blade_design(self, row: str) -> Any:
+        """Blade row ``row`` sized from the spec
+        (:class:`~steamtwin.geometry.profile.RowDesign`: mean section, radii and counts in m);
+        ValueError naming the spec and listing its :attr:`blade_rows` for a row it has not."""
+        from steamtwin.errors import SteamtwinError
+        from steamtwin.geometry.profile import row_design
+
+        try:
+            return row_design(self.spec, row)
+        except (SteamtwinError, ValueError):
+            raise ValueError(f"row {row!r} is not a blade row of spec {self.spec.name!r}; its "
+                             f"rows: {', '.join(self.blade_rows)}") from None
+
+    def simulate(self, inputs: pd.DataFrame, params: ModelParameters | None = None
+                 ) -> pd.DataFrame:
         """The full-order model's outputs for ``inputs`` with the twin's parameters.
 
         ``inputs``: canonical SI boundary conditions (``main_steam_pressure`` Pa,
         ``main_steam_temperature`` K, ``main_steam_flow`` kg/s, ``hp_exhaust_pressure`` Pa) on
         a time index; returns one row per sample (temperatures K, pressures Pa, power W),
-        exactly :meth:`FullOrderModel.simulate` of the spec with :attr:`parameters`.
+        exactly :meth:`FullOrderModel.simulate` of the spec with :attr:`parameters` (or
+        ``params``, e.g. to compare other coefficients with the twin's).
         """
-        model = getattr(self, "_model", None)
-        if model is None:
-            model = self._model = FullOrderModel(self.spec)
-        return model.simulate(inputs, self.parameters)
+        return self.full_order_model.simulate(inputs, params or self.parameters)
 
     # -- calibration ------------------------------------------------------------------------
 
@@ -367,6 +404,7 @@ class Twin:
         """
         from steamtwin.rom.build import build_rom
 
+        given = mesh is not None
         if mesh is None:
             from steamtwin.geometry.meshing import blade_volume_mesh
 
@@ -377,11 +415,28 @@ class Twin:
                               progress=progress, spec_toml=self._spec_text(),
                               observed=None if observed is None else observed.data, **options)
         self.rom_ = bundle
-        self._record(_step("build_rom", row=row if mesh is None else "given mesh",
+        self._record(_step("build_rom", row=row,
+                           mesh="given" if given else "the spec's exact blade, meshed",
                            n_snapshots=n_snapshots, random_state=random_state,
                            modes=int(bundle.rom.n_modes_),
                            parameters=asdict(self.parameters)))
         return self
+
+    def held_out_fields(self, n_conditions: int, *, random_state: int = 1000,
+                        workers: int | None = None,
+                        progress: ProgressCallback | None = None) -> Any:
+        """The full-order model's steady blade fields (K, on the ROM's mesh, with the ROM's
+        parameters) at ``n_conditions`` design-envelope conditions drawn with ``random_state``
+        (:func:`~steamtwin.rom.snapshots.design_conditions`): held-out checks of the ROM, for
+        :meth:`validate`'s ``field_check`` (Figure 9). Use another ``random_state`` than the
+        build's so the conditions are not the snapshots'."""
+        from steamtwin.rom.provenance import rom_parameters
+        from steamtwin.rom.snapshots import design_conditions, generate_snapshots
+
+        bundle = self._rom_or_error()
+        conditions = design_conditions(self.spec, n_conditions, random_state=random_state)
+        return generate_snapshots(self.spec, bundle.mesh, conditions, rom_parameters(bundle),
+                                  max_workers=workers, progress=progress)
 
     # -- validation -------------------------------------------------------------------------
 
@@ -395,22 +450,27 @@ class Twin:
         return tuple(needed)
 
     def validate(self, history: History, out_dir: str | Path, *,
-                 windows: Sequence[str | tuple[pd.Timestamp, pd.Timestamp]] = (),
+                 windows: Sequence[str | tuple[pd.Timestamp, pd.Timestamp]]
+                 | Mapping[str, str | tuple[pd.Timestamp, pd.Timestamp]] = (),
                  hours: float = 2.0, monitor: str = "fom", sensor_lag: bool = True,
-                 field_check: bool = False, settings: Mapping[str, object] | None = None,
+                 field_check: Any = False, settings: Mapping[str, object] | None = None,
                  timings: Mapping[str, float] | None = None,
-                 progress: ProgressCallback | None = None) -> Any:
+                 progress: ProgressCallback | None = None, title: str | None = None,
+                 extra_sections: Sequence[Any] = ()) -> Any:
         """Replay the twin over measured windows and write the validation report into
         ``out_dir`` (:func:`steamtwin.validation.monitor.validate`); returns the
         :class:`~steamtwin.validation.html.ValidationReport` (also ``validation_``).
 
-        Windows: the ``windows`` spans, else the last ``hours`` (h) of every steady-load span
-        (± 2 % of rated) of at least ``hours``, named by mean load. Blade temperatures come
+        Windows: the ``windows`` spans (a mapping: name → span, the names the report uses),
+        else the last ``hours`` (h) of every steady-load span (± 2 % of rated) of at least
+        ``hours``; named by mean load unless named. Blade temperatures come
         from the ROM; the steam-path temperatures from the FOM with the ROM's parameters
         (``monitor="fom"``) or the ROM (``"rom"``), either read through the tag map's sensors:
         lags unless ``sensor_lag`` is False, and the twin's sensor offsets. ``field_check``
-        adds the FOM blade field at each window's mean conditions (Figure 9). ``settings``
-        and ``timings`` (stage → s) of the caller head the report's own;
+        True adds the FOM blade field at each window's mean conditions (Figure 9), or give the
+        FOM fields to compare with (e.g. :meth:`held_out_fields`). ``settings`` and
+        ``timings`` (stage → s) of the caller head the report's own, ``extra_sections``
+        (:mod:`steamtwin.validation.html` sections) follow it, ``title`` replaces its title;
         ``progress(fraction, message)`` names the stage.
         """
         from steamtwin.dcs.windows import name_windows
@@ -421,7 +481,9 @@ class Twin:
             raise ValueError(f"--monitor must be 'fom' or 'rom' (got {monitor!r})")
         _check_history(history, "validate")
         bundle = self._rom_or_error()
-        missing = [name for name in self.signals_needed(monitor=monitor, field_check=field_check)
+        solve_fields = field_check is True
+        missing = [name for name in self.signals_needed(monitor=monitor,
+                                                        field_check=solve_fields)
                    if name not in history.data.columns]
         if missing:
             raise ValueError(f"{history.historian.source}: signal(s) {missing} are needed but "
@@ -434,7 +496,8 @@ class Twin:
                              "search for steady windows needs; map the generator load in the "
                              "tag map or pass --window START/END")
         duration = hours * 3600.0
-        picked = history.windows(rated, given=windows, min_steady_s=duration,
+        spans = list(windows.values()) if isinstance(windows, Mapping) else list(windows)
+        picked = history.windows(rated, given=spans, min_steady_s=duration,
                                  max_steady_s=duration, tolerance=STEADY_TOLERANCE, ramps=False)
         if not picked:
             raise ValueError(f"no steady-load span of {hours:g} h found in the data; pass "
@@ -442,11 +505,12 @@ class Twin:
         zone = history.tag_map.time_zone
         frames = [w.data.set_axis(w.data.index.tz_convert(zone)) if zone else w.data
                   for w in picked]
-        named = name_windows(frames, rated)
+        named = (dict(zip(windows, frames, strict=True)) if isinstance(windows, Mapping)
+                 else name_windows(frames, rated))
         _check_windows(bundle, named)
         timings["window selection"] = time.perf_counter() - clock
-        reference = None
-        if field_check:
+        reference = None if field_check is False else field_check
+        if solve_fields:
             clock = time.perf_counter()
             if progress is not None:
                 progress(0.2, "solving the FOM blade field at each window's conditions")
@@ -472,7 +536,9 @@ class Twin:
                                        offsets),
             sensors=rom_sensors(self.spec, monitor, sensor_lag, history.tag_map, offsets),
             extra_sections=[quality_section(history.report, "Data quality of the export "
-                                            "(whole file, before windowing)")])
+                                            "(whole file, before windowing)"),
+                            *extra_sections],
+            **({} if title is None else {"title": title}))
         self.validation_ = report
         self._record(_step("validate", data=history.historian.source, windows=list(named),
                            monitor=monitor, report=str(out_dir)))

@@ -107,9 +107,9 @@ def test_demo_maps_its_options_and_prints_the_runs_figures(tmp_path, monkeypatch
 
     def fake_run(out, settings, progress):
         seen["settings"] = settings
-        for stage in STAGES:
-            progress(stage, 0.0)
-            progress(stage, 1.0)
+        for k, stage in enumerate(settings.stages):  # as run_demo: equal shares, named
+            progress(k / len(STAGES), stage)
+            progress((k + 1) / len(STAGES), f"{stage}: done")
         tables = {
             "table6_rmse": pd.DataFrame({"condition": ["30 % load"], "rmse_empirical_K": [2.0],
                                          "rmse_calibrated_K": [0.5], "reduction_pct": [75.0]}),
@@ -124,15 +124,20 @@ def test_demo_maps_its_options_and_prints_the_runs_figures(tmp_path, monkeypatch
 
     monkeypatch.setattr(demo_cli, "run_demo", fake_run)
     result = runner.invoke(app, ["demo", "--out", str(tmp_path), "--full", "--hold-hours",
-                                 "1.5", "--workers", "2", "--seed", "7"])
+                                 "1.5", "--workers", "2", "--seed", "7", "--row", "hp13"])
     assert result.exit_code == 0, result.output
     settings = seen["settings"]
     assert (settings.mode, settings.calibration, settings.snapshots) == ("full", "ga", 32)
-    assert (settings.hold_hours, settings.workers, settings.seed) == (1.5, 2, 7)
+    assert (settings.hold_hours, settings.workers, settings.random_state) == (1.5, 2, 7)
+    assert (settings.spec, settings.row) == ("reference", "hp13")
     text = " ".join(result.output.split())  # rich wraps long lines
     assert "flow 0.9800" in text and "2.00 → 0.50 K (−75 %)" in text
     assert "mean abs deviation 0.21 K, max 1.22 K" in text
     assert "warning: IdentifiabilityWarning: test" in text
+    result = runner.invoke(app, ["demo", "--out", str(tmp_path / "quick"), "--quick",
+                                 "--turbine", "unit.toml"])
+    assert result.exit_code == 0, result.output
+    assert (seen["settings"].mode, seen["settings"].spec) == ("quick", "unit.toml")
 
 
 def _historian_csv(path, pressure_mpa):

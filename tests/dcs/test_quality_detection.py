@@ -18,6 +18,7 @@ from steamtwin.dcs.plant import KKS_TAGS, run_plant
 from steamtwin.dcs.quality import (
     MAX_RATES,
     Flag,
+    QualityOptions,
     check_quality,
     clean,
     estimate_noise_sigma,
@@ -109,19 +110,20 @@ def test_flat_or_coarse_signal_is_not_stuck_but_noisy_held_one_is():
 
 
 def test_given_noise_resolution_and_rate_are_used(independent):
-    report = check_quality(independent, noise_si={"main_steam_temperature": 0.3},
-                           resolution_si={"main_steam_temperature": 0.1})
+    report = check_quality(independent, QualityOptions(
+        noise_si={"main_steam_temperature": 0.3}, resolution_si={"main_steam_temperature": 0.1}))
     (stuck,) = findings(report, "stuck", "main_steam_temperature")
     assert dict(stuck.details)["sigma"] == 0.3 and dict(stuck.details)["quantum"] == 0.1
     # a declared 100 K resolution makes 120 equal samples plausible: not stuck
-    report = check_quality(independent, resolution_si={"main_steam_temperature": 100.0})
+    report = check_quality(independent,
+                           QualityOptions(resolution_si={"main_steam_temperature": 100.0}))
     assert not findings(report, "stuck", "main_steam_temperature")
     assert findings(report, "stuck", "hp_exhaust_temperature")
     # a rate limit of 1 MPa/s allows the 0.9 MPa jump: no spike
-    report = check_quality(independent, max_rate_si={"control_stage_pressure": 1e6})
+    report = check_quality(independent, QualityOptions(max_rate_si={"control_stage_pressure": 1e6}))
     assert not findings(report, "spike", "control_stage_pressure")
     with pytest.raises(ValueError, match=r"noise_si\['load'\] must be a finite number ≥ 0"):
-        check_quality(independent, noise_si={"load": -1.0})
+        check_quality(independent, QualityOptions(noise_si={"load": -1.0}))
 
 
 def test_spike_needs_return_and_rate():
@@ -135,7 +137,7 @@ def test_spike_needs_return_and_rate():
     result = clean(frame)
     spikes = np.flatnonzero(result.flags["hp_exhaust_temperature"] & int(Flag.SPIKE))
     assert list(spikes) == [1000, 2000, 2001, 2002]
-    slow = check_quality(frame, max_rate_si={"hp_exhaust_temperature": 5.0})
+    slow = check_quality(frame, QualityOptions(max_rate_si={"hp_exhaust_temperature": 5.0}))
     assert not findings(slow, "spike", "hp_exhaust_temperature")  # 5 K/s allows 3 K
 
 

@@ -10,7 +10,7 @@ from hypothesis import strategies as st
 
 from steamtwin.dcs.plant import plant_tag_map, run_plant
 from steamtwin.dcs.plant_model import PlantTruth
-from steamtwin.dcs.quality import Flag, clean
+from steamtwin.dcs.quality import Flag, QualityOptions, clean
 from steamtwin.dcs.sensors import FaultConfig
 from steamtwin.live.gate import StreamGate, gate_options
 
@@ -24,7 +24,8 @@ def faulty():
     run = run_plant("deep-peak-50", hours=0.3, random_state=3, truth=truth)
     measured = run.measured
     options = gate_options(plant_tag_map(), run.injected.sensors)
-    batch = clean(measured, nominal_step_s=1.0, out_of_range_error_fraction=1.0, **options)
+    batch = clean(measured, QualityOptions(nominal_step_s=1.0, out_of_range_error_fraction=1.0,
+                                           **options))
     return measured, options, batch, run.injected.faults
 
 

@@ -9,6 +9,7 @@ import pandas as pd
 import pytest
 
 from steamtwin.pipeline import STAGES, DemoSettings, run_demo
+from steamtwin.twin import Twin
 from steamtwin.validation.html import format_value
 
 TINY = DemoSettings.quick(hold_hours=0.25, scan_points=12_000, uncertainty_samples=2,
@@ -18,17 +19,32 @@ TINY = DemoSettings.quick(hold_hours=0.25, scan_points=12_000, uncertainty_sampl
 
 @pytest.fixture(scope="module")
 def demo(tmp_path_factory):
-    stages = []
+    calls = []
     result = run_demo(tmp_path_factory.mktemp("demo"), TINY,
-                      progress=lambda stage, fraction: stages.append((stage, fraction)))
-    return result, stages
+                      progress=lambda fraction, message: calls.append((fraction, message)))
+    return result, calls
 
 
 def test_every_stage_reports_progress_and_time(demo):
-    result, stages = demo
-    assert [s for s, f in stages if f == 0.0] == list(STAGES)
+    result, calls = demo
+    started = [message for _, message in calls if message in STAGES]
+    assert list(dict.fromkeys(started)) == list(STAGES)
+    assert all(any(message.startswith(stage) for stage in STAGES) for _, message in calls)
+    fractions = [fraction for fraction, _ in calls]
+    assert fractions[0] == 0.0 and fractions[-1] == 1.0
+    assert fractions == sorted(fractions)  # one callback for the run, never going back
     assert set(STAGES) <= set(result.timings)
     assert all(result.timings[s] > 0.0 for s in STAGES)
+
+
+def test_the_output_folder_is_the_twin(demo):
+    """The demo saves its twin with Twin.save: Twin.load reads the calibrated parameters and
+    the ROM back, checked against the spec."""
+    result, _ = demo
+    twin = Twin.load(result.out)
+    assert twin.parameters == result.params == result.twin.parameters
+    assert twin.blade_rom is not None
+    assert [step["step"] for step in twin.steps][:3] == ["from_spec", "calibrate", "build_rom"]
 
 
 def test_report_holds_every_table_and_figure_of_the_method(demo):

@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from steamtwin.dcs.quality import Flag, QualityReport, check_quality, clean
+from steamtwin.dcs.quality import Flag, QualityOptions, QualityReport, check_quality, clean
 from steamtwin.dcs.readers import HistorianData, read_historian
 from steamtwin.dcs.tagmap import TagMap, load_tag_map
 from steamtwin.dcs.windows import (
@@ -158,7 +158,7 @@ def check_history(data: str | Path, tag_map: str | Path | TagMap,
     the same checks, with the same settings, as :func:`load_history` applies."""
     tags = tag_map if isinstance(tag_map, TagMap) else load_tag_map(tag_map)
     historian = read_historian(data, tags)
-    return historian, check_quality(historian.signals, **quality_options(historian, required))
+    return historian, check_quality(historian.signals, quality_options(historian, required))
 
 
 def _load_one(data: str | Path, tag_map: TagMap, required: tuple[str, ...],
@@ -174,7 +174,7 @@ def _load_one(data: str | Path, tag_map: TagMap, required: tuple[str, ...],
         raise ValueError(f"{data}: no {kind} " + ", ".join(
             f"{tag!r} (signal {name}, mapped in {tag_map.source})" for name, tag in absent.items())
             + "; it is needed")
-    result = clean(historian.signals, **quality_options(historian, required))
+    result = clean(historian.signals, quality_options(historian, required))
     if result.report.errors and not accept_errors:
         raise DataQualityError(result.report)
     return History(data=result.data, flags=result.flags, report=result.report,
@@ -219,8 +219,8 @@ def _joined(parts: list[History]) -> History:
 
 
 def quality_options(historian: HistorianData, required: Collection[str] = ()
-                    ) -> dict[str, Any]:
-    """Keyword arguments of :func:`~steamtwin.dcs.quality.check_quality` and
+                    ) -> QualityOptions:
+    """The options of :func:`~steamtwin.dcs.quality.check_quality` and
     :func:`~steamtwin.dcs.quality.clean` from everything the tag map and the export give: valid
     ranges, declared units, tags, noise, resolution, rate limits, the historian's quality marks.
     ``dcs check`` and the gate use the same, so what one reports is what the other excludes."""
@@ -231,14 +231,9 @@ def quality_options(historian: HistorianData, required: Collection[str] = ()
         return {s.signal: getattr(s, attribute) for s in specs
                 if getattr(s, attribute) is not None}
 
-    return {
-        "required": tuple(required),
-        "ranges": per_signal("valid_range_si"),
-        "declared_units": {s.signal: s.unit for s in specs},
-        "tag_names": {s.signal: s.column for s in specs},
-        "source": historian.source,
-        "bad_quality": historian.bad_quality,
-        "noise_si": per_signal("noise_si"),
-        "resolution_si": per_signal("resolution_si"),
-        "max_rate_si": per_signal("max_rate_si"),
-    }
+    return QualityOptions(
+        required=tuple(required), ranges=per_signal("valid_range_si"),
+        declared_units={s.signal: s.unit for s in specs},
+        tag_names={s.signal: s.column for s in specs}, source=historian.source,
+        bad_quality=historian.bad_quality, noise_si=per_signal("noise_si"),
+        resolution_si=per_signal("resolution_si"), max_rate_si=per_signal("max_rate_si"))

@@ -27,14 +27,14 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from steamtwin.dcs.quality import Finding, Flag, clean
+from steamtwin.dcs.quality import Finding, Flag, QualityOptions, clean
 from steamtwin.dcs.tagmap import TagMap
 
 __all__ = ["GateOutput", "StreamGate", "gate_options"]
 
 
 def gate_options(tag_map: TagMap, instruments: pd.DataFrame | None = None) -> dict[str, Any]:
-    """:func:`~steamtwin.dcs.quality.clean` keyword arguments from ``tag_map`` (ranges,
+    """:class:`~steamtwin.dcs.quality.QualityOptions` fields from ``tag_map`` (ranges,
     declared units, tags, noise, resolution, rate limits), as the batch gate takes them.
     ``instruments``: a table indexed by signal with ``noise_sigma`` and ``resolution`` (SI;
     e.g. the virtual plant's ``injected.sensors``), filling what the tag map does not state."""
@@ -72,7 +72,7 @@ class GateOutput:
 class StreamGate:
     """Incremental gate over a stream of sample blocks (see the module docstring).
 
-    ``options``: :func:`~steamtwin.dcs.quality.clean` keyword arguments (e.g.
+    ``options``: :class:`~steamtwin.dcs.quality.QualityOptions` fields (e.g.
     :func:`gate_options`); ``nominal_step_s``: the stream's sample step (s);
     ``context_samples``: passed samples kept as left context.
     """
@@ -124,13 +124,13 @@ class StreamGate:
         assert self._values is not None and self._bad is not None
         if stop <= self._passed:
             return self._empty(self._values.columns)
-        cleaned = clean(self._values, nominal_step_s=self.nominal_step_s,
-                        spike_window=self.spike_window,
-                        stuck_min_duration_s=self.stuck_min_duration_s,
-                        bad_quality={name: self._bad[name].to_numpy(dtype=bool)
-                                     for name in self._values.columns},
-                        out_of_range_error_fraction=1.0,  # a stream has no "file" to refuse
-                        **self.options)
+        cleaned = clean(self._values, QualityOptions(
+            nominal_step_s=self.nominal_step_s, spike_window=self.spike_window,
+            stuck_min_duration_s=self.stuck_min_duration_s,
+            bad_quality={name: self._bad[name].to_numpy(dtype=bool)
+                         for name in self._values.columns},
+            out_of_range_error_fraction=1.0,  # a stream has no "file" to refuse
+            **self.options))
         chosen = slice(self._passed, stop)
         data = cleaned.data.iloc[chosen]
         flags = cleaned.flags.iloc[chosen]

@@ -5,6 +5,9 @@ as read (possibly unsorted, with duplicate timestamps and gaps); :func:`clean` r
 what it safely can and flags and counts every sample it touched. Cleaning never interpolates and
 never fills a gap; resampling is a later, separate, explicit step.
 
+Every setting named below (ranges, units, tags, detector parameters) is a field of one
+:class:`QualityOptions`, built and validated once and passed to both functions.
+
 Each finding names the source, the signal and its historian tag, the first offending row with
 its timestamp, and the expected unit or range. Messages and the printed table count data rows
 from 1 in the frame as read (the header not counted); ``Finding.first_row`` and the JSON's
@@ -94,6 +97,7 @@ from steamtwin.dcs.quality.limits import (
     STUCK_CHANCE_RUNS_PER_DAY,
     TYPICAL_RANGES,
 )
+from steamtwin.dcs.quality.options import QualityOptions
 from steamtwin.dcs.quality.report import CleaningResult, Finding, Flag, QualityReport
 
 __all__ = [
@@ -104,6 +108,7 @@ __all__ = [
     "CleaningResult",
     "Finding",
     "Flag",
+    "QualityOptions",
     "QualityReport",
     "check_quality",
     "clean",

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping
-
 import numpy as np
 import pandas as pd
 
@@ -13,89 +11,40 @@ from steamtwin.dcs.quality.options import QualityOptions
 from steamtwin.dcs.quality.report import CleaningResult, Finding, Flag, QualityReport
 
 
-def check_quality(
-    frame: pd.DataFrame,
-    *,
-    required: Collection[str] = (),
-    ranges: Mapping[str, tuple[float, float]] | None = None,
-    declared_units: Mapping[str, str] | None = None,
-    tag_names: Mapping[str, str] | None = None,
-    source: str = "",
-    nominal_step_s: float | None = None,
-    gap_factor: float = 3.0,
-    spike_window: int = 61,
-    spike_n_sigmas: float = 4.5,
-    stuck_min_duration_s: float = 30.0,
-    out_of_range_error_fraction: float = 0.01,
-    noise_si: Mapping[str, float] | None = None,
-    resolution_si: Mapping[str, float] | None = None,
-    max_rate_si: Mapping[str, float] | None = None,
-    bad_quality: Mapping[str, np.ndarray] | None = None,
-) -> QualityReport:
+def check_quality(frame: pd.DataFrame, options: QualityOptions | None = None) -> QualityReport:
     """Check DCS data in SI units on a time index; nothing is changed.
 
-    ``ranges`` are physical validity limits in SI (Pa, K, kg/s, W); ``declared_units`` the units
-    the historian declared (e.g. ``{"main_steam_pressure": "MPa"}``; SI assumed if absent);
-    ``tag_names`` map signal → historian tag for the messages. ``nominal_step_s`` is the
-    sampling step in s (median step if None). ``spike_window`` (odd, samples) and
-    ``spike_n_sigmas`` (k) set the spike detector; ``stuck_min_duration_s`` (s) is the shortest
-    run reported as stuck. ``noise_si``: white-noise σ per signal (SI, before quantisation;
-    estimated when absent); ``resolution_si``: quantum per signal (SI; estimated when absent);
-    ``max_rate_si``: physical rate limit per signal (SI per s; overrides :data:`MAX_RATES`);
-    ``bad_quality``: per signal, a boolean mask over the frame's rows as read of samples the
-    historian's quality column marked bad or uncertain. See the module docstring.
+    ``frame``: one column per canonical signal (SI: Pa, K, kg/s, W) on a time index, as read
+    (possibly unsorted, with duplicate timestamps and gaps). ``options``: the ranges, units,
+    tags and detector settings (:class:`QualityOptions`; None: the defaults). See the module
+    docstring of :mod:`steamtwin.dcs.quality` for what is found and why.
     """
-    options = QualityOptions.make(
-        required, ranges, declared_units, tag_names, source, nominal_step_s, gap_factor,
-        spike_window, spike_n_sigmas, stuck_min_duration_s, out_of_range_error_fraction,
-        noise_si, resolution_si, max_rate_si, bad_quality,
-    )
+    options = _options_or_default(options)
     analysis = analyse(frame, options)
     return QualityReport(
-        tuple(detection_findings(analysis, options)), source, len(frame), analysis.signals
+        tuple(detection_findings(analysis, options)), options.source, len(frame),
+        analysis.signals,
     )
 
-def clean(
-    frame: pd.DataFrame,
-    report: QualityReport | None = None,
-    *,
-    required: Collection[str] = (),
-    ranges: Mapping[str, tuple[float, float]] | None = None,
-    declared_units: Mapping[str, str] | None = None,
-    tag_names: Mapping[str, str] | None = None,
-    source: str = "",
-    nominal_step_s: float | None = None,
-    gap_factor: float = 3.0,
-    spike_window: int = 61,
-    spike_n_sigmas: float = 4.5,
-    stuck_min_duration_s: float = 30.0,
-    out_of_range_error_fraction: float = 0.01,
-    noise_si: Mapping[str, float] | None = None,
-    resolution_si: Mapping[str, float] | None = None,
-    max_rate_si: Mapping[str, float] | None = None,
-    bad_quality: Mapping[str, np.ndarray] | None = None,
-    reject_stuck: bool = True,
-) -> CleaningResult:
+
+def clean(frame: pd.DataFrame, options: QualityOptions | None = None, *,
+          report: QualityReport | None = None, reject_stuck: bool = True) -> CleaningResult:
     """Sort, de-duplicate and reject bad samples (→ NaN), flagging and counting every change.
 
     Exact duplicate rows are removed; of conflicting duplicates the first row as read is kept.
-    Spikes, out-of-range values, samples the historian marked bad (``bad_quality``) and stuck
-    runs (unless ``reject_stuck=False``) become NaN, and so does every sample of a signal with
-    an error-level unit finding. Nothing is interpolated. ``report``: a :func:`check_quality`
-    report of this same frame, carried into the result instead of rebuilding the detection
-    findings (the per-sample masks are always recomputed with the options given here). Other
-    options as in :func:`check_quality`.
+    Spikes, out-of-range values, samples the historian marked bad (``options.bad_quality``) and
+    stuck runs (unless ``reject_stuck=False``) become NaN, and so does every sample of a signal
+    with an error-level unit finding. Nothing is interpolated. ``frame`` and ``options`` as in
+    :func:`check_quality`. ``report``: a :func:`check_quality` report of this same frame,
+    carried into the result instead of rebuilding the detection findings (the per-sample masks
+    are always recomputed with ``options``).
     """
-    options = QualityOptions.make(
-        required, ranges, declared_units, tag_names, source, nominal_step_s, gap_factor,
-        spike_window, spike_n_sigmas, stuck_min_duration_s, out_of_range_error_fraction,
-        noise_si, resolution_si, max_rate_si, bad_quality,
-    )
+    options = _options_or_default(options)
     analysis = analyse(frame, options)
     if report is not None and report.n_rows != len(frame):
         raise ValueError(
-            f"{source or 'clean'}: the report is for {report.n_rows} rows, the frame has "
-            f"{len(frame)}; pass the report of this frame or none"
+            f"{options.source or 'clean'}: the report is for {report.n_rows} rows, the frame "
+            f"has {len(frame)}; pass the report of this frame or none"
         )
     detected = (
         list(report.findings) if report is not None else detection_findings(analysis, options)
@@ -160,5 +109,14 @@ def clean(
             "rejected",
         ))
     flags_frame = pd.DataFrame(flags, index=data.index, columns=frame.columns)
-    full = QualityReport(tuple(detected + actions), source, len(frame), a.signals)
+    full = QualityReport(tuple(detected + actions), options.source, len(frame), a.signals)
     return CleaningResult(data, flags_frame, full, a.rows.copy())
+
+
+def _options_or_default(options: QualityOptions | None) -> QualityOptions:
+    if options is None:
+        return QualityOptions()
+    if not isinstance(options, QualityOptions):
+        raise TypeError("options must be a steamtwin.dcs.quality.QualityOptions (got "
+                        f"{type(options).__name__}); build it with QualityOptions(ranges=…, …)")
+    return options

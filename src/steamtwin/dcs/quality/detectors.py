@@ -135,7 +135,7 @@ def analyse(frame: pd.DataFrame, options: QualityOptions) -> Analysis:
 
     columns: dict[str, Column] = {}
     where = options.source or "quality check"
-    for name, mask in options.bad.items():
+    for name, mask in options.bad_quality.items():
         if name not in frame.columns:  # a non-numeric column is reported, not checked
             raise ValueError(f"{where}: bad_quality has a mask for {name!r}, which is not a "
                              "column of the data")
@@ -153,7 +153,7 @@ def analyse(frame: pd.DataFrame, options: QualityOptions) -> Analysis:
             lo, hi = options.ranges[name]
             with np.errstate(invalid="ignore"):
                 oor = ~nan & ((x < lo) | (x > hi))
-        bad = options.bad[key][rows] if key in options.bad else np.zeros_like(nan)
+        bad = options.bad_quality[key][rows] if key in options.bad_quality else np.zeros_like(nan)
         col = Column(x, nan, oor, bad, np.zeros_like(nan), np.zeros_like(nan),
                       conflict[:, j].copy())
         _detect(col, seconds, step_s, options, key)
@@ -232,15 +232,15 @@ def _detect(col: Column, seconds: np.ndarray, step_s: float, options: QualityOpt
     """Noise, quantum, stuck runs and spikes of one column (sets the fields of ``col``)."""
     usable = ~col.nan & ~col.out_of_range & ~col.bad
     x = np.where(usable, col.values, np.nan)
-    quantum = options.resolution.get(name)
+    quantum = options.resolution_si.get(name)
     col.quantum = estimate_resolution(x) if quantum is None else quantum
-    col.max_rate = options.max_rate.get(name, 0.0)
-    given = options.noise.get(name)
+    col.max_rate = options.rate_limits.get(name, 0.0)
+    given = options.noise_si.get(name)
     sigma = given if given is not None else estimate_noise_sigma(x, col.quantum)
-    stuck = _stuck(x, seconds, sigma, col.quantum, step_s, options.stuck_s)
+    stuck = _stuck(x, seconds, sigma, col.quantum, step_s, options.stuck_min_duration_s)
     if given is None and stuck.any():  # again without the stuck runs' zero differences
         sigma = estimate_noise_sigma(np.where(stuck, np.nan, x), col.quantum)
-        stuck = _stuck(x, seconds, sigma, col.quantum, step_s, options.stuck_s)
+        stuck = _stuck(x, seconds, sigma, col.quantum, step_s, options.stuck_min_duration_s)
     col.sigma, col.stuck = sigma, stuck
     if stuck.any():
         starts, ends, _ = segments(np.r_[False, stuck[1:] & stuck[:-1]])
@@ -335,12 +335,12 @@ def _spikes(x: np.ndarray, seconds: np.ndarray, valid: np.ndarray, col: Column,
     if index.size < 3:
         return out, math.nan
     xv, tv = x[index], seconds[index]
-    residual = xv - _rolling_median(xv, options.window)
+    residual = xv - _rolling_median(xv, options.spike_window)
     noise = math.sqrt(col.sigma**2 + col.quantum**2 / 12.0) if math.isfinite(col.sigma) else 0.0
     scale = max(noise, _trimmed_std(residual))
     dt = np.diff(tv)
     longer_step = np.maximum(np.r_[dt[0], dt], np.r_[dt, dt[-1]])
-    threshold = np.maximum(options.n_sigmas * scale, col.max_rate * longer_step)
+    threshold = np.maximum(options.spike_n_sigmas * scale, col.max_rate * longer_step)
     candidate = (threshold > 0.0) & (np.abs(residual) > threshold)
     sign = np.sign(residual)
     joined = np.zeros(index.size, dtype=bool)

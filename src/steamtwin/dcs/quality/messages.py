@@ -28,7 +28,7 @@ def _unit_of(signal: str | None, options: QualityOptions) -> tuple[str, str]:
     """(display unit, SI unit) of a signal; display = declared, else wire unit, else none."""
     if signal in SIGNALS:
         si = SIGNALS[signal].si_unit
-        return options.declared.get(signal, SIGNALS[signal].wire_unit), si
+        return options.declared_units.get(signal, SIGNALS[signal].wire_unit), si
     return "", ""
 
 def _show(value: float, signal: str | None, options: QualityOptions, *, delta: bool = False) -> str:
@@ -52,7 +52,7 @@ class Where:
 
     def __init__(self, a: Analysis, options: QualityOptions, signal: str | None) -> None:
         self.a, self.options, self.signal = a, options, signal
-        self.tag = options.tags.get(signal) if signal is not None else None
+        self.tag = options.tag_names.get(signal) if signal is not None else None
 
     @property
     def label(self) -> str:
@@ -159,7 +159,7 @@ def _signal_findings(a: Analysis, options: QualityOptions, name: str, col: Colum
         lo, hi = options.ranges[name]
         bad = col.values[col.out_of_range]
         fraction = bad.size / max(n_valid, 1)
-        severity = "error" if fraction > options.oor_error_fraction else "warning"
+        severity = "error" if fraction > options.out_of_range_error_fraction else "warning"
         out.append(where.finding(
             "out_of_range", severity, col.out_of_range,
             f"value(s) ({fraction:.2%}) outside the physical range {_show(lo, name, options)} "
@@ -169,7 +169,7 @@ def _signal_findings(a: Analysis, options: QualityOptions, name: str, col: Colum
         ))
     if col.bad.any():
         fraction = int(col.bad.sum()) / max(col.values.size, 1)
-        severity = "error" if fraction > options.oor_error_fraction else "warning"
+        severity = "error" if fraction > options.out_of_range_error_fraction else "warning"
         out.append(where.finding(
             "historian_quality", severity, col.bad,
             f"sample(s) ({fraction:.2%}) marked bad or uncertain by the historian's quality "
@@ -183,19 +183,19 @@ def _signal_findings(a: Analysis, options: QualityOptions, name: str, col: Colum
         out.append(where.finding(
             "spike", "warning", col.spike,
             f"spike(s): excursion(s) of ≤ {SPIKE_MAX_SAMPLES} sample(s) that return, beyond "
-            f"{options.n_sigmas:g} × {_show(col.spike_scale, name, options, delta=True)} "
+            f"{options.spike_n_sigmas:g} × {_show(col.spike_scale, name, options, delta=True)} "
             f"(noise scale) and beyond the physical rate limit "
             f"{_show(col.max_rate, name, options, delta=True)}/s × step from the "
-            f"{options.window}-sample rolling median; first value "
+            f"{options.spike_window}-sample rolling median; first value "
             f"{_show(float(col.values[i]), name, options)}",
-            noise_scale=col.spike_scale, n_sigmas=options.n_sigmas, max_rate=col.max_rate,
+            noise_scale=col.spike_scale, n_sigmas=options.spike_n_sigmas, max_rate=col.max_rate,
         ))
     if col.stuck.any():
         out.append(where.finding(
             "stuck", "warning", col.stuck,
             f"sample(s) in {col.stuck_runs} stuck run(s) (value exactly repeated for at least "
-            f"{options.stuck_s:g} s, fewer than {STUCK_CHANCE_RUNS_PER_DAY:g} such runs per day "
-            f"expected by chance with {noise}), {col.stuck_duration_s:g} s in total",
+            f"{options.stuck_min_duration_s:g} s, fewer than {STUCK_CHANCE_RUNS_PER_DAY:g} such "
+            f"runs per day expected by chance with {noise}), {col.stuck_duration_s:g} s in total",
             runs=col.stuck_runs, duration_s=col.stuck_duration_s, sigma=col.sigma,
             quantum=col.quantum,
         ))
@@ -236,7 +236,7 @@ def _unit_check(a: Analysis, options: QualityOptions, name: str, median: float,
     if lo <= median <= hi:
         return None
     si = SIGNALS[name].si_unit
-    declared = options.declared.get(name, si)
+    declared = options.declared_units.get(name, si)
     where = Where(a, options, name)
     expected = f"{_show(lo, name, options)} … {_show(hi, name, options)}"
     try:
