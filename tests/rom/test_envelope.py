@@ -15,6 +15,7 @@ from scipy.spatial import Delaunay
 
 from steamtwin.model.design_check import valve_openings
 from steamtwin.model.fom import InputError
+from steamtwin.model.kernel import PRESSURE_TOLERANCE
 from steamtwin.model.operating import operating_point
 from steamtwin.model.parameters import ModelParameters, ParameterError
 from steamtwin.model.simulator import INPUT_SIGNALS
@@ -270,4 +271,8 @@ def test_every_planned_condition_runs_and_spans_the_line(reference_spec, referen
         "control_stage_pressure"].to_numpy()
     line = operating_line(reference_spec, params, [0.3, 0.5, 0.75, 1.0],
                           model=reference_model)["control_stage_pressure"].to_numpy()
-    assert p1.min() <= line.min() and line.max() <= p1.max()
+    # to the model's own convergence: a sample that keeps the last sweep's state is within
+    # 1.5 × the kernel's relative pressure tolerance of a converged solve (kernel.py; seen
+    # here: 2e-5 between the plan's rated line point and the line's solve of the same inputs)
+    slack = 1.5 * PRESSURE_TOLERANCE * line
+    assert p1.min() <= line.min() + slack[0] and line.max() - slack[-1] <= p1.max()
