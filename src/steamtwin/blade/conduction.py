@@ -37,6 +37,7 @@ from skfem.helpers import dot, grad
 
 from steamtwin.blade.mesh import REGIONS, SolidMesh, checked_mesh, to_skfem
 from steamtwin.errors import SteamtwinError
+from steamtwin.progress import ProgressCallback
 from steamtwin.spec.turbine import Material
 
 RegionConvection = tuple[np.ndarray | float, np.ndarray | float]
@@ -222,7 +223,7 @@ class BladeConduction:
 
     def solve_transient(self, convection: Sequence[Convection] | Callable[[int], Convection],
                         times: np.ndarray, initial: np.ndarray, *, tol: float = 1e-9,
-                        progress: Callable[[float], None] | None = None) -> np.ndarray:
+                        progress: ProgressCallback | None = None) -> np.ndarray:
         """Implicit-Euler temperatures (K) at ``times`` (s), shape (len(times), N).
 
         Row 0 is ``initial``; ``convection[i]`` (or ``convection(i)``) holds the boundary
@@ -249,7 +250,7 @@ class BladeConduction:
             temperature = _cg(system, rhs, temperature, tol, preconditioner)
             out[step] = temperature
             if progress is not None:
-                progress(step / (times.size - 1))
+                progress(step / (times.size - 1), f"time step {step}/{times.size - 1}")
         return out
 
     def heat_flows(self, temperature: np.ndarray, convection: Convection) -> dict[str, float]:

@@ -24,6 +24,7 @@ import numpy as np
 from skfem.helpers import dot
 
 from steamtwin.blade.conduction import BladeConduction, Convection
+from steamtwin.progress import ProgressCallback
 
 
 @dataclass(frozen=True)
@@ -107,7 +108,7 @@ class ConvergenceRow:
 def mesh_convergence(build: Callable[[float], tuple[BladeConduction, Convection]],
                      element_sizes: Sequence[float],
                      monitor: Callable[[BladeConduction, np.ndarray, Convection], dict[str, float]],
-                     progress: Callable[[float], None] | None = None) -> list[ConvergenceRow]:
+                     progress: ProgressCallback | None = None) -> list[ConvergenceRow]:
     """Solve the steady problem on meshes of decreasing ``element_sizes`` (m).
 
     ``build(size)`` returns the conduction model on a mesh of that size and its convection;
@@ -120,7 +121,7 @@ def mesh_convergence(build: Callable[[float], tuple[BladeConduction, Convection]
         rows.append(ConvergenceRow(size, conduction.n_nodes,
                                    monitor(conduction, temperature, convection)))
         if progress is not None:
-            progress((i + 1) / len(element_sizes))
+            progress((i + 1) / len(element_sizes), f"mesh {i + 1}/{len(element_sizes)}")
     return rows
 
 

@@ -67,8 +67,7 @@ def ramp_transient(spec: TurbineSpec, mesh: object, params: ModelParameters | No
     initial = conduction.solve_steady(boundary.convection(states[0], params))
     times = np.arange(load.size) * step_s
     fields = conduction.solve_transient(lambda i: boundary.convection(states[i], params),
-                                        times, initial, progress=None if progress is None else (
-                                            lambda f: progress(f, "transient FEM")))
+                                        times, initial, progress=progress)
     conditions = inputs.reset_index(drop=True).copy()
     conditions["control_stage_pressure"] = outputs["control_stage_pressure"].to_numpy()
     conditions["load_fraction"] = load
