@@ -44,7 +44,7 @@ from steamtwin.dcs.windows import (
 from steamtwin.errors import DataError
 
 __all__ = ["DEFAULT_TAG_MAP_NAME", "DataQualityError", "History", "check_history",
-           "load_history", "quality_options"]
+           "load_history", "quality_options", "tag_map_quality_fields"]
 
 DEFAULT_TAG_MAP_NAME = "tags.toml"
 """The tag map :func:`load_history` looks for next to the data when none is given (the name
@@ -224,16 +224,25 @@ def quality_options(historian: HistorianData, required: Collection[str] = ()
     :func:`~steamtwin.dcs.quality.clean` from everything the tag map and the export give: valid
     ranges, declared units, tags, noise, resolution, rate limits, the historian's quality marks.
     ``dcs check`` and the gate use the same, so what one reports is what the other excludes."""
-    specs = [spec for spec in historian.tag_map.signals.values()
-             if spec.signal in historian.signals.columns]
+    return QualityOptions(
+        required=tuple(required), source=historian.source, bad_quality=historian.bad_quality,
+        **tag_map_quality_fields(historian.tag_map, historian.signals.columns))
+
+
+def tag_map_quality_fields(tag_map: TagMap, signals: Collection[str] | None = None
+                           ) -> dict[str, dict[str, Any]]:
+    """The :class:`~steamtwin.dcs.quality.QualityOptions` fields a tag map states for
+    ``signals`` (default: all it maps): valid ranges, declared units, tags, noise, resolution
+    and rate limits (SI), each signal → value, signals that state none left out."""
+    specs = [spec for spec in tag_map.signals.values()
+             if signals is None or spec.signal in signals]
 
     def per_signal(attribute: str) -> dict[str, Any]:
         return {s.signal: getattr(s, attribute) for s in specs
                 if getattr(s, attribute) is not None}
 
-    return QualityOptions(
-        required=tuple(required), ranges=per_signal("valid_range_si"),
-        declared_units={s.signal: s.unit for s in specs},
-        tag_names={s.signal: s.column for s in specs}, source=historian.source,
-        bad_quality=historian.bad_quality, noise_si=per_signal("noise_si"),
-        resolution_si=per_signal("resolution_si"), max_rate_si=per_signal("max_rate_si"))
+    return {"ranges": per_signal("valid_range_si"),
+            "declared_units": {s.signal: s.unit for s in specs},
+            "tag_names": {s.signal: s.column for s in specs},
+            "noise_si": per_signal("noise_si"), "resolution_si": per_signal("resolution_si"),
+            "max_rate_si": per_signal("max_rate_si")}

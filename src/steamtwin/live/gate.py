@@ -27,6 +27,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from steamtwin.dcs.history import tag_map_quality_fields
 from steamtwin.dcs.quality import Finding, Flag, QualityOptions, clean
 from steamtwin.dcs.tagmap import TagMap
 
@@ -38,24 +39,14 @@ def gate_options(tag_map: TagMap, instruments: pd.DataFrame | None = None) -> di
     declared units, tags, noise, resolution, rate limits), as the batch gate takes them.
     ``instruments``: a table indexed by signal with ``noise_sigma`` and ``resolution`` (SI;
     e.g. the virtual plant's ``injected.sensors``), filling what the tag map does not state."""
-    specs = list(tag_map.signals.values())
-
-    def per_signal(attribute: str) -> dict[str, Any]:
-        return {s.signal: getattr(s, attribute) for s in specs
-                if getattr(s, attribute) is not None}
-
-    noise, resolution = per_signal("noise_si"), per_signal("resolution_si")
+    fields = tag_map_quality_fields(tag_map)
     if instruments is not None:
-        for column, given in (("noise_sigma", noise), ("resolution", resolution)):
+        for column, key in (("noise_sigma", "noise_si"), ("resolution", "resolution_si")):
+            given = fields[key]
             for signal, value in instruments[column].items():
                 if signal in tag_map.signals and signal not in given and float(value) > 0.0:
                     given[str(signal)] = float(value)
-    return {"ranges": per_signal("valid_range_si"),
-            "declared_units": {s.signal: s.unit for s in specs},
-            "tag_names": {s.signal: s.column for s in specs},
-            "noise_si": noise, "resolution_si": resolution,
-            "max_rate_si": per_signal("max_rate_si"),
-            "source": tag_map.source}
+    return {**fields, "source": tag_map.source}
 
 
 @dataclass
