@@ -12,8 +12,7 @@ The handful of objects a user needs, imported on first use (``import steamtwin``
 Everything else stays in its subpackage.
 """
 
-from importlib import import_module
-from typing import Any
+from steamtwin.lazy import lazy_exports
 
 __version__ = "0.1.0"
 
@@ -31,14 +30,4 @@ _EXPORTS = {
 __all__ = ["__version__", *_EXPORTS]
 
 
-def __getattr__(name: str) -> Any:
-    """The re-exported objects, imported when first asked for (PEP 562)."""
-    if name in _EXPORTS:
-        value = getattr(import_module(_EXPORTS[name]), name)
-        globals()[name] = value
-        return value
-    raise AttributeError(f"module 'steamtwin' has no attribute {name!r}")
-
-
-def __dir__() -> list[str]:
-    return sorted([*globals(), *_EXPORTS])
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
