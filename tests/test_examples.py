@@ -22,6 +22,8 @@ import pytest
 
 import steamtwin
 
+pytestmark = pytest.mark.slow  # 62 s of the full suite (2026-11-27): not in the quick loop
+
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 TRUE_FLOW = 0.965  # PlantTruth's default flow coefficient (steamtwin.dcs.plant)
 

@@ -12,6 +12,8 @@ from steamtwin.pipeline import STAGES, DemoSettings, run_demo
 from steamtwin.spec.fingerprint import load_spec_and_text
 from steamtwin.twin import Twin
 
+pytestmark = pytest.mark.slow  # 18 s of the full suite (2026-11-27): not in the quick loop
+
 
 @pytest.fixture(scope="module")
 def reference_toml(tmp_path_factory):

@@ -31,6 +31,8 @@ from steamtwin.model.parameters import ModelParameters
 from steamtwin.spec.fingerprint import spec_hash
 from steamtwin.twin import Twin, TwinError
 
+pytestmark = pytest.mark.slow  # 12 s of the full suite (2026-11-27): not in the quick loop
+
 ROOT = Path(__file__).resolve().parents[1]
 TRUE_FLOW = 0.965  # PlantTruth's default flow coefficient (steamtwin.dcs.plant)
 

@@ -15,6 +15,8 @@ from typer.testing import CliRunner
 
 from steamtwin.cli.main import app
 
+pytestmark = pytest.mark.slow  # 16 s of the full suite (2026-11-27): not in the quick loop
+
 DOC = Path(__file__).resolve().parents[1] / "docs" / "your-turbine.md"
 _EXPECTED = re.compile(r"#\s*exits\s+(\d+)")
 
@@ -48,7 +50,6 @@ def test_the_page_has_the_whole_chain_on_the_independent_unit():
             assert argv[argv.index("--turbine") + 1] == "fitted.toml"
 
 
-@pytest.mark.slow
 def test_every_command_of_the_page_runs_as_written(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     runner = CliRunner()

@@ -26,6 +26,8 @@ from steamtwin.model.operating import operating_point
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.steam import if97
 
+pytestmark = pytest.mark.slow  # 28 s of the full suite (2026-11-27): not in the quick loop
+
 
 @pytest.fixture(scope="module")
 def blade_mesh(reference_spec):

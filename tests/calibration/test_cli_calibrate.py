@@ -6,12 +6,15 @@ import json
 
 import numpy as np
 import pandas as pd
+import pytest
 import typer
 from typer.testing import CliRunner
 
 from steamtwin.cli.calibrate import calibrate
 from steamtwin.dcs.plant import write_plant
 from steamtwin.model.parameters import ModelParameters
+
+pytestmark = pytest.mark.slow  # 8 s of the full suite (2026-11-27): not in the quick loop
 
 
 def test_calibrate_command(plant_run, tmp_path):

@@ -13,6 +13,8 @@ from steamtwin.dcs.plant import run_plant
 from steamtwin.dcs.plant_model import ParameterDrift, PlantTruth
 from steamtwin.model.parameters import ModelParameters
 
+pytestmark = pytest.mark.slow  # 10 s of the full suite (2026-11-27): not in the quick loop
+
 
 @pytest.fixture(scope="module")
 def fouling_day():

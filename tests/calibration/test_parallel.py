@@ -21,6 +21,8 @@ from steamtwin.calibration.evaluation import (
     make_evaluator,
 )
 
+pytestmark = pytest.mark.slow  # 67 s of the full suite (2026-11-27): not in the quick loop
+
 SMALL = {"search": GeneticSearch(population=6, generations=3), "random_state": 4}
 
 

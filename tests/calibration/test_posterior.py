@@ -34,6 +34,8 @@ from steamtwin.model.parameters import (
 )
 from steamtwin.model.simulator import INPUT_SIGNALS
 
+pytestmark = pytest.mark.slow  # 6 s of the full suite (2026-11-27): not in the quick loop
+
 SENSORS = ("control_stage_temperature", "hp_exhaust_temperature",
            "hp_inner_casing_temperature")
 RATED_FLOW = 500.0  # kg/s

@@ -22,6 +22,8 @@ from steamtwin.geometry.pointcloud import write_point_cloud
 from steamtwin.model.fom import INPUT_RANGES, InputError
 from steamtwin.model.simulate_file import in_file_terms
 
+pytestmark = pytest.mark.slow  # 25 s of the full suite (2026-11-27): not in the quick loop
+
 runner = CliRunner()
 HEADER = "time,main_steam_pressure,main_steam_temperature,main_steam_flow,hp_exhaust_pressure\n"
 BINARY = bytes(range(256)) * 8

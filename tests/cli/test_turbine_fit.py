@@ -18,6 +18,8 @@ from steamtwin.model.design_fit import fitted_spec_toml
 from steamtwin.spec import load_spec
 from steamtwin.spec.turbine import PartLoad
 
+pytestmark = pytest.mark.slow  # 6 s of the full suite (2026-11-27): not in the quick loop
+
 runner = CliRunner()
 LOADS = (1.0, 0.75, 0.6, 0.5, 0.4, 0.3)
 PERTURBED = PartLoad(reynolds_exponent=0.15, admission_loss_multiplier=1.6,

@@ -12,6 +12,8 @@ from steamtwin.cli.geometry import geometry_app
 from steamtwin.geometry.pointcloud import write_point_cloud
 from steamtwin.geometry.volume_mesh import read_volume_mesh
 
+pytestmark = pytest.mark.slow  # 20 s of the full suite (2026-11-27): not in the quick loop
+
 runner = CliRunner()
 
 

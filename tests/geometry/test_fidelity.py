@@ -22,6 +22,8 @@ from steamtwin.geometry.fidelity import (
 from steamtwin.geometry.profile import make_blade, reference_surface
 from steamtwin.geometry.rigid import transform
 
+pytestmark = pytest.mark.slow  # 26 s of the full suite (2026-11-27): not in the quick loop
+
 
 @pytest.mark.parametrize("row", ["hp1", "hp9", "ip3"])
 def test_metrics_of_the_exact_section_reproduce_the_design(reference_spec, row: str) -> None:

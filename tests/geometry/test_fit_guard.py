@@ -24,6 +24,8 @@ from steamtwin.geometry.reconstruct import ReconstructionSettings, reconstruct_b
 from steamtwin.geometry.segmentation import segment_blade
 from steamtwin.geometry.volume_mesh import REGIONS
 
+pytestmark = pytest.mark.slow  # 25 s of the full suite (2026-11-27): not in the quick loop
+
 # --- a blade that is not ours ------------------------------------------------------------------
 
 

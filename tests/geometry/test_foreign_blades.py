@@ -33,6 +33,8 @@ from hypothesis import strategies as st
 
 from steamtwin.geometry.reconstruct import reconstruct_blade
 
+pytestmark = pytest.mark.slow  # 20 s of the full suite (2026-11-27): not in the quick loop
+
 
 @pytest.fixture(scope="module")
 def blades() -> dict[str, ForeignBlade]:

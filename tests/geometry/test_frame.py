@@ -36,6 +36,8 @@ from steamtwin.geometry.reconstruct import reconstruct_blade
 from steamtwin.geometry.rigid import transform
 from steamtwin.spec import TurbineSpec, load_spec
 
+pytestmark = pytest.mark.slow  # 61 s of the full suite (2026-11-27): not in the quick loop
+
 runner = CliRunner()
 EZ = np.array([0.0, 0.0, 1.0])
 #: Rows with their hub/tip rule: hp5 is tapered (0.9), hp1 and ip3 are prismatic and need the

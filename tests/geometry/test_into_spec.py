@@ -24,6 +24,8 @@ from steamtwin.geometry.reconstruction_report import (
 )
 from steamtwin.spec import parse_spec
 
+pytestmark = pytest.mark.slow  # 15 s of the full suite (2026-11-27): not in the quick loop
+
 REFERENCE_TEXT = (files("steamtwin.spec") / "data" / "reference.toml").read_text(
     encoding="utf-8")
 

@@ -16,6 +16,8 @@ from steamtwin.geometry.segmentation import segment_blade
 from steamtwin.geometry.volume_mesh import REGIONS
 from steamtwin.spec import TurbineSpec
 
+pytestmark = pytest.mark.slow  # 27 s of the full suite (2026-11-27): not in the quick loop
+
 SIDE = [REGIONS.index(name) for name in ("pressure_side", "suction_side", "leading_edge",
                                          "trailing_edge")]
 

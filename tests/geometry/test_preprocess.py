@@ -20,6 +20,8 @@ from steamtwin.geometry.registration import degeneracy_aware_icp, pose_errors
 from steamtwin.geometry.rigid import transform
 from steamtwin.geometry.scanner import ScannerSettings, scan_blade
 
+pytestmark = pytest.mark.slow  # 10 s of the full suite (2026-11-27): not in the quick loop
+
 
 @pytest.fixture(scope="module")
 def hp5_scan(reference_spec):

@@ -40,6 +40,8 @@ from steamtwin.geometry.scanner import ScannerSettings, scan_blade
 from steamtwin.geometry.segmentation import segment_blade
 from steamtwin.geometry.volume_mesh import REGIONS, read_volume_mesh
 
+pytestmark = pytest.mark.slow  # 69 s of the full suite (2026-11-27): not in the quick loop
+
 runner = CliRunner()
 SIDE = [REGIONS.index(name) for name in ("pressure_side", "suction_side", "leading_edge",
                                          "trailing_edge")]

@@ -15,6 +15,8 @@ from steamtwin.geometry.rigid import transform
 from steamtwin.geometry.scanner import ScannerSettings, scan_blade, write_scan
 from steamtwin.geometry.targets import SphereFit, detect_spheres, fit_sphere, match_spheres
 
+pytestmark = pytest.mark.slow  # 10 s of the full suite (2026-11-27): not in the quick loop
+
 RADIUS = 5e-3
 
 

@@ -18,6 +18,8 @@ from steamtwin.geometry.row_metrics import (
     row_section,
 )
 
+pytestmark = pytest.mark.slow  # 7 s of the full suite (2026-11-27): not in the quick loop
+
 
 def _arc(centre: np.ndarray, radius: float, start: float, stop: float, count: int
          ) -> np.ndarray:

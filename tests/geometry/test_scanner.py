@@ -11,6 +11,8 @@ from steamtwin.geometry.fidelity import blade_distance
 from steamtwin.geometry.pointcloud import read_point_cloud
 from steamtwin.geometry.scanner import ScannerSettings, scan_blade, write_scan
 
+pytestmark = pytest.mark.slow  # 37 s of the full suite (2026-11-27): not in the quick loop
+
 SETTINGS = ScannerSettings(views=6, points=24_000, outlier_share=0.02)
 
 

@@ -18,6 +18,8 @@ from steamtwin.geometry.uncertainty import (
     scan_uncertainty,
 )
 
+pytestmark = pytest.mark.slow  # 5 s of the full suite (2026-11-27): not in the quick loop
+
 
 def _exhaust(model) -> float:
     return float(model.simulate(model.design_inputs())["hp_exhaust_temperature"].iloc[0])

@@ -16,6 +16,8 @@ from steamtwin.geometry.volume_mesh import (
     write_volume_mesh,
 )
 
+pytestmark = pytest.mark.slow  # 5 s of the full suite (2026-11-27): not in the quick loop
+
 
 @pytest.mark.parametrize("suffix", [".msh", ".vtu"])
 def test_round_trip_keeps_every_array(hp1_mesh: VolumeMesh, tmp_path, suffix: str) -> None:

@@ -11,11 +11,14 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 from asyncua import Client
 from ports import free_port
 
 from steamtwin.dcs.tagmap import load_tag_map
 from steamtwin.live.nodes import resolve_node_id
+
+pytestmark = pytest.mark.slow  # 12 s of the full suite (2026-11-27): not in the quick loop
 
 
 def _wait_for(process: subprocess.Popen, text: str, timeout: float) -> str:

@@ -16,6 +16,8 @@ import pytest
 
 from steamtwin.live.historian import Alarm, LiveHistorian, export_history
 
+pytestmark = pytest.mark.slow  # 5 s of the full suite (2026-11-27): not in the quick loop
+
 
 def _block(start: int, n: int = 60) -> dict[str, pd.DataFrame]:
     index = pd.date_range("2026-03-01", periods=n, freq="1s", tz="UTC") + pd.Timedelta(

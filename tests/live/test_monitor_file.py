@@ -26,6 +26,8 @@ from steamtwin.live.monitor_file import (
 )
 from steamtwin.live.unit_model import unit_model
 
+pytestmark = pytest.mark.slow  # 5 s of the full suite (2026-11-27): not in the quick loop
+
 
 @pytest.fixture(scope="module")
 def healthy(tmp_path_factory):

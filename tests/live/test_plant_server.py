@@ -22,6 +22,8 @@ from steamtwin.live.plant_server import (
 )
 from steamtwin.units import convert
 
+pytestmark = pytest.mark.slow  # 6 s of the full suite (2026-11-27): not in the quick loop
+
 
 def _signals(n: int = 120) -> pd.DataFrame:
     index = pd.date_range("2026-03-01", periods=n, freq="1s", tz="UTC")

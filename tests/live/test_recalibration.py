@@ -24,6 +24,8 @@ from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.operating import load_profile_inputs
 from steamtwin.model.parameters import ModelParameters
 
+pytestmark = pytest.mark.slow  # 7 s of the full suite (2026-11-27): not in the quick loop
+
 SIGMA = {"control_stage_temperature": 0.3, "hp_exhaust_temperature": 0.3,
          "hp_inner_casing_temperature": 0.3, "control_stage_pressure": 9.0e3}
 SENSORS = tuple(SIGMA)

@@ -17,6 +17,8 @@ from ports import free_port
 from steamtwin.dcs.plant import plant_tag_map
 from steamtwin.live.sources import OpcUaSecurity, OpcUaSource
 
+pytestmark = pytest.mark.slow  # 19 s of the full suite (2026-11-27): not in the quick loop
+
 CLIENT_URI = "urn:freeopcua:client"  # asyncua's client application URI, in its certificate
 
 

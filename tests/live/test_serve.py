@@ -18,6 +18,8 @@ from steamtwin.live.historian import LiveHistorian
 from steamtwin.live.plant_server import PlantServer, PlantServerSettings, plant_node_ids
 from steamtwin.live.runner import run_service
 
+pytestmark = pytest.mark.slow  # 11 s of the full suite (2026-11-27): not in the quick loop
+
 
 @pytest.fixture(scope="module")
 def plant(tmp_path_factory):

@@ -21,6 +21,8 @@ from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.measurement import TYPICAL_TIME_CONSTANTS_S
 from steamtwin.model.parameters import ModelParameters
 
+pytestmark = pytest.mark.slow  # 5 s of the full suite (2026-11-27): not in the quick loop
+
 QUERY = "SELECT unit, time, source, signal, value, flag FROM series ORDER BY ALL"
 
 

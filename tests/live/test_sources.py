@@ -19,6 +19,8 @@ from steamtwin.dcs.tagmap import load_tag_map
 from steamtwin.live.plant_server import PlantServer, PlantServerSettings, plant_node_ids
 from steamtwin.live.sources import OpcUaSecurity, OpcUaSource, ReplaySource
 
+pytestmark = pytest.mark.slow  # 21 s of the full suite (2026-11-27): not in the quick loop
+
 INSECURE = OpcUaSecurity(allow_insecure=True)
 
 

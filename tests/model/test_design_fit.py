@@ -33,6 +33,8 @@ from steamtwin.spec import TurbineSpec, load_spec, parse_spec
 from steamtwin.spec.heat_balance import HeatBalance, HeatBalancePoint, MachineDescription
 from steamtwin.spec.turbine import PartLoad
 
+pytestmark = pytest.mark.slow  # 16 s of the full suite (2026-11-27): not in the quick loop
+
 LOADS = (1.0, 0.75, 0.6, 0.5, 0.4, 0.3)
 MACHINE = MachineDescription(12, 314.159, 1.10, (0.25, 0.25, 0.25, 0.25), (1, 1, 2, 3),
                              ("GV1", "GV2", "GV3", "GV4"))

@@ -19,6 +19,8 @@ from steamtwin.rom.romfile import RomFileError, load_rom, save_rom
 from steamtwin.rom.snapshots import ROM_INPUTS, generate_snapshots
 from steamtwin.rom.validation import rom_errors
 
+pytestmark = pytest.mark.slow  # 5 s of the full suite (2026-11-27): not in the quick loop
+
 
 @pytest.fixture(scope="module")
 def default_build(reference_spec, reference_model, coarse_blade):

@@ -15,6 +15,8 @@ from steamtwin.cli.rom import rom_app
 from steamtwin.dcs.plant import run_plant, write_plant
 from steamtwin.dcs.tagmap import load_tag_map, write_tag_map
 
+pytestmark = pytest.mark.slow  # 7 s of the full suite (2026-11-27): not in the quick loop
+
 
 @pytest.fixture(scope="module")
 def plant_files(tmp_path_factory):

@@ -36,6 +36,8 @@ from steamtwin.rom.reconstruction import (
 from steamtwin.rom.snapshots import ROM_INPUTS, design_conditions
 from steamtwin.spec import TemperatureSchedule
 
+pytestmark = pytest.mark.slow  # 23 s of the full suite (2026-11-27): not in the quick loop
+
 KELVIN = 273.15
 CALIBRATED = ModelParameters(flow_coefficient=0.953)
 

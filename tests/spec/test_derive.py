@@ -24,6 +24,8 @@ from steamtwin.spec import (
 from steamtwin.spec.derive import design_point_of
 from steamtwin.steam import if97
 
+pytestmark = pytest.mark.slow  # 12 s of the full suite (2026-11-27): not in the quick loop
+
 KIT = files("steamtwin.spec").joinpath("data/example-600mw-heat-balance.toml").read_text(
     encoding="utf-8")
 

@@ -27,6 +27,8 @@ from numba import njit
 from steamtwin.steam import if97
 from steamtwin.steam import tables as tb
 
+pytestmark = pytest.mark.slow  # 5 s of the full suite (2026-11-27): not in the quick loop
+
 TOL_T = 1e-3  # K
 TOL_S = 1e-3  # J/(kg K)
 RTOL_V = 2e-6

@@ -12,6 +12,8 @@ from steamtwin.pipeline import STAGES, DemoSettings, run_demo
 from steamtwin.twin import Twin
 from steamtwin.validation.html import format_value
 
+pytestmark = pytest.mark.slow  # 71 s of the full suite (2026-11-27): not in the quick loop
+
 TINY = DemoSettings.quick(hold_hours=0.25, scan_points=12_000, uncertainty_samples=2,
                           evaluations=40, population=10, table7_generations=2, snapshots=8,
                           held_out=4, sobol_n_base=8, noise_repeats=1, workers=1)

@@ -12,6 +12,8 @@ from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.validation.sensitivity import sobol_indices
 
+pytestmark = pytest.mark.slow  # 11 s of the full suite (2026-11-27): not in the quick loop
+
 PARAMETERS = tuple(PARAMETER_BOUNDS)
 # Y = 500 K + Σ a_i·x_i per output (K per unit of each dimensionless coefficient)
 SLOPES = {"hp_exhaust_temperature": (100.0, 4.0, 2.0),

@@ -25,6 +25,8 @@ from steamtwin.rom.romfile import load_rom, save_rom
 from steamtwin.validation import NotesSection, monitor_windows
 from steamtwin.validation import validate as validate_windows
 
+pytestmark = pytest.mark.slow  # 10 s of the full suite (2026-11-27): not in the quick loop
+
 app = typer.Typer()
 app.command()(validate)
 runner = CliRunner()
