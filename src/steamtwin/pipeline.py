@@ -328,6 +328,21 @@ LIVE_HOURS = 0.1
 """Length of the live stage's hold (h): the deep-peak-50 ramp and a short hold, over OPC UA."""
 
 
+LIVE_WAIT_S = 120.0
+"""The longest the live stage waits for the service to store what the plant published (s)."""
+LOOK_AHEAD_SAMPLES = 61
+"""Samples the streaming gate still holds when the stage stops (its 60-s look-ahead and one)."""
+
+
+def _stored(database: Path) -> int:
+    """Samples the live service has committed so far (its database, read beside the writer)."""
+    if not database.exists():
+        return 0
+    with LiveHistorian(database) as historian:
+        return historian.connection.execute(
+            "SELECT count(DISTINCT time) FROM series").fetchone()[0]
+
+
 def _live_stage(twin: Twin, settings: DemoSettings, out: Path,
                 report: Callable[..., None]) -> list[Section]:
     """The virtual plant published over OPC UA on loopback, the live service reading it with
@@ -353,9 +368,14 @@ def _live_stage(twin: Twin, settings: DemoSettings, out: Path,
         stop = asyncio.Event()
         async with PlantServer(run.measured, plant_tag_map(), server_settings) as server:
             service = asyncio.create_task(run_service(config, stop))
-            await asyncio.sleep(1.5)  # the service connects and subscribes
+            await server.wait_for_subscribers(len(plant_tag_map().signals))
             await server.publish()
-            await asyncio.sleep(4.0)  # the last samples settle and pass the gate's look-ahead
+            # until every sample but the gate's last look-ahead minute is stored (on a loaded
+            # machine a fixed wait stopped the service early), at most LIVE_WAIT_S
+            deadline = time.perf_counter() + LIVE_WAIT_S
+            while (_stored(database) < len(run.measured) - LOOK_AHEAD_SAMPLES
+                   and time.perf_counter() < deadline and not service.done()):
+                await asyncio.sleep(0.25)
             stop.set()
             return await service
 

@@ -169,6 +169,21 @@ class PlantServer:
             server, self._server = self._server, None
             await server.stop()
 
+    async def wait_for_subscribers(self, monitored_items: int, timeout_s: float = 60.0) -> None:
+        """Return once a client has subscribed to at least ``monitored_items`` of the tags
+        (TimeoutError after ``timeout_s`` of wall time): what is published before a client
+        subscribes reaches it only through HistoryRead."""
+        if self._server is None:
+            raise RuntimeError("start the server first (async with PlantServer(...))")
+        service = self._server.iserver.subscription_service
+        deadline = asyncio.get_running_loop().time() + timeout_s
+        while sum(len(s.monitored_item_srv._monitored_items)  # asyncua exposes no count
+                  for s in list(service.subscriptions.values())) < monitored_items:
+            if asyncio.get_running_loop().time() > deadline:
+                raise TimeoutError(f"no client subscribed to {monitored_items} tags within "
+                                   f"{timeout_s:g} s")
+            await asyncio.sleep(0.05)
+
     async def publish(self, samples: int | None = None) -> int:
         """Send the next ``samples`` samples (None: all that are left) at the set speed; return
         how many were sent. Values in the tags' wire units; see the module docstring."""
