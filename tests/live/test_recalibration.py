@@ -203,3 +203,8 @@ def test_without_an_alarm_the_parameters_change_only_on_schedule(reference_spec,
     assert restored.get_state() == recalibration.get_state()
     with pytest.raises(ValueError, match="settle_steps"):
         LiveRecalibration(tracker, settle_steps=-1)
+    # a service keeps the latest steps only (its swaps are in the database)
+    kept = ParameterTracker(model, sigma=SIGMA, step_s=300.0, trajectory_rows=2).run(data)
+    assert list(kept.trajectory_.index) == list(tracker.trajectory_.index[-2:])
+    with pytest.raises(ValueError, match="trajectory_rows"):
+        ParameterTracker(model, sigma=SIGMA, trajectory_rows=0).start()

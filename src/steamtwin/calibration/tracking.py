@@ -116,10 +116,11 @@ class ParameterTracker:
     ``tracked``: the coefficients followed (:data:`TRACKED_PARAMETERS`), the others stay at
     their prior's centre; ``flow_uncertainty``: the flow measurement's relative standard
     uncertainty, in the flow coefficient's reported interval
-    (:data:`FLOW_MEASUREMENT_UNCERTAINTY`). After :meth:`run`/:meth:`update`: ``trajectory_``
-    (one row per step, indexed by the step's end: each coefficient, its ``<name>_std`` (the
-    filter's, normal coordinate) and 95 % ``<name>_low`` / ``_high``, ``samples``, ``error``)
-    and ``params_`` (current).
+    (:data:`FLOW_MEASUREMENT_UNCERTAINTY`); ``trajectory_rows``: the most recent steps the
+    trajectory keeps (None: all; a live service keeps a day's). After :meth:`run`/:meth:`update`:
+    ``trajectory_`` (one row per step, indexed by the step's end: each coefficient, its
+    ``<name>_std`` (the filter's, normal coordinate) and 95 % ``<name>_low`` / ``_high``,
+    ``samples``, ``error``) and ``params_`` (current).
     """
 
     def __init__(self, simulator: Simulator, *, sigma: Mapping[str, float],
@@ -129,7 +130,8 @@ class ParameterTracker:
                  tracked: Sequence[str] = TRACKED_PARAMETERS,
                  flow_uncertainty: float = FLOW_MEASUREMENT_UNCERTAINTY,
                  store: ParameterStore | None = None,
-                 max_input_gap_s: float = MAX_INPUT_GAP_S) -> None:
+                 max_input_gap_s: float = MAX_INPUT_GAP_S,
+                 trajectory_rows: int | None = None) -> None:
         self.simulator = simulator
         self.sigma = sigma
         self.priors = priors
@@ -140,8 +142,12 @@ class ParameterTracker:
         self.flow_uncertainty = flow_uncertainty
         self.store = store
         self.max_input_gap_s = max_input_gap_s
+        self.trajectory_rows = trajectory_rows
 
     def _start(self) -> None:
+        rows = self.trajectory_rows
+        if rows is not None and (isinstance(rows, bool) or not isinstance(rows, int) or rows < 1):
+            raise ValueError(f"trajectory_rows must be a whole number ≥ 1 or None (got {rows!r})")
         if not (isinstance(self.step_s, int | float) and math.isfinite(self.step_s)
                 and self.step_s > 0):
             raise ValueError(f"step_s must be a positive number of seconds (got {self.step_s!r})")
@@ -212,6 +218,8 @@ class ParameterTracker:
             self._buffer = self._buffer.loc[self._buffer.index >= end]
         if added:
             self._rows.extend(added)
+            if self.trajectory_rows is not None:  # a service that runs for months
+                self._rows = self._rows[-self.trajectory_rows:]
             self.trajectory_ = pd.DataFrame(self._rows).set_index("time")
         return pd.DataFrame(added).set_index("time") if added else pd.DataFrame()
 

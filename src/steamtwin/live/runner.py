@@ -36,7 +36,8 @@ def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, So
     if unit.recalibration is not None:
         tracker = ParameterTracker(model, sigma=tracking_sigma(tag_map),
                                    priors=centred_priors(params),
-                                   step_s=unit.recalibration.step_s)
+                                   step_s=unit.recalibration.step_s,
+                                   trajectory_rows=round(86_400.0 / unit.recalibration.step_s))
         recalibration = LiveRecalibration(tracker, every_s=unit.recalibration.every_s,
                                           settle_steps=unit.recalibration.settle_steps)
     twin = LiveTwin(unit.name, model, params, StreamGate(gate_options(tag_map)), historian,
