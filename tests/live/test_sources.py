@@ -5,6 +5,7 @@ HistoryRead back-fill, gaps left as gaps, bad input as findings."""
 from __future__ import annotations
 
 import asyncio
+import dataclasses
 from datetime import UTC, datetime, timedelta
 
 import numpy as np
@@ -43,6 +44,24 @@ async def _started(source: OpcUaSource, blocks: list) -> asyncio.Task:
         await asyncio.sleep(0.05)
     await asyncio.sleep(0.3)
     return task
+
+
+async def _tag_server(endpoint: str, urn: str, initial: dict[str, ua.Variant]):
+    """A started asyncua server on ``endpoint`` (no security: a test plant) with one variable
+    per tag of ``initial`` in namespace ``urn``, each still waiting for its first value."""
+    server = Server()
+    await server.init()
+    server.set_endpoint(endpoint)
+    server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
+    index = await server.register_namespace(urn)
+    variables = {}
+    for tag, value in initial.items():
+        variables[tag] = await server.nodes.objects.add_variable(ua.NodeId(tag, index), tag,
+                                                                 value)
+        await server.write_attribute_value(variables[tag].nodeid, ua.DataValue(
+            Value=value, StatusCode=ua.StatusCode(ua.StatusCodes.BadWaitingForInitialData)))
+    await server.start()
+    return server, variables
 
 
 def _frame(blocks) -> pd.DataFrame:
@@ -143,29 +162,17 @@ def test_bad_input_becomes_findings_and_the_source_goes_on():
                "control_stage_pressure": "S"}
 
     async def scenario():
-        server = Server()
-        await server.init()
-        server.set_endpoint(endpoint)
-        server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
-        index = await server.register_namespace("urn:test")
-        variables = {}
-        for name, tag in signals.items():  # a text tag where the map expects a number
-            initial = ua.Variant("ok", ua.VariantType.String) if tag == "S" else ua.Variant(
-                0.0, ua.VariantType.Double)
-            variables[name] = await server.nodes.objects.add_variable(ua.NodeId(tag, index),
-                                                                      tag, initial)
-            await server.write_attribute_value(variables[name].nodeid, ua.DataValue(
-                Value=initial,
-                StatusCode=ua.StatusCode(ua.StatusCodes.BadWaitingForInitialData)))
-        specs = {name: tag_map.signals[name] for name in signals}
-        import dataclasses
-
-        specs = {name: dataclasses.replace(spec, node_id=f"nsu=urn:test;s={signals[name]}")
-                 for name, spec in specs.items()}
+        double = ua.Variant(0.0, ua.VariantType.Double)  # a text tag where a number is expected
+        server, by_tag = await _tag_server(endpoint, "urn:test", {
+            tag: ua.Variant("ok", ua.VariantType.String) if tag == "S" else double
+            for tag in signals.values()})
+        variables = {name: by_tag[tag] for name, tag in signals.items()}
+        specs = {name: dataclasses.replace(tag_map.signals[name],
+                                           node_id=f"nsu=urn:test;s={tag}")
+                 for name, tag in signals.items()}
         specs["main_steam_flow"] = dataclasses.replace(tag_map.signals["main_steam_flow"],
                                                        node_id="nsu=urn:test;s=NOPE")
         mapped = dataclasses.replace(tag_map, signals=specs)
-        await server.start()
         source = OpcUaSource(endpoint, mapped, INSECURE, settle_s=1.0)
         blocks: list = []
         consumer = await _started(source, blocks)
@@ -218,21 +225,12 @@ def test_a_burst_of_ten_thousand_values_is_named_and_the_source_goes_on():
     tag_map = plant_tag_map()
 
     async def scenario():
-        server = Server()
-        await server.init()
-        server.set_endpoint(endpoint)
-        server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
-        index = await server.register_namespace("urn:burst")
-        variable = await server.nodes.objects.add_variable(ua.NodeId("P", index), "P", 0.0)
-        await server.write_attribute_value(variable.nodeid, ua.DataValue(
-            Value=ua.Variant(0.0, ua.VariantType.Double),
-            StatusCode=ua.StatusCode(ua.StatusCodes.BadWaitingForInitialData)))
-        import dataclasses
-
+        server, variables = await _tag_server(endpoint, "urn:burst",
+                                              {"P": ua.Variant(0.0, ua.VariantType.Double)})
+        variable = variables["P"]
         spec = dataclasses.replace(tag_map.signals["main_steam_pressure"],
                                    node_id="nsu=urn:burst;s=P")
         mapped = dataclasses.replace(tag_map, signals={"main_steam_pressure": spec})
-        await server.start()
         source = OpcUaSource(endpoint, mapped, INSECURE, settle_s=0.5)
         blocks: list = []
         consumer = await _started(source, blocks)
