@@ -55,7 +55,7 @@ def test_evaluator_choice_and_bad_arguments():
     with pytest.raises(ValueError, match="workers"):
         make_evaluator(0)
     with pytest.raises(ValueError, match="cannot reach the Dask scheduler"):
-        DaskEvaluator("tcp://127.0.0.1:9").start(None)
+        DaskEvaluator("tcp://127.0.0.1:9", connect_timeout_s=1.0).start(None)
 
 
 class _Interrupted(Exception):

@@ -126,11 +126,13 @@ class DaskEvaluator:
     ``distributed.Client`` (left open on :meth:`close`; a client made here is closed).
 
     The objective is scattered to every worker once (``broadcast=True``); each batch becomes
-    about ``2·workers`` tasks that refer to it.
+    about ``2·workers`` tasks that refer to it. ``connect_timeout_s``: how long (s) to try
+    reaching a scheduler given by address before giving up.
     """
 
-    def __init__(self, scheduler: Any) -> None:
+    def __init__(self, scheduler: Any, connect_timeout_s: float = 30.0) -> None:
         self.scheduler = scheduler
+        self.connect_timeout_s = connect_timeout_s
 
     def start(self, objective: Objective) -> None:
         """Connect and broadcast ``objective`` to the workers."""
@@ -140,7 +142,7 @@ class DaskEvaluator:
             self._client, self._own_client = self.scheduler, False
         elif isinstance(self.scheduler, str) and self.scheduler:
             try:
-                self._client = Client(self.scheduler, timeout="30s")
+                self._client = Client(self.scheduler, timeout=self.connect_timeout_s)
             except OSError as error:
                 raise ValueError(f"cannot reach the Dask scheduler at {self.scheduler!r}: "
                                  f"{error}") from None
