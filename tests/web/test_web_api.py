@@ -79,6 +79,8 @@ def test_a_long_range_is_downsampled_and_keeps_the_spike(reading):
     assert answer["max_time"][peak] == "2026-03-01T00:30:00+00:00"
     default = reading.get(SERIES).json()  # the last hour, at the service's max_points
     assert default["start"] == "2026-03-01T00:59:59+00:00" and len(default["time"]) == 500
+    minute = reading.get(f"{SERIES}&span_s=60").json()  # the last minute: raw
+    assert minute["start"] == "2026-03-01T01:58:59+00:00" and len(minute["time"]) == 61
 
 
 def test_downloads_hold_the_raw_samples(reading):
@@ -140,6 +142,8 @@ def test_health_tells_whether_the_service_keeps_up(filled_db):
     (f"{SERIES}&start=2026-03-01T02:00:00Z&end=2026-03-01T01:00:00Z", 422,
      "start=2026-03-01T02:00:00+00:00 is after end=2026-03-01T01:00:00+00:00"),
     (f"{SERIES}&start=1900-01-01T00:00:00Z", 422, "at most 400 days"),
+    (f"{SERIES}&span_s=1e12", 422, "at most 400 days"),
+    (f"{SERIES}&span_s=60&start=2026-03-01T00:00:00Z", 422, "start or span_s, not both"),
     (f"{SERIES}&start=yesterday", 422, "start='yesterday': not an ISO 8601 time"),
     (f"{SERIES}&end=2026-03-01T00:00:00", 422, "the time has no offset"),
     (f"{SERIES}&source=forecast", 422, "query.source"),
@@ -187,3 +191,29 @@ def test_the_api_reference_is_served_without_script(reading):
     for path in ("/api/units/{unit}/series", "/api/alarms/{alarm_id}/acknowledge",
                  "/api/events", "/health", "/metrics"):
         assert path in schema["paths"] and f"<code>{path}</code>" in page.text
+
+
+def test_identical_polls_share_one_answer_until_it_ages(filled_db):
+    app = create_app(filled_db, settings=WebSettings(cache_s=60.0))
+    with TestClient(app) as client:
+        reader = app.state.reader
+        calls = []
+        alarms = reader.alarms
+        reader.alarms = lambda *args, **kwargs: calls.append(args) or alarms(*args, **kwargs)
+        first = [client.get("/api/alarms?active=true").json() for _ in range(5)]
+        assert len(calls) == 1 and first[0] == first[-1]
+        client.get("/api/alarms?active=false")  # another query: computed
+        assert len(calls) == 2
+        client.post("/api/alarms/2/acknowledge", json={"by": "op"})  # a write empties the store
+        again = client.get("/api/alarms?active=true").json()
+        assert len(calls) == 3 and again[0]["acknowledged_by"] == "op"
+        assert client.get("/metrics").headers["content-type"].startswith("text/plain")
+        assert client.get("/api/alarms/99").status_code == 404  # errors are never kept
+    with TestClient(create_app(filled_db, settings=WebSettings(cache_s=0.0))) as client:
+        reader = client.app.state.reader
+        calls.clear()
+        alarms = reader.alarms
+        reader.alarms = lambda *args, **kwargs: calls.append(args) or alarms(*args, **kwargs)
+        for _ in range(3):
+            client.get("/api/alarms")
+        assert len(calls) == 3

@@ -47,6 +47,7 @@ from steamtwin.live.config import ServiceConfig
 from steamtwin.web.access import AccessPolicy, SecurityMiddleware
 from steamtwin.web.apidocs import render_api_docs
 from steamtwin.web.catalog import Catalog, signal_info
+from steamtwin.web.coalesce import ResponseCoalescer
 from steamtwin.web.events import LiveFeed
 from steamtwin.web.metrics import CONTENT_TYPE, RequestMetrics, RequestStats, exposition
 from steamtwin.web.pages import STATIC_DIR
@@ -64,6 +65,8 @@ SignalName = Annotated[str, Query(description="canonical signal name, e.g. "
 Start = Annotated[str | None, Query(description="ISO 8601 with offset, e.g. "
                                     "2026-03-01T12:00:00+00:00; default: end minus the "
                                     "default span")]
+Span = Annotated[float | None, Query(ge=0.0, description="instead of start: the range's "
+                                    "length before end (s), e.g. 60 for the last minute")]
 MaxPoints = Annotated[int | None, Query(ge=10, description="most points (buckets) in the "
                                        "answer; default and limit: the service's max_points")]
 End = Annotated[str | None, Query(description="ISO 8601 with offset; default: the last "
@@ -78,7 +81,10 @@ class WebSettings:
     1-s data); ``default_span_s``: the range when none is given (s, ending at the last
     sample); ``stale_after_s``: last-sample age (wall clock, s) beyond which /health says a
     unit does not keep up; ``readers``: pooled database connections; ``poll_s``: the live
-    feed's poll interval (s)."""
+    feed's poll interval (s); ``cache_s``: how old an answer to an identical GET, and the
+    units' last-sample times, may be when reused across requests (s; 0: never reused —
+    :mod:`steamtwin.web.coalesce`); ``signals_cache_s``: the same for each unit's signal
+    list."""
 
     max_points: int = 2000
     max_span_s: float = 400 * 86_400.0
@@ -87,6 +93,8 @@ class WebSettings:
     stale_after_s: float = 30.0
     readers: int = 4
     poll_s: float = 0.25
+    cache_s: float = 0.2
+    signals_cache_s: float = 5.0
 
 
 class ApiError(Exception):
@@ -180,8 +188,10 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
     app.state.feed = feed
     app.state.catalog = catalog
 
+    fresh_s = settings.cache_s
+
     def known_units() -> list[str]:
-        return sorted(set(catalog.units) | set(reader.last_times()))
+        return sorted(set(catalog.units) | set(reader.last_times(fresh_s)))
 
     app.state.known_units = known_units
 
@@ -207,12 +217,15 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
             raise ApiError(404, f"unknown unit {unit!r}; units: {', '.join(units) or 'none'}")
         return unit
 
-    def time_range(unit: str, start: str | None, end: str | None, limit_s: float
-                   ) -> tuple[pd.Timestamp, pd.Timestamp]:
-        last = reader.last_times().get(unit, pd.Timestamp.now(tz="UTC"))
+    def time_range(unit: str, start: str | None, end: str | None, limit_s: float,
+                   span_s: float | None = None) -> tuple[pd.Timestamp, pd.Timestamp]:
+        if span_s is not None and start is not None:
+            raise ApiError(422, "give start or span_s, not both")
+        last = reader.last_times(fresh_s).get(unit, pd.Timestamp.now(tz="UTC"))
         stop = parse_time(end, "end") if end is not None else last
+        span = settings.default_span_s if span_s is None else span_s
         begin = (parse_time(start, "start") if start is not None
-                 else stop - pd.Timedelta(seconds=settings.default_span_s))
+                 else stop - pd.Timedelta(seconds=span))
         if begin > stop:
             raise ApiError(422, f"start={begin.isoformat()} is after end={stop.isoformat()}")
         span = (stop - begin).total_seconds()
@@ -222,19 +235,21 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
         return begin, stop
 
     def series_query(unit: str, signal: str, source: str, start: str | None,
-                     end: str | None, limit_s: float) -> SeriesQuery:
+                     end: str | None, limit_s: float, span_s: float | None = None
+                     ) -> SeriesQuery:
         check_unit(unit)
-        stored = [s for src, s in reader.signals(unit) if src == source]
+        stored = [s for src, s in reader.signals(unit, settings.signals_cache_s)
+                  if src == source]
         if signal not in stored:
             raise ApiError(404, f"unit {unit!r} has no {source} signal {signal!r}; "
                            f"{source} signals: {', '.join(stored) or 'none'}")
-        begin, stop = time_range(unit, start, end, limit_s)
+        begin, stop = time_range(unit, start, end, limit_s, span_s)
         return SeriesQuery(unit, source, signal, begin, stop)
 
     # -- API ------------------------------------------------------------------------------
     @app.get("/api/units", summary="The units and their last stored sample")
     def units() -> list[dict]:
-        last = reader.last_times()
+        last = reader.last_times(fresh_s)
         return [{"name": name, "last_sample": None if name not in last
                  else last[name].isoformat(), "configured": name in catalog.units}
                 for name in known_units()]
@@ -248,14 +263,14 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
 
     @app.get("/api/units/{unit}/series", summary="One signal over a time range")
     def series(unit: str, signal: SignalName, source: SourceName = "measured",
-               start: Start = None, end: End = None,
+               start: Start = None, end: End = None, span_s: Span = None,
                max_points: MaxPoints = None) -> dict:
         """Raw samples (time, value in SI, gate flags) when the range holds at most
         ``max_points``; otherwise that many equal buckets with min, max (and their times),
         mean and count (M4 aggregation, extrema kept)."""
         if max_points is not None and max_points > settings.max_points:
             raise ApiError(422, f"max_points={max_points}: at most {settings.max_points}")
-        query = series_query(unit, signal, source, start, end, settings.max_span_s)
+        query = series_query(unit, signal, source, start, end, settings.max_span_s, span_s)
         info = signal_info(signal, catalog.tag_map(unit))
         return {"unit": unit, "signal": signal, "source": source,
                 "si_unit": info["si_unit"], "start": query.start.isoformat(),
@@ -358,7 +373,7 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
         now = pd.Timestamp.now(tz="UTC")
         units = {name: {"last_sample": last.isoformat(),
                         "age_s": (now - last).total_seconds()}
-                 for name, last in reader.last_times().items()}
+                 for name, last in reader.last_times(fresh_s).items()}
         keeps_up = bool(units) and all(u["age_s"] <= settings.stale_after_s
                                        for u in units.values())
         return {"status": "ok", "keeps_up": keeps_up, "stale_after_s": settings.stale_after_s,
@@ -367,7 +382,7 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
     @app.get("/metrics", summary="Prometheus metrics", response_class=Response)
     def prometheus() -> Response:
         now = time.time()
-        last = reader.last_times()
+        last = reader.last_times(fresh_s)
         active = {}
         for alarm_row in reader.alarms(None, True):
             active[alarm_row["unit"]] = active.get(alarm_row["unit"], 0) + 1
@@ -393,6 +408,7 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
     app.mount("/static", StaticFiles(directory=str(STATIC_DIR)), name="static")
 
     # added last = outermost: the security layer sees every response, a 500 included
+    app.add_middleware(ResponseCoalescer, max_age_s=settings.cache_s)
     app.add_middleware(RequestMetrics, stats=stats)
     app.add_middleware(SecurityMiddleware, policy=access)
     return app

@@ -23,9 +23,11 @@ from __future__ import annotations
 
 import json
 import queue
+import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
+from datetime import UTC, datetime
 
 import duckdb
 import numpy as np
@@ -51,8 +53,11 @@ class SeriesQuery:
 
 
 def _iso(value) -> str | None:
-    if value is None or (isinstance(value, float) and np.isnan(value)) or value is pd.NaT:
+    """A stored time (aware datetime; the connections' zone is UTC) in ISO 8601."""
+    if value is None or value is pd.NaT:
         return None
+    if isinstance(value, datetime):
+        return value.astimezone(UTC).isoformat()
     return pd.Timestamp(value).tz_convert("UTC").isoformat()
 
 
@@ -83,6 +88,8 @@ class HistorianReader:
         self._pool: queue.Queue[duckdb.DuckDBPyConnection] = queue.Queue()
         self._all = []
         self.timeout_s = timeout_s
+        self._last_times: tuple[float, dict[str, pd.Timestamp]] | None = None
+        self._signals: dict[str, tuple[float, list[tuple[str, str]]]] = {}
         for _ in range(size):
             connection = connect()
             connection.execute("SET TimeZone = 'UTC'")
@@ -109,17 +116,31 @@ class HistorianReader:
             return connection.execute(sql, list(arguments)).fetchall()
 
     # -- units and signals ---------------------------------------------------------------
-    def last_times(self) -> dict[str, pd.Timestamp]:
-        """Each unit's last committed sample time (UTC)."""
-        return {unit: pd.Timestamp(time).tz_convert("UTC")
-                for unit, time in self._rows("SELECT unit, last_time FROM progress")}
+    def last_times(self, max_age_s: float = 0.0) -> dict[str, pd.Timestamp]:
+        """Each unit's last committed sample time (UTC); an answer at most ``max_age_s`` old
+        may be reused (one query serves the requests of that moment)."""
+        now = time.monotonic()
+        cached = self._last_times
+        if cached is not None and now - cached[0] <= max_age_s:
+            return cached[1]
+        last = {unit: pd.Timestamp(stamp).tz_convert("UTC")
+                for unit, stamp in self._rows("SELECT unit, last_time FROM progress")}
+        self._last_times = (now, last)
+        return last
 
-    def signals(self, unit: str) -> list[tuple[str, str]]:
-        """(source, signal) pairs stored for ``unit``'s last committed sample, sorted."""
-        return [(source, signal) for source, signal in self._rows(
-            "SELECT DISTINCT source, signal FROM series WHERE unit = ? AND time = "
-            "(SELECT last_time FROM progress WHERE unit = ?) ORDER BY source, signal",
-            [unit, unit])]
+    def signals(self, unit: str, max_age_s: float = 0.0) -> list[tuple[str, str]]:
+        """(source, signal) pairs stored for ``unit``'s last committed sample, sorted; an
+        answer at most ``max_age_s`` old may be reused."""
+        now = time.monotonic()
+        cached = self._signals.get(unit)
+        if cached is not None and now - cached[0] <= max_age_s:
+            return cached[1]
+        last = self.last_times(max_age_s).get(unit)
+        pairs = [] if last is None else [(source, signal) for source, signal in self._rows(
+            "SELECT DISTINCT source, signal FROM series WHERE unit = ? AND time = ? "
+            "ORDER BY source, signal", [unit, last.to_pydatetime()])]
+        self._signals[unit] = (now, pairs)
+        return pairs
 
     # -- series ---------------------------------------------------------------------------
     @staticmethod
@@ -146,18 +167,18 @@ class HistorianReader:
         """The signal as JSON-ready columns: raw (time, value, flag) when it has at most
         ``max_points`` samples in the range, else ``max_points`` equal buckets with each
         bucket's min and max (and their times), mean and count (M4; module docstring)."""
+        where, arguments = self._where(query)
+        rows = self._rows(f"SELECT time, value, flag FROM series WHERE {where} ORDER BY time "
+                          "LIMIT ?", [*arguments, max_points + 1])
+        if len(rows) <= max_points:
+            return {"downsampled": False, "count": len(rows),
+                    "time": [_iso(t) for t, _, _ in rows],
+                    "value": [_number(v) for _, v, _ in rows],
+                    "flag": [None if f is None else _flag_names(f) for _, _, f in rows]}
         total = self.count(query)
-        if total <= max_points:
-            frame = self.raw(query)
-            return {"downsampled": False, "count": total,
-                    "time": [t.isoformat() for t in frame["time"]],
-                    "value": [_number(v) for v in frame["value"]],
-                    "flag": [None if f is None or pd.isna(f) else _flag_names(f)
-                             for f in frame["flag"]]}
         start_us = int(query.start.value // 1000)
         span_us = int(query.end.value // 1000) - start_us
         width_us = max(1, -(-span_us // max_points))  # ceil; the end joins the last bucket
-        where, arguments = self._where(query)
         rows = self._rows(
             "SELECT bucket, min(value), arg_min(time, value), max(value), arg_max(time, value), "
             "avg(value), count(value) FROM (SELECT time, value, least((epoch_us(time) - ?) // "
@@ -183,9 +204,9 @@ class HistorianReader:
             f"DISTINCT time FROM series WHERE unit = ?{clause} ORDER BY time DESC LIMIT ?) "
             "ORDER BY time, source, signal", [unit, *arguments, limit])
         samples: dict[pd.Timestamp, dict[str, float | None]] = {}
-        for time, source, signal, value in rows:
-            samples.setdefault(pd.Timestamp(time), {})[f"{source}/{signal}"] = _number(value)
-        return [{"time": _iso(time), "values": values} for time, values in samples.items()]
+        for stamp, source, signal, value in rows:
+            samples.setdefault(pd.Timestamp(stamp), {})[f"{source}/{signal}"] = _number(value)
+        return [{"time": _iso(stamp), "values": values} for stamp, values in samples.items()]
 
     # -- alarms ---------------------------------------------------------------------------
     _ALARM_COLUMNS = ('id, unit, kind, signal, start, "end", evidence, acknowledged_at, '
