@@ -20,7 +20,10 @@ Two processes on loopback, as in the plant:
 Prints the request count, errors, latency p50/p95/p99/max, the service's commit lateness
 p99/max, both processes' CPU time and the machine load (``os.getloadavg``).
 
+``--cache-s 0`` turns off the reuse of an identical poll's answer (``web.coalesce``).
+
 Run: python benchmarks/bench_web_api.py [--clients 200] [--seconds 30] [--history-h 24]
+     [--cache-s 0.2]
 """
 
 from __future__ import annotations
@@ -40,6 +43,8 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from steamtwin.web.app import WebSettings
+
 SIGNALS = ("main_steam_pressure", "main_steam_temperature", "main_steam_flow",
            "control_stage_pressure", "control_stage_temperature", "hp_exhaust_pressure",
            "hp_exhaust_temperature", "hp_inner_casing_temperature", "load")
@@ -55,8 +60,9 @@ def _frames(index: pd.DatetimeIndex, rng: np.random.Generator) -> dict[str, pd.D
     return {"measured": measured, "twin": twin, "residual": residual}
 
 
-async def _service(db: Path, port_file: Path, history_h: float) -> None:
+async def _service(db: Path, port_file: Path, history_h: float, cache_s: float) -> None:
     from steamtwin.live.historian import LiveHistorian
+    from steamtwin.web.app import WebSettings
     from steamtwin.web.server import HttpSettings, http_companion
 
     rng = np.random.default_rng(0)
@@ -71,8 +77,8 @@ async def _service(db: Path, port_file: Path, history_h: float) -> None:
                               inclusive="left", tz="UTC")
         historian.commit_block("unit1", _frames(index, rng))
         block_start += hour
-    companion = http_companion(HttpSettings(port=0), on_bound=lambda _h, port: port_file.
-                               write_text(str(port)))
+    companion = http_companion(HttpSettings(port=0, web=WebSettings(cache_s=cache_s)),
+                               on_bound=lambda _h, port: port_file.write_text(str(port)))
     done = asyncio.Event()
     loop = asyncio.get_running_loop()
     loop.add_signal_handler(signal.SIGTERM, done.set)
@@ -168,18 +174,21 @@ def main() -> None:
     parser.add_argument("--clients", type=int, default=200)
     parser.add_argument("--seconds", type=float, default=30.0)
     parser.add_argument("--history-h", type=float, default=24.0)
+    parser.add_argument("--cache-s", type=float, default=WebSettings().cache_s,
+                        help="the service's answer reuse for identical polls (0: off)")
     parser.add_argument("--db", type=Path)
     parser.add_argument("--port-file", type=Path)
     args = parser.parse_args()
     if args.role == "service":
-        asyncio.run(_service(args.db, args.port_file, args.history_h))
+        asyncio.run(_service(args.db, args.port_file, args.history_h, args.cache_s))
         return
     with tempfile.TemporaryDirectory() as folder:
         port_file = Path(folder) / "port"
         started = time.perf_counter()
         service = subprocess.Popen(
             [sys.executable, __file__, "--role", "service", "--db", str(Path(folder) / "t.db"),
-             "--port-file", str(port_file), "--history-h", str(args.history_h)],
+             "--port-file", str(port_file), "--history-h", str(args.history_h),
+             "--cache-s", str(args.cache_s)],
             stdout=subprocess.PIPE, text=True)
         try:
             while not port_file.exists() or not port_file.read_text():

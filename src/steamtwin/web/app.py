@@ -43,6 +43,7 @@ from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, Field
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
+from steamtwin.errors import SteamtwinError
 from steamtwin.live.config import ServiceConfig
 from steamtwin.web.access import AccessPolicy, SecurityMiddleware
 from steamtwin.web.apidocs import render_api_docs
@@ -97,7 +98,7 @@ class WebSettings:
     signals_cache_s: float = 5.0
 
 
-class ApiError(Exception):
+class ApiError(SteamtwinError, ValueError):
     """A refused request: HTTP ``status`` and a message for the client."""
 
     def __init__(self, status: int, message: str) -> None:
