@@ -7,13 +7,15 @@ from __future__ import annotations
 
 import io
 import shutil
+from typing import get_args
 
 import pandas as pd
 import pytest
 from fastapi.testclient import TestClient
 from web_fixtures import write_serve_config
 
-from steamtwin.web.app import WebSettings, create_app
+from steamtwin.live.historian import SOURCES
+from steamtwin.web.app import SourceName, WebSettings, create_app
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 
@@ -39,6 +41,10 @@ def reading(tmp_path_factory, pristine_db):
     with _client(folder / "twin.duckdb",
                  write_serve_config(folder, folder / "twin.duckdb")) as client:
         yield client
+
+
+def test_the_api_names_the_historians_sources():
+    assert set(get_args(get_args(SourceName)[0])) == set(SOURCES)
 
 
 def test_units_and_signals_carry_si_units_and_instrument_errors(reading):

@@ -34,6 +34,8 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
+from starlette.types import ASGIApp, Receive, Scope, Send
+
 from steamtwin.errors import SteamtwinError
 
 __all__ = ["ROLES", "SECURITY_HEADERS", "AccessError", "AccessPolicy", "SecurityMiddleware",
@@ -175,11 +177,11 @@ class SecurityMiddleware:
     Pure ASGI rather than Starlette's ``BaseHTTPMiddleware``, whose task handling gets in the
     way of streamed (SSE) responses."""
 
-    def __init__(self, app, policy: AccessPolicy) -> None:
+    def __init__(self, app: ASGIApp, policy: AccessPolicy) -> None:
         self.app = app
         self.policy = policy
 
-    async def __call__(self, scope, receive, send) -> None:
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return

@@ -17,6 +17,8 @@ import asyncio
 import time
 from collections import OrderedDict
 
+from starlette.types import ASGIApp, Receive, Scope, Send
+
 __all__ = ["ResponseCoalescer"]
 
 MAX_BODY = 1 << 20
@@ -27,7 +29,8 @@ class ResponseCoalescer:
     """ASGI middleware (see the module docstring): ``max_age_s`` (s; 0 turns it off),
     ``prefixes`` of the paths it may answer, ``size`` answers kept at most."""
 
-    def __init__(self, app, max_age_s: float, prefixes: tuple[str, ...] = ("/api/", "/health"),
+    def __init__(self, app: ASGIApp, max_age_s: float,
+                 prefixes: tuple[str, ...] = ("/api/", "/health"),
                  excluded: tuple[str, ...] = ("/api/events", "/download"),
                  size: int = 256) -> None:
         self.app = app
@@ -44,7 +47,7 @@ class ResponseCoalescer:
                 and path.startswith(self.prefixes)
                 and not any(part in path for part in self.excluded))
 
-    async def __call__(self, scope, receive, send) -> None:
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return

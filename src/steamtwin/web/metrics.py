@@ -16,6 +16,8 @@ import time
 from collections import defaultdict
 from collections.abc import Iterable, Mapping
 
+from starlette.types import ASGIApp, Receive, Scope, Send
+
 __all__ = ["CONTENT_TYPE", "Family", "RequestMetrics", "RequestStats", "exposition"]
 
 CONTENT_TYPE = "text/plain; version=0.0.4; charset=utf-8"
@@ -93,11 +95,11 @@ class RequestStats:
 class RequestMetrics:
     """ASGI middleware recording every HTTP request into ``stats``."""
 
-    def __init__(self, app, stats: RequestStats) -> None:
+    def __init__(self, app: ASGIApp, stats: RequestStats) -> None:
         self.app = app
         self.stats = stats
 
-    async def __call__(self, scope, receive, send) -> None:
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
