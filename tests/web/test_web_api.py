@@ -12,9 +12,9 @@ from typing import get_args
 import pandas as pd
 import pytest
 from fastapi.testclient import TestClient
-from web_fixtures import write_serve_config
+from web_fixtures import unit_block, write_serve_config
 
-from steamtwin.live.historian import SOURCES
+from steamtwin.live.historian import SOURCES, LiveHistorian
 from steamtwin.web.app import SourceName, WebSettings, create_app
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
@@ -223,3 +223,16 @@ def test_identical_polls_share_one_answer_until_it_ages(filled_db):
         for _ in range(3):
             client.get("/api/alarms")
         assert len(calls) == 3
+
+
+def test_a_signal_stored_after_the_list_was_kept_is_found(filled_db):
+    app = create_app(filled_db, settings=WebSettings(signals_cache_s=600.0, cache_s=0.0))
+    with TestClient(app) as client:
+        url = "/api/units/unit2/series?signal=blade_trailing_edge&source=twin&span_s=10"
+        assert client.get(url).status_code == 404  # not stored yet; the list is now kept
+        frames, flags = unit_block(600, 5)
+        frames["twin"]["blade_trailing_edge"] = 760.0
+        with LiveHistorian(filled_db) as historian:  # the service's writer, same database
+            historian.commit_block("unit2", frames, flags)
+        answer = client.get(url)
+        assert answer.status_code == 200 and answer.json()["value"] == [760.0] * 5

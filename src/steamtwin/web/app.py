@@ -241,6 +241,8 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
         check_unit(unit)
         stored = [s for src, s in reader.signals(unit, settings.signals_cache_s)
                   if src == source]
+        if signal not in stored:  # perhaps new since the list was kept: look again
+            stored = [s for src, s in reader.signals(unit) if src == source]
         if signal not in stored:
             raise ApiError(404, f"unit {unit!r} has no {source} signal {signal!r}; "
                            f"{source} signals: {', '.join(stored) or 'none'}")
