@@ -21,9 +21,12 @@ Prints the request count, errors, latency p50/p95/p99/max, the service's commit 
 p99/max, both processes' CPU time and the machine load (``os.getloadavg``).
 
 ``--cache-s 0`` turns off the reuse of an identical poll's answer (``web.coalesce``).
+``--streams K`` also opens K server-sent event streams (``/api/events``) and reports how long
+after its second each new sample reached them (the second's start → the event read: the
+writer's commit lateness, the feed's poll interval and the delivery).
 
 Run: python benchmarks/bench_web_api.py [--clients 200] [--seconds 30] [--history-h 24]
-     [--cache-s 0.2]
+     [--cache-s 0.2] [--streams 0]
 """
 
 from __future__ import annotations
@@ -121,7 +124,8 @@ async def _get(reader: asyncio.StreamReader, writer: asyncio.StreamWriter, targe
     return int(lines[0].split(" ")[1])
 
 
-async def _clients(port: int, clients: int, seconds: float) -> dict[str, object]:
+async def _clients(port: int, clients: int, seconds: float, streams: int
+                   ) -> dict[str, object]:
     """``clients`` browsers, each on its own kept-alive connection, polling once a second.
     A lean HTTP client on asyncio streams: httpx costs ~6 ms of CPU a request, which on this
     2-core machine would load it more than the service does."""
@@ -152,15 +156,40 @@ async def _clients(port: int, clients: int, seconds: float) -> dict[str, object]
         finally:
             writer.close()
 
+    delays: list[float] = []
+
+    async def listen() -> None:
+        """One open event stream: how long after its second each sample arrives."""
+        reader, writer = await asyncio.open_connection("127.0.0.1", port)
+        writer.write(b"GET /api/events?unit=unit1 HTTP/1.1\r\nHost: 127.0.0.1\r\n\r\n")
+        await writer.drain()
+        try:
+            while (remaining := stop_at - time.perf_counter()) > 0:
+                try:
+                    line = await asyncio.wait_for(reader.readline(), remaining)
+                except TimeoutError:
+                    break
+                if line.startswith(b"id: "):  # the sample's time (chunk sizes never match)
+                    sample = pd.Timestamp(line[4:].decode().strip())
+                    delays.append((pd.Timestamp.now(tz="UTC") - sample).total_seconds())
+        finally:
+            writer.close()
+
     cpu0 = time.process_time()
-    await asyncio.gather(*(poll(k) for k in range(clients)))
+    await asyncio.gather(*(poll(k) for k in range(clients)),
+                         *(listen() for _ in range(streams)))
     cpu = time.process_time() - cpu0
     reader, writer = await asyncio.open_connection("127.0.0.1", port)
     writer.write(b"GET /health HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n")
     health = json.loads((await reader.read()).split(b"\r\n\r\n", 1)[1])
     writer.close()
     late = np.array(latencies) * 1000.0
-    return {"requests": len(late), "errors": len(errors), "first_errors": errors[:3],
+    events = np.array(delays if delays else [np.nan]) * 1000.0
+    return {"streams": streams, "events": len(delays),
+            "event_delay_p50_ms": float(np.percentile(events, 50)),
+            "event_delay_p95_ms": float(np.percentile(events, 95)),
+            "event_delay_max_ms": float(np.max(events)),
+            "requests": len(late), "errors": len(errors), "first_errors": errors[:3],
             "rate_per_s": len(late) / seconds,
             "p50_ms": float(np.percentile(late, 50)), "p95_ms": float(np.percentile(late, 95)),
             "p99_ms": float(np.percentile(late, 99)), "max_ms": float(late.max()),
@@ -173,6 +202,8 @@ def main() -> None:
     parser.add_argument("--role", choices=("clients", "service"), default="clients")
     parser.add_argument("--clients", type=int, default=200)
     parser.add_argument("--seconds", type=float, default=30.0)
+    parser.add_argument("--streams", type=int, default=0,
+                        help="open server-sent event streams besides the pollers")
     parser.add_argument("--history-h", type=float, default=24.0)
     parser.add_argument("--cache-s", type=float, default=WebSettings().cache_s,
                         help="the service's answer reuse for identical polls (0: off)")
@@ -200,7 +231,7 @@ def main() -> None:
             time.sleep(1.0)
             load_before = os.getloadavg()
             result = asyncio.run(_clients(int(port_file.read_text()), args.clients,
-                                          args.seconds))
+                                          args.seconds, args.streams))
             load_after = os.getloadavg()
         finally:
             service.send_signal(signal.SIGTERM)

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import io
 import shutil
+import subprocess
+import sys
 from typing import get_args
 
 import pandas as pd
@@ -14,6 +16,7 @@ import pytest
 from fastapi.testclient import TestClient
 from web_fixtures import unit_block, write_serve_config
 
+from steamtwin.errors import DataError
 from steamtwin.live.historian import SOURCES, LiveHistorian
 from steamtwin.web.app import SourceName, WebSettings, create_app
 
@@ -236,3 +239,18 @@ def test_a_signal_stored_after_the_list_was_kept_is_found(filled_db):
             historian.commit_block("unit2", frames, flags)
         answer = client.get(url)
         assert answer.status_code == 200 and answer.json()["value"] == [760.0] * 5
+
+
+def test_a_database_another_process_writes_is_refused_clearly(tmp_path):
+    db = tmp_path / "held.duckdb"
+    holder = subprocess.Popen(
+        [sys.executable, "-c", f"import duckdb, sys; c = duckdb.connect({str(db)!r}); "
+         "print('held', flush=True); sys.stdin.read()"],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline().strip() == "held"
+        with pytest.raises(DataError, match=r"cannot open the historian.*steamtwin serve "
+                           r"--http-port"):
+            create_app(db)
+    finally:
+        holder.communicate("", timeout=30)

@@ -43,7 +43,7 @@ from fastapi.staticfiles import StaticFiles
 from pydantic import BaseModel, Field
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from steamtwin.errors import SteamtwinError
+from steamtwin.errors import DataError, SteamtwinError
 from steamtwin.live.config import ServiceConfig
 from steamtwin.web.access import AccessPolicy, SecurityMiddleware
 from steamtwin.web.apidocs import render_api_docs
@@ -153,7 +153,12 @@ def _reader(historian: str | Path | HistorianReader | Callable[[], duckdb.DuckDB
     path = Path(historian)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such historian database")
-    return HistorianReader(lambda: duckdb.connect(str(path)), size)
+    try:
+        return HistorianReader(lambda: duckdb.connect(str(path)), size)
+    except duckdb.IOException as error:  # e.g. the file is locked by a service elsewhere
+        raise DataError(f"{path}: cannot open the historian ({error}); DuckDB lets one process "
+                        "write a database: serve it from that process (steamtwin serve "
+                        "--http-port)") from None
 
 
 def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.DuckDBPyConnection],
