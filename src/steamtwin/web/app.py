@@ -337,7 +337,11 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
         if before["acknowledged_at"] is not None:
             raise ApiError(409, f"alarm {alarm_id} was acknowledged by "
                            f"{before['acknowledged_by']} at {before['acknowledged_at']}")
-        return reader.acknowledge(alarm_id, by, pd.Timestamp.now(tz="UTC"))
+        try:
+            return reader.acknowledge(alarm_id, by, pd.Timestamp.now(tz="UTC"))
+        except duckdb.TransactionException:  # the service updated the alarm at that moment
+            raise ApiError(503, f"alarm {alarm_id} changed while being acknowledged; try "
+                           "again") from None
 
     @app.get("/api/units/{unit}/parameters", summary="Parameter trajectory and current set")
     def parameters(unit: str, start: Start = None, end: End = None) -> dict:
