@@ -8,6 +8,7 @@ import asyncio
 import contextlib
 import logging
 import signal
+from collections.abc import Awaitable, Callable, Sequence
 
 from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
 from steamtwin.live.config import ServiceConfig, UnitConfig
@@ -21,7 +22,7 @@ from steamtwin.live.sources import OpcUaSecurity, OpcUaSource, ReplaySource, Sou
 from steamtwin.live.unit_model import unit_model
 from steamtwin.rom.romfile import load_rom
 
-__all__ = ["build_unit", "run_service", "stop_on_signals"]
+__all__ = ["Companion", "build_unit", "run_service", "stop_on_signals"]
 
 LOG = logging.getLogger("steamtwin.live")
 
@@ -97,14 +98,31 @@ def stop_on_signals() -> asyncio.Event:
     return stop
 
 
-async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None
-                      ) -> dict[str, LiveSummary]:
+Companion = Callable[[LiveHistorian, asyncio.Event], Awaitable[None]]
+"""A task run beside the units on the open historian (e.g. the HTTP service); it must return
+soon after the event (set when every unit has stopped) is set."""
+
+
+async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
+                      companions: Sequence[Companion] = ()) -> dict[str, LiveSummary]:
     """Run every unit of ``config`` until its source ends or ``stop`` is set; returns each
-    unit's summary. What was committed stays; a restart continues from it."""
+    unit's summary. What was committed stays; a restart continues from it. ``companions``
+    run on the same loop and historian from before the first unit starts until the last one
+    stops (a companion that fails stops the service)."""
     stop = stop if stop is not None else asyncio.Event()
     historian = LiveHistorian(config.database)
     historian.open()
+    done = asyncio.Event()
+    beside: list[asyncio.Task] = []
     try:
+        beside = [asyncio.create_task(companion(historian, done)) for companion in companions]
+
+        def stop_if_failed(task: asyncio.Task) -> None:
+            if not task.cancelled() and task.exception() is not None:
+                stop.set()
+
+        for task in beside:
+            task.add_done_callback(stop_if_failed)
         built = [build_unit(unit, historian) for unit in config.units]
         for twin, _ in built:
             resume = twin.resume_after()
@@ -128,4 +146,9 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None
         results = await asyncio.gather(*(until_stopped(t, s) for t, s in built))
         return {twin.name: result for (twin, _), result in zip(built, results, strict=True)}
     finally:
+        done.set()
+        outcomes = await asyncio.gather(*beside, return_exceptions=True)
         historian.close()
+        failed = [o for o in outcomes if isinstance(o, Exception)]
+        if failed:
+            raise failed[0]

@@ -121,12 +121,10 @@ class ReplaySource:
         wall_start = time.monotonic()
         for start in range(0, len(frame), self.block_samples):
             stop = min(start + self.block_samples, len(frame))
+            delay = 0.0  # behind the pace or at full speed: still yield to the loop's others
             if self.speed is not None:
-                delay = wall_start + seconds[stop - 1] / self.speed - time.monotonic()
-                if delay > 0.0:
-                    await asyncio.sleep(delay)
-            else:
-                await asyncio.sleep(0)
+                delay = max(0.0, wall_start + seconds[stop - 1] / self.speed - time.monotonic())
+            await asyncio.sleep(delay)
             chunk, chunk_bad = frame.iloc[start:stop], bad.iloc[start:stop]
             yield SourceBlock(chunk.where(~chunk_bad.to_numpy()), chunk_bad)
 

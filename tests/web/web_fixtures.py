@@ -1,0 +1,85 @@
+"""Helpers of the HTTP service's tests (imported by tests/web/conftest.py and the tests): a
+historian filled by the live twin's own writer (:meth:`LiveHistorian.commit_block`, as the
+service stores its blocks) and a serve configuration whose tag map gives the signals' tags and
+instrument errors."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pandas as pd
+
+from steamtwin.dcs.plant import plant_tag_map
+from steamtwin.dcs.quality import Flag
+from steamtwin.dcs.tagmap import write_tag_map
+from steamtwin.live.config import load_config
+from steamtwin.live.historian import Alarm, AlarmEnd, BlockEvents, LiveHistorian
+
+START = pd.Timestamp("2026-03-01T00:00:00Z")
+HOURS = 2
+
+
+def unit_block(start_s: int, n: int, seed: int = 0) -> tuple[dict[str, pd.DataFrame],
+                                                             pd.DataFrame]:
+    """``n`` 1-s samples from ``start_s`` s after :data:`START`: measured, twin, residual
+    (SI) and the gate's flags."""
+    index = START + pd.to_timedelta(np.arange(start_s, start_s + n), unit="s")
+    rng = np.random.default_rng(seed + start_s)
+    k = np.arange(start_s, start_s + n, dtype=float)
+    twin_t = 600.0 + 5.0 * np.sin(2.0 * np.pi * k / 3600.0)
+    measured = pd.DataFrame({"hp_exhaust_temperature": twin_t + rng.normal(0.0, 0.5, n),
+                             "control_stage_pressure": 9.0e6 + 100.0 * k}, index=index)
+    twin = pd.DataFrame({"hp_exhaust_temperature": twin_t,
+                         "blade_leading_edge": 780.0 + 0.001 * k}, index=index)
+    residual = measured[["hp_exhaust_temperature"]] - twin[["hp_exhaust_temperature"]]
+    flags = pd.DataFrame(None, index=index, columns=measured.columns, dtype=object)
+    return {"measured": measured, "twin": twin, "residual": residual}, flags
+
+
+BLOCK_S = 600
+"""Seconds per stored block (the service commits smaller ones; the rows are the same)."""
+
+
+def fill(path) -> None:
+    """2 h of unit1 (at 00:30:00 a spike put in the data and flagged, a stuck flag on the
+    pressure, an alarm raised and a parameter swap; at 00:40 that alarm ends, a degradation
+    alarm stays active and the flow coefficient moves again) and 10 min of unit2."""
+    with LiveHistorian(path) as historian:
+        for block in range(HOURS * 3600 // BLOCK_S):
+            start_s = BLOCK_S * block
+            frames, flags = unit_block(start_s, BLOCK_S)
+            index = frames["measured"].index
+            events = None
+            if start_s == 1800:
+                frames["measured"].iloc[0, 0] = 700.0
+                flags.iloc[0, 0] = str(int(Flag.SPIKE | Flag.OUT_OF_RANGE))
+                flags.iloc[1, 1] = str(int(Flag.STUCK))
+                events = BlockEvents(
+                    alarms=(Alarm("unit1", "sensor_fault", index[0], "hp_exhaust_temperature",
+                                  evidence={"statistic": 9.1, "threshold": 5.0}),
+                            AlarmEnd("sensor_fault", "hp_exhaust_temperature", index[10]),
+                            Alarm("unit1", "degradation", index[15], None,
+                                  evidence={"statistic": 12.0})),
+                    parameters=((index[0], {"flow_coefficient": 0.99,
+                                            "friction_coefficient": 1.0}, "scheduled"),
+                                (index[15], {"flow_coefficient": 0.98}, "degradation")))
+            historian.commit_block("unit1", frames, flags, events=events)
+        frames, flags = unit_block(0, 600, seed=7)
+        historian.commit_block("unit2", frames, flags)
+
+
+def write_serve_config(folder, db):
+    """A serve configuration of unit1 and unit2 on ``db`` in ``folder`` (a replay source that
+    is never run), with a tag map giving the exhaust temperature an instrument σ of 1.5 K."""
+    tag_map = plant_tag_map()
+    signals = dict(tag_map.signals)
+    signals["hp_exhaust_temperature"] = dataclasses.replace(
+        signals["hp_exhaust_temperature"], noise_si=1.5)
+    write_tag_map(dataclasses.replace(tag_map, signals=signals), folder / "tags.toml")
+    (folder / "plant.csv").write_text("Timestamp\n")
+    units = "".join(f'[[units]]\nname = "{name}"\ntags = "tags.toml"\n[units.source]\n'
+                    'kind = "replay"\npath = "plant.csv"\n' for name in ("unit1", "unit2"))
+    config = folder / "unit.toml"
+    config.write_text(f'database = "{db}"\n{units}')
+    return load_config(config)
