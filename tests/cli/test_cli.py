@@ -202,7 +202,9 @@ def test_turbine_show_refuses_a_bad_spec_without_traceback(tmp_path, content, ex
     """Issue 16, findings 5 and 6: exit 0 on a dropped bleed, a traceback on a binary file."""
     spec = tmp_path / "unit.toml"
     spec.write_bytes(content)
-    result = runner.invoke(app, ["turbine", "show", str(spec)])
+    # a terminal wide enough that rich does not break the (long, temporary) path mid-word
+    result = runner.invoke(app, ["turbine", "show", str(spec)], env={"COLUMNS": "400"},
+                           terminal_width=400)
     assert result.exit_code == 2 and isinstance(result.exception, SystemExit)
     assert expected in _one_line(result.output)
     assert "Traceback" not in result.output
