@@ -64,8 +64,10 @@ def test_report_holds_every_table_and_figure_of_the_method(demo):
         assert matches, pattern
         assert all((result.out / name).stat().st_size > 10_000 for name in matches)
     html = (result.out / "report.html").read_text(encoding="utf-8")
-    for name in files:
-        assert f'src="{name}"' in html
+    for name in files:  # embedded (self-contained page), the file beside it named
+        assert f'data-file="{name}"' in html
+    assert html.count('src="data:image/png;base64,') == len(files)
+    assert html.index("<h2>Summary</h2>") < html.index("<h2>Run settings, versions and timings")
     assert set(STAGES) <= set(document["timings_s"])
     assert document["versions"]["steamtwin"]
 

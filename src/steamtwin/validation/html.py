@@ -1,18 +1,27 @@
-"""A small HTML report writer (standard library only): tables, figures, notes, provenance.
+"""A small HTML report writer (standard library only): summary, tables, figures, notes, provenance.
 
 :class:`ValidationReport` collects, in order, sections of four kinds — tables (a DataFrame,
 shown as an HTML table and written as ``<name>.csv`` next to the report), figures (PNG files,
-referenced by relative path and copied into the report folder when they lie elsewhere), data
-files (e.g. Parquet series, listed with links, placed like figures) and notes (paragraphs of
-text) — plus the run's settings, package versions and timings (stage →
+embedded in the page and also placed in the report folder, copied in when they lie elsewhere),
+data files (e.g. Parquet series, listed with links, placed like figures) and notes (paragraphs of
+text) — plus the run's headline figures, settings, package versions and timings (stage →
 seconds). :meth:`ValidationReport.write` writes ``report.html`` and ``report.json`` (the same
-content machine-readable: settings, versions, timings, tables as records at full precision,
-figures, data files and notes). Every text is HTML-escaped; numbers are shown with four significant
-digits in the HTML (the CSV and JSON files keep full precision).
+content machine-readable: headlines, settings, versions, timings, tables as records at full
+precision, figures, data files and notes).
+
+The page reads top down: a one-screen summary (each headline figure beside its limit and the
+method's published value, pass/fail marked; :mod:`steamtwin.validation.summary`), the sections
+in order, then the settings, versions and timings. Column names are shown as "Readable name
+[unit]" and numbers rounded by quantity (:mod:`steamtwin.validation.labels`: 3 significant
+figures, never finer than the unit's resolution; the CSV and JSON files keep full precision).
+Tables fit a 1366-px screen: at most :data:`MAX_COLUMNS` columns each (a wider table is shown in
+parts that repeat its key columns), cells wrap. The page is self-contained: CSS inline, figures
+as base64 PNG, no script, no external URL. Every text is HTML-escaped.
 """
 
 from __future__ import annotations
 
+import base64
 import datetime as dt
 import html
 import json
@@ -30,23 +39,50 @@ import numpy as np
 import pandas as pd
 
 from steamtwin.errors import SteamtwinError
+from steamtwin.validation.labels import (
+    RESOLUTION,
+    ROW_UNIT_COLUMNS,
+    column_label,
+    header_text,
+    round_digits,
+    unit_text,
+    value_label,
+)
+from steamtwin.validation.summary import Headline, headline_figures
 
-__all__ = ["FigureSection", "FilesSection", "NotesSection", "ReportError", "Section",
-           "TableSection", "ValidationReport", "format_value", "package_versions"]
+__all__ = ["MAX_COLUMNS", "FigureSection", "FilesSection", "NotesSection", "ReportError",
+           "Section", "TableSection", "ValidationReport", "format_value", "package_versions"]
 
 BASE_PACKAGES = ("steamtwin", "numpy", "scipy", "pandas", "matplotlib")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
+MAX_COLUMNS = 10
+"""Most columns of one HTML table: at 0.85 em (13.6 px) a column takes ≤ 120 px when its header
+wraps at word boundaries, so 10 fit the 1302 px a 1366-px screen leaves inside the margins."""
+MAX_KEY_COLUMNS = 3
+"""Most leading label columns (index, text, times) repeated in each part of a split table."""
 _STYLE = """
-body { font-family: system-ui, sans-serif; margin: 2em; color: #222; max-width: 1400px; }
-h1 { font-size: 1.5em; } h2 { font-size: 1.2em; margin-top: 1.6em; }
-table { border-collapse: collapse; margin: 0.5em 0 1em; font-size: 0.85em; }
-th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; }
-td.number { text-align: right; font-variant-numeric: tabular-nums; }
-th { background: #f0f0f0; } caption { caption-side: top; text-align: left; font-weight: bold; }
-figure { margin: 1em 0; } img { max-width: 100%; } figcaption { font-size: 0.9em; }
-p.meta { color: #666; font-size: 0.85em; }
+body { font-family: system-ui, sans-serif; margin: 2em auto; padding: 0 2em; color: #222;
+       max-width: 1366px; box-sizing: border-box; line-height: 1.35; }
+h1 { font-size: 1.5em; margin-bottom: 0.2em; } h2 { font-size: 1.2em; margin-top: 1.6em; }
+h3 { font-size: 1.05em; margin-top: 1.2em; }
+.table-wrap { max-width: 100%; overflow-x: auto; }
+table { border-collapse: collapse; margin: 0.5em 0 1em; font-size: 0.85em; max-width: 100%; }
+th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; vertical-align: top;
+         overflow-wrap: anywhere; }
+td.number { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
+th { background: #f0f0f0; text-align: left; font-weight: 600; }
+tbody th { font-weight: normal; }
+figure { margin: 1em 0; } img { max-width: 100%; height: auto; }
+figcaption { font-size: 0.9em; }
+p.meta { color: #666; font-size: 0.85em; margin-top: 0; }
+section.summary { border: 1px solid #bbb; border-radius: 6px; padding: 0.2em 1em 0.6em;
+                  background: #fafafa; }
+section.summary h2 { margin-top: 0.6em; }
+p.verdict { font-weight: 600; margin: 0.3em 0; }
+tr.pass td.status { color: #17612a; background: #e5f4e8; font-weight: 600; }
+tr.fail td.status { color: #9b1c1c; background: #fbe5e5; font-weight: 600; }
+section.provenance { margin-top: 3em; border-top: 2px solid #ddd; }
 """
-
 
 class ReportError(SteamtwinError, ValueError):
     """A report cannot be written: a section is empty, missing or named twice."""
@@ -99,9 +135,11 @@ def package_versions(extra: Mapping[str, str] | None = None) -> dict[str, str]:
     return versions | dict(extra or {})
 
 
-def format_value(value: object) -> str:
-    """Text of a table cell: integers as they are, floats with 4 significant digits (fixed
-    notation within 1e-3 … 1e6, scientific outside), NaN/None as "–", times in ISO 8601."""
+def format_value(value: object, unit: str = "") -> str:
+    """Text of a table cell: integers as they are, floats rounded by the rule of
+    :mod:`steamtwin.validation.labels` for ``unit`` (3 significant figures, never finer than the
+    unit's resolution; scientific with 3 significant figures below 1e-3 or from 1e6 when the
+    unit sets no resolution), NaN/None as "–", times as "YYYY-MM-DD HH:MM:SS±HH:MM"."""
     if value is None or value is pd.NaT or value is pd.NA:
         return "–"
     if isinstance(value, bool | np.bool_):
@@ -115,12 +153,13 @@ def format_value(value: object) -> str:
         if number == 0.0:
             return "0"
         magnitude = abs(number)
-        if 1e-3 <= magnitude < 1e6:
-            decimals = min(max(3 - math.floor(math.log10(magnitude)), 0), 6)
-            return f"{number:.{decimals}f}"
-        return f"{number:.3e}"
+        if unit not in RESOLUTION and not 1e-3 <= magnitude < 1e6:
+            return f"{number:.2e}"
+        decimals = round_digits(number, unit)
+        text = f"{round(number, decimals):.{max(decimals, 0)}f}"
+        return text.removeprefix("-") if float(text) == 0.0 else text
     if isinstance(value, pd.Timestamp | dt.datetime):
-        return value.isoformat()
+        return value.isoformat(sep=" ", timespec="seconds")
     return str(value)
 
 
@@ -128,8 +167,11 @@ def format_value(value: object) -> str:
 class ValidationReport:
     """Sections of a validation report in the order added; :meth:`write` makes the files.
 
-    ``settings`` (name → value), ``versions`` (package → version; Python, steamtwin, numpy,
-    scipy, pandas and matplotlib by default) and ``timings`` (stage → seconds) head the report.
+    ``headlines`` (:class:`~steamtwin.validation.summary.Headline`) open the report as its
+    summary; None (the default): those :func:`~steamtwin.validation.summary.headline_figures`
+    finds in the report's tables when it is written. ``settings`` (name → value), ``versions``
+    (package → version; Python, steamtwin, numpy, scipy, pandas and matplotlib by default) and
+    ``timings`` (stage → seconds) close it.
     """
 
     title: str
@@ -137,6 +179,7 @@ class ValidationReport:
     versions: dict[str, str] = field(default_factory=package_versions)
     timings: dict[str, float] = field(default_factory=dict)
     sections: list[Section] = field(default_factory=list)
+    headlines: list[Headline] | None = None
 
     def add(self, section: Section) -> Section:
         """Append a section; table names and figure file names must be unique."""
@@ -210,12 +253,11 @@ class ValidationReport:
         figure_list: list[dict[str, str]] = []
         file_list: list[dict[str, str]] = []
         notes: list[dict[str, object]] = []
+        headlines = (headline_figures(self.tables) if self.headlines is None
+                     else list(self.headlines))
         body = [f"<h1>{_text(self.title)}</h1>",
                 f'<p class="meta">written {_text(created)} by steamtwin</p>']
-        body += _key_value("Settings", {k: _setting_text(v) for k, v in self.settings.items()})
-        body += _key_value("Versions", self.versions)
-        body += _key_value("Timings", {k: f"{format_value(float(v))} s"
-                                       for k, v in self.timings.items()})
+        body += _summary_html(headlines)
         for section in self.sections:
             if isinstance(section, TableSection):
                 csv_name = f"{section.name}.csv"
@@ -232,9 +274,7 @@ class ValidationReport:
             elif isinstance(section, FigureSection):
                 relative = figures[id(section)]
                 figure_list.append({"file": relative, "caption": section.caption})
-                body.append(f'<figure><img src="{_text(quote(relative))}" alt="'
-                            f'{_text(section.caption or relative)}"><figcaption>'
-                            f"{_text(section.caption)}</figcaption></figure>")
+                body.append(_figure_html(section, relative))
             elif isinstance(section, FilesSection):
                 body.append(f"<h2>{_text(section.heading)}</h2>")
                 items = []
@@ -250,8 +290,12 @@ class ValidationReport:
                               "paragraphs": list(section.paragraphs)})
                 body.append(f"<h2>{_text(section.heading)}</h2>")
                 body += [f"<p>{_text(p)}</p>" for p in section.paragraphs]
+        body += _provenance_html(self.settings, self.versions, self.timings)
         document = {
             "title": self.title, "created_utc": created,
+            "headlines": [{"figure": h.figure, "value": _json_value(h.value), "unit": h.unit,
+                           "limit": h.limit, "published": h.published, "source": h.source,
+                           "passed": h.passed} for h in headlines],
             "settings": _json_value(self.settings), "versions": dict(self.versions),
             "timings_s": {k: float(v) for k, v in self.timings.items()},
             "tables": tables, "figures": figure_list, "files": file_list, "notes": notes,
@@ -305,37 +349,123 @@ def _text(value: object) -> str:
 
 
 def _setting_text(value: object) -> str:
+    """A setting as given (floats to 6 significant figures: what the user chose, not a
+    measured figure)."""
     if isinstance(value, Mapping):
         return json.dumps(_json_value(value), ensure_ascii=False)
     if isinstance(value, list | tuple):
-        return ", ".join(format_value(v) for v in value)
+        return ", ".join(_setting_text(v) for v in value)
+    if isinstance(value, float | np.floating):
+        return f"{float(value):g}"
     return format_value(value)
+
+
+def _summary_html(headlines: Sequence[Headline]) -> list[str]:
+    """The summary: each headline figure beside its limit and the published value, marked."""
+    if not headlines:
+        return []
+    passed = sum(h.passed for h in headlines)
+    rows = []
+    for h in headlines:
+        status = "✓ within" if h.passed else "✗ outside"
+        rows.append(f'<tr class="{"pass" if h.passed else "fail"}"><td>{_text(h.figure)}</td>'
+                    f'<td class="number">{_text(_with_unit(h.value, h.unit))}</td>'
+                    f'<td class="number">≤ {_text(f"{h.limit:g} {h.unit}")}</td>'
+                    f"<td>{_text(h.published)}</td><td>{_text(h.source)}</td>"
+                    f'<td class="status">{status}</td></tr>')
+    return ['<section class="summary">', "<h2>Summary</h2>",
+            f'<p class="verdict">{passed} of {len(headlines)} headline figures within their '
+            "limits</p>", '<div class="table-wrap"><table class="headlines">',
+            "<thead><tr><th>Figure</th><th>This run</th><th>Limit</th>"
+            "<th>The method (published)</th><th>Limit from</th><th>Result</th></tr></thead>",
+            "<tbody>" + "".join(rows) + "</tbody></table></div>", "</section>"]
+
+
+def _with_unit(value: float, unit: str) -> str:
+    text = format_value(float(value), unit)
+    return f"{text} {unit}" if unit and text != "–" else text
+
+
+def _provenance_html(settings: Mapping[str, object], versions: Mapping[str, str],
+                     timings: Mapping[str, float]) -> list[str]:
+    """Settings, versions and timings: the page's last section."""
+    parts = _key_value("Settings", {header_text(k): _setting_text(v)
+                                    for k, v in settings.items()})
+    parts += _key_value("Versions", versions)
+    if timings:
+        total = sum(float(v) for v in timings.values())
+        parts += _key_value("Timings", {k: _with_unit(float(v), "s")
+                                        for k, v in timings.items()}
+                            | {"total": _with_unit(total, "s")})
+    if not parts:
+        return []
+    return ['<section class="provenance">', "<h2>Run settings, versions and timings</h2>",
+            *parts, "</section>"]
 
 
 def _key_value(heading: str, items: Mapping[str, object]) -> list[str]:
     if not items:
         return []
     rows = "".join(f"<tr><th>{_text(k)}</th><td>{_text(v)}</td></tr>" for k, v in items.items())
-    return [f"<h2>{_text(heading)}</h2>", f"<table>{rows}</table>"]
+    return [f"<h3>{_text(heading)}</h3>", f'<div class="table-wrap"><table>{rows}</table></div>']
+
+
+def _figure_html(section: FigureSection, relative: str) -> str:
+    """The figure embedded as a base64 PNG (``data-file``: the file beside the report)."""
+    data = base64.b64encode(section.path.read_bytes()).decode("ascii")
+    return (f'<figure><img src="data:image/png;base64,{data}" data-file="{_text(relative)}" '
+            f'alt="{_text(section.caption or relative)}"><figcaption>'
+            f"{_text(section.caption)}</figcaption></figure>")
 
 
 def _table_html(section: TableSection, csv_name: str, keep_index: bool) -> list[str]:
-    frame = section.frame
-    header = [str(frame.index.name or "")] if keep_index else []
-    header += [str(c) for c in frame.columns]
+    """The table with readable headers and rounded numbers, in parts of ≤ MAX_COLUMNS columns
+    that repeat the leading label columns when it is wider."""
+    frame = section.frame.reset_index() if keep_index else section.frame
+    columns = list(frame.columns)
+    keys = 0
+    while (keys < min(MAX_KEY_COLUMNS, len(columns) - 1)
+           and pd.api.types.is_object_dtype(frame[columns[keys]])):
+        keys += 1
+    if keys == 0 and keep_index:
+        keys = 1
+    rest = columns[keys:]
+    width = MAX_COLUMNS - keys
+    parts = max(1, math.ceil(len(rest) / width))
+    size = math.ceil(len(rest) / parts)
     lines = [f"<h2>{_text(section.caption or section.name)}</h2>",
              f'<p class="meta">CSV: <a href="{_text(quote(csv_name))}">{_text(csv_name)}</a>'
-             "</p>", "<table>",
-             "<tr>" + "".join(f"<th>{_text(h)}</th>" for h in header) + "</tr>"]
-    for label, row in zip(frame.index, frame.itertuples(index=False, name=None), strict=True):
-        cells = [f"<th>{_text(format_value(label))}</th>"] if keep_index else []
-        for value in row:
+             "</p>"]
+    for part in range(parts):
+        chosen = columns[:keys] + rest[part * size:(part + 1) * size]
+        if parts > 1:
+            lines.append(f'<p class="meta">part {part + 1} of {parts}</p>')
+        lines += _table_part(frame, chosen, keys)
+    return lines
+
+
+def _table_part(frame: pd.DataFrame, columns: Sequence[object], keys: int) -> list[str]:
+    names = [str(c) for c in frame.columns]
+    position = {c: names.index(str(c)) for c in columns}
+    units = [column_label(c)[1] for c in columns]
+    row_units = [names.index(ROW_UNIT_COLUMNS[str(c)])
+                 if not unit and ROW_UNIT_COLUMNS.get(str(c)) in names else None
+                 for c, unit in zip(columns, units, strict=True)]
+    lines = ['<div class="table-wrap"><table>', "<thead><tr>" + "".join(
+        f"<th>{_text(header_text(c))}</th>" for c in columns) + "</tr></thead>", "<tbody>"]
+    for row in frame.itertuples(index=False, name=None):  # each column's own type kept
+        cells = []
+        for k, column in enumerate(columns):
+            value = row[position[column]]
+            unit = units[k] if row_units[k] is None else unit_text(row[row_units[k]])
             numeric = isinstance(value, int | float | np.integer | np.floating) and not isinstance(
                 value, bool | np.bool_)
-            css = ' class="number"' if numeric else ""
-            cells.append(f"<td{css}>{_text(format_value(value))}</td>")
+            text = value_label(value) if isinstance(value, str) else format_value(value, unit)
+            tag = "th" if k < keys else "td"
+            css = ' class="number"' if numeric and tag == "td" else ""
+            cells.append(f"<{tag}{css}>{_text(text)}</{tag}>")
         lines.append("<tr>" + "".join(cells) + "</tr>")
-    lines.append("</table>")
+    lines.append("</tbody></table></div>")
     return lines
 
 
