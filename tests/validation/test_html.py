@@ -120,7 +120,8 @@ def test_missing_empty_or_duplicate_sections_are_refused(tmp_path):
     # by quantity: never finer than the unit's resolution
     (538.123, "°C", "538"), (16.7012, "MPa", "16.7"), (2.3456, "MPa", "2.35"),
     (0.0567, "K", "0.06"), (-0.004, "K", "0.00"), (0.09806, "s", "0.1"), (1800.4, "t/h", "1800"),
-    (0.38123, "%", "0.38"), (0.0123456, "mm", "0.012"),
+    (0.38123, "%", "0.38"), (0.0123456, "mm", "0.012"), (0.99954, "", "1.00"), (999.7, "", "1000"),
+    (-0.09996, "", "-0.100"),
     (pd.Timestamp("2026-03-01T00:00:00Z"), "", "2026-03-01 00:00:00+00:00"),
 ])
 def test_numbers_are_rounded_by_quantity(value, unit, text):

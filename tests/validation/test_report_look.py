@@ -188,6 +188,11 @@ def test_tables_fit_a_1366_px_screen(tmp_path):
     page, parser = _report(tmp_path)
     assert all(len(row) <= MAX_COLUMNS for table in parser.tables for row in table)
     assert len(parser.tables) > 5  # Table 5's 27 columns and Table 8's 19 come in parts
+    parts = [table[0] for table in parser.tables if table[0][0] == "Window"]
+    assert len(parts) == 3  # Table 5: each part led by its window, all 27 columns shown once
+    assert sum(len(header) - 1 for header in parts) == 27
+    table8 = [table[0][:3] for table in parser.tables if table[0][0] == "Signal"]
+    assert table8 and all(header == ["Signal", "Window", "Unit"] for header in table8)
     for table in parser.tables:
         widths = [0.0] * max(len(row) for row in table)
         for row in table:
@@ -196,7 +201,7 @@ def test_tables_fit_a_1366_px_screen(tmp_path):
                 widths[k] = max(widths[k], word * CHAR_PX + CELL_PAD_PX)
         assert sum(widths) <= SCREEN_PX - MARGIN_PX, (table[0], sum(widths))
     style = page[page.index("<style>"):page.index("</style>")]
-    assert "max-width: 100%" in style and "overflow-wrap: anywhere" in style
+    assert "max-width: 100%" in style and "overflow-wrap: break-word" in style
     assert "overflow-x: auto" in style
 
 
@@ -219,8 +224,9 @@ def test_headlines_are_only_those_the_tables_hold():
                                                            (2.5, 2.34, False)]
     ratio = [h.passed for h in headlines if "instrument" in h.figure]
     assert ratio == [True, False, False]  # 1.51 > 1.5; NaN never passes
-    scan = pd.DataFrame({"row": ["hp1", "hp13"],
-                         "hp_exhaust_temperature_max_deviation_K": [0.332, 0.236]})
+    scan = pd.DataFrame({"row": ["hp1", "hp13", "hp2"],
+                         "hp_exhaust_temperature_max_deviation_K": [0.332, 0.236, np.nan]})
+    # a row not propagated to the steam path (NaN) has no headline
     assert [h.passed for h in headline_figures({"scan_uncertainty": scan})] == [False, True]
     given = [Headline("x", 1.0, "K", 2.0, "–", "test")]
     assert given[0].passed

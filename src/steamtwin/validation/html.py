@@ -15,8 +15,10 @@ in order, then the settings, versions and timings. Column names are shown as "Re
 [unit]" and numbers rounded by quantity (:mod:`steamtwin.validation.labels`: 3 significant
 figures, never finer than the unit's resolution; the CSV and JSON files keep full precision).
 Tables fit a 1366-px screen: at most :data:`MAX_COLUMNS` columns each (a wider table is shown in
-parts that repeat its key columns), cells wrap. The page is self-contained: CSS inline, figures
-as base64 PNG, no script, no external URL. Every text is HTML-escaped.
+parts that repeat its key columns), cells wrap between words (a word longer than its column
+breaks; a table still too wide scrolls inside its own box, never the page). The page is
+self-contained: CSS inline, figures as base64 PNG, no script, no external URL. Every text is
+HTML-escaped.
 """
 
 from __future__ import annotations
@@ -40,6 +42,7 @@ import pandas as pd
 
 from steamtwin.errors import SteamtwinError
 from steamtwin.validation.labels import (
+    LABEL_COLUMNS,
     RESOLUTION,
     ROW_UNIT_COLUMNS,
     column_label,
@@ -68,7 +71,7 @@ h3 { font-size: 1.05em; margin-top: 1.2em; }
 .table-wrap { max-width: 100%; overflow-x: auto; }
 table { border-collapse: collapse; margin: 0.5em 0 1em; font-size: 0.85em; max-width: 100%; }
 th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; vertical-align: top;
-         overflow-wrap: anywhere; }
+         overflow-wrap: break-word; }
 td.number { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 th { background: #f0f0f0; text-align: left; font-weight: 600; }
 tbody th { font-weight: normal; }
@@ -367,7 +370,8 @@ def _summary_html(headlines: Sequence[Headline]) -> list[str]:
     passed = sum(h.passed for h in headlines)
     rows = []
     for h in headlines:
-        status = "✓ within" if h.passed else "✗ outside"
+        status = ("✓ within" if h.passed else "✗ outside" if math.isfinite(h.value)
+                  else "✗ no value")
         rows.append(f'<tr class="{"pass" if h.passed else "fail"}"><td>{_text(h.figure)}</td>'
                     f'<td class="number">{_text(_with_unit(h.value, h.unit))}</td>'
                     f'<td class="number">≤ {_text(f"{h.limit:g} {h.unit}")}</td>'
@@ -425,7 +429,7 @@ def _table_html(section: TableSection, csv_name: str, keep_index: bool) -> list[
     columns = list(frame.columns)
     keys = 0
     while (keys < min(MAX_KEY_COLUMNS, len(columns) - 1)
-           and pd.api.types.is_object_dtype(frame[columns[keys]])):
+           and _is_text(frame[columns[keys]])):
         keys += 1
     if keys == 0 and keep_index:
         keys = 1
@@ -444,6 +448,13 @@ def _table_html(section: TableSection, csv_name: str, keep_index: bool) -> list[
     return lines
 
 
+def _is_text(column: pd.Series) -> bool:
+    """Whether a column holds labels (text), not numbers, flags or times."""
+    types = pd.api.types
+    return not (types.is_numeric_dtype(column) or types.is_bool_dtype(column)
+                or types.is_datetime64_any_dtype(column))
+
+
 def _table_part(frame: pd.DataFrame, columns: Sequence[object], keys: int) -> list[str]:
     names = [str(c) for c in frame.columns]
     position = {c: names.index(str(c)) for c in columns}
@@ -460,7 +471,9 @@ def _table_part(frame: pd.DataFrame, columns: Sequence[object], keys: int) -> li
             unit = units[k] if row_units[k] is None else unit_text(row[row_units[k]])
             numeric = isinstance(value, int | float | np.integer | np.floating) and not isinstance(
                 value, bool | np.bool_)
-            text = value_label(value) if isinstance(value, str) else format_value(value, unit)
+            text = format_value(value, unit)
+            if isinstance(value, str):
+                text = header_text(value) if str(column) in LABEL_COLUMNS else value_label(value)
             tag = "th" if k < keys else "td"
             css = ' class="number"' if numeric and tag == "td" else ""
             cells.append(f"<{tag}{css}>{_text(text)}</{tag}>")

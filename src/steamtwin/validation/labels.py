@@ -24,8 +24,9 @@ import re
 
 from steamtwin.dcs.signals import SIGNALS
 
-__all__ = ["COLUMN_LABELS", "RESOLUTION", "ROW_UNIT_COLUMNS", "SIGNAL_NAMES", "UNIT_TOKENS",
-           "WORDS", "column_label", "header_text", "round_digits", "unit_text", "value_label"]
+__all__ = ["COLUMN_LABELS", "GA_SETTINGS", "LABEL_COLUMNS", "RESOLUTION", "ROW_UNIT_COLUMNS",
+           "SIGNAL_NAMES", "UNIT_TOKENS", "WORDS", "column_label", "header_text", "round_digits",
+           "unit_text", "value_label"]
 
 SIGNAL_NAMES: dict[str, str] = {
     "main_steam_pressure": "Main-steam pressure",
@@ -63,19 +64,33 @@ RESOLUTION: dict[str, float] = {
 
 WORDS: dict[str, str] = {
     "hp": "HP", "ip": "IP", "rmse": "RMSE", "rom": "ROM", "fom": "FOM", "rms": "RMS",
-    "abs": "abs.", "n": "number of", "std": "σ", "p95": "95th percentile", "pct": "%",
+    "abs": "abs.", "n": "N", "std": "σ", "p95": "95th percentile", "pct": "%",
     "conf": "95 % interval", "ga": "GA", "dcs": "DCS", "stl": "STL",
 }
 """Words spelled out (or upper-cased) when a column name is turned into a label by rule."""
 
 _STATISTICS = {"mean": "mean", "min": "min", "max": "max"}
+_PREFIXES = {"empirical": ("{name} RMSE, empirical constants", "K"),
+             "calibrated": ("{name} RMSE, calibrated", "K"),
+             "corr": ("Correlation with {lower}", "")}
+"""``<prefix>:<name>`` columns (Table 6's per-sensor RMSEs, the identifiability correlations)."""
+
+LABEL_COLUMNS = frozenset({"item", "setting", "metric", "statistic"})
+"""Columns whose text cells are names, spelled out as column names are (:func:`header_text`)."""
+
+GA_SETTINGS: dict[str, str] = {
+    "population": "Population", "generations": "Generations",
+    "crossover_probability": "Crossover probability",
+    "mutation_probability": "Mutation probability",
+}
+"""Readable names of the GA's settings (Table 7)."""
 
 COLUMN_LABELS: dict[str, tuple[str, str]] = {
     # Table 5 and the time columns
     "window": ("Window", ""), "start": ("Start", ""), "end": ("End", ""),
     "samples": ("Samples", ""), "time": ("Time", ""),
     # Table 8 (the deviation unit is the row's: K or MPa)
-    "signal": ("Signal", ""), "unit": ("Unit of d", ""),
+    "signal": ("Signal", ""), "unit": ("Unit", ""),
     "n_samples": ("Samples", ""), "n_used": ("Used", ""),
     "n_skipped_missing": ("Skipped: missing", ""),
     "n_skipped_rom_invalid": ("Skipped: ROM input invalid", ""),
@@ -95,12 +110,14 @@ COLUMN_LABELS: dict[str, tuple[str, str]] = {
     "low_95": ("95 % interval, low", ""), "high_95": ("95 % interval, high", ""),
     "prior_low_95": ("Prior 95 %, low", ""), "prior_high_95": ("Prior 95 %, high", ""),
     "identifiable": ("Identifiable", ""), "detectable_rise_K": ("Detectable rise", "K"),
+    "std_error": ("Standard error", ""),
     "setting": ("GA setting", ""), "value": ("Value", ""), "rmse_K": ("RMSE", "K"),
     "evaluations": ("Model runs", ""),
     # Sobol' indices and noise propagation
     "output": ("Output", ""), "statistic": ("Statistic", ""),
     "S1": ("First-order index S1", ""), "S1_conf": ("S1, 95 % interval ±", ""),
     "ST": ("Total index ST", ""), "ST_conf": ("ST, 95 % interval ±", ""),
+    "std": ("Output σ", ""),
     "sigma_K": ("Noise σ", "K"), "rms_deviation": ("RMS deviation", ""),
     "gain": ("Gain (RMS deviation / σ)", ""),
     # geometry
@@ -141,10 +158,15 @@ def column_label(name: object) -> tuple[str, str]:
     text = str(name)
     if text in COLUMN_LABELS:
         return COLUMN_LABELS[text]
-    if ":" in text:  # "<setting>:<signal>", e.g. Table 6's per-sensor RMSEs "calibrated:<sensor>"
+    if ":" in text:  # "<prefix>:<name>", e.g. Table 6's per-sensor RMSEs "calibrated:<sensor>"
         head, _, tail = text.partition(":")
-        tail_label, unit = column_label(tail)
-        return f"{tail_label}, {_words(head)}", unit
+        tail_label = column_label(tail)[0]
+        if head in _PREFIXES:
+            label, unit = _PREFIXES[head]
+            lower = (tail_label if tail_label[1:2].isupper()  # an acronym such as "HP" stays
+                     else tail_label[:1].lower() + tail_label[1:])
+            return label.format(name=tail_label, lower=lower), unit
+        return f"{tail_label}, {_words(head)}", ""
     statistic = ""
     stem, _, last = text.rpartition("_")
     if stem and last in _STATISTICS:
@@ -169,8 +191,8 @@ def header_text(name: object) -> str:
 def value_label(value: str) -> str:
     """A canonical signal or parameter name or a unit token (``degC``, ``t_per_h``) in a table
     cell as its readable name or unit; other text as it is."""
-    return (SIGNAL_NAMES.get(value) or PARAMETER_NAMES.get(value) or UNIT_TOKENS.get(value)
-            or value)
+    return (SIGNAL_NAMES.get(value) or PARAMETER_NAMES.get(value) or GA_SETTINGS.get(value)
+            or UNIT_TOKENS.get(value) or value)
 
 
 def unit_text(unit: object) -> str:
@@ -184,6 +206,9 @@ def round_digits(value: float, unit: str = "") -> int:
     for rounding left of the point (e.g. −1: to tens). ``value`` must be finite and non-zero.
     """
     exponent = math.floor(math.log10(abs(value)))
+    rounded = round(value, 2 - exponent)
+    if rounded and math.floor(math.log10(abs(rounded))) > exponent:  # 0.9996 → 1.00, not 1.000
+        exponent += 1
     significant = 4 if exponent >= 3 else 3
     decimals = significant - 1 - exponent
     resolution = RESOLUTION.get(unit)
@@ -201,4 +226,4 @@ def _words(text: str) -> str:
     if not words:
         return text
     label = " ".join(words)
-    return label[0].upper() + label[1:]
+    return label[0].upper() + label[1:] if label[0].isascii() else label

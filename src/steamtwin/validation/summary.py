@@ -93,6 +93,8 @@ def headline_figures(tables: Mapping[str, pd.DataFrame]) -> list[Headline]:
     scan = tables.get("scan_uncertainty")
     if scan is not None and "hp_exhaust_temperature_max_deviation_K" in scan.columns:
         for row in scan.itertuples(index=False):
+            if not math.isfinite(row.hp_exhaust_temperature_max_deviation_K):
+                continue  # a row whose throat sets no flow in the model: not propagated
             headlines.append(Headline(
                 f"Scan uncertainty, row {getattr(row, 'row', '?')}: largest HP-exhaust "
                 "temperature deviation", float(row.hp_exhaust_temperature_max_deviation_K),
