@@ -113,7 +113,7 @@ def _report(tmp_path, field_error_pct: float = 0.42) -> tuple[str, _Tables]:
 def test_the_summary_leads_and_settings_versions_timings_close(tmp_path):
     page, parser = _report(tmp_path)
     headings = parser.headings
-    assert headings[0] == "Summary"
+    assert headings[:2] == ["Summary", "Contents"]
     assert headings.index("Settings") > headings.index("Notes") > headings.index("Table 8")
     assert headings[-3:] == ["Settings", "Versions", "Timings"]
     assert page.index("Summary") < page.index("Table 5") < page.index("Hold hours")
@@ -203,6 +203,15 @@ def test_tables_fit_a_1366_px_screen(tmp_path):
     style = page[page.index("<style>"):page.index("</style>")]
     assert "max-width: 100%" in style and "overflow-wrap: break-word" in style
     assert "overflow-x: auto" in style
+
+
+def test_contents_link_to_every_section_heading(tmp_path):
+    page, parser = _report(tmp_path)
+    anchors = [a["href"] for tag, a in parser.attrs if tag == "a" and a["href"].startswith("#")]
+    ids = [a["id"] for tag, a in parser.attrs if tag == "h2" and "id" in a]
+    assert anchors == [f"#{i}" for i in ids] and len(ids) == 5  # 3 tables, notes, settings
+    assert page.index("<h2>Summary</h2>") < page.index("<h2>Contents</h2>") < page.index(
+        'id="section-1"')
 
 
 def test_the_page_is_self_contained(tmp_path):

@@ -85,6 +85,7 @@ p.verdict { font-weight: 600; margin: 0.3em 0; }
 tr.pass td.status { color: #17612a; background: #e5f4e8; font-weight: 600; }
 tr.fail td.status { color: #9b1c1c; background: #fbe5e5; font-weight: 600; }
 section.provenance { margin-top: 3em; border-top: 2px solid #ddd; }
+nav.contents ol { columns: 2; column-gap: 2em; font-size: 0.85em; margin: 0.3em 0; }
 """
 
 class ReportError(SteamtwinError, ValueError):
@@ -260,7 +261,8 @@ class ValidationReport:
                      else list(self.headlines))
         body = [f"<h1>{_text(self.title)}</h1>",
                 f'<p class="meta">written {_text(created)} by steamtwin</p>']
-        body += _summary_html(headlines)
+        summary = _summary_html(headlines)
+        body += summary
         for section in self.sections:
             if isinstance(section, TableSection):
                 csv_name = f"{section.name}.csv"
@@ -294,6 +296,7 @@ class ValidationReport:
                 body.append(f"<h2>{_text(section.heading)}</h2>")
                 body += [f"<p>{_text(p)}</p>" for p in section.paragraphs]
         body += _provenance_html(self.settings, self.versions, self.timings)
+        body = _with_contents(body, after=2 + len(summary))  # after the title, meta, summary
         document = {
             "title": self.title, "created_utc": created,
             "headlines": [{"figure": h.figure, "value": _json_value(h.value), "unit": h.unit,
@@ -383,6 +386,24 @@ def _summary_html(headlines: Sequence[Headline]) -> list[str]:
             "<thead><tr><th>Figure</th><th>This run</th><th>Limit</th>"
             "<th>The method (published)</th><th>Limit from</th><th>Result</th></tr></thead>",
             "<tbody>" + "".join(rows) + "</tbody></table></div>", "</section>"]
+
+
+def _with_contents(body: list[str], after: int) -> list[str]:
+    """``body`` with an id on every section heading and, after its first ``after`` lines (title
+    and summary), a list of links to them (each heading cut at its first parenthesis)."""
+    lines, links = [], []
+    for line in body:
+        if line.startswith("<h2>") and line != "<h2>Summary</h2>":
+            anchor = f"section-{len(links) + 1}"
+            heading = html.unescape(line.removeprefix("<h2>").removesuffix("</h2>"))
+            short = heading.split(" (")[0]
+            links.append(f'<li><a href="#{anchor}">{_text(short)}</a></li>')
+            line = f'<h2 id="{anchor}">{line.removeprefix("<h2>")}'
+        lines.append(line)
+    if not links:
+        return lines
+    return [*lines[:after], '<nav class="contents"><h2>Contents</h2><ol>', *links, "</ol></nav>",
+            *lines[after:]]
 
 
 def _with_unit(value: float, unit: str) -> str:
