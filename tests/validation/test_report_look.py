@@ -3,6 +3,7 @@ numbers rounded by quantity, tables that fit 1366 px, self-contained, settings l
 
 from __future__ import annotations
 
+import json
 import re
 from html.parser import HTMLParser
 
@@ -138,6 +139,9 @@ def test_headline_figures_sit_beside_their_limits_and_published_values(tmp_path)
     assert "2 of 5 headline figures within their limits" not in page  # 3 of 5 pass
     assert "3 of 5 headline figures within their limits" in page
     assert len(re.findall(r'<tr class="fail">', page)) == 2
+    document = json.loads((tmp_path / "report.json").read_text(encoding="utf-8"))
+    assert [h["passed"] for h in document["headlines"]] == [True, True, True, False, False]
+    assert document["headlines"][4]["value"] == pytest.approx(3.98765)  # full precision
 
 
 def test_a_failing_rom_error_is_marked_failing(tmp_path):
