@@ -216,6 +216,14 @@ def test_contents_link_to_every_section_heading(tmp_path):
     assert anchors == [f"#{i}" for i in ids] and len(ids) == 5  # 3 tables, notes, settings
     assert page.index("<h2>Summary</h2>") < page.index("<h2>Contents</h2>") < page.index(
         'id="section-1"')
+    report = ValidationReport("r")
+    report.add_table("t", pd.DataFrame({"a": [1]}), "Table 8 — monitored (twin) vs measured "
+                     "temperatures (K or MPa as the unit column says) " + "and more " * 10)
+    page = report.write(tmp_path / "long").read_text(encoding="utf-8")
+    assert '<a href="#section-1">Table 8 — monitored (twin) vs measured temperatures</a>' in page
+    report.add_notes("word " * 30, ["long heading"])
+    page = report.write(tmp_path / "long").read_text(encoding="utf-8")
+    assert f'<a href="#section-2">{"word " * 18}…</a>' in page  # cut before 90 characters
 
 
 def test_the_page_is_self_contained(tmp_path):

@@ -135,13 +135,13 @@ def summary_html(headlines: Sequence[Headline]) -> list[str]:
 
 def with_contents(body: list[str], after: int) -> list[str]:
     """``body`` with an id on every section heading and, after its first ``after`` lines (title
-    and summary), a list of links to them (each heading cut at its first parenthesis)."""
+    and summary), a list of links to them (each heading shortened, :func:`_short`)."""
     lines, links = [], []
     for line in body:
         if line.startswith("<h2>") and line != "<h2>Summary</h2>":
             anchor = f"section-{len(links) + 1}"
             heading = html.unescape(line.removeprefix("<h2>").removesuffix("</h2>"))
-            short = heading.split(" (")[0]
+            short = _short(heading)
             links.append(f'<li><a href="#{anchor}">{escape(short)}</a></li>')
             line = f'<h2 id="{anchor}">{line.removeprefix("<h2>")}'
         lines.append(line)
@@ -149,6 +149,18 @@ def with_contents(body: list[str], after: int) -> list[str]:
         return lines
     return [*lines[:after], '<nav class="contents"><h2>Contents</h2><ol>', *links, "</ol></nav>",
             *lines[after:]]
+
+
+def _short(heading: str, keep: int = 25, most: int = 90) -> str:
+    """A heading for the contents: cut at its first " (" or ": " after ``keep`` characters,
+    then at a word boundary before ``most`` characters (with "…")."""
+    for separator in (" (", ": "):
+        position = heading.find(separator, keep)
+        if position > 0:
+            heading = heading[:position]
+    if len(heading) > most:
+        heading = heading[:heading.rfind(" ", 0, most)] + " …"
+    return heading
 
 
 def _with_unit(value: float, unit: str) -> str:
