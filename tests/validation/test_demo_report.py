@@ -67,7 +67,7 @@ def test_report_holds_every_table_and_figure_of_the_method(demo):
     for name in files:  # embedded (self-contained page), the file beside it named
         assert f'data-file="{name}"' in html
     assert html.count('src="data:image/png;base64,') == len(files)
-    assert html.index("<h2>Summary</h2>") < html.index("<h2>Run settings, versions and timings")
+    assert html.index("<h2>Summary</h2>") < html.index("Run settings, versions and timings</h2>")
     assert set(STAGES) <= set(document["timings_s"])
     assert document["versions"]["steamtwin"]
 
