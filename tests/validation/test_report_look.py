@@ -258,3 +258,18 @@ def test_counts_stay_whole_beside_floats(tmp_path):
     report.add_table("t", pd.DataFrame({"samples": [123456], "rmse_K": [0.123456]}))
     page = report.write(tmp_path).read_text(encoding="utf-8")
     assert ">123456<" in page and ">0.12<" in page
+
+
+def test_full_precision_floats_in_text_cells_are_rounded(tmp_path):
+    """Lists written into one text cell (e.g. the ROM's provenance) keep no float noise; times,
+    versions and hashes are left alone."""
+    report = ValidationReport("r")
+    values = ["0.3, 0.8116022099447515, 0.9299999999999999, -12.3456789",
+              "2026-11-27T03:54:49.123456+00:00", "ba6258d2e8d1.3d8f5df1bce2"]
+    report.add_table("rom_provenance", pd.DataFrame({"item": ["levels", "created", "hash"],
+                                                     "value": values}))
+    page = report.write(tmp_path).read_text(encoding="utf-8")
+    assert "<td>0.3, 0.812, 0.930, -12.3</td>" in page
+    assert "<td>2026-11-27T03:54:49.123456+00:00</td>" in page
+    assert "<td>ba6258d2e8d1.3d8f5df1bce2</td>" in page
+

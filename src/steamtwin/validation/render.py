@@ -13,6 +13,7 @@ import datetime as dt
 import html
 import json
 import math
+import re
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from urllib.parse import quote
@@ -229,6 +230,17 @@ def table_html(frame: pd.DataFrame, heading: str, csv_name: str, keep_index: boo
     return lines
 
 
+_FLOAT_NOISE = re.compile(r"(?<![\w.:-])-?\d+\.\d{6,}(?![\w.])")
+"""A decimal number with six or more decimals standing alone in text (e.g. ``0.8116022099447515``
+in a provenance list; not part of a time, version or hash)."""
+
+
+def _tidy_numbers(text: str) -> str:
+    """Text with each float written at full precision (:data:`_FLOAT_NOISE`) rounded like a
+    cell (:func:`format_value`)."""
+    return _FLOAT_NOISE.sub(lambda match: format_value(float(match[0])), text)
+
+
 def _is_text(column: pd.Series) -> bool:
     """Whether a column holds labels (text), not numbers, flags or times."""
     types = pd.api.types
@@ -254,7 +266,8 @@ def _table_part(frame: pd.DataFrame, columns: Sequence[object], keys: int) -> li
                 value, bool | np.bool_)
             text = format_value(value, unit)
             if isinstance(value, str):
-                text = header_text(value) if str(column) in LABEL_COLUMNS else value_label(value)
+                text = (header_text(value) if str(column) in LABEL_COLUMNS
+                        else _tidy_numbers(value_label(value)))
             tag = "th" if k < keys else "td"
             css = ' class="number"' if numeric and tag == "td" else ""
             cells.append(f"<{tag}{css}>{escape(text)}</{tag}>")
