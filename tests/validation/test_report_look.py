@@ -273,3 +273,12 @@ def test_full_precision_floats_in_text_cells_are_rounded(tmp_path):
     assert "<td>2026-11-27T03:54:49.123456+00:00</td>" in page
     assert "<td>ba6258d2e8d1.3d8f5df1bce2</td>" in page
 
+
+
+def test_numbers_align_right_only_in_number_columns(tmp_path):
+    report = ValidationReport("r")
+    report.add_table("items", pd.DataFrame({"item": ["modes", "kernel"], "value": [3, "tps"]}))
+    report.add_table("t", pd.DataFrame({"window": ["a"], "rmse_K": [0.5]}))
+    page = report.write(tmp_path).read_text(encoding="utf-8")
+    assert "<th>Modes</th><td>3</td>" in page  # a number among text: as text
+    assert '<th>a</th><td class="number">0.50</td>' in page

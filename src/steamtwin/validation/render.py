@@ -252,6 +252,8 @@ def _table_part(frame: pd.DataFrame, columns: Sequence[object], keys: int) -> li
     names = [str(c) for c in frame.columns]
     position = {c: names.index(str(c)) for c in columns}
     units = [column_label(c)[1] for c in columns]
+    # right-aligned: the cells of number columns (not numbers among text, e.g. item → value)
+    numbers = [pd.api.types.is_numeric_dtype(frame[c]) for c in columns]
     row_units = [names.index(ROW_UNIT_COLUMNS[str(c)])
                  if not unit and ROW_UNIT_COLUMNS.get(str(c)) in names else None
                  for c, unit in zip(columns, units, strict=True)]
@@ -262,8 +264,7 @@ def _table_part(frame: pd.DataFrame, columns: Sequence[object], keys: int) -> li
         for k, column in enumerate(columns):
             value = row[position[column]]
             unit = units[k] if row_units[k] is None else unit_text(row[row_units[k]])
-            numeric = isinstance(value, int | float | np.integer | np.floating) and not isinstance(
-                value, bool | np.bool_)
+            numeric = numbers[k] and not isinstance(value, bool | np.bool_)
             text = format_value(value, unit)
             if isinstance(value, str):
                 text = (header_text(value) if str(column) in LABEL_COLUMNS
