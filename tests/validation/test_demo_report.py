@@ -64,8 +64,10 @@ def test_report_holds_every_table_and_figure_of_the_method(demo):
         assert matches, pattern
         assert all((result.out / name).stat().st_size > 10_000 for name in matches)
     html = (result.out / "report.html").read_text(encoding="utf-8")
-    for name in files:
-        assert f'src="{name}"' in html
+    for name in files:  # embedded (self-contained page), the file beside it named
+        assert f'data-file="{name}"' in html
+    assert html.count('src="data:image/png;base64,') == len(files)
+    assert html.index("<h2>Summary</h2>") < html.index("Run settings, versions and timings</h2>")
     assert set(STAGES) <= set(document["timings_s"])
     assert document["versions"]["steamtwin"]
 
@@ -94,8 +96,8 @@ def test_report_numbers_are_the_runs_own(demo):
     assert (exhaust["n_used"] + exhaust["n_skipped_missing"] + exhaust["n_skipped_rom_invalid"]
             == exhaust["n_samples"]).all()
     html = (result.out / "report.html").read_text(encoding="utf-8")
-    for value in exhaust["max_abs_deviation"]:
-        assert f">{format_value(value)}<" in html
+    for value in exhaust["max_abs_deviation"]:  # rounded for the row's unit, K
+        assert f">{format_value(value, 'K')}<" in html
 
 
 def test_the_live_stage_stored_what_the_plant_published(demo):

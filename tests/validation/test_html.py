@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import base64
 import json
 
 import numpy as np
@@ -46,7 +47,7 @@ def test_one_csv_per_table_equal_to_the_frame(tmp_path):
     pd.testing.assert_frame_equal(
         pd.read_csv(tmp_path / "table5_operating.csv", index_col="window"), _operating())
     page = (tmp_path / "report.html").read_text(encoding="utf-8")
-    assert 'href="table8_deviation.csv"' in page and "0.1235" in page
+    assert 'href="table8_deviation.csv"' in page and ">0.12<" in page  # rmse_K: 0.01 K
 
 
 def test_report_json_holds_the_tables_settings_and_timings(tmp_path):
@@ -69,7 +70,7 @@ def test_report_json_holds_the_tables_settings_and_timings(tmp_path):
     pd.testing.assert_frame_equal(operating.set_index("window"), _operating())
 
 
-def test_figures_are_referenced_relatively_and_copied_in(tmp_path):
+def test_figures_are_embedded_and_copied_in(tmp_path):
     out = tmp_path / "report"
     out.mkdir()
     inside = out / "figure10.png"
@@ -80,7 +81,9 @@ def test_figures_are_referenced_relatively_and_copied_in(tmp_path):
     report.add_figure(inside, "tracking")
     report.add_figure(outside, "copied")
     page = report.write(out).read_text(encoding="utf-8")
-    assert 'src="figure10.png"' in page and 'src="elsewhere.png"' in page
+    embedded = f'src="data:image/png;base64,{base64.b64encode(PNG).decode()}"'
+    assert page.count(embedded) == 2  # self-contained: the page carries the images
+    assert 'data-file="figure10.png"' in page and 'data-file="elsewhere.png"' in page
     assert (out / "elsewhere.png").read_bytes() == PNG
     figures = json.loads((out / "report.json").read_text(encoding="utf-8"))["figures"]
     assert figures == [{"file": "figure10.png", "caption": "tracking"},
@@ -109,14 +112,20 @@ def test_missing_empty_or_duplicate_sections_are_refused(tmp_path):
         report.add_table("../escape", _deviations())
 
 
-@pytest.mark.parametrize(("value", "text"), [
-    (16.7, "16.70"), (538.123, "538.1"), (0.012345, "0.01235"), (1234.7, "1235"),
-    (2.5e-5, "2.500e-05"), (3e7, "3.000e+07"), (0.0, "0"), (np.nan, "–"), (None, "–"),
-    (7200, "7200"), (np.int64(3), "3"), (True, "yes"), ("a", "a"),
-    (pd.Timestamp("2026-03-01T00:00:00Z"), "2026-03-01T00:00:00+00:00"),
+@pytest.mark.parametrize(("value", "unit", "text"), [
+    (16.7, "", "16.7"), (538.123, "", "538"), (0.012345, "", "0.0123"), (1234.7, "", "1235"),
+    (12345.6, "", "12350"), (2.5e-5, "", "2.50e-05"), (3e7, "", "3.00e+07"), (0.0, "", "0"),
+    (np.nan, "", "–"), (None, "", "–"), (7200, "", "7200"), (np.int64(3), "", "3"),
+    (True, "", "yes"), ("a", "", "a"),
+    # by quantity: never finer than the unit's resolution
+    (538.123, "°C", "538"), (16.7012, "MPa", "16.7"), (2.3456, "MPa", "2.35"),
+    (0.0567, "K", "0.06"), (-0.004, "K", "0.00"), (0.09806, "s", "0.1"), (1800.4, "t/h", "1800"),
+    (0.38123, "%", "0.38"), (0.0123456, "mm", "0.012"), (0.99954, "", "1.00"), (999.7, "", "1000"),
+    (-0.09996, "", "-0.100"),
+    (pd.Timestamp("2026-03-01T00:00:00Z"), "", "2026-03-01 00:00:00+00:00"),
 ])
-def test_numbers_are_formatted_with_four_significant_digits(value, text):
-    assert format_value(value) == text
+def test_numbers_are_rounded_by_quantity(value, unit, text):
+    assert format_value(value, unit) == text
 
 
 def test_data_files_are_linked_listed_in_json_and_checked(tmp_path):

@@ -2,6 +2,7 @@
 
 Modules: ``tables`` (Table 5 operating conditions, Table 8 deviations, ROM provenance),
 ``figures`` (Figure 10 HP-exhaust tracking), ``html`` (the report writer: HTML + CSV + JSON),
+``labels`` (readable column names, units and rounding), ``summary`` (the headline figures),
 ``monitor`` (ROM replay over windows and :func:`validate`, used by ``steamtwin validate`` and
 the demo), ``sensitivity`` (Sobol sensitivity) and ``noise`` (noise propagation).
 """

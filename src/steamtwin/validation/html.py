@@ -1,22 +1,30 @@
-"""A small HTML report writer (standard library only): tables, figures, notes, provenance.
+"""A small HTML report writer (standard library only): summary, tables, figures, notes, provenance.
 
 :class:`ValidationReport` collects, in order, sections of four kinds — tables (a DataFrame,
 shown as an HTML table and written as ``<name>.csv`` next to the report), figures (PNG files,
-referenced by relative path and copied into the report folder when they lie elsewhere), data
-files (e.g. Parquet series, listed with links, placed like figures) and notes (paragraphs of
-text) — plus the run's settings, package versions and timings (stage →
+embedded in the page and also placed in the report folder, copied in when they lie elsewhere),
+data files (e.g. Parquet series, listed with links, placed like figures) and notes (paragraphs of
+text) — plus the run's headline figures, settings, package versions and timings (stage →
 seconds). :meth:`ValidationReport.write` writes ``report.html`` and ``report.json`` (the same
-content machine-readable: settings, versions, timings, tables as records at full precision,
-figures, data files and notes). Every text is HTML-escaped; numbers are shown with four significant
-digits in the HTML (the CSV and JSON files keep full precision).
+content machine-readable: headlines, settings, versions, timings, tables as records at full
+precision, figures, data files and notes).
+
+The page reads top down: a one-screen summary (each headline figure beside its limit and the
+method's published value, pass/fail marked; :mod:`steamtwin.validation.summary`), the sections
+in order, then the settings, versions and timings. Column names are shown as "Readable name
+[unit]" and numbers rounded by quantity (:mod:`steamtwin.validation.labels`: 3 significant
+figures, never finer than the unit's resolution; the CSV and JSON files keep full precision).
+Tables fit a 1366-px screen: at most :data:`MAX_COLUMNS` columns each (a wider table is shown in
+parts that repeat its key columns), cells wrap between words (a word longer than its column
+breaks; a table still too wide scrolls inside its own box, never the page). The page is
+self-contained: CSS inline, figures as base64 PNG, no script, no external URL. Every text is
+HTML-escaped. The pieces of the page are made by :mod:`steamtwin.validation.render`.
 """
 
 from __future__ import annotations
 
 import datetime as dt
-import html
 import json
-import math
 import platform
 import re
 import shutil
@@ -26,28 +34,28 @@ from importlib import metadata
 from pathlib import Path
 from urllib.parse import quote
 
-import numpy as np
 import pandas as pd
 
 from steamtwin.errors import SteamtwinError
+from steamtwin.validation.render import (
+    MAX_COLUMNS,
+    STYLE,
+    escape,
+    figure_html,
+    format_value,
+    json_value,
+    provenance_html,
+    summary_html,
+    table_html,
+    with_contents,
+)
+from steamtwin.validation.summary import Headline, headline_figures
 
-__all__ = ["FigureSection", "FilesSection", "NotesSection", "ReportError", "Section",
-           "TableSection", "ValidationReport", "format_value", "package_versions"]
+__all__ = ["MAX_COLUMNS", "FigureSection", "FilesSection", "NotesSection", "ReportError",
+           "Section", "TableSection", "ValidationReport", "format_value", "package_versions"]
 
 BASE_PACKAGES = ("steamtwin", "numpy", "scipy", "pandas", "matplotlib")
 _NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]*$")
-_STYLE = """
-body { font-family: system-ui, sans-serif; margin: 2em; color: #222; max-width: 1400px; }
-h1 { font-size: 1.5em; } h2 { font-size: 1.2em; margin-top: 1.6em; }
-table { border-collapse: collapse; margin: 0.5em 0 1em; font-size: 0.85em; }
-th, td { border: 1px solid #ccc; padding: 0.2em 0.5em; }
-td.number { text-align: right; font-variant-numeric: tabular-nums; }
-th { background: #f0f0f0; } caption { caption-side: top; text-align: left; font-weight: bold; }
-figure { margin: 1em 0; } img { max-width: 100%; } figcaption { font-size: 0.9em; }
-p.meta { color: #666; font-size: 0.85em; }
-"""
-
-
 class ReportError(SteamtwinError, ValueError):
     """A report cannot be written: a section is empty, missing or named twice."""
 
@@ -99,37 +107,15 @@ def package_versions(extra: Mapping[str, str] | None = None) -> dict[str, str]:
     return versions | dict(extra or {})
 
 
-def format_value(value: object) -> str:
-    """Text of a table cell: integers as they are, floats with 4 significant digits (fixed
-    notation within 1e-3 … 1e6, scientific outside), NaN/None as "–", times in ISO 8601."""
-    if value is None or value is pd.NaT or value is pd.NA:
-        return "–"
-    if isinstance(value, bool | np.bool_):
-        return "yes" if value else "no"
-    if isinstance(value, int | np.integer):
-        return str(int(value))
-    if isinstance(value, float | np.floating):
-        number = float(value)
-        if not math.isfinite(number):
-            return "–" if math.isnan(number) else str(number)
-        if number == 0.0:
-            return "0"
-        magnitude = abs(number)
-        if 1e-3 <= magnitude < 1e6:
-            decimals = min(max(3 - math.floor(math.log10(magnitude)), 0), 6)
-            return f"{number:.{decimals}f}"
-        return f"{number:.3e}"
-    if isinstance(value, pd.Timestamp | dt.datetime):
-        return value.isoformat()
-    return str(value)
-
-
 @dataclass
 class ValidationReport:
     """Sections of a validation report in the order added; :meth:`write` makes the files.
 
-    ``settings`` (name → value), ``versions`` (package → version; Python, steamtwin, numpy,
-    scipy, pandas and matplotlib by default) and ``timings`` (stage → seconds) head the report.
+    ``headlines`` (:class:`~steamtwin.validation.summary.Headline`) open the report as its
+    summary; None (the default): those :func:`~steamtwin.validation.summary.headline_figures`
+    finds in the report's tables when it is written. ``settings`` (name → value), ``versions``
+    (package → version; Python, steamtwin, numpy, scipy, pandas and matplotlib by default) and
+    ``timings`` (stage → seconds) close it.
     """
 
     title: str
@@ -137,6 +123,7 @@ class ValidationReport:
     versions: dict[str, str] = field(default_factory=package_versions)
     timings: dict[str, float] = field(default_factory=dict)
     sections: list[Section] = field(default_factory=list)
+    headlines: list[Headline] | None = None
 
     def add(self, section: Section) -> Section:
         """Append a section; table names and figure file names must be unique."""
@@ -210,12 +197,12 @@ class ValidationReport:
         figure_list: list[dict[str, str]] = []
         file_list: list[dict[str, str]] = []
         notes: list[dict[str, object]] = []
-        body = [f"<h1>{_text(self.title)}</h1>",
-                f'<p class="meta">written {_text(created)} by steamtwin</p>']
-        body += _key_value("Settings", {k: _setting_text(v) for k, v in self.settings.items()})
-        body += _key_value("Versions", self.versions)
-        body += _key_value("Timings", {k: f"{format_value(float(v))} s"
-                                       for k, v in self.timings.items()})
+        headlines = (headline_figures(self.tables) if self.headlines is None
+                     else list(self.headlines))
+        body = [f"<h1>{escape(self.title)}</h1>",
+                f'<p class="meta">written {escape(created)} by steamtwin</p>']
+        summary = summary_html(headlines)
+        body += summary
         for section in self.sections:
             if isinstance(section, TableSection):
                 csv_name = f"{section.name}.csv"
@@ -225,34 +212,38 @@ class ValidationReport:
                 tables[section.name] = {
                     "caption": section.caption, "csv": csv_name,
                     "columns": [str(c) for c in records.columns],
-                    "records": [{str(k): _json_value(v) for k, v in row.items()}
+                    "records": [{str(k): json_value(v) for k, v in row.items()}
                                 for row in records.to_dict(orient="records")],
                 }
-                body += _table_html(section, csv_name, keep_index)
+                body += table_html(section.frame, section.caption or section.name, csv_name,
+                                   keep_index)
             elif isinstance(section, FigureSection):
                 relative = figures[id(section)]
                 figure_list.append({"file": relative, "caption": section.caption})
-                body.append(f'<figure><img src="{_text(quote(relative))}" alt="'
-                            f'{_text(section.caption or relative)}"><figcaption>'
-                            f"{_text(section.caption)}</figcaption></figure>")
+                body.append(figure_html(section.path, section.caption, relative))
             elif isinstance(section, FilesSection):
-                body.append(f"<h2>{_text(section.heading)}</h2>")
+                body.append(f"<h2>{escape(section.heading)}</h2>")
                 items = []
                 for path, description in section.files:
                     relative = _place_figure(path, directory)
                     file_list.append({"heading": section.heading, "file": relative,
                                       "description": description})
-                    items.append(f'<li><a href="{_text(quote(relative))}">{_text(relative)}'
-                                 f"</a> — {_text(description)}</li>")
+                    items.append(f'<li><a href="{escape(quote(relative))}">{escape(relative)}'
+                                 f"</a> — {escape(description)}</li>")
                 body.append("<ul>" + "".join(items) + "</ul>")
             else:
                 notes.append({"heading": section.heading,
                               "paragraphs": list(section.paragraphs)})
-                body.append(f"<h2>{_text(section.heading)}</h2>")
-                body += [f"<p>{_text(p)}</p>" for p in section.paragraphs]
+                body.append(f"<h2>{escape(section.heading)}</h2>")
+                body += [f"<p>{escape(p)}</p>" for p in section.paragraphs]
+        body += provenance_html(self.settings, self.versions, self.timings)
+        body = with_contents(body, after=2 + len(summary))  # after the title, meta, summary
         document = {
             "title": self.title, "created_utc": created,
-            "settings": _json_value(self.settings), "versions": dict(self.versions),
+            "headlines": [{"figure": h.figure, "value": json_value(h.value), "unit": h.unit,
+                           "limit": h.limit, "published": h.published, "source": h.source,
+                           "passed": h.passed} for h in headlines],
+            "settings": json_value(self.settings), "versions": dict(self.versions),
             "timings_s": {k: float(v) for k, v in self.timings.items()},
             "tables": tables, "figures": figure_list, "files": file_list, "notes": notes,
         }
@@ -260,7 +251,7 @@ class ValidationReport:
             json.dumps(document, indent=2, ensure_ascii=False, allow_nan=False) + "\n",
             encoding="utf-8")
         page = ("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-                f"<title>{_text(self.title)}</title>\n<style>{_STYLE}</style>\n</head>\n"
+                f"<title>{escape(self.title)}</title>\n<style>{STYLE}</style>\n</head>\n"
                 "<body>\n" + "\n".join(body) + "\n</body>\n</html>\n")
         path = directory / "report.html"
         path.write_text(page, encoding="utf-8")
@@ -298,63 +289,3 @@ def _has_index(frame: pd.DataFrame) -> bool:
     index = frame.index
     return not (isinstance(index, pd.RangeIndex) and index.name is None and index.start == 0
                 and index.step == 1)
-
-
-def _text(value: object) -> str:
-    return html.escape(str(value), quote=True)
-
-
-def _setting_text(value: object) -> str:
-    if isinstance(value, Mapping):
-        return json.dumps(_json_value(value), ensure_ascii=False)
-    if isinstance(value, list | tuple):
-        return ", ".join(format_value(v) for v in value)
-    return format_value(value)
-
-
-def _key_value(heading: str, items: Mapping[str, object]) -> list[str]:
-    if not items:
-        return []
-    rows = "".join(f"<tr><th>{_text(k)}</th><td>{_text(v)}</td></tr>" for k, v in items.items())
-    return [f"<h2>{_text(heading)}</h2>", f"<table>{rows}</table>"]
-
-
-def _table_html(section: TableSection, csv_name: str, keep_index: bool) -> list[str]:
-    frame = section.frame
-    header = [str(frame.index.name or "")] if keep_index else []
-    header += [str(c) for c in frame.columns]
-    lines = [f"<h2>{_text(section.caption or section.name)}</h2>",
-             f'<p class="meta">CSV: <a href="{_text(quote(csv_name))}">{_text(csv_name)}</a>'
-             "</p>", "<table>",
-             "<tr>" + "".join(f"<th>{_text(h)}</th>" for h in header) + "</tr>"]
-    for label, row in zip(frame.index, frame.itertuples(index=False, name=None), strict=True):
-        cells = [f"<th>{_text(format_value(label))}</th>"] if keep_index else []
-        for value in row:
-            numeric = isinstance(value, int | float | np.integer | np.floating) and not isinstance(
-                value, bool | np.bool_)
-            css = ' class="number"' if numeric else ""
-            cells.append(f"<td{css}>{_text(format_value(value))}</td>")
-        lines.append("<tr>" + "".join(cells) + "</tr>")
-    lines.append("</table>")
-    return lines
-
-
-def _json_value(value: object) -> object:
-    """JSON-ready copy: numpy scalars to Python, NaN/inf and NaT to null, times to ISO text."""
-    if isinstance(value, Mapping):
-        return {str(k): _json_value(v) for k, v in value.items()}
-    if isinstance(value, list | tuple | np.ndarray):
-        return [_json_value(v) for v in value]
-    if value is None or value is pd.NaT or value is pd.NA:
-        return None
-    if isinstance(value, bool | np.bool_):
-        return bool(value)
-    if isinstance(value, int | np.integer):
-        return int(value)
-    if isinstance(value, float | np.floating):
-        return float(value) if math.isfinite(value) else None
-    if isinstance(value, pd.Timestamp | dt.datetime):
-        return value.isoformat()
-    if isinstance(value, str):
-        return value
-    return str(value)

@@ -216,10 +216,12 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
         report.add_notes("Figure 10", ("not drawn: hp_exhaust_temperature is missing from the "
                                        "data or not predicted by the ROM.",))
     if field_check is not None:
-        report.add_table("figure9_field_error", _field_check(bundle, field_check, out_dir,
-                                                             report),
+        errors, figures = _field_check(bundle, field_check, out_dir)
+        report.add_table("figure9_field_error", errors,
                          "Blade field, ROM vs FOM at the reference conditions (Figure 9; K; "
                          "relative error over the snapshots' field range)")
+        for path, caption in figures:  # under the table's heading
+            report.add_figure(path, caption)
     stages["figures"] = time.perf_counter() - clock
     report.add_table("rom_provenance", rom_provenance_table(bundle),
                      "The ROM: format, snapshots, modes, settings and provenance")
@@ -265,11 +267,12 @@ def _in_zone(frame: pd.DataFrame, time_zone: str, name: str) -> pd.DataFrame:
     return frame.set_axis(index.tz_convert(time_zone))
 
 
-def _field_check(bundle: BladeRom, reference: SnapshotSet, out_dir: Path,
-                 report: ValidationReport) -> pd.DataFrame:
-    """Figure 9 per reference field (added to ``report``) and a table of the field errors."""
+def _field_check(bundle: BladeRom, reference: SnapshotSet, out_dir: Path
+                 ) -> tuple[pd.DataFrame, list[tuple[Path, str]]]:
+    """A table of the field errors per reference field and its Figure 9 (path, caption)."""
     rom = bundle.rom
     rows = []
+    figures = []
     for i in range(reference.fields.shape[0]):
         condition = {name: float(reference.conditions[name].iloc[i])
                      for name in rom.input_names_}
@@ -282,14 +285,14 @@ def _field_check(bundle: BladeRom, reference: SnapshotSet, out_dir: Path,
         label = f"p0 {p0:.2f} MPa, T0 {t0:.1f} °C, p1 {p1:.2f} MPa"
         path = field_comparison_figure(bundle.mesh, reference.fields[i], rom_field,
                                        out_dir / f"figure9_field{suffix}.png", title=label)
-        report.add_figure(path, f"Figure 9 — blade temperature field, FOM | ROM | ROM − FOM "
-                          f"({label})")
+        figures.append((path, "Figure 9 — blade temperature field (pressure side), FOM | ROM | "
+                        f"ROM − FOM ({label})"))
         rows.append({"main_steam_pressure_MPa": p0, "main_steam_temperature_degC": t0,
                      "control_stage_pressure_MPa": p1,
                      "max_abs_error_K": float(error.max()),
                      "mean_abs_error_K": float(error.mean()),
                      "max_relative_error_pct": 100.0 * float(error.max()) / rom.field_range_})
-    return pd.DataFrame(rows)
+    return pd.DataFrame(rows), figures
 
 
 def _accounting(table8: pd.DataFrame) -> list[str]:
