@@ -94,8 +94,9 @@ class SurrogateSearch:
     GA on the surrogate; ``polish_evaluations``: model runs of the final local descent (step 6;
     0: none). Arguments outside their range raise ``ValueError`` naming the
     argument, here. The result's ``history`` has one row per round (model runs so far, best
-    score and fitness, the surrogate's own prediction at its optimum, best parameters),
-    ``samples`` every model-evaluated point and its score.
+    score and fitness, the surrogate's own prediction at its optimum, best parameters) and
+    a last one after the polish (its prediction NaN), ``samples`` every model-evaluated point
+    and its score.
     """
 
     initial_samples: int | None = None
