@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pandas as pd
 import pytest
@@ -13,6 +15,7 @@ from steamtwin.calibration import (
     GeneticSearch,
     SurrogateSearch,
 )
+from steamtwin.calibration.posterior import fit_map
 from steamtwin.calibration.settings import PARAMETER_NAMES
 from steamtwin.model.fom import InputError
 from steamtwin.model.parameters import ModelParameters
@@ -91,3 +94,39 @@ def test_surrogate_with_no_finite_rmse_is_a_calibration_error(linear_window):
                        r"rejected all 12 runs \(last reason: main_steam_flow 1\.2e4 kg/s"):
         calibrator.fit([linear_window])
     assert not hasattr(calibrator, "params_")
+
+
+def test_residual_vector_is_the_score_in_least_squares_form(linear_simulator, linear_window):
+    problem = Calibrator(linear_simulator, workers=1).problem([linear_window])
+    problem.objective = replace(problem.objective, tempering=0.01)
+    x = np.array([1.01, 1.3, 0.7])
+    result, residuals = problem.evaluate_with_residuals(x)
+    objective = problem.objective
+    # Σr² = κχ² + Σz² = score² · κ · n (objective module docstring)
+    assert residuals @ residuals == pytest.approx(
+        result.score**2 * objective.tempering * objective.weighted_count(), rel=1e-12)
+    assert result == objective.evaluate(x)
+    assert problem.n_evaluations == 1
+    rejected, none = problem.evaluate_with_residuals(np.array([0.92, 1.0, 1.0]))
+    assert none is None and rejected.penalised and problem.n_penalised == 1
+
+
+def test_polish_lands_on_the_map_the_surrogate_alone_misses(linear_simulator, linear_window):
+    search = SurrogateSearch(initial_samples=8, infill_per_round=2, max_evaluations=60,
+                             patience=2, population=10, generations=10, polish_evaluations=30)
+    polished = Calibrator(linear_simulator, search=search, random_state=3,
+                          workers=1).fit([linear_window])
+    problem = polished.problem([linear_window])
+    problem.objective = replace(problem.objective, tempering=polished.tempering_)
+    best = fit_map(problem.objective, ModelParameters(1.02, 1.2, 0.8))
+    optimum = problem.objective.evaluate([getattr(best, n) for n in PARAMETER_NAMES]).value
+    # the surrogate rounds stop short of the MAP (last round's best); the polish reaches it
+    history = polished.history_["best_rmse"]
+    assert history.iloc[-2] - optimum > 1e-4
+    assert history.iloc[-1] == polished.score_ == pytest.approx(optimum, rel=1e-7)
+    for name in PARAMETER_NAMES:
+        assert getattr(polished.params_, name) == pytest.approx(getattr(best, name), abs=2e-3)
+    polish_runs = polished.n_evaluations_ - int(polished.history_["evaluations"].iloc[-2])
+    assert 0 < polish_runs <= 30
+    assert len(polished.samples_) == polished.n_evaluations_
+    assert polished.samples_["score"].min() == polished.score_

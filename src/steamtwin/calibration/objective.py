@@ -195,7 +195,10 @@ class Objective:
         √(w_s ω)·(T_sim − T_meas − b)/σ_s with b the bias estimate of its sensor, then each bias
         term's b/β, flattened (dimensionless; order fixed by the windows); raises if the model
         rejects ``params``."""
-        parts = self._residuals(params)
+        return self._standardised(self._residuals(params))
+
+    def _standardised(self, parts: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+        """:meth:`standardised_residuals` of the per-window residuals ``parts``."""
         sums = self._bias_sums(parts)
         bias = {g: b / (a + inverse) for g, (a, b, inverse) in sums.items()}
         flat = [((residual - bias[w.group]) * np.sqrt(precision))[~np.isnan(residual)]
@@ -221,11 +224,32 @@ class Objective:
 
     def evaluate(self, x: Sequence[float]) -> Evaluation:
         """Score one decision vector; a rejected candidate scores :data:`PENALTY_RMSE`."""
+        parts = self._parts_or_penalty(x)
+        return parts if isinstance(parts, Evaluation) else self._evaluation(x, parts)
+
+    def evaluate_with_residuals(self, x: Sequence[float]) -> tuple[Evaluation, np.ndarray | None]:
+        """One model run of ``x``: its :class:`Evaluation` (as :meth:`evaluate`) and the
+        residual vector ``[standardised_residuals; prior_terms]`` (dimensionless), whose sum of
+        squares is ``κχ² + Σz²`` — the score's square times κ·:meth:`weighted_count`, so a
+        least-squares method on it minimises the score; None when the model rejects ``x``."""
+        parts = self._parts_or_penalty(x)
+        if isinstance(parts, Evaluation):
+            return parts, None
+        return (self._evaluation(x, parts),
+                np.concatenate([self._standardised(parts), self.prior_terms(x)]))
+
+    def _parts_or_penalty(self, x: Sequence[float]
+                          ) -> list[tuple[np.ndarray, np.ndarray]] | Evaluation:
+        """:meth:`_residuals` of ``x``, or the penalised :class:`Evaluation` if rejected."""
         try:
-            parts = self._residuals(self.parameters(x))
+            return self._residuals(self.parameters(x))
         except ValueError as error:
             reason = str(error) or type(error).__name__
             return Evaluation(PENALTY_RMSE, reason, PENALTY_RMSE)
+
+    def _evaluation(self, x: Sequence[float], parts: list[tuple[np.ndarray, np.ndarray]]
+                    ) -> Evaluation:
+        """RMSE and score of ``x`` from its per-window residuals ``parts``."""
         sse = count = counted = chi2 = 0.0
         kelvin = self.weights * self.temperature_mask  # the RMSE is over temperatures (K)
         for window, (residual, precision) in zip(self.windows, parts, strict=True):
@@ -341,22 +365,30 @@ class CalibrationProblem(Problem):
             results = self.objective.evaluate_many(rows)
         else:
             results = self.evaluator.evaluate(rows)
-        self.n_evaluations += len(results)
         for result in results:
-            if result.penalised:
-                self.n_penalised += 1
-                self.last_error = result.error
+            self._count(result)
         return np.array([result.value for result in results])
 
     def evaluate_full(self, params: ModelParameters) -> Evaluation:
         """RMSE (K) and score of ``params``, counted as one evaluation."""
         x = np.array([getattr(params, name) for name in PARAMETER_NAMES])
         result = self.objective.evaluate(x)
+        self._count(result)
+        return result
+
+    def evaluate_with_residuals(self, x: Sequence[float]
+                                ) -> tuple[Evaluation, np.ndarray | None]:
+        """:meth:`Objective.evaluate_with_residuals` of the decision vector ``x``, counted as
+        one evaluation."""
+        result, residuals = self.objective.evaluate_with_residuals(x)
+        self._count(result)
+        return result, residuals
+
+    def _count(self, result: Evaluation) -> None:
         self.n_evaluations += 1
         if result.penalised:
             self.n_penalised += 1
             self.last_error = result.error
-        return result
 
     def rmse(self, params: ModelParameters) -> float:
         """Weighted pooled RMSE (K) of ``params``; :data:`PENALTY_RMSE` if rejected."""
