@@ -204,31 +204,18 @@ class LiveTwin:
         if data.empty:
             return
         summary.findings += len(passed.findings)
-        inputs = data[list(INPUT_SIGNALS)]
-        complete = inputs.notna().all(axis=1).to_numpy()
-        twin = pd.DataFrame(np.nan, index=data.index, columns=list(self.model.output_signals))
-        if complete.any():
-            if self.recalibration is not None:
-                self._rewind.keep(self._state, inputs[complete],
-                                  2.0 * self.recalibration.tracker.step_s)
-            outputs, self._state = self.model.simulate_stream(inputs[complete], self.params,
-                                                              self._state)
-            twin.loc[outputs.index, :] = outputs.to_numpy()
-            if self.rom is not None:
-                with warnings.catch_warnings():  # counted below, not a warning per block
-                    warnings.simplefilter("ignore", ExtrapolationWarning)
-                    probes = predict_series(self.rom, data[complete]).sensors
-                summary.rom_extrapolated += int(probes[FLAG_EXTRAPOLATED].sum())
-                valid = ~probes[FLAG_INVALID].to_numpy(dtype=bool)
-                for name in self.rom.probes:
-                    twin.loc[probes.index[valid], name] = probes[name].to_numpy()[valid]
-        sensors = [s for s in self.monitored if s in data.columns and s in twin.columns]
-        residual = data[sensors] - twin[sensors]
+        complete = _complete(data)
+        if complete.any() and self.recalibration is not None:
+            self._rewind.keep(self._state, data[list(INPUT_SIGNALS)][complete],
+                              2.0 * self.recalibration.tracker.step_s)
+        twin, self._state, extrapolated = self._predict(data, complete, self._state)
+        summary.rom_extrapolated += extrapolated
+        residual = self._residual(data, twin)
         alarms = [] if self.monitor is None else self._alarms(data, residual, final)
         swaps = [] if self.recalibration is None else self.recalibration.feed(data, self.params)
         if swaps:  # the new set applies from the next sample on
             self._swap(swaps[-1])
-        flags = passed.flags.where(passed.flags != 0).astype(object)
+        flags = _flag_objects(passed.flags)
         end = data.index[-1]
         snapshot = final or self._last_snapshot is None or (
             (end - self._last_snapshot).total_seconds() >= self.snapshot_every_s)
@@ -252,6 +239,43 @@ class LiveTwin:
         summary.swaps += len(swaps)
         summary.samples += len(data)
         summary.without_twin += int((~complete).sum())
+
+    def _predict(self, data: pd.DataFrame, complete: np.ndarray, state: StreamState | None
+                 ) -> tuple[pd.DataFrame, StreamState | None, int]:
+        """Twin values of ``data`` (SI): the model's sensor readings, and the ROM's probe
+        temperatures, where ``complete`` (all inputs good), NaN elsewhere; the model state
+        after these samples (``state`` continued; unchanged without a complete sample); and the
+        samples whose ROM probes were extrapolated. Built as one array (pandas ``.loc``
+        assignments per column cost more than the model on a 60-sample block)."""
+        columns = list(self.model.output_signals)
+        if not complete.any():
+            return (pd.DataFrame(np.nan, index=data.index, columns=columns), state, 0)
+        outputs, state = self.model.simulate_stream(data[list(INPUT_SIGNALS)][complete],
+                                                    self.params, state)
+        probes = [] if self.rom is None else [n for n in self.rom.probes if n not in columns]
+        values = np.full((len(data), len(columns) + len(probes)), np.nan)
+        values[complete, :len(columns)] = outputs.to_numpy(dtype=float)
+        extrapolated = 0
+        if self.rom is not None:
+            with warnings.catch_warnings():  # counted by the caller, not a warning per block
+                warnings.simplefilter("ignore", ExtrapolationWarning)
+                predicted = predict_series(self.rom, data[complete]).sensors
+            extrapolated = int(predicted[FLAG_EXTRAPOLATED].sum())
+            valid = ~predicted[FLAG_INVALID].to_numpy(dtype=bool)
+            rows = np.flatnonzero(complete)[valid]
+            position = {name: j for j, name in enumerate(columns + probes)}
+            for name in self.rom.probes:
+                values[rows, position[name]] = predicted[name].to_numpy(dtype=float)[valid]
+        return pd.DataFrame(values, index=data.index, columns=columns + probes), state, extrapolated
+
+    def _residual(self, data: pd.DataFrame, twin: pd.DataFrame) -> pd.DataFrame:
+        """measured − twin (SI) of the monitored sensors both have."""
+        sensors = [s for s in self.monitored if s in data.columns and s in twin.columns]
+        measured = data.columns.get_indexer(sensors)
+        modelled = twin.columns.get_indexer(sensors)
+        return pd.DataFrame(data.to_numpy(dtype=float)[:, measured]
+                            - twin.to_numpy(dtype=float)[:, modelled],
+                            index=data.index, columns=sensors)
 
     def _swap(self, swap: ParameterSwap) -> None:
         """Make ``swap``'s parameters live. The model's carried state (metal temperatures,
@@ -308,3 +332,15 @@ class LiveTwin:
                        else self.sensitivity.get(load, block.rows, self.params))
         return self.monitor.update(block.end, block.means[sensors], sensitivity,
                                    load=load if np.isfinite(load) else None)
+
+
+def _complete(data: pd.DataFrame) -> np.ndarray:
+    """True for the samples whose model inputs are all present (not NaN)."""
+    return ~np.isnan(data[list(INPUT_SIGNALS)].to_numpy(dtype=float)).any(axis=1)
+
+
+def _flag_objects(flags: pd.DataFrame) -> pd.DataFrame:
+    """The gate's flag bits as the historian stores them: the code where set, None where 0."""
+    codes = flags.to_numpy()
+    return pd.DataFrame(np.where(codes != 0, codes.astype(float), np.nan).astype(object),
+                        index=flags.index, columns=flags.columns)
