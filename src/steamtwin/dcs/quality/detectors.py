@@ -373,7 +373,7 @@ def _row_nanmedian(rows: np.ndarray) -> np.ndarray:
     high = counts // 2
     low = np.where(counts % 2 == 1, high, high - 1)
     picked = np.arange(rows.shape[0])
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", over="ignore"):  # inf − inf, huge + huge: as numpy
         return (ordered[picked, low] + ordered[picked, high]) / 2.0
 
 def segments(mask_continue: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
