@@ -90,9 +90,16 @@ class StreamGate:
 
     def push(self, data: pd.DataFrame, bad: pd.DataFrame | None = None) -> GateOutput:
         """Take new samples (SI, time index after every earlier one; ``bad``: True where the
-        source's status excluded the value) and return those now final (maybe none)."""
+        source's status excluded the value) and return those now final (maybe none):
+        :meth:`add` then :meth:`release`."""
+        self.add(data, bad)
+        return self.release()
+
+    def add(self, data: pd.DataFrame, bad: pd.DataFrame | None = None) -> None:
+        """Take new samples (as :meth:`push`) without judging any: they wait in
+        :meth:`pending` until :meth:`release`."""
         if len(data) == 0:
-            return self._empty(data.columns)
+            return
         bad_values = (np.zeros(data.shape, dtype=bool) if bad is None else
                       bad.reindex(index=data.index, columns=data.columns, fill_value=False)
                       .to_numpy(dtype=bool))
@@ -105,6 +112,11 @@ class StreamGate:
         else:
             self._values = pd.concat([self._values, data])
             self._bad = np.concatenate([self._bad, bad_values])
+
+    def release(self) -> GateOutput:
+        """The samples whose look-ahead is in, judged (maybe none)."""
+        if self._values is None:
+            return self._empty(pd.Index([]))
         return self._release(len(self._values) - self.lookahead_samples)
 
     def flush(self) -> GateOutput:

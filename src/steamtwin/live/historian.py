@@ -12,7 +12,12 @@ file per service, several units side by side:
 * ``parameters`` (unit, time, name, value, reason) — every swap of the live parameters;
 * ``states`` (unit, time, state JSON) — the newest :data:`KEPT_STATES` state snapshots of
   each unit, to restart from;
-* ``progress`` (unit, last_time) — the last committed sample.
+* ``progress`` (unit, last_time) — the last committed sample;
+* ``provisional`` (as ``series``) — the twin's first word on the samples the gate's look-ahead
+  has not judged yet (:meth:`LiveHistorian.store_provisional`), each row deleted in the
+  transaction that commits its sample's final row; the view ``latest_series`` is ``series``
+  and ``provisional`` together, with a ``provisional`` column. A restarted service rewrites
+  them; ``series``, ``progress`` and the rest never hold a provisional value.
 
 Exactly once: :meth:`LiveHistorian.commit_block` writes a block's series rows, the unit's
 progress and (optionally) its state snapshot in ONE transaction (DuckDB transactions are
@@ -52,6 +57,12 @@ _SCHEMA = (
        state JSON NOT NULL)""",
     """CREATE TABLE IF NOT EXISTS progress (unit VARCHAR PRIMARY KEY,
        last_time TIMESTAMPTZ NOT NULL)""",
+    """CREATE TABLE IF NOT EXISTS provisional (unit VARCHAR NOT NULL,
+       time TIMESTAMPTZ NOT NULL, source VARCHAR NOT NULL, signal VARCHAR NOT NULL,
+       value DOUBLE, flag VARCHAR)""",
+    """CREATE OR REPLACE VIEW latest_series AS
+       SELECT *, false AS provisional FROM series
+       UNION ALL SELECT *, true AS provisional FROM provisional""",
 )
 
 
@@ -103,6 +114,7 @@ class LiveHistorian:
         self.path = Path(path)
         self._connection: duckdb.DuckDBPyConnection | None = None
         self._last_times: dict[str, pd.Timestamp | None] = {}  # what progress holds
+        self._provisional: dict[str, bool] = {}  # unit → it may have provisional rows
 
     def __enter__(self) -> LiveHistorian:
         self.open()
@@ -127,6 +139,7 @@ class LiveHistorian:
             self._connection.close()
             self._connection = None
         self._last_times.clear()
+        self._provisional.clear()
 
     @property
     def connection(self) -> duckdb.DuckDBPyConnection:
@@ -181,6 +194,9 @@ class LiveHistorian:
         try:
             self._insert_series(rows)
             self._set_progress(unit, last, known=resume is not None)
+            if self._may_have_provisional(unit):  # superseded by the final rows
+                connection.execute("DELETE FROM provisional WHERE unit = ? AND time <= ?",
+                                   [unit, last.to_pydatetime()]).fetchall()
             if state is not None:
                 connection.execute("INSERT INTO states VALUES (?, ?, ?)",
                                    [unit, last.to_pydatetime(), json.dumps(state)])
@@ -198,14 +214,53 @@ class LiveHistorian:
         self._last_times[unit] = last
         return rows.num_rows
 
-    def _insert_series(self, rows: pa.Table) -> None:
-        """Append ``rows`` (the series columns, Arrow) to ``series``: one ``INSERT … SELECT``
+    def store_provisional(self, unit: str, frames: Mapping[str, pd.DataFrame],
+                          flags: pd.DataFrame | None = None) -> int:
+        """Store provisional rows of ``unit`` (``frames`` and ``flags`` as in
+        :meth:`commit_block`): they replace the unit's provisional rows from their first time
+        on, and :meth:`commit_block` deletes them when it stores their samples' final rows.
+        Refuses rows at or before the last committed sample (ValueError); returns the rows
+        written."""
+        times = [_utc(frame.index) for frame in frames.values() if len(frame)]
+        if not times:
+            return 0
+        first = min(index[0] for index in times)
+        resume = self.resume_time(unit)
+        if resume is not None and first <= resume:
+            raise ValueError(f"unit {unit!r}: provisional rows from {first.isoformat()}, not "
+                             f"after the last committed sample {resume.isoformat()}")
+        rows = pa.concat_tables([
+            self._long(unit, source, frame, flags if source == "measured" else None)
+            for source, frame in frames.items() if len(frame)])
+        connection = self.connection
+        connection.execute("BEGIN TRANSACTION")
+        try:
+            if self._may_have_provisional(unit):
+                connection.execute("DELETE FROM provisional WHERE unit = ? AND time >= ?",
+                                   [unit, first.to_pydatetime()]).fetchall()
+            self._insert_series(rows, "provisional")
+            connection.execute("COMMIT")
+        except Exception:
+            connection.execute("ROLLBACK")
+            raise
+        self._provisional[unit] = True
+        return rows.num_rows
+
+    def _may_have_provisional(self, unit: str) -> bool:
+        if unit not in self._provisional:  # once per connection; then this writer knows
+            self._provisional[unit] = bool(self.connection.execute(  # fetchall: DuckDB keeps
+                "SELECT count(*) FROM provisional WHERE unit = ?",  # a fetchone's result open
+                [unit]).fetchall()[0][0])
+        return self._provisional[unit]
+
+    def _insert_series(self, rows: pa.Table, table: str = "series") -> None:
+        """Append ``rows`` (the series columns, Arrow) to ``table``: one ``INSERT … SELECT``
         over the registered Arrow table, scanned without copying (DuckDB docs, "Data
         Ingestion": bulk insert from Arrow/pandas rather than row by row)."""
         connection = self.connection
         connection.register("block_rows", rows)
         try:
-            connection.execute("INSERT INTO series SELECT unit, time, source, signal, value, "
+            connection.execute(f"INSERT INTO {table} SELECT unit, time, source, signal, value, "
                                "flag FROM block_rows")
         finally:
             connection.unregister("block_rows")

@@ -88,7 +88,9 @@ class LiveTwin:
     blade ROM (probe temperatures); ``monitor``: an optional fitted residual monitor;
     ``sensitivity``: J per load band for its degradation hypotheses (without it the monitor
     tells sensor faults only); ``recalibration``: optional online recalibration;
-    ``snapshot_every_s``: data seconds between saved states (0: every block).
+    ``snapshot_every_s``: data seconds between saved states (0: every block);
+    ``provisional``: also store a provisional twin value of each sample as soon as it arrives
+    (the ``provisional`` table), replaced by the final row once the gate has judged it.
     """
 
     def __init__(self, name: str, model: FullOrderModel, params: ModelParameters,
@@ -97,7 +99,7 @@ class LiveTwin:
                  monitored: Sequence[str] = MONITORED,
                  sensitivity: SensitivityCache | None = None,
                  recalibration: LiveRecalibration | None = None,
-                 snapshot_every_s: float = 600.0) -> None:
+                 snapshot_every_s: float = 600.0, provisional: bool = False) -> None:
         self.name = name
         self.model = model
         self.params = params
@@ -116,6 +118,10 @@ class LiveTwin:
         self._replay_from: pd.Timestamp | None = None
         self._committed: pd.Timestamp | None = None
         self._last_snapshot: pd.Timestamp | None = None
+        self.provisional = provisional
+        self._provisional_state: StreamState | None = None
+        self._provisional_until: pd.Timestamp | None = None
+        self._provisional_inputs: pd.DataFrame | None = None  # NaN rows: no twin value
 
     def start(self) -> LiveTwin:
         """Open the historian and continue from its last saved state, if any."""
@@ -177,7 +183,15 @@ class LiveTwin:
         return summary
 
     def process(self, block: SourceBlock, summary: LiveSummary | None = None) -> LiveSummary:
-        """One source block through gate, model, residuals and historian."""
+        """One source block through gate, model, residuals and historian: :meth:`receive`
+        then :meth:`settle`."""
+        summary = self.receive(block, summary)
+        return self.settle(summary)
+
+    def receive(self, block: SourceBlock, summary: LiveSummary | None = None) -> LiveSummary:
+        """Take a source block into the gate and, with ``provisional``, store the twin's
+        provisional values of the samples still waiting for their look-ahead — the fast half
+        of :meth:`process` (the service runs every unit's before any unit's :meth:`settle`)."""
         if not self._started:
             self.start()
         summary = summary if summary is not None else LiveSummary()
@@ -190,8 +204,63 @@ class LiveTwin:
             keep = frame.index > resume
             frame, bad = frame[keep], bad[keep]
         if len(frame):
-            self._store(self.gate.push(frame, bad), summary)
+            self.gate.add(frame, bad)
+            if self.provisional:
+                self._store_provisional()
         return summary
+
+    def settle(self, summary: LiveSummary | None = None) -> LiveSummary:
+        """Judge, model and store the samples whose look-ahead is in (the slow half of
+        :meth:`process`)."""
+        summary = summary if summary is not None else LiveSummary()
+        self._store(self.gate.release(), summary)
+        return summary
+
+    def _store_provisional(self) -> None:
+        """The twin on the gate's pending samples (verdicts that need no look-ahead: range,
+        status, missing), continuing the provisional model state over the samples not yet
+        given a value, or restarting it from the final state when the final verdicts took
+        other inputs than the provisional ones (a spike or stuck run found), after a swap or
+        a restart. The model state of the final chain is never touched."""
+        values, flags = self.gate.pending()
+        committed = self.historian.resume_time(self.name)
+        if committed is not None:
+            later = values.index > committed
+            values, flags = values[later], flags[later]
+        if self._provisional_until is not None:
+            new = values.index > self._provisional_until
+            values, flags = values[new], flags[new]
+        if values.empty:
+            return
+        start = self._provisional_state if self._provisional_until is not None else self._state
+        complete = _complete(values)
+        twin, state, _ = self._predict(values, complete, start)
+        used = _fed(values, complete)
+        self._provisional_inputs = (used if self._provisional_inputs is None
+                                    else pd.concat([self._provisional_inputs, used]))
+        self._provisional_state, self._provisional_until = state, values.index[-1]
+        self.historian.store_provisional(
+            self.name, {"measured": values, "twin": twin,
+                        "residual": self._residual(values, twin)}, _flag_objects(flags))
+
+    def _check_provisional(self, data: pd.DataFrame, complete: np.ndarray) -> None:
+        """Keep the provisional chain if the final samples ``data`` fed the model what the
+        provisional values assumed; else restart it from the final state."""
+        seen = self._provisional_inputs
+        if seen is None:
+            return
+        final = _fed(data, complete)
+        done = seen.index <= data.index[-1]
+        if seen.index[done].equals(final.index) and np.array_equal(
+                seen[done].to_numpy(), final.to_numpy(), equal_nan=True):
+            self._provisional_inputs = seen[~done]
+        else:
+            self._reset_provisional()
+
+    def _reset_provisional(self) -> None:
+        self._provisional_state = None
+        self._provisional_until = None
+        self._provisional_inputs = None
 
     def finish(self, summary: LiveSummary | None = None) -> LiveSummary:
         """The end of a stream: what the gate still holds (no more look-ahead)."""
@@ -205,6 +274,8 @@ class LiveTwin:
             return
         summary.findings += len(passed.findings)
         complete = _complete(data)
+        if self.provisional:
+            self._check_provisional(data, complete)
         if complete.any() and self.recalibration is not None:
             self._rewind.keep(self._state, data[list(INPUT_SIGNALS)][complete],
                               2.0 * self.recalibration.tracker.step_s)
@@ -283,6 +354,7 @@ class LiveTwin:
         a state grown under the old set would keep its metal a transient behind the plant's and
         show, for the casing's time constant, a residual that no sensor or parameter explains."""
         self.params = swap.params
+        self._reset_provisional()
         if self.sensitivity is not None:
             self.sensitivity.clear()
         if self.monitor is not None:
@@ -337,6 +409,14 @@ class LiveTwin:
 def _complete(data: pd.DataFrame) -> np.ndarray:
     """True for the samples whose model inputs are all present (not NaN)."""
     return ~np.isnan(data[list(INPUT_SIGNALS)].to_numpy(dtype=float)).any(axis=1)
+
+
+def _fed(data: pd.DataFrame, complete: np.ndarray) -> pd.DataFrame:
+    """The model inputs of ``data`` where ``complete``, NaN rows elsewhere (what the model
+    was fed)."""
+    values = data[list(INPUT_SIGNALS)].to_numpy(dtype=float).copy()
+    values[~complete] = np.nan
+    return pd.DataFrame(values, index=data.index, columns=list(INPUT_SIGNALS))
 
 
 def _flag_objects(flags: pd.DataFrame) -> pd.DataFrame:
