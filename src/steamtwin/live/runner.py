@@ -40,15 +40,17 @@ def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, So
                                    trajectory_rows=round(86_400.0 / unit.recalibration.step_s))
         recalibration = LiveRecalibration(tracker, every_s=unit.recalibration.every_s,
                                           settle_steps=unit.recalibration.settle_steps)
+    source_config = unit.source
+    # a live or paced source gets provisional values (latency); a replay at full speed not
+    provisional = source_config.kind != "replay" or source_config.speed is not None
     twin = LiveTwin(unit.name, model, params, StreamGate(gate_options(tag_map)), historian,
                     rom=None if unit.rom is None else load_rom(unit.rom), monitor=monitor,
                     monitored=MONITORED if monitor is None else monitor.sensors,
                     sensitivity=None if monitor is None else SensitivityCache(model,
                                                                               monitor.sensors),
-                    recalibration=recalibration)
+                    recalibration=recalibration, provisional=provisional)
     twin.start()
     resume = twin.resume_after()
-    source_config = unit.source
     if source_config.kind == "replay":
         source: Source = ReplaySource(source_config.path, tag_map, speed=source_config.speed,
                                       block_samples=unit.block_samples, start_after=resume)
@@ -69,7 +71,9 @@ async def _run_unit(twin: LiveTwin, source: Source, stop: asyncio.Event,
     blocks = source.blocks()
     try:
         async for block in blocks:
-            twin.process(block, summary)
+            twin.receive(block, summary)
+            await asyncio.sleep(0)  # every unit's provisional values before anyone's final work
+            twin.settle(summary)
             for finding in block.findings:
                 LOG.warning("%s: %s", twin.name, finding.message)
             if stop.is_set():
@@ -97,12 +101,14 @@ def stop_on_signals() -> asyncio.Event:
     return stop
 
 
-async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None
-                      ) -> dict[str, LiveSummary]:
+async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
+                      historian: LiveHistorian | None = None) -> dict[str, LiveSummary]:
     """Run every unit of ``config`` until its source ends or ``stop`` is set; returns each
-    unit's summary. What was committed stays; a restart continues from it."""
+    unit's summary. What was committed stays; a restart continues from it. ``historian``:
+    the database to use instead of ``config.database``'s (e.g. one that records when rows
+    are stored, for the latency benchmark)."""
     stop = stop if stop is not None else asyncio.Event()
-    historian = LiveHistorian(config.database)
+    historian = historian if historian is not None else LiveHistorian(config.database)
     historian.open()
     try:
         built = [build_unit(unit, historian) for unit in config.units]
