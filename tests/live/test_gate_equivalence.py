@@ -12,7 +12,7 @@ from hypothesis import strategies as st
 from hypothesis.extra import numpy as hnp
 
 from steamtwin.dcs.quality import Flag, QualityOptions, clean
-from steamtwin.dcs.quality.detectors import _row_nanmedian
+from steamtwin.dcs.quality.detectors import row_nanmedian
 from steamtwin.live.gate import StreamGate
 
 GATE = {"context_samples": 90, "spike_window": 11, "stuck_min_duration_s": 8.0}
@@ -105,7 +105,7 @@ def test_row_medians_are_numpys_bit_for_bit(rows):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN rows
         expected = np.nanmedian(rows, axis=1)
-    assert np.array_equal(_row_nanmedian(rows), expected, equal_nan=True)
+    assert np.array_equal(row_nanmedian(rows), expected, equal_nan=True)
 
 
 def test_pending_samples_carry_the_verdicts_that_need_no_look_ahead():

@@ -15,6 +15,24 @@ taken over the whole file in batch and over the window here, so near a ramp a fe
 go one way or the other. Rejected values become NaN
 with their :class:`~steamtwin.dcs.quality.Flag` bits; the findings of each passed block name
 signal, tag and time. Nothing is dropped: every sample in comes out once, in time order.
+
+Which detector needs how much look-ahead (the design of the provisional values, issue 21's
+latency point): the valid range, the source's status and a missing value are judged per sample
+and need none; unit plausibility is a verdict on a whole signal (the median of the window) and
+needs none either; a spike is a departure from a *centred* rolling median that returns within
+two samples — it needs the half window ahead for the batch gate's median (one neighbour would
+tell a return, not the robust trend); a stuck run is one of at least ``stuck_min_duration_s`` of
+equal values whose improbability is judged against the trend on up to 30 samples after the run
+— it needs the run and that trend. So the final verdict waits the longer (60 s at 1 Hz), while
+:meth:`StreamGate.pending` gives every waiting sample the verdicts that need no look-ahead at
+once: the live twin stores a *provisional* value from them as soon as a sample arrives
+(:mod:`steamtwin.live.service`), and a spike or stuck value can reach that provisional value
+but never the final row nor the model state the final chain carries.
+
+The detectors run over the window as :func:`steamtwin.dcs.quality.cleaning.clean_flags` (the
+batch ``clean``'s masks without its messages, which the gate builds for its passed samples
+only): the same verdicts, bit for bit, as ``clean`` over the same window (tested with random
+streams, :mod:`tests.live.test_gate_equivalence`).
 """
 
 from __future__ import annotations

@@ -21,6 +21,18 @@
    alarms started and ended, the parameter swaps, and the state (model, gate context, monitor,
    open block, J cache, filter, live parameters) — all in one transaction per block.
 
+Latency: the gate's final verdict waits for its look-ahead (60 s at 1 Hz; why, in
+:mod:`steamtwin.live.gate`). With ``provisional=True`` (the service's choice for an OPC UA or
+paced source) :meth:`LiveTwin.receive` stores, as soon as a sample arrives, its provisional
+measured, twin (ROM probes included) and residual rows in the historian's ``provisional`` table,
+from the verdicts that need no look-ahead and a provisional model state continued from the last
+final one; :meth:`LiveTwin.settle` later stores the final rows, which delete the provisional ones
+in the same transaction. The final chain never sees a provisional value: when the final verdicts
+fed the model other inputs than the provisional ones (a spike or stuck run found) or the
+parameters were swapped, the provisional chain restarts from the final state. Provisional rows
+live outside ``series``, ``progress`` and the state, so a restart gives the uninterrupted
+run's database (tested).
+
 Restart: the state is saved with the block that crosses each ``snapshot_every_s`` of data
 (default 10 min; serialising the gate's context, the filter's data and the rewind buffer every
 block would cost more than the model), and with the last block of a finished stream. A new

@@ -359,10 +359,10 @@ def _rolling_median(x: np.ndarray, window: int) -> np.ndarray:
     half = min(window // 2, x.size)
     edges = np.unique(np.r_[np.arange(half), np.arange(x.size - half, x.size)])
     padded = np.concatenate([np.full(window // 2, np.nan), x, np.full(window // 2, np.nan)])
-    trend[edges] = _row_nanmedian(padded[edges[:, None] + np.arange(window)])
+    trend[edges] = row_nanmedian(padded[edges[:, None] + np.arange(window)])
     return trend
 
-def _row_nanmedian(rows: np.ndarray) -> np.ndarray:
+def row_nanmedian(rows: np.ndarray) -> np.ndarray:
     """``np.nanmedian(rows, axis=1)``, bit for bit, without its masked-array machinery (5× its
     cost on the short rows here): sort each row (NaN last), take the low and high middle of its
     finite count c (the same element when c is odd) and halve their sum — numpy's own
