@@ -131,11 +131,15 @@ class StreamGate:
             self._values = pd.concat([self._values, data])
             self._bad = np.concatenate([self._bad, bad_values])
 
-    def release(self) -> GateOutput:
-        """The samples whose look-ahead is in, judged (maybe none)."""
+    def release(self, min_samples: int = 1) -> GateOutput:
+        """The samples whose look-ahead is in, judged — once at least ``min_samples`` of them
+        are (fewer: none yet; a live service judges a minute at a time, not every second)."""
         if self._values is None:
             return self._empty(pd.Index([]))
-        return self._release(len(self._values) - self.lookahead_samples)
+        stop = len(self._values) - self.lookahead_samples
+        if stop - self._passed < min_samples:
+            return self._empty(self._values.columns)
+        return self._release(stop)
 
     def flush(self) -> GateOutput:
         """Everything still pending (the end of a stream: no more look-ahead)."""

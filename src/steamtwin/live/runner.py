@@ -67,13 +67,21 @@ def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, So
 
 
 async def _run_unit(twin: LiveTwin, source: Source, stop: asyncio.Event,
-                    summary: LiveSummary) -> LiveSummary:
+                    summary: LiveSummary, settle: tuple[int, int] = (1, 1)) -> LiveSummary:
+    """``settle``: (first, then) — the final samples judged at once, the first time and then
+    (a live unit: its ``block_samples``, the first time at a phase of its own so that the
+    units' final work falls in different seconds instead of delaying every unit's provisional
+    values in the same one)."""
     blocks = source.blocks()
+    first, then = settle
     try:
         async for block in blocks:
             twin.receive(block, summary)
             await asyncio.sleep(0)  # every unit's provisional values before anyone's final work
-            twin.settle(summary)
+            stored = summary.samples
+            twin.settle(summary, first)
+            if summary.samples > stored:
+                first = then
             for finding in block.findings:
                 LOG.warning("%s: %s", twin.name, finding.message)
             if stop.is_set():
@@ -117,9 +125,12 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
             LOG.info("%s: starting%s", twin.name,
                      f" after {resume.isoformat()}" if resume is not None else "")
 
-        async def until_stopped(twin: LiveTwin, source: Source) -> LiveSummary:
+        async def until_stopped(k: int, twin: LiveTwin, source: Source) -> LiveSummary:
             summary = LiveSummary()  # kept up to date even when the run is cancelled
-            task = asyncio.create_task(_run_unit(twin, source, stop, summary))
+            size = config.units[k].block_samples
+            settle = ((max(1, round(size * (k + 1) / len(built))), size) if twin.provisional
+                      else (1, 1))
+            task = asyncio.create_task(_run_unit(twin, source, stop, summary, settle))
             waiter = asyncio.create_task(stop.wait())
             await asyncio.wait({task, waiter}, return_when=asyncio.FIRST_COMPLETED)
             if not task.done():
@@ -131,7 +142,8 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
                 await task
             return summary
 
-        results = await asyncio.gather(*(until_stopped(t, s) for t, s in built))
+        results = await asyncio.gather(*(until_stopped(k, t, s)
+                                         for k, (t, s) in enumerate(built)))
         return {twin.name: result for (twin, _), result in zip(built, results, strict=True)}
     finally:
         historian.close()

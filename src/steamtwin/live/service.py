@@ -221,11 +221,11 @@ class LiveTwin:
                 self._store_provisional()
         return summary
 
-    def settle(self, summary: LiveSummary | None = None) -> LiveSummary:
-        """Judge, model and store the samples whose look-ahead is in (the slow half of
-        :meth:`process`)."""
+    def settle(self, summary: LiveSummary | None = None, min_samples: int = 1) -> LiveSummary:
+        """Judge, model and store the samples whose look-ahead is in, once there are at least
+        ``min_samples`` of them (the slow half of :meth:`process`)."""
         summary = summary if summary is not None else LiveSummary()
-        self._store(self.gate.release(), summary)
+        self._store(self.gate.release(min_samples), summary)
         return summary
 
     def _store_provisional(self) -> None:
