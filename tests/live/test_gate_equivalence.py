@@ -116,7 +116,10 @@ def test_pending_samples_carry_the_verdicts_that_need_no_look_ahead():
     bad = pd.DataFrame(False, index=index, columns=frame.columns)
     bad.iloc[37, 1] = True
     gate = StreamGate({"ranges": {"a": (0.0, 2000.0)}}, **GATE)
-    assert len(gate.push(frame, bad).data) == 40 - gate.lookahead_samples
+    gate.add(frame, bad)
+    ready = 40 - gate.lookahead_samples
+    assert gate.release(min_samples=ready + 1).data.empty  # not enough judged yet: wait
+    assert len(gate.release(min_samples=ready).data) == ready
     values, flags = gate.pending()
     assert values.index.equals(index[40 - gate.lookahead_samples:])
     codes = flags.to_numpy(dtype=np.uint16)
