@@ -418,15 +418,25 @@ class LiveTwin:
                                    load=load if np.isfinite(load) else None)
 
 
+def _inputs(data: pd.DataFrame) -> np.ndarray:
+    """The model inputs of ``data`` as an array (columns in INPUT_SIGNALS order; positional
+    look-ups: pandas' label indexing costs more than a one-sample model step)."""
+    columns = data.columns.get_indexer(list(INPUT_SIGNALS))
+    if (columns < 0).any():
+        missing = [n for n, j in zip(INPUT_SIGNALS, columns, strict=True) if j < 0]
+        raise KeyError(f"the data lack the model input(s) {missing}")
+    return data.to_numpy(dtype=float)[:, columns]
+
+
 def _complete(data: pd.DataFrame) -> np.ndarray:
     """True for the samples whose model inputs are all present (not NaN)."""
-    return ~np.isnan(data[list(INPUT_SIGNALS)].to_numpy(dtype=float)).any(axis=1)
+    return ~np.isnan(_inputs(data)).any(axis=1)
 
 
 def _fed(data: pd.DataFrame, complete: np.ndarray) -> pd.DataFrame:
     """The model inputs of ``data`` where ``complete``, NaN rows elsewhere (what the model
     was fed)."""
-    values = data[list(INPUT_SIGNALS)].to_numpy(dtype=float).copy()
+    values = _inputs(data)
     values[~complete] = np.nan
     return pd.DataFrame(values, index=data.index, columns=list(INPUT_SIGNALS))
 
