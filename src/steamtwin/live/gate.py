@@ -15,6 +15,24 @@ taken over the whole file in batch and over the window here, so near a ramp a fe
 go one way or the other. Rejected values become NaN
 with their :class:`~steamtwin.dcs.quality.Flag` bits; the findings of each passed block name
 signal, tag and time. Nothing is dropped: every sample in comes out once, in time order.
+
+Which detector needs how much look-ahead (the design of the provisional values, issue 21's
+latency point): the valid range, the source's status and a missing value are judged per sample
+and need none; unit plausibility is a verdict on a whole signal (the median of the window) and
+needs none either; a spike is a departure from a *centred* rolling median that returns within
+two samples — it needs the half window ahead for the batch gate's median (one neighbour would
+tell a return, not the robust trend); a stuck run is one of at least ``stuck_min_duration_s`` of
+equal values whose improbability is judged against the trend on up to 30 samples after the run
+— it needs the run and that trend. So the final verdict waits the longer (60 s at 1 Hz), while
+:meth:`StreamGate.pending` gives every waiting sample the verdicts that need no look-ahead at
+once: the live twin stores a *provisional* value from them as soon as a sample arrives
+(:mod:`steamtwin.live.service`), and a spike or stuck value can reach that provisional value
+but never the final row nor the model state the final chain carries.
+
+The detectors run over the window as :func:`steamtwin.dcs.quality.cleaning.clean_flags` (the
+batch ``clean``'s masks without its messages, which the gate builds for its passed samples
+only): the same verdicts, bit for bit, as ``clean`` over the same window (tested with random
+streams, :mod:`tests.live.test_gate_equivalence`).
 """
 
 from __future__ import annotations
@@ -28,7 +46,8 @@ import numpy as np
 import pandas as pd
 
 from steamtwin.dcs.history import tag_map_quality_fields
-from steamtwin.dcs.quality import Finding, Flag, QualityOptions, clean
+from steamtwin.dcs.quality import Finding, Flag, QualityOptions
+from steamtwin.dcs.quality.cleaning import clean_flags
 from steamtwin.dcs.tagmap import TagMap
 
 __all__ = ["GateOutput", "StreamGate", "gate_options"]
@@ -84,26 +103,43 @@ class StreamGate:
         self.lookahead_samples = max(spike_window // 2 + 1,
                                      math.ceil(2.0 * stuck_min_duration_s / nominal_step_s))
         self._values: pd.DataFrame | None = None  # context + pending, raw SI
-        self._bad: pd.DataFrame | None = None
+        self._bad: np.ndarray | None = None  # True where the source's status excluded a value
         self._passed = 0  # rows of _values already passed (the context)
 
     def push(self, data: pd.DataFrame, bad: pd.DataFrame | None = None) -> GateOutput:
         """Take new samples (SI, time index after every earlier one; ``bad``: True where the
-        source's status excluded the value) and return those now final (maybe none)."""
+        source's status excluded the value) and return those now final (maybe none):
+        :meth:`add` then :meth:`release`."""
+        self.add(data, bad)
+        return self.release()
+
+    def add(self, data: pd.DataFrame, bad: pd.DataFrame | None = None) -> None:
+        """Take new samples (as :meth:`push`) without judging any: they wait in
+        :meth:`pending` until :meth:`release`."""
         if len(data) == 0:
-            return self._empty(data.columns)
-        bad = (pd.DataFrame(False, index=data.index, columns=data.columns) if bad is None
-               else bad.reindex(index=data.index, columns=data.columns, fill_value=False))
+            return
+        bad_values = (np.zeros(data.shape, dtype=bool) if bad is None else
+                      bad.reindex(index=data.index, columns=data.columns, fill_value=False)
+                      .to_numpy(dtype=bool))
         if self._values is not None and len(self._values) and not (
                 data.index[0] > self._values.index[-1]):
             raise ValueError(f"samples from {data.index[0]} do not come after the gate's last "
                              f"({self._values.index[-1]}); the source must pass them in order")
-        if self._values is None:
-            self._values, self._bad = data.copy(), bad.astype(bool)
+        if self._values is None or self._bad is None:
+            self._values, self._bad = data.copy(), bad_values
         else:
             self._values = pd.concat([self._values, data])
-            self._bad = pd.concat([self._bad, bad.astype(bool)])
-        return self._release(len(self._values) - self.lookahead_samples)
+            self._bad = np.concatenate([self._bad, bad_values])
+
+    def release(self, min_samples: int = 1) -> GateOutput:
+        """The samples whose look-ahead is in, judged — once at least ``min_samples`` of them
+        are (fewer: none yet; a live service judges a minute at a time, not every second)."""
+        if self._values is None:
+            return self._empty(pd.Index([]))
+        stop = len(self._values) - self.lookahead_samples
+        if stop - self._passed < min_samples:
+            return self._empty(self._values.columns)
+        return self._release(stop)
 
     def flush(self) -> GateOutput:
         """Everything still pending (the end of a stream: no more look-ahead)."""
@@ -111,39 +147,67 @@ class StreamGate:
             return self._empty(pd.Index([]))
         return self._release(len(self._values))
 
+    def pending(self) -> tuple[pd.DataFrame, pd.DataFrame]:
+        """The samples still waiting for their look-ahead, with the verdict of the checks that
+        need none (valid range, the source's status, missing values): their values (SI, NaN
+        where rejected so far) and :class:`~steamtwin.dcs.quality.Flag` bits. Provisional — a
+        spike or a stuck run among them is only recognised once the look-ahead is in."""
+        if self._values is None or self._bad is None:
+            empty = self._empty(pd.Index([]))
+            return empty.data, empty.flags
+        values = self._values.iloc[self._passed:]
+        bad = self._bad[self._passed:]
+        x = values.to_numpy(dtype=float)
+        ranges = self.options.get("ranges", {})
+        lo = np.array([ranges.get(name, (-np.inf, np.inf))[0] for name in values.columns])
+        hi = np.array([ranges.get(name, (-np.inf, np.inf))[1] for name in values.columns])
+        missing = np.isnan(x)
+        with np.errstate(invalid="ignore"):
+            out_of_range = ~missing & ((x < lo) | (x > hi))
+        status = bad & ~missing
+        flags = (missing * np.uint16(Flag.MISSING) | out_of_range * np.uint16(Flag.OUT_OF_RANGE)
+                 | bad * np.uint16(Flag.BAD_QUALITY)).astype(np.uint16)
+        removed = out_of_range | status
+        flags[removed] |= np.uint16(Flag.REMOVED)
+        return (pd.DataFrame(np.where(removed, np.nan, x), index=values.index,
+                             columns=values.columns),
+                pd.DataFrame(flags, index=values.index, columns=values.columns))
+
     def _release(self, stop: int) -> GateOutput:
         assert self._values is not None and self._bad is not None
         if stop <= self._passed:
             return self._empty(self._values.columns)
-        cleaned = clean(self._values, QualityOptions(
+        rows, codes = clean_flags(self._values, QualityOptions(
             nominal_step_s=self.nominal_step_s, spike_window=self.spike_window,
             stuck_min_duration_s=self.stuck_min_duration_s,
-            bad_quality={name: self._bad[name].to_numpy(dtype=bool)
-                         for name in self._values.columns},
+            bad_quality={name: self._bad[:, j] for j, name in enumerate(self._values.columns)},
             out_of_range_error_fraction=1.0,  # a stream has no "file" to refuse
             **self.options))
-        chosen = slice(self._passed, stop)
-        data = cleaned.data.iloc[chosen]
-        flags = cleaned.flags.iloc[chosen]
+        chosen = rows[self._passed:stop]
+        kept = self._values.iloc[chosen]
+        codes = codes[self._passed:stop]
+        values = np.where((codes & np.uint16(Flag.REMOVED)) != 0, np.nan,
+                          kept.to_numpy(dtype=float))
+        data = pd.DataFrame(values, index=kept.index, columns=kept.columns)
+        flags = pd.DataFrame(codes, index=kept.index, columns=kept.columns)
         findings = _findings(flags, self.options.get("tag_names", {}))
         keep = max(0, stop - self.context_samples)
         self._values = self._values.iloc[keep:]
-        self._bad = self._bad.iloc[keep:]
+        self._bad = self._bad[keep:]
         self._passed = stop - keep
         return GateOutput(data, flags, findings)
 
     def get_state(self) -> dict[str, Any]:
         """JSON-ready context (the passed samples the detectors look back on), exact; samples
         still waiting for their look-ahead are not kept: a restart receives them again."""
-        if self._values is None:
+        if self._values is None or self._bad is None:
             return {"columns": [], "times": [], "values": [], "bad": []}
         context = self._values.iloc[:self._passed]
-        bad = self._bad.iloc[:self._passed]
         return {"columns": [str(c) for c in context.columns],
                 "times": [t.isoformat() for t in context.index],
                 "values": [[None if not np.isfinite(v) else float(v) for v in row]
                            for row in context.to_numpy(dtype=float)],
-                "bad": bad.to_numpy(dtype=bool).tolist()}
+                "bad": self._bad[:self._passed].tolist()}
 
     def set_state(self, state: Mapping[str, Any]) -> StreamGate:
         """Continue after the context :meth:`get_state` wrote."""
@@ -155,8 +219,7 @@ class StreamGate:
         values = np.array([[np.nan if v is None else v for v in row] for row in state["values"]],
                           dtype=float)
         self._values = pd.DataFrame(values, index=index, columns=state["columns"])
-        self._bad = pd.DataFrame(np.array(state["bad"], dtype=bool), index=index,
-                                 columns=state["columns"])
+        self._bad = np.array(state["bad"], dtype=bool).reshape(values.shape)
         self._passed = len(index)
         return self
 

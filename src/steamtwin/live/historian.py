@@ -12,7 +12,12 @@ file per service, several units side by side:
 * ``parameters`` (unit, time, name, value, reason) — every swap of the live parameters;
 * ``states`` (unit, time, state JSON) — the newest :data:`KEPT_STATES` state snapshots of
   each unit, to restart from;
-* ``progress`` (unit, last_time) — the last committed sample.
+* ``progress`` (unit, last_time) — the last committed sample;
+* ``provisional`` (as ``series``) — the twin's first word on the samples the gate's look-ahead
+  has not judged yet (:meth:`LiveHistorian.store_provisional`), each row deleted in the
+  transaction that commits its sample's final row; the view ``latest_series`` is ``series``
+  and ``provisional`` together, with a ``provisional`` column. A restarted service rewrites
+  them; ``series``, ``progress`` and the rest never hold a provisional value.
 
 Exactly once: :meth:`LiveHistorian.commit_block` writes a block's series rows, the unit's
 progress and (optionally) its state snapshot in ONE transaction (DuckDB transactions are
@@ -32,6 +37,7 @@ from pathlib import Path
 import duckdb
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 
 __all__ = ["SOURCES", "Alarm", "AlarmEnd", "BlockEvents", "LiveHistorian", "export_history"]
 
@@ -51,6 +57,12 @@ _SCHEMA = (
        state JSON NOT NULL)""",
     """CREATE TABLE IF NOT EXISTS progress (unit VARCHAR PRIMARY KEY,
        last_time TIMESTAMPTZ NOT NULL)""",
+    """CREATE TABLE IF NOT EXISTS provisional (unit VARCHAR NOT NULL,
+       time TIMESTAMPTZ NOT NULL, source VARCHAR NOT NULL, signal VARCHAR NOT NULL,
+       value DOUBLE, flag VARCHAR)""",
+    """CREATE OR REPLACE VIEW latest_series AS
+       SELECT *, false AS provisional FROM series
+       UNION ALL SELECT *, true AS provisional FROM provisional""",
 )
 
 
@@ -101,6 +113,8 @@ class LiveHistorian:
     def __init__(self, path: str | Path) -> None:
         self.path = Path(path)
         self._connection: duckdb.DuckDBPyConnection | None = None
+        self._last_times: dict[str, pd.Timestamp | None] = {}  # what progress holds
+        self._provisional: dict[str, bool] = {}  # unit → it may have provisional rows
 
     def __enter__(self) -> LiveHistorian:
         self.open()
@@ -124,6 +138,8 @@ class LiveHistorian:
         if self._connection is not None:
             self._connection.close()
             self._connection = None
+        self._last_times.clear()
+        self._provisional.clear()
 
     @property
     def connection(self) -> duckdb.DuckDBPyConnection:
@@ -133,10 +149,15 @@ class LiveHistorian:
         return self._connection
 
     def resume_time(self, unit: str) -> pd.Timestamp | None:
-        """The last committed sample's time of ``unit`` (UTC), None before the first."""
-        row = self.connection.execute(
-            "SELECT last_time FROM progress WHERE unit = ?", [unit]).fetchone()
-        return None if row is None else pd.Timestamp(row[0]).tz_convert("UTC")
+        """The last committed sample's time of ``unit`` (UTC), None before the first. Read
+        from the database once, then kept up to date by :meth:`commit_block` (DuckDB lets one
+        process write a file, and this connection is its writer)."""
+        if unit not in self._last_times:
+            row = self.connection.execute(
+                "SELECT last_time FROM progress WHERE unit = ?", [unit]).fetchone()
+            self._last_times[unit] = (None if row is None
+                                      else pd.Timestamp(row[0]).tz_convert("UTC"))
+        return self._last_times[unit]
 
     def commit_block(self, unit: str, frames: Mapping[str, pd.DataFrame],
                      flags: pd.DataFrame | None = None,
@@ -165,18 +186,17 @@ class LiveHistorian:
             raise ValueError(f"unit {unit!r}: block starts at {first.isoformat()}, not after "
                              f"the last committed sample {resume.isoformat()} (a sample would "
                              "be stored twice)")
-        long = [self._long(unit, source, frame, flags if source == "measured" else None)
-                for source, frame in frames.items() if len(frame)]
-        rows = pd.concat(long, ignore_index=True)
+        rows = pa.concat_tables([
+            self._long(unit, source, frame, flags if source == "measured" else None)
+            for source, frame in frames.items() if len(frame)])
         connection = self.connection
         connection.execute("BEGIN TRANSACTION")
         try:
-            connection.register("block_rows", rows)
-            connection.execute("INSERT INTO series SELECT unit, time, source, signal, value, "
-                               "flag FROM block_rows")
-            connection.unregister("block_rows")
-            connection.execute("INSERT OR REPLACE INTO progress VALUES (?, ?)",
-                               [unit, last.to_pydatetime()])
+            self._insert_series(rows)
+            self._set_progress(unit, last, known=resume is not None)
+            if self._may_have_provisional(unit):  # superseded by the final rows
+                connection.execute("DELETE FROM provisional WHERE unit = ? AND time <= ?",
+                                   [unit, last.to_pydatetime()]).fetchall()
             if state is not None:
                 connection.execute("INSERT INTO states VALUES (?, ?, ?)",
                                    [unit, last.to_pydatetime(), json.dumps(state)])
@@ -189,8 +209,72 @@ class LiveHistorian:
             connection.execute("COMMIT")
         except Exception:
             connection.execute("ROLLBACK")
+            self._last_times.pop(unit, None)  # read again from the database
             raise
-        return len(rows)
+        self._last_times[unit] = last
+        return rows.num_rows
+
+    def store_provisional(self, unit: str, frames: Mapping[str, pd.DataFrame],
+                          flags: pd.DataFrame | None = None) -> int:
+        """Store provisional rows of ``unit`` (``frames`` and ``flags`` as in
+        :meth:`commit_block`): they replace the unit's provisional rows from their first time
+        on, and :meth:`commit_block` deletes them when it stores their samples' final rows.
+        Refuses rows at or before the last committed sample (ValueError); returns the rows
+        written."""
+        times = [_utc(frame.index) for frame in frames.values() if len(frame)]
+        if not times:
+            return 0
+        first = min(index[0] for index in times)
+        resume = self.resume_time(unit)
+        if resume is not None and first <= resume:
+            raise ValueError(f"unit {unit!r}: provisional rows from {first.isoformat()}, not "
+                             f"after the last committed sample {resume.isoformat()}")
+        rows = pa.concat_tables([
+            self._long(unit, source, frame, flags if source == "measured" else None)
+            for source, frame in frames.items() if len(frame)])
+        connection = self.connection
+        connection.execute("BEGIN TRANSACTION")
+        try:
+            if self._may_have_provisional(unit):
+                connection.execute("DELETE FROM provisional WHERE unit = ? AND time >= ?",
+                                   [unit, first.to_pydatetime()]).fetchall()
+            self._insert_series(rows, "provisional")
+            connection.execute("COMMIT")
+        except Exception:
+            connection.execute("ROLLBACK")
+            raise
+        self._provisional[unit] = True
+        return rows.num_rows
+
+    def _may_have_provisional(self, unit: str) -> bool:
+        if unit not in self._provisional:  # once per connection; then this writer knows
+            self._provisional[unit] = bool(self.connection.execute(  # fetchall: DuckDB keeps
+                "SELECT count(*) FROM provisional WHERE unit = ?",  # a fetchone's result open
+                [unit]).fetchall()[0][0])
+        return self._provisional[unit]
+
+    def _insert_series(self, rows: pa.Table, table: str = "series") -> None:
+        """Append ``rows`` (the series columns, Arrow) to ``table``: one ``INSERT … SELECT``
+        over the registered Arrow table, scanned without copying (DuckDB docs, "Data
+        Ingestion": bulk insert from Arrow/pandas rather than row by row)."""
+        connection = self.connection
+        connection.register("block_rows", rows)
+        try:
+            connection.execute(f"INSERT INTO {table} SELECT unit, time, source, signal, value, "
+                               "flag FROM block_rows")
+        finally:
+            connection.unregister("block_rows")
+
+    def _set_progress(self, unit: str, last: pd.Timestamp, known: bool) -> None:
+        """The unit's last committed sample: an UPDATE of its row once it has one (cheaper in
+        DuckDB than INSERT OR REPLACE, which deletes and re-inserts under the primary key)."""
+        stamp = last.to_pydatetime()
+        if known:
+            self.connection.execute("UPDATE progress SET last_time = ? WHERE unit = ?",
+                                    [stamp, unit])
+        else:
+            self.connection.execute("INSERT OR REPLACE INTO progress VALUES (?, ?)",
+                                    [unit, stamp])
 
     def _store_events(self, unit: str, events: BlockEvents) -> None:
         for alarm in events.alarms:
@@ -207,23 +291,31 @@ class LiveHistorian:
 
     @staticmethod
     def _long(unit: str, source: str, frame: pd.DataFrame, flags: pd.DataFrame | None
-              ) -> pd.DataFrame:
+              ) -> pa.Table:
+        """The series rows of one wide ``frame`` (time-major, one row per time and signal) as
+        an Arrow table: unit, source and signal dictionary-encoded (no string per row),
+        NaN values stored as NULL."""
         times = _utc(frame.index)
         signals = [str(name) for name in frame.columns]
-        values = frame.to_numpy(dtype=float)
+        values = frame.to_numpy(dtype=float).reshape(-1)
         flag_values = np.full(values.shape, None, dtype=object)
         if flags is not None:
             aligned = flags.reindex(index=frame.index, columns=frame.columns)
-            raw = aligned.to_numpy(dtype=object)
+            raw = aligned.to_numpy(dtype=object).reshape(-1)
             present = pd.notna(raw)
             flag_values[present] = raw[present].astype(str)
-        return pd.DataFrame({
-            "unit": unit,
-            "time": np.repeat(times.to_numpy(), len(signals)),
-            "source": source,
-            "signal": np.tile(np.array(signals, dtype=object), len(times)),
-            "value": values.reshape(-1),
-            "flag": flag_values.reshape(-1),
+        n = values.size
+        constant = np.zeros(n, dtype=np.int32)
+        return pa.table({
+            "unit": pa.DictionaryArray.from_arrays(constant, pa.array([unit])),
+            "time": pa.array(np.repeat(times.as_unit("us").asi8, len(signals)),
+                             type=pa.timestamp("us", tz="UTC")),
+            "source": pa.DictionaryArray.from_arrays(constant, pa.array([source])),
+            "signal": pa.DictionaryArray.from_arrays(
+                np.tile(np.arange(len(signals), dtype=np.int32), len(times)),
+                pa.array(signals, type=pa.string())),
+            "value": pa.array(values, mask=np.isnan(values)),
+            "flag": pa.array(flag_values, type=pa.string()),
         })
 
     def latest_state(self, unit: str) -> tuple[pd.Timestamp, dict] | None:

@@ -41,15 +41,17 @@ def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, So
                                    trajectory_rows=round(86_400.0 / unit.recalibration.step_s))
         recalibration = LiveRecalibration(tracker, every_s=unit.recalibration.every_s,
                                           settle_steps=unit.recalibration.settle_steps)
+    source_config = unit.source
+    # a live or paced source gets provisional values (latency); a replay at full speed not
+    provisional = source_config.kind != "replay" or source_config.speed is not None
     twin = LiveTwin(unit.name, model, params, StreamGate(gate_options(tag_map)), historian,
                     rom=None if unit.rom is None else load_rom(unit.rom), monitor=monitor,
                     monitored=MONITORED if monitor is None else monitor.sensors,
                     sensitivity=None if monitor is None else SensitivityCache(model,
                                                                               monitor.sensors),
-                    recalibration=recalibration)
+                    recalibration=recalibration, provisional=provisional)
     twin.start()
     resume = twin.resume_after()
-    source_config = unit.source
     if source_config.kind == "replay":
         source: Source = ReplaySource(source_config.path, tag_map, speed=source_config.speed,
                                       block_samples=unit.block_samples, start_after=resume)
@@ -66,11 +68,21 @@ def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, So
 
 
 async def _run_unit(twin: LiveTwin, source: Source, stop: asyncio.Event,
-                    summary: LiveSummary) -> LiveSummary:
+                    summary: LiveSummary, settle: tuple[int, int] = (1, 1)) -> LiveSummary:
+    """``settle``: (first, then) — the final samples judged at once, the first time and then
+    (a live unit: its ``block_samples``, the first time at a phase of its own so that the
+    units' final work falls in different seconds instead of delaying every unit's provisional
+    values in the same one)."""
     blocks = source.blocks()
+    first, then = settle
     try:
         async for block in blocks:
-            twin.process(block, summary)
+            twin.receive(block, summary)
+            await asyncio.sleep(0)  # every unit's provisional values before anyone's final work
+            stored = summary.samples
+            twin.settle(summary, first)
+            if summary.samples > stored:
+                first = then
             for finding in block.findings:
                 LOG.warning("%s: %s", twin.name, finding.message)
             if stop.is_set():
@@ -104,13 +116,16 @@ soon after the event (set when every unit has stopped) is set."""
 
 
 async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
-                      companions: Sequence[Companion] = ()) -> dict[str, LiveSummary]:
+                      companions: Sequence[Companion] = (),
+                      historian: LiveHistorian | None = None) -> dict[str, LiveSummary]:
     """Run every unit of ``config`` until its source ends or ``stop`` is set; returns each
     unit's summary. What was committed stays; a restart continues from it. ``companions``
     run on the same loop and historian from before the first unit starts until the last one
-    stops (a companion that fails stops the service)."""
+    stops (a companion that fails stops the service). ``historian``: the database to use
+    instead of ``config.database``'s (e.g. one that records when rows are stored, for the
+    latency benchmark)."""
     stop = stop if stop is not None else asyncio.Event()
-    historian = LiveHistorian(config.database)
+    historian = historian if historian is not None else LiveHistorian(config.database)
     historian.open()
     done = asyncio.Event()
     beside: list[asyncio.Task] = []
@@ -129,9 +144,12 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
             LOG.info("%s: starting%s", twin.name,
                      f" after {resume.isoformat()}" if resume is not None else "")
 
-        async def until_stopped(twin: LiveTwin, source: Source) -> LiveSummary:
+        async def until_stopped(k: int, twin: LiveTwin, source: Source) -> LiveSummary:
             summary = LiveSummary()  # kept up to date even when the run is cancelled
-            task = asyncio.create_task(_run_unit(twin, source, stop, summary))
+            size = config.units[k].block_samples
+            settle = ((max(1, round(size * (k + 1) / len(built))), size) if twin.provisional
+                      else (1, 1))
+            task = asyncio.create_task(_run_unit(twin, source, stop, summary, settle))
             waiter = asyncio.create_task(stop.wait())
             await asyncio.wait({task, waiter}, return_when=asyncio.FIRST_COMPLETED)
             if not task.done():
@@ -143,7 +161,8 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
                 await task
             return summary
 
-        results = await asyncio.gather(*(until_stopped(t, s) for t, s in built))
+        results = await asyncio.gather(*(until_stopped(k, t, s)
+                                         for k, (t, s) in enumerate(built)))
         return {twin.name: result for (twin, _), result in zip(built, results, strict=True)}
     finally:
         done.set()

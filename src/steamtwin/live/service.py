@@ -21,6 +21,18 @@
    alarms started and ended, the parameter swaps, and the state (model, gate context, monitor,
    open block, J cache, filter, live parameters) — all in one transaction per block.
 
+Latency: the gate's final verdict waits for its look-ahead (60 s at 1 Hz; why, in
+:mod:`steamtwin.live.gate`). With ``provisional=True`` (the service's choice for an OPC UA or
+paced source) :meth:`LiveTwin.receive` stores, as soon as a sample arrives, its provisional
+measured, twin (ROM probes included) and residual rows in the historian's ``provisional`` table,
+from the verdicts that need no look-ahead and a provisional model state continued from the last
+final one; :meth:`LiveTwin.settle` later stores the final rows, which delete the provisional ones
+in the same transaction. The final chain never sees a provisional value: when the final verdicts
+fed the model other inputs than the provisional ones (a spike or stuck run found) or the
+parameters were swapped, the provisional chain restarts from the final state. Provisional rows
+live outside ``series``, ``progress`` and the state, so a restart gives the uninterrupted
+run's database (tested).
+
 Restart: the state is saved with the block that crosses each ``snapshot_every_s`` of data
 (default 10 min; serialising the gate's context, the filter's data and the rewind buffer every
 block would cost more than the model), and with the last block of a finished stream. A new
@@ -88,7 +100,9 @@ class LiveTwin:
     blade ROM (probe temperatures); ``monitor``: an optional fitted residual monitor;
     ``sensitivity``: J per load band for its degradation hypotheses (without it the monitor
     tells sensor faults only); ``recalibration``: optional online recalibration;
-    ``snapshot_every_s``: data seconds between saved states (0: every block).
+    ``snapshot_every_s``: data seconds between saved states (0: every block);
+    ``provisional``: also store a provisional twin value of each sample as soon as it arrives
+    (the ``provisional`` table), replaced by the final row once the gate has judged it.
     """
 
     def __init__(self, name: str, model: FullOrderModel, params: ModelParameters,
@@ -97,7 +111,7 @@ class LiveTwin:
                  monitored: Sequence[str] = MONITORED,
                  sensitivity: SensitivityCache | None = None,
                  recalibration: LiveRecalibration | None = None,
-                 snapshot_every_s: float = 600.0) -> None:
+                 snapshot_every_s: float = 600.0, provisional: bool = False) -> None:
         self.name = name
         self.model = model
         self.params = params
@@ -116,6 +130,10 @@ class LiveTwin:
         self._replay_from: pd.Timestamp | None = None
         self._committed: pd.Timestamp | None = None
         self._last_snapshot: pd.Timestamp | None = None
+        self.provisional = provisional
+        self._provisional_state: StreamState | None = None
+        self._provisional_until: pd.Timestamp | None = None
+        self._provisional_inputs: pd.DataFrame | None = None  # NaN rows: no twin value
 
     def start(self) -> LiveTwin:
         """Open the historian and continue from its last saved state, if any."""
@@ -177,7 +195,15 @@ class LiveTwin:
         return summary
 
     def process(self, block: SourceBlock, summary: LiveSummary | None = None) -> LiveSummary:
-        """One source block through gate, model, residuals and historian."""
+        """One source block through gate, model, residuals and historian: :meth:`receive`
+        then :meth:`settle`."""
+        summary = self.receive(block, summary)
+        return self.settle(summary)
+
+    def receive(self, block: SourceBlock, summary: LiveSummary | None = None) -> LiveSummary:
+        """Take a source block into the gate and, with ``provisional``, store the twin's
+        provisional values of the samples still waiting for their look-ahead — the fast half
+        of :meth:`process` (the service runs every unit's before any unit's :meth:`settle`)."""
         if not self._started:
             self.start()
         summary = summary if summary is not None else LiveSummary()
@@ -190,8 +216,63 @@ class LiveTwin:
             keep = frame.index > resume
             frame, bad = frame[keep], bad[keep]
         if len(frame):
-            self._store(self.gate.push(frame, bad), summary)
+            self.gate.add(frame, bad)
+            if self.provisional:
+                self._store_provisional()
         return summary
+
+    def settle(self, summary: LiveSummary | None = None, min_samples: int = 1) -> LiveSummary:
+        """Judge, model and store the samples whose look-ahead is in, once there are at least
+        ``min_samples`` of them (the slow half of :meth:`process`)."""
+        summary = summary if summary is not None else LiveSummary()
+        self._store(self.gate.release(min_samples), summary)
+        return summary
+
+    def _store_provisional(self) -> None:
+        """The twin on the gate's pending samples (verdicts that need no look-ahead: range,
+        status, missing), continuing the provisional model state over the samples not yet
+        given a value, or restarting it from the final state when the final verdicts took
+        other inputs than the provisional ones (a spike or stuck run found), after a swap or
+        a restart. The model state of the final chain is never touched."""
+        values, flags = self.gate.pending()
+        committed = self.historian.resume_time(self.name)
+        if committed is not None:
+            later = values.index > committed
+            values, flags = values[later], flags[later]
+        if self._provisional_until is not None:
+            new = values.index > self._provisional_until
+            values, flags = values[new], flags[new]
+        if values.empty:
+            return
+        start = self._provisional_state if self._provisional_until is not None else self._state
+        complete = _complete(values)
+        twin, state, _ = self._predict(values, complete, start)
+        used = _fed(values, complete)
+        self._provisional_inputs = (used if self._provisional_inputs is None
+                                    else pd.concat([self._provisional_inputs, used]))
+        self._provisional_state, self._provisional_until = state, values.index[-1]
+        self.historian.store_provisional(
+            self.name, {"measured": values, "twin": twin,
+                        "residual": self._residual(values, twin)}, _flag_objects(flags))
+
+    def _check_provisional(self, data: pd.DataFrame, complete: np.ndarray) -> None:
+        """Keep the provisional chain if the final samples ``data`` fed the model what the
+        provisional values assumed; else restart it from the final state."""
+        seen = self._provisional_inputs
+        if seen is None:
+            return
+        final = _fed(data, complete)
+        done = seen.index <= data.index[-1]
+        if seen.index[done].equals(final.index) and np.array_equal(
+                seen[done].to_numpy(), final.to_numpy(), equal_nan=True):
+            self._provisional_inputs = seen[~done]
+        else:
+            self._reset_provisional()
+
+    def _reset_provisional(self) -> None:
+        self._provisional_state = None
+        self._provisional_until = None
+        self._provisional_inputs = None
 
     def finish(self, summary: LiveSummary | None = None) -> LiveSummary:
         """The end of a stream: what the gate still holds (no more look-ahead)."""
@@ -204,31 +285,20 @@ class LiveTwin:
         if data.empty:
             return
         summary.findings += len(passed.findings)
-        inputs = data[list(INPUT_SIGNALS)]
-        complete = inputs.notna().all(axis=1).to_numpy()
-        twin = pd.DataFrame(np.nan, index=data.index, columns=list(self.model.output_signals))
-        if complete.any():
-            if self.recalibration is not None:
-                self._rewind.keep(self._state, inputs[complete],
-                                  2.0 * self.recalibration.tracker.step_s)
-            outputs, self._state = self.model.simulate_stream(inputs[complete], self.params,
-                                                              self._state)
-            twin.loc[outputs.index, :] = outputs.to_numpy()
-            if self.rom is not None:
-                with warnings.catch_warnings():  # counted below, not a warning per block
-                    warnings.simplefilter("ignore", ExtrapolationWarning)
-                    probes = predict_series(self.rom, data[complete]).sensors
-                summary.rom_extrapolated += int(probes[FLAG_EXTRAPOLATED].sum())
-                valid = ~probes[FLAG_INVALID].to_numpy(dtype=bool)
-                for name in self.rom.probes:
-                    twin.loc[probes.index[valid], name] = probes[name].to_numpy()[valid]
-        sensors = [s for s in self.monitored if s in data.columns and s in twin.columns]
-        residual = data[sensors] - twin[sensors]
+        complete = _complete(data)
+        if self.provisional:
+            self._check_provisional(data, complete)
+        if complete.any() and self.recalibration is not None:
+            self._rewind.keep(self._state, data[list(INPUT_SIGNALS)][complete],
+                              2.0 * self.recalibration.tracker.step_s)
+        twin, self._state, extrapolated = self._predict(data, complete, self._state)
+        summary.rom_extrapolated += extrapolated
+        residual = self._residual(data, twin)
         alarms = [] if self.monitor is None else self._alarms(data, residual, final)
         swaps = [] if self.recalibration is None else self.recalibration.feed(data, self.params)
         if swaps:  # the new set applies from the next sample on
             self._swap(swaps[-1])
-        flags = passed.flags.where(passed.flags != 0).astype(object)
+        flags = _flag_objects(passed.flags)
         end = data.index[-1]
         snapshot = final or self._last_snapshot is None or (
             (end - self._last_snapshot).total_seconds() >= self.snapshot_every_s)
@@ -253,12 +323,50 @@ class LiveTwin:
         summary.samples += len(data)
         summary.without_twin += int((~complete).sum())
 
+    def _predict(self, data: pd.DataFrame, complete: np.ndarray, state: StreamState | None
+                 ) -> tuple[pd.DataFrame, StreamState | None, int]:
+        """Twin values of ``data`` (SI): the model's sensor readings, and the ROM's probe
+        temperatures, where ``complete`` (all inputs good), NaN elsewhere; the model state
+        after these samples (``state`` continued; unchanged without a complete sample); and the
+        samples whose ROM probes were extrapolated. Built as one array (pandas ``.loc``
+        assignments per column cost more than the model on a 60-sample block)."""
+        columns = list(self.model.output_signals)
+        if not complete.any():
+            return (pd.DataFrame(np.nan, index=data.index, columns=columns), state, 0)
+        outputs, state = self.model.simulate_stream(data[list(INPUT_SIGNALS)][complete],
+                                                    self.params, state)
+        probes = [] if self.rom is None else [n for n in self.rom.probes if n not in columns]
+        values = np.full((len(data), len(columns) + len(probes)), np.nan)
+        values[complete, :len(columns)] = outputs.to_numpy(dtype=float)
+        extrapolated = 0
+        if self.rom is not None:
+            with warnings.catch_warnings():  # counted by the caller, not a warning per block
+                warnings.simplefilter("ignore", ExtrapolationWarning)
+                predicted = predict_series(self.rom, data[complete]).sensors
+            extrapolated = int(predicted[FLAG_EXTRAPOLATED].sum())
+            valid = ~predicted[FLAG_INVALID].to_numpy(dtype=bool)
+            rows = np.flatnonzero(complete)[valid]
+            position = {name: j for j, name in enumerate(columns + probes)}
+            for name in self.rom.probes:
+                values[rows, position[name]] = predicted[name].to_numpy(dtype=float)[valid]
+        return pd.DataFrame(values, index=data.index, columns=columns + probes), state, extrapolated
+
+    def _residual(self, data: pd.DataFrame, twin: pd.DataFrame) -> pd.DataFrame:
+        """measured − twin (SI) of the monitored sensors both have."""
+        sensors = [s for s in self.monitored if s in data.columns and s in twin.columns]
+        measured = data.columns.get_indexer(sensors)
+        modelled = twin.columns.get_indexer(sensors)
+        return pd.DataFrame(data.to_numpy(dtype=float)[:, measured]
+                            - twin.to_numpy(dtype=float)[:, modelled],
+                            index=data.index, columns=sensors)
+
     def _swap(self, swap: ParameterSwap) -> None:
         """Make ``swap``'s parameters live. The model's carried state (metal temperatures,
         sensor lags) is recomputed with them from the start of the data the estimate rests on:
         a state grown under the old set would keep its metal a transient behind the plant's and
         show, for the casing's time constant, a residual that no sensor or parameter explains."""
         self.params = swap.params
+        self._reset_provisional()
         if self.sensitivity is not None:
             self.sensitivity.clear()
         if self.monitor is not None:
@@ -308,3 +416,33 @@ class LiveTwin:
                        else self.sensitivity.get(load, block.rows, self.params))
         return self.monitor.update(block.end, block.means[sensors], sensitivity,
                                    load=load if np.isfinite(load) else None)
+
+
+def _inputs(data: pd.DataFrame) -> np.ndarray:
+    """The model inputs of ``data`` as an array (columns in INPUT_SIGNALS order; positional
+    look-ups: pandas' label indexing costs more than a one-sample model step)."""
+    columns = data.columns.get_indexer(list(INPUT_SIGNALS))
+    if (columns < 0).any():
+        missing = [n for n, j in zip(INPUT_SIGNALS, columns, strict=True) if j < 0]
+        raise KeyError(f"the data lack the model input(s) {missing}")
+    return data.to_numpy(dtype=float)[:, columns]
+
+
+def _complete(data: pd.DataFrame) -> np.ndarray:
+    """True for the samples whose model inputs are all present (not NaN)."""
+    return ~np.isnan(_inputs(data)).any(axis=1)
+
+
+def _fed(data: pd.DataFrame, complete: np.ndarray) -> pd.DataFrame:
+    """The model inputs of ``data`` where ``complete``, NaN rows elsewhere (what the model
+    was fed)."""
+    values = _inputs(data)
+    values[~complete] = np.nan
+    return pd.DataFrame(values, index=data.index, columns=list(INPUT_SIGNALS))
+
+
+def _flag_objects(flags: pd.DataFrame) -> pd.DataFrame:
+    """The gate's flag bits as the historian stores them: the code where set, None where 0."""
+    codes = flags.to_numpy()
+    return pd.DataFrame(np.where(codes != 0, codes.astype(float), np.nan).astype(object),
+                        index=flags.index, columns=flags.columns)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from steamtwin.dcs.quality.detectors import analyse
+from steamtwin.dcs.quality.detectors import Analysis, analyse
 from steamtwin.dcs.quality.messages import Where, detection_findings, unit_findings
 from steamtwin.dcs.quality.options import QualityOptions
 from steamtwin.dcs.quality.report import CleaningResult, Finding, Flag, QualityReport
@@ -49,30 +49,12 @@ def clean(frame: pd.DataFrame, options: QualityOptions | None = None, *,
     detected = (
         list(report.findings) if report is not None else detection_findings(analysis, options)
     )
-    unit_errors = {f.signal for f in unit_findings(analysis, options)
-                   if f.kind == "unit" and f.severity == "error"}
-
     a = analysis
+    flags, removed = _flag_codes(a, frame.columns, options, reject_stuck)
     data = frame.iloc[a.rows].copy()
-    flags = np.zeros((len(a.rows), frame.shape[1]), dtype=np.uint16)
     actions: list[Finding] = []
-    common = (a.kept_has_dup.astype(np.uint16) * np.uint16(Flag.DUPLICATE)) | (
-        a.kept_late.astype(np.uint16) * np.uint16(Flag.OUT_OF_ORDER)
-    )
-    position = {name: j for j, name in enumerate(frame.columns)}
-    for name in frame.columns:
-        flags[:, position[name]] |= common
     for name, col in a.columns.items():
-        f = flags[:, position[name]]
-        for bit, mask in ((Flag.MISSING, col.nan), (Flag.SPIKE, col.spike),
-                          (Flag.OUT_OF_RANGE, col.out_of_range), (Flag.STUCK, col.stuck),
-                          (Flag.DUPLICATE_CONFLICT, col.conflict),
-                          (Flag.BAD_QUALITY, col.bad)):
-            f[mask] |= np.uint16(bit)
-        stuck = col.stuck & ~col.nan if reject_stuck else np.zeros_like(col.nan)
-        unit = ~col.nan if name in unit_errors else np.zeros_like(col.nan)
-        remove = col.spike | col.out_of_range | (col.bad & ~col.nan) | stuck | unit
-        f[remove] |= np.uint16(Flag.REMOVED)
+        remove, stuck, unit = removed[name]
         if remove.any():
             values = col.values.copy()
             values[remove] = np.nan
@@ -111,6 +93,49 @@ def clean(frame: pd.DataFrame, options: QualityOptions | None = None, *,
     flags_frame = pd.DataFrame(flags, index=data.index, columns=frame.columns)
     full = QualityReport(tuple(detected + actions), options.source, len(frame), a.signals)
     return CleaningResult(data, flags_frame, full, a.rows.copy())
+
+
+def clean_flags(frame: pd.DataFrame, options: QualityOptions, *, reject_stuck: bool = True
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """What :func:`clean` does to each sample, without its findings: the as-read positions of
+    the rows kept (sorted, de-duplicated) and their :class:`Flag` bits (rows × columns,
+    uint16; ``Flag.REMOVED`` where :func:`clean` writes NaN). For a caller that builds its own
+    findings (the live gate, :mod:`steamtwin.live.gate`) and needs the masks only."""
+    options = _options_or_default(options)
+    analysis = analyse(frame, options)
+    flags, _ = _flag_codes(analysis, frame.columns, options, reject_stuck)
+    return analysis.rows.copy(), flags
+
+
+def _flag_codes(a: Analysis, columns: pd.Index, options: QualityOptions, reject_stuck: bool
+                ) -> tuple[np.ndarray, dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+    """Flag bits per kept row and column, and per checked signal its (removed, stuck
+    rejected, unit rejected) masks: spikes, out-of-range values, bad statuses, stuck runs
+    (unless ``reject_stuck`` is False) and every sample of a signal with an error-level unit
+    finding are removed."""
+    unit_errors = {f.signal for f in unit_findings(a, options)
+                   if f.kind == "unit" and f.severity == "error"}
+    flags = np.zeros((len(a.rows), len(columns)), dtype=np.uint16)
+    common = (a.kept_has_dup.astype(np.uint16) * np.uint16(Flag.DUPLICATE)) | (
+        a.kept_late.astype(np.uint16) * np.uint16(Flag.OUT_OF_ORDER)
+    )
+    position = {name: j for j, name in enumerate(columns)}
+    for name in columns:
+        flags[:, position[name]] |= common
+    removed = {}
+    for name, col in a.columns.items():
+        f = flags[:, position[name]]
+        for bit, mask in ((Flag.MISSING, col.nan), (Flag.SPIKE, col.spike),
+                          (Flag.OUT_OF_RANGE, col.out_of_range), (Flag.STUCK, col.stuck),
+                          (Flag.DUPLICATE_CONFLICT, col.conflict),
+                          (Flag.BAD_QUALITY, col.bad)):
+            f[mask] |= np.uint16(bit)
+        stuck = col.stuck & ~col.nan if reject_stuck else np.zeros_like(col.nan)
+        unit = ~col.nan if name in unit_errors else np.zeros_like(col.nan)
+        remove = col.spike | col.out_of_range | (col.bad & ~col.nan) | stuck | unit
+        f[remove] |= np.uint16(Flag.REMOVED)
+        removed[name] = (remove, stuck, unit)
+    return flags, removed
 
 
 def _options_or_default(options: QualityOptions | None) -> QualityOptions:

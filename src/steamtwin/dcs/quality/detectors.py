@@ -359,8 +359,22 @@ def _rolling_median(x: np.ndarray, window: int) -> np.ndarray:
     half = min(window // 2, x.size)
     edges = np.unique(np.r_[np.arange(half), np.arange(x.size - half, x.size)])
     padded = np.concatenate([np.full(window // 2, np.nan), x, np.full(window // 2, np.nan)])
-    trend[edges] = np.nanmedian(padded[edges[:, None] + np.arange(window)], axis=1)
+    trend[edges] = row_nanmedian(padded[edges[:, None] + np.arange(window)])
     return trend
+
+def row_nanmedian(rows: np.ndarray) -> np.ndarray:
+    """``np.nanmedian(rows, axis=1)``, bit for bit, without its masked-array machinery (5× its
+    cost on the short rows here): sort each row (NaN last), take the low and high middle of its
+    finite count c (the same element when c is odd) and halve their sum — numpy's own
+    definition (``numpy.ma.median``, which ``nanmedian`` uses on rows this short). A row
+    without a finite value gives NaN."""
+    ordered = np.sort(rows, axis=1)
+    counts = np.count_nonzero(~np.isnan(rows), axis=1)
+    high = counts // 2
+    low = np.where(counts % 2 == 1, high, high - 1)
+    picked = np.arange(rows.shape[0])
+    with np.errstate(invalid="ignore", over="ignore"):  # inf − inf, huge + huge: as numpy
+        return (ordered[picked, low] + ordered[picked, high]) / 2.0
 
 def segments(mask_continue: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Segments of samples where ``mask_continue[i]`` says i continues i − 1's segment."""
