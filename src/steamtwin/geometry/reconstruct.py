@@ -37,6 +37,7 @@ import numpy as np
 
 from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.bspline import AdaptiveSurfaceFit, PeriodicSurface, clamped_knots
+from steamtwin.geometry.edge_model import EdgeModel, model_sparse_edges
 from steamtwin.geometry.fit_guard import GuardReport, GuardSettings, guard_surface, refusal_message
 from steamtwin.geometry.mesh_sections import check_closed
 from steamtwin.geometry.pritchard import GeometryError
@@ -69,7 +70,9 @@ class ReconstructionSettings:
     span; ``chordwise_spacing``, ``sag`` and ``span_spacing`` control the triangulation;
     ``guard`` checks the surface against the cloud (None: not checked,
     :mod:`~steamtwin.geometry.fit_guard`); ``penalty_factor`` multiplies the fit's smoothing
-    penalty (the guard's repairs raise it).
+    penalty (the guard's repairs raise it); ``model_edges``: the side is fitted to model points
+    on circles tangent to both flanks instead of the cloud's own points where an edge is
+    sparsely sampled (:mod:`~steamtwin.geometry.edge_model`).
     """
 
     segmentation: SegmentationSettings = field(default_factory=SegmentationSettings)
@@ -84,6 +87,7 @@ class ReconstructionSettings:
     span_spacing: float = 1e-3
     guard: GuardSettings | None = field(default_factory=GuardSettings)
     penalty_factor: float = 1.0
+    model_edges: bool = True
 
 
 @dataclass(frozen=True)
@@ -166,23 +170,33 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
     breaks = initial_breaks(boundaries, perimeter, settings,
                             edge_arcs(segmentation, labels, perimeter))
     root, tip = _refit_caps(points, labels, segmentation)
-    z = points[have, 2]
     z_lo, z_hi = _span_range(points[have], root, tip)
     interior = max(0, math.ceil((z_hi - z_lo) / settings.spanwise_knot_spacing) - 1)
     z_knots = clamped_knots(z_lo, z_hi, interior)
     fit = AdaptiveSurfaceFit(tolerance=settings.tolerance, max_breaks=settings.max_breaks,
                              outlier_distance=settings.outlier_distance,
                              penalty_factor=settings.penalty_factor)
-    fit.fit(s0[have], z, points[have, :2], breaks, z_knots)
+    replaced = _edge_model(points, s0, have, segmentation, settings)
+    kept = have & ~replaced.replaced
+    s0 = np.where(np.isnan(replaced.parameters), s0, replaced.parameters)
+    fit.fit(np.concatenate([s0[kept], replaced.s]),
+            np.concatenate([points[kept, 2], replaced.points[:, 2]]),
+            np.vstack([points[kept, :2], replaced.points[:, :2]]), breaks, z_knots)
     surface = fit.surface_
     check_side_fit(fit)
+    # the cloud's own side points: those the edge model stood in for projected onto the fit
     parameters = np.full(len(points), np.nan)
-    parameters[have] = fit.parameters_
-    boundaries = patch_boundaries(fit.parameters_, labels[have])
     residuals = np.full(len(points), np.nan)
     inliers = np.zeros(len(points), dtype=bool)
-    residuals[have] = fit.residuals_
-    inliers[have] = fit.inliers_
+    count = int(kept.sum())
+    parameters[kept] = fit.parameters_[:count]
+    residuals[kept] = fit.residuals_[:count]
+    inliers[kept] = fit.inliers_[:count]
+    own = np.flatnonzero(replaced.replaced)
+    parameters[own] = surface.project(points[own, :2], points[own, 2], s0[own])
+    residuals[own] = surface.residuals(points[own, :2], points[own, 2], parameters[own])
+    inliers[own] = np.abs(residuals[own]) <= settings.outlier_distance
+    boundaries = patch_boundaries(parameters[have], labels[have])
     for plane, name, outward in ((root, "root", -1.0), (tip, "tip", 1.0)):
         on = labels == REGIONS.index(name)
         residuals[on] = outward * (points[on, 2] - plane.height(points[on, :2]))
@@ -194,6 +208,19 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
                                   root=root, tip=tip, residuals=residuals, inliers=inliers,
                                   parameters=parameters, boundaries=boundaries,
                                   fit_history=fit.history_, ring_parameters=ring_s), settings)
+
+
+def _edge_model(points: np.ndarray, s0: np.ndarray, have: np.ndarray, segmentation: Segmentation,
+                settings: ReconstructionSettings) -> EdgeModel:
+    """Model points that stand in for the side points of a sparsely sampled edge
+    (:func:`~steamtwin.geometry.edge_model.model_sparse_edges`); none unless
+    ``settings.model_edges``."""
+    if not settings.model_edges:
+        return EdgeModel(points=np.empty((0, 3)), s=np.empty(0),
+                         replaced=np.zeros(len(points), dtype=bool),
+                         parameters=np.full(len(points), np.nan), slabs=())
+    return model_sparse_edges(points, s0, have, segmentation.labels, segmentation.perimeter,
+                              segmentation.spacing)
 
 
 def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings) -> Reconstruction:

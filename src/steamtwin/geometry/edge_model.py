@@ -1,0 +1,420 @@
+"""A model of thin, sparsely sampled blade edges: circles tangent to both flanks.
+
+A leading or trailing edge whose half circle π·r holds only a few points of the cloud (a
+0.2 mm trailing edge at 0.14 mm spacing: about four, each σ = 0.017 mm off) is not resolved by
+the side's B-spline: its few knot spans there either smooth the edge off (cut short) or
+overshoot it (a "beak" beyond the edge, a fold). The standard description of a blade profile
+closes each end with a circle tangent to the pressure and suction sides (Dixon & Hall, "Fluid
+Mechanics and Thermodynamics of Turbomachinery", 7th ed. 2014, §3.3 on profile geometry;
+Pritchard 1985, ASME 85-GT-219, the edge circles of the eleven-parameter profile, as in
+:mod:`~steamtwin.geometry.pritchard`). This module fits that model and hands the fit
+model points instead of the sparse edge's own:
+
+- in slabs along the span, the flanks next to the edge (side points between ``a`` and ``L``
+  of arc length from the edge, on either side of it) are each a plane through their points
+  (total least squares, Pearson 1901: the smallest principal axis), trimmed of stray points
+  and refitted; within the slab's plane z = const each is a line n·p = d(z), n pointing into
+  the blade — d varies linearly with z, so a twisting or leaning edge keeps its tangency over
+  the slab's height;
+- the circles inside the wedge tangent to both lines form a one-parameter family in the radius
+  r: the centre solves n₁·c = d₁ + r, n₂·c = d₂ + r. The radius is the geometric least-squares
+  fit of the slab's points in the arc sector, Σ(|p − c(r)| − r)² (Chernov & Lesort 2005, "Least
+  squares fitting of circles", J. Math. Imaging Vision 23:239 — here with the tangency
+  constraint a one-dimensional problem: a grid, then Brent's bounded method), refitted without
+  points beyond 3 robust standard deviations (the outliers of a fused scan lie outward);
+- the edge is then sampled on the fitted arc between the tangent points, denser than the
+  cloud, with the parameter ``s`` of each model point from its arc length (the side's ``s`` is
+  the arc-length fraction round the section) offset to agree with the flank points' own.
+
+An edge is modelled where its circle holds fewer than :data:`MODEL_SAMPLES` points of the
+cloud's spacing on the half circle; a slab whose flanks are not straight within the noise, whose
+wedge is too open or closed, or whose radius lies at a bound of its search, keeps its own points
+(:attr:`EdgeModel.slabs` records why).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.optimize import least_squares, minimize_scalar
+
+from steamtwin.geometry.volume_mesh import REGIONS
+
+#: An edge is modelled where its half circle π·r holds fewer than this many point spacings.
+MODEL_SAMPLES = 8.0
+#: Slab height along the span in point spacings (at least :data:`MIN_SLAB` m).
+SLAB_SPACINGS = 6.0
+MIN_SLAB = 1.5e-3
+#: Flank window length beyond its start, in point spacings (at least :data:`MIN_FLANK` m).
+FLANK_SPACINGS = 16.0
+MIN_FLANK = 2.0e-3
+#: Fewest points of a flank, and of the arc sector, for a slab to be modelled.
+MIN_FLANK_POINTS = 12
+MIN_ARC_POINTS = 4
+#: Wedge angles (rad) within which the tangent-circle construction is well conditioned.
+WEDGE_RANGE = (math.radians(2.0), math.radians(120.0))
+#: Largest relative difference of a slab's radius from the median of its neighbours'.
+SPAN_SPREAD = 0.1
+#: Scale δ (m) of the soft-L1 loss of the circle fit: about the scan noise.
+SOFT_SCALE = 0.02e-3
+#: The model reaches this many point spacings beyond its tangent points along the flanks.
+CUT_SPACINGS = 2.0
+#: Whether the lines are refitted together with the circle (:func:`refine_edge`).
+REFINE = True
+#: Radii tried before the bounded search of the circle fit.
+SEARCH_GRID = 40
+#: Smallest residual (m) at which a point is left out of the circle fit: above the scan noise
+#: (σ 0.017 mm, 3.5 σ), below the stray points of a fused scan (0.2–2 mm off).
+TRIM_FLOOR = 0.06e-3
+#: Model points along the arc and along the span, per point spacing.
+ARC_DENSITY = 2.0
+RING_DENSITY = 1.0
+
+
+@dataclass(frozen=True)
+class EdgeSlab:
+    """One slab's fit: ``edge``, ``z`` (m, centre), ``radius`` (m, NaN unless fitted),
+    ``wedge`` angle (rad), RMS of the arc points about the circle (m), ``used`` — whether its
+    model replaced the points —, ``reason`` when not, and the circle's ``centre`` (x, y; m)
+    at ``z`` (NaN unless fitted)."""
+
+    edge: str
+    z: float
+    radius: float
+    wedge: float
+    rms: float
+    used: bool
+    reason: str = ""
+    centre: tuple[float, float] = (math.nan, math.nan)
+
+
+@dataclass(frozen=True)
+class EdgeModel:
+    """Model points of the sparse edges: ``points`` (k, 3; m) and their side parameter ``s``
+    (k,), ``replaced`` the cloud points (mask over the cloud) that they stand in for,
+    ``parameters`` the side parameter from the model of the other cloud points of a modelled
+    slab (NaN elsewhere: keep their own), and the per-slab fits ``slabs``."""
+
+    points: np.ndarray
+    s: np.ndarray
+    replaced: np.ndarray
+    parameters: np.ndarray
+    slabs: tuple[EdgeSlab, ...]
+
+
+def _circular(values: np.ndarray) -> np.ndarray:
+    """Values in (−0.5, 0.5] modulo 1."""
+    return np.mod(values + 0.5, 1.0) - 0.5
+
+
+def flank_plane(points: np.ndarray, rounds: int = 2) -> tuple[np.ndarray, float, float, np.ndarray]:
+    """A flank as the total least-squares plane of ``points`` (n, 3; m), refitted ``rounds``
+    times without the points beyond 3 robust standard deviations (floor 5 µm). Returns the
+    in-plane unit normal n (2,), d0 and d1 of the line n·p = d0 + d1·(z − z̄) of each section
+    z = const, and the kept-points mask."""
+    keep = np.ones(len(points), dtype=bool)
+    for _ in range(rounds + 1):
+        mean = points[keep].mean(axis=0)
+        _, _, vt = np.linalg.svd(points[keep] - mean, full_matrices=False)
+        normal3 = vt[-1]
+        distance = (points - mean) @ normal3
+        spread = 1.4826 * float(np.median(np.abs(distance[keep])))
+        keep = np.abs(distance) <= 3.0 * max(spread, 5e-6)
+    horizontal = float(np.hypot(normal3[0], normal3[1]))
+    n = normal3[:2] / horizontal
+    slope = float(-normal3[2] / horizontal)
+    # the plane n3·(p − mean) = 0 in the section z: n·p = n·mean_xy + slope·(z − mean_z)
+    return n, float(n @ mean[:2]) - slope * float(mean[2]), slope, keep
+
+
+def tangent_centre(normals: np.ndarray, offsets: np.ndarray, radius: float) -> np.ndarray:
+    """Centre (k, 2) of the circle of ``radius`` (m) tangent to the lines nᵢ·p = dᵢ with
+    inward unit normals ``normals`` (2, 2) and offsets ``offsets`` (k, 2) per height:
+    nᵢ·c = dᵢ + r."""
+    return np.linalg.solve(normals, (offsets + radius).T).T
+
+
+def edge_distance(xy: np.ndarray, normals: np.ndarray, offsets: np.ndarray, radius: float
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Signed distance (m, positive outside) of ``xy`` (n, 2) from the edge model — the arc
+    of the circle of ``radius`` tangent to both lines nᵢ·p = dᵢ (``offsets`` (n, 2) at each
+    point's height), then the lines beyond the tangent points c − r·nᵢ — and the mask of the
+    points in the arc's sector (past both tangent points, towards the edge)."""
+    centre = tangent_centre(normals, offsets, radius)
+    tip = -(normals[0] + normals[1]) / np.linalg.norm(normals[0] + normals[1])
+    sector = np.ones(len(xy), dtype=bool)
+    line = np.full(len(xy), np.inf)
+    for i, n in enumerate(normals):
+        away = np.array([n[1], -n[0]])
+        away = -away if away @ tip > 0 else away
+        past = np.einsum("ij,j->i", xy - (centre - radius * n), away) < 0.0
+        sector &= past
+        distance = offsets[:, i] - xy @ n  # positive outside the line
+        beside = ~past & (np.abs(distance) < np.abs(line))
+        line[beside] = distance[beside]
+    circle = np.linalg.norm(xy - centre, axis=1) - radius
+    return np.where(sector | np.isinf(line), circle, line), sector
+
+
+def fit_tangent_circle(xy: np.ndarray, normals: np.ndarray, offsets: np.ndarray,
+                       bounds: tuple[float, float]) -> tuple[float, np.ndarray]:
+    """Radius (m) of the circle tangent to both flank lines whose edge model
+    (:func:`edge_distance`) best fits ``xy`` (n, 2; m) in the geometric sense (Chernov &
+    Lesort 2005) with the soft-L1 loss Σ(√(1 + (d/δ)²) − 1), δ = :data:`SOFT_SCALE` (quadratic
+    within the noise, linear beyond: Triggs et al. 2000, "Bundle adjustment — a modern
+    synthesis", §6.8 on robust cost functions), over ``bounds`` (m); ``offsets`` (n, 2) are
+    the lines' offsets at each point's height. Points beyond 3 robust standard deviations,
+    and at least :data:`TRIM_FLOOR`, are left out and the fit repeated: the few points round
+    a sparse edge must not count as stray ones against the many on the flanks, whose spread is
+    the noise alone. Returns the radius
+    and the mask of the points kept."""
+    keep = np.ones(len(xy), dtype=bool)
+    radius = 0.5 * (bounds[0] + bounds[1])
+    for _ in range(3):
+        def cost(r: float, use: np.ndarray = keep) -> float:
+            ratio = edge_distance(xy[use], normals, offsets[use], r)[0] / SOFT_SCALE
+            return float(np.sum(np.sqrt(1.0 + ratio * ratio) - 1.0))
+
+        # the cost is piecewise (points enter and leave the arc's sector): a grid first,
+        # then Brent's method within the best grid cell
+        grid = np.linspace(bounds[0], bounds[1], SEARCH_GRID)
+        best = int(np.argmin([cost(r) for r in grid]))
+        cell = (grid[max(best - 1, 0)], grid[min(best + 1, SEARCH_GRID - 1)])
+        radius = float(minimize_scalar(cost, bounds=cell, method="bounded",
+                                       options={"xatol": 1e-8}).x)
+        residual = edge_distance(xy, normals, offsets, radius)[0]
+        spread = 1.4826 * float(np.median(np.abs(residual[keep])))
+        new = np.abs(residual) <= max(3.0 * spread, TRIM_FLOOR)
+        if new.sum() < MIN_ARC_POINTS or np.array_equal(new, keep):
+            break
+        keep = new
+    return radius, keep
+
+
+def refine_edge(xy: np.ndarray, dz: np.ndarray, normals: np.ndarray, d0: np.ndarray,
+                d1: np.ndarray, radius: float, keep: np.ndarray, bounds: tuple[float, float]
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """The flank lines and the radius fitted together to the kept points ``xy`` (n, 2; m) at
+    heights ``dz`` (m from the slab's middle): the composite distance of :func:`edge_distance`
+    over the lines' angles, offsets d0 and slopes d1 and the radius, soft-L1 loss of scale
+    :data:`SOFT_SCALE` (scipy ``least_squares``, trust-region reflective; Branch, Coleman & Li
+    1999). In a thin wedge the tip moves along the bisector by δd / sin(β/2) for an error δd
+    of either line: lines fitted to the flanks alone, a little away from the edge, put it off
+    by several times the noise; fitted with the edge points they agree with them."""
+    angles = np.arctan2(normals[:, 1], normals[:, 0])
+
+    def unpack(x: np.ndarray) -> tuple:
+        n = np.column_stack([np.cos(x[:2]), np.sin(x[:2])])
+        return n, x[2:4], x[4:6], x[6]
+
+    def residual(x: np.ndarray) -> np.ndarray:
+        n, e0, e1, r = unpack(x)
+        offsets = e0[None, :] + dz[keep, None] * e1[None, :]
+        return edge_distance(xy[keep], n, offsets, r)[0] / SOFT_SCALE
+
+    start = np.concatenate([angles, d0, d1, [radius]])
+    lower = np.concatenate([angles - 0.2, d0 - 0.2e-3, d1 - 0.5, [bounds[0]]])
+    upper = np.concatenate([angles + 0.2, d0 + 0.2e-3, d1 + 0.5, [bounds[1]]])
+    result = least_squares(residual, start, bounds=(lower, upper), loss="soft_l1",
+                           x_scale=np.concatenate([[1e-2, 1e-2], [1e-5, 1e-5], [1e-2, 1e-2],
+                                                   [1e-5]]), max_nfev=50)
+    n, e0, e1, r = unpack(result.x)
+    return n, e0, e1, float(r)
+
+
+def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labels: np.ndarray,
+                       perimeter: np.ndarray, spacing: float, noise: float = 0.03e-3
+                       ) -> EdgeModel:
+    """Model points for the sparse leading and trailing edges of a blade side.
+
+    ``points`` (n, 3; m) in the blade frame; ``s`` the side parameter (arc-length fraction
+    anticlockwise from the rear end, NaN off the side) of the points under ``mask``;
+    ``labels`` the segmentation's REGIONS indices; ``perimeter`` each side point's section
+    perimeter (m); ``spacing`` the cloud's point spacing (m); ``noise`` the largest RMS (m)
+    of the flank points about their plane for the flank to count as straight.
+    """
+    pieces, slabs = [], []
+    replaced = np.zeros(len(points), dtype=bool)
+    parameters = np.full(len(points), np.nan)
+    for edge in ("trailing_edge", "leading_edge"):
+        on = mask & (labels == REGIONS.index(edge))
+        if on.sum() < MIN_ARC_POINTS:
+            continue
+        base = 0.0 if edge == "trailing_edge" else 0.5
+        centre_s = float(np.mod(base + np.median(_circular(s[on] - base)), 1.0))
+        result = _model_edge(points, s, mask, perimeter, spacing, noise, edge, centre_s)
+        pieces += result[0]
+        slabs += result[1]
+        replaced |= result[2]
+        parameters = np.where(np.isnan(result[3]), parameters, result[3])
+    model_points = np.vstack([p for p, _ in pieces]) if pieces else np.empty((0, 3))
+    model_s = np.concatenate([q for _, q in pieces]) if pieces else np.empty(0)
+    return EdgeModel(points=model_points, s=model_s, replaced=replaced, parameters=parameters,
+                     slabs=tuple(slabs))
+
+
+def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: np.ndarray,
+                spacing: float, noise: float, edge: str, centre_s: float) -> tuple:
+    """Slabs of one edge: (model point pieces, slab records, replaced mask, parameters)."""
+    arc = np.full(len(points), np.inf)
+    arc[mask] = _circular(s[mask] - centre_s) * perimeter[mask]  # signed arc length (m)
+    # the half circle of a modelled edge is shorter than MODEL_SAMPLES spacings: its tangent
+    # points lie within π r / 2 < MODEL_SAMPLES·spacing / 2 of the edge's middle
+    start = 0.5 * MODEL_SAMPLES * spacing + 2.0 * spacing
+    length = max(FLANK_SPACINGS * spacing, MIN_FLANK)
+    near = np.flatnonzero(np.abs(arc) <= start + length)
+    z_near = points[near, 2]
+    height = max(SLAB_SPACINGS * spacing, MIN_SLAB)
+    lo, hi = float(z_near.min()), float(z_near.max())
+    count = max(1, round((hi - lo) / height))
+    edges_z = np.linspace(lo, hi, count + 1)
+    fits = []
+    for k in range(count):
+        members = near[(z_near >= edges_z[k]) & (z_near <= edges_z[k + 1])]
+        record, piece, used = _model_slab(points, s, arc, members, spacing, noise, edge,
+                                          centre_s, (edges_z[k], edges_z[k + 1]), start)
+        fits.append((EdgeSlab(edge=edge, z=0.5 * (edges_z[k] + edges_z[k + 1]), **record),
+                     piece, used))
+    # along the span the edge changes slowly: a slab whose radius is off the median of its
+    # neighbours' by more than SPAN_SPREAD is a bad fit (in a thin wedge the centre moves
+    # along the bisector by δr / sin(β/2), eight times the radius error at 14°)
+    radii = np.array([slab.radius if slab.used else np.nan for slab, _, _ in fits])
+    pieces, slabs = [], []
+    replaced = np.zeros(len(points), dtype=bool)
+    parameters = np.full(len(points), np.nan)
+    for k, (slab, piece, used) in enumerate(fits):
+        around = radii[max(0, k - 2): k + 3]
+        typical = float(np.nanmedian(around)) if np.isfinite(around).sum() >= 3 else math.nan
+        if slab.used and not abs(slab.radius - typical) <= SPAN_SPREAD * typical:
+            slab = replace(slab, used=False, reason="radius off its neighbours'")
+        slabs.append(slab)
+        if slab.used:
+            pieces.append(piece)
+            replaced[used[0]] = True
+            parameters[used[1]] = used[2]
+    return pieces, slabs, replaced, parameters
+
+
+def _model_slab(points: np.ndarray, s: np.ndarray, arc: np.ndarray, members: np.ndarray,
+                spacing: float, noise: float, edge: str, centre_s: float,
+                z_range: tuple[float, float], start: float) -> tuple:
+    """Fit one slab: (EdgeSlab fields, (model points, s) or None, replaced indices)."""
+    failed = {"radius": math.nan, "wedge": math.nan, "rms": math.nan, "used": False}
+    arc_m = arc[members]
+    flanks = [members[arc_m <= -start], members[arc_m >= start]]
+    if min(len(f) for f in flanks) < MIN_FLANK_POINTS:
+        return {**failed, "reason": "too few points"}, None, None
+    z_mid = 0.5 * (z_range[0] + z_range[1])
+    fits = [flank_plane(points[f] - [0.0, 0.0, z_mid]) for f in flanks]
+    normals = np.array([f[0] for f in fits])
+    d0 = np.array([f[1] for f in fits])
+    d1 = np.array([f[2] for f in fits])
+    for i in range(2):  # each normal into the blade: towards the other flank's points
+        if normals[i] @ points[flanks[1 - i], :2].mean(axis=0) < d0[i]:
+            normals[i], d0[i], d1[i] = -normals[i], -d0[i], -d1[i]
+
+    def line_offsets(z: np.ndarray) -> np.ndarray:
+        return d0[None, :] + (z - z_mid)[:, None] * d1[None, :]
+
+    flank_rms = max(float(np.sqrt(np.mean(
+        (np.einsum("ij,j->i", points[f, :2], normals[i])
+         - line_offsets(points[f, 2])[:, i])[fits[i][3]] ** 2))) for i, f in enumerate(flanks))
+    wedge = math.pi - math.acos(float(np.clip(normals[0] @ normals[1], -1.0, 1.0)))
+    record = {**failed, "wedge": wedge}
+    if not WEDGE_RANGE[0] <= wedge <= WEDGE_RANGE[1]:
+        return {**record, "reason": "wedge angle out of range"}, None, None
+    if flank_rms > noise:
+        return ({**record, "reason": f"flanks not straight (RMS {flank_rms * 1e3:.3f} mm)"},
+                None, None)
+    r_max = MODEL_SAMPLES * spacing / math.pi
+    bounds = (0.02 * r_max, 2.0 * r_max)
+    # all the slab's points: those on the flanks beyond the tangent points are at the lines'
+    # distance whatever the radius; the order s is unreliable right at a sparse edge
+    xy, offsets = points[members, :2], line_offsets(points[members, 2])
+    radius, keep = fit_tangent_circle(xy, normals, offsets, bounds)
+    if REFINE:
+        normals, d0, d1, radius = refine_edge(xy, points[members, 2] - z_mid, normals, d0, d1,
+                                              radius, keep, bounds)
+        offsets = line_offsets(points[members, 2])
+    residual, sector = edge_distance(xy, normals, offsets, radius)
+    rms = float(np.sqrt(np.mean(residual[sector & keep] ** 2))) if sector.any() else math.nan
+    centre = tangent_centre(normals, line_offsets(np.array([z_mid])), radius)[0]
+    record = {**record, "radius": radius, "rms": rms, "centre": (float(centre[0]),
+                                                                 float(centre[1]))}
+    if not bounds[0] * 1.01 < radius < bounds[1] * 0.99:
+        return {**record, "reason": "radius at a bound of its search"}, None, None
+    if math.pi * radius >= MODEL_SAMPLES * spacing:
+        return {**record, "reason": "edge resolved by the cloud"}, None, None
+    if (sector & keep).sum() < MIN_ARC_POINTS or not rms <= 2.0 * noise:
+        return {**record, "reason": "arc points do not follow the circle"}, None, None
+    half = 0.5 * (math.pi - wedge)  # angle from the tip to either tangent point
+    # the cloud's order s is unreliable next to a sparse edge: every point of the slab gets
+    # the s of its arc length u along the model, offset to agree with the flank points'
+    u = model_arc_length(xy, normals, offsets, radius)
+    on_flank = np.isin(members, np.concatenate([f[fit[3]] for f, fit in zip(flanks, fits,
+                                                                            strict=True)]))
+    # the cloud's arc length (from its s) against the model's on the flanks: a line, whose
+    # slope is the local ratio of the parametrisation's length to the model's
+    scale, shift = np.polyfit(u[on_flank], arc[members[on_flank]], 1)
+    if not 0.5 < scale < 2.0:
+        return {**record, "reason": "the cloud's order does not follow the model"}, None, None
+    perimeter = float(np.median(arc[members[on_flank]]
+                                / _circular(s[members[on_flank]] - centre_s)))
+    cut = radius * half + CUT_SPACINGS * spacing
+    model_xyz, model_u = _sample_model(normals, line_offsets, radius, half, cut, z_range,
+                                       spacing)
+    model_s = np.mod(centre_s + (shift + scale * model_u) / perimeter, 1.0)
+    replaced = sector | (np.abs(u) < cut)  # the model's points, and stray points beyond it
+    members_s = np.mod(centre_s + (shift + scale * u) / perimeter, 1.0)
+    return ({**record, "used": True, "reason": ""}, (model_xyz, model_s),
+            (members[replaced], members[~replaced], members_s[~replaced]))
+
+
+def model_arc_length(xy: np.ndarray, normals: np.ndarray, offsets: np.ndarray, radius: float
+                     ) -> np.ndarray:
+    """Arc length u (m) of the points ``xy`` (n, 2) along the edge model of
+    :func:`edge_distance` from its tip, negative towards line 0: r × the angle from the tip
+    on the arc's sector, r·(π − β)/2 plus the distance along the line beyond it."""
+    centre = tangent_centre(normals, offsets, radius)
+    tip = -(normals[0] + normals[1]) / np.linalg.norm(normals[0] + normals[1])
+    half = math.acos(float(np.clip(-normals[0] @ tip, -1.0, 1.0)))
+    perp = np.array([-tip[1], tip[0]])
+    sign = 1.0 if -normals[0] @ perp > 0 else -1.0  # which way round line 0 lies
+    v = xy - centre
+    u = radius * np.arctan2(-sign * (v @ perp), v @ tip)
+    along, distance = np.zeros((2, len(xy))), np.zeros((2, len(xy)))
+    for i, n in enumerate(normals):
+        away = np.array([n[1], -n[0]])
+        away = -away if away @ tip > 0 else away
+        along[i] = np.einsum("ij,j->i", v + radius * n, away)
+        distance[i] = np.abs(offsets[:, i] - xy @ n)
+    beside = along.max(axis=0) >= 0.0  # not past both tangent points: on a flank
+    line = np.where((along[1] < 0.0) | ((along[0] >= 0.0) & (distance[0] <= distance[1])), 0, 1)
+    flank_u = (radius * half + along[line, np.arange(len(xy))]) * np.where(line == 0, -1.0, 1.0)
+    return np.where(beside, flank_u, u)
+
+
+def _sample_model(normals: np.ndarray, line_offsets, radius: float, half: float, cut: float,
+                  z_range: tuple[float, float], spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Model points (k, 3) for |u| ≤ ``cut`` — the arc between the tangent points, then the
+    flank lines —, in rings every spacing / RING_DENSITY over the slab, ARC_DENSITY per
+    spacing along the model; and their arc length u (m), negative towards line 0."""
+    rings = max(1, math.ceil((z_range[1] - z_range[0]) * RING_DENSITY / spacing))
+    z = z_range[0] + (np.arange(rings) + 0.5) * (z_range[1] - z_range[0]) / rings
+    u = np.linspace(-cut, cut, max(5, math.ceil(2.0 * cut * ARC_DENSITY / spacing) + 1))
+    tip = -(normals[0] + normals[1]) / np.linalg.norm(normals[0] + normals[1])
+    perp = np.array([-tip[1], tip[0]])
+    sign = 1.0 if -normals[0] @ perp > 0 else -1.0
+    angle = np.clip(u / radius, -half, half)
+    direction = np.cos(angle)[:, None] * tip - sign * np.sin(angle)[:, None] * perp
+    beyond = np.maximum(np.abs(u) - radius * half, 0.0)
+    line = np.where(u < 0.0, 0, 1)
+    away = np.array([[n[1], -n[0]] for n in normals])
+    away = np.where((away @ tip > 0)[:, None], -away, away)
+    centres = tangent_centre(normals, line_offsets(z), radius)  # (rings, 2)
+    xy = (centres[:, None, :] + radius * direction[None, :, :]
+          + (beyond[:, None] * away[line])[None, :, :])
+    model_xyz = np.column_stack([xy.reshape(-1, 2), np.repeat(z, len(u))])
+    return model_xyz, np.tile(u, rings)
