@@ -61,6 +61,8 @@ SPAN_SPREAD = 0.1
 SOFT_SCALE = 0.02e-3
 #: The model reaches this many point spacings beyond its tangent points along the flanks.
 CUT_SPACINGS = 2.0
+#: Largest RMS of the arc's points about the circle, as a multiple of the flanks' RMS.
+ARC_RMS = 1.5
 #: Whether the lines are refitted together with the circle (:func:`refine_edge`).
 REFINE = True
 #: Radii tried before the bounded search of the circle fit.
@@ -273,40 +275,95 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
     fits = []
     for k in range(count):
         members = near[(z_near >= edges_z[k]) & (z_near <= edges_z[k + 1])]
-        record, piece, used = _model_slab(points, s, arc, members, spacing, noise, edge,
-                                          centre_s, (edges_z[k], edges_z[k + 1]), start)
+        record, geometry = _fit_slab(points, arc, members, spacing, noise,
+                                     0.5 * (edges_z[k] + edges_z[k + 1]), start)
         fits.append((EdgeSlab(edge=edge, z=0.5 * (edges_z[k] + edges_z[k + 1]), **record),
-                     piece, used))
+                     geometry, members))
     # along the span the edge changes slowly: a slab whose radius is off the median of its
     # neighbours' by more than SPAN_SPREAD is a bad fit (in a thin wedge the centre moves
     # along the bisector by δr / sin(β/2), eight times the radius error at 14°)
     radii = np.array([slab.radius if slab.used else np.nan for slab, _, _ in fits])
-    pieces, slabs = [], []
-    replaced = np.zeros(len(points), dtype=bool)
-    parameters = np.full(len(points), np.nan)
-    for k, (slab, piece, used) in enumerate(fits):
+    for k, (slab, _, members) in enumerate(fits):
         around = radii[max(0, k - 2): k + 3]
         typical = float(np.nanmedian(around)) if np.isfinite(around).sum() >= 3 else math.nan
         if slab.used and not abs(slab.radius - typical) <= SPAN_SPREAD * typical:
-            slab = replace(slab, used=False, reason="radius off its neighbours'")
+            fits[k] = (replace(slab, used=False, reason="radius off its neighbours'"), None,
+                       members)
+    _bridge(fits)
+    # the cloud's order along the edge, scale and shift of its arc length against the model's
+    # (:func:`_order_against_model`), smoothed along the span: each slab's own is noisy by a
+    # few tenths of a millimetre, and the side's spline, smooth over several slabs, folds
+    # where neighbouring slabs disagree
+    order = np.full((len(fits), 2), np.nan)
+    for k, (_, geometry, members) in enumerate(fits):
+        if geometry is not None:
+            order[k] = _order_against_model(points, arc, members, geometry, spacing)
+    smooth = np.array([np.nanmedian(order[max(0, k - ORDER_SLABS): k + ORDER_SLABS + 1],
+                                    axis=0) if np.isfinite(order[max(0, k - ORDER_SLABS):
+                                                                 k + ORDER_SLABS + 1, 0]).any()
+                       else [np.nan, np.nan] for k in range(len(fits))])
+    pieces, slabs = [], []
+    replaced = np.zeros(len(points), dtype=bool)
+    parameters = np.full(len(points), np.nan)
+    for k, (slab, geometry, members) in enumerate(fits):
+        if geometry is not None and not np.isfinite(smooth[k]).all():
+            slab = replace(slab, used=False, reason="the cloud's order does not follow the model")
+        elif geometry is not None:
+            applied = _apply_model(points, perimeter, members, geometry, spacing, centre_s,
+                                   (edges_z[k], edges_z[k + 1]), smooth[k])
+            pieces.append(applied[0])
+            replaced[applied[1]] = True
+            parameters[applied[2]] = applied[3]
         slabs.append(slab)
-        if slab.used:
-            pieces.append(piece)
-            replaced[used[0]] = True
-            parameters[used[1]] = used[2]
     return pieces, slabs, replaced, parameters
 
 
-def _model_slab(points: np.ndarray, s: np.ndarray, arc: np.ndarray, members: np.ndarray,
-                spacing: float, noise: float, edge: str, centre_s: float,
-                z_range: tuple[float, float], start: float) -> tuple:
-    """Fit one slab: (EdgeSlab fields, (model points, s) or None, replaced indices)."""
+#: Slabs either side over which the cloud's order against the model is smoothed (median).
+ORDER_SLABS = 3
+#: Slabs without a fit of their own are given their neighbours' model across at most this
+#: many slabs (a gap of a hole or of stray points; not the long stretch of an edge that the
+#: cloud resolves).
+MAX_BRIDGE = 3
+
+
+def _bridge(fits: list) -> None:
+    """Slabs whose fit failed, between fitted ones at most :data:`MAX_BRIDGE` slabs apart (or
+    that many beyond the last one at either end), get the model interpolated linearly in z
+    between them — every slab of the edge then has the same parametrisation, which the side's
+    spline, smooth over several slabs, needs — marked ``used`` with the reason "bridged"."""
+    done = [k for k, (slab, _, _) in enumerate(fits) if slab.used]
+    for k, (slab, geometry, members) in enumerate(fits):
+        if slab.used or not done:
+            continue
+        before = [j for j in done if j < k]
+        after = [j for j in done if j > k]
+        lo = before[-1] if before else after[0]
+        hi = after[0] if after else before[-1]
+        if (before and after and hi - lo > MAX_BRIDGE + 1) or min(abs(k - lo),
+                                                                  abs(hi - k)) > MAX_BRIDGE:
+            continue
+        weight = 0.0 if hi == lo else (k - lo) / (hi - lo)
+        a, b = fits[lo][1], fits[hi][1]
+        z = slab.z
+        angles = [(1 - weight) * np.arctan2(a[0][:, 1], a[0][:, 0])
+                  + weight * np.arctan2(b[0][:, 1], b[0][:, 0])]
+        normals = np.column_stack([np.cos(angles[0]), np.sin(angles[0])])
+        d_a, d_b = a[1] + a[2] * (z - a[3]), b[1] + b[2] * (z - b[3])
+        geometry = (normals, (1 - weight) * d_a + weight * d_b,
+                    (1 - weight) * a[2] + weight * b[2], z,
+                    (1 - weight) * a[4] + weight * b[4])
+        fits[k] = (replace(slab, used=True, reason="bridged", radius=geometry[4]), geometry,
+                   members)
+
+
+def _fit_slab(points: np.ndarray, arc: np.ndarray, members: np.ndarray, spacing: float,
+              noise: float, z_mid: float, start: float) -> tuple:
+    """Fit one slab: (EdgeSlab fields, geometry (normals, d0, d1, z_mid, radius) or None)."""
     failed = {"radius": math.nan, "wedge": math.nan, "rms": math.nan, "used": False}
     arc_m = arc[members]
     flanks = [members[arc_m <= -start], members[arc_m >= start]]
     if min(len(f) for f in flanks) < MIN_FLANK_POINTS:
-        return {**failed, "reason": "too few points"}, None, None
-    z_mid = 0.5 * (z_range[0] + z_range[1])
+        return {**failed, "reason": "too few points"}, None
     fits = [flank_plane(points[f] - [0.0, 0.0, z_mid]) for f in flanks]
     normals = np.array([f[0] for f in fits])
     d0 = np.array([f[1] for f in fits])
@@ -324,10 +381,9 @@ def _model_slab(points: np.ndarray, s: np.ndarray, arc: np.ndarray, members: np.
     wedge = math.pi - math.acos(float(np.clip(normals[0] @ normals[1], -1.0, 1.0)))
     record = {**failed, "wedge": wedge}
     if not WEDGE_RANGE[0] <= wedge <= WEDGE_RANGE[1]:
-        return {**record, "reason": "wedge angle out of range"}, None, None
+        return {**record, "reason": "wedge angle out of range"}, None
     if flank_rms > noise:
-        return ({**record, "reason": f"flanks not straight (RMS {flank_rms * 1e3:.3f} mm)"},
-                None, None)
+        return {**record, "reason": f"flanks not straight (RMS {flank_rms * 1e3:.3f} mm)"}, None
     r_max = MODEL_SAMPLES * spacing / math.pi
     bounds = (0.02 * r_max, 2.0 * r_max)
     # all the slab's points: those on the flanks beyond the tangent points are at the lines'
@@ -344,32 +400,73 @@ def _model_slab(points: np.ndarray, s: np.ndarray, arc: np.ndarray, members: np.
     record = {**record, "radius": radius, "rms": rms, "centre": (float(centre[0]),
                                                                  float(centre[1]))}
     if not bounds[0] * 1.01 < radius < bounds[1] * 0.99:
-        return {**record, "reason": "radius at a bound of its search"}, None, None
+        return {**record, "reason": "radius at a bound of its search"}, None
     if math.pi * radius >= MODEL_SAMPLES * spacing:
-        return {**record, "reason": "edge resolved by the cloud"}, None, None
-    if (sector & keep).sum() < MIN_ARC_POINTS or not rms <= 2.0 * noise:
-        return {**record, "reason": "arc points do not follow the circle"}, None, None
-    half = 0.5 * (math.pi - wedge)  # angle from the tip to either tangent point
-    # the cloud's order s is unreliable next to a sparse edge: every point of the slab gets
-    # the s of its arc length u along the model, offset to agree with the flank points'
+        return {**record, "reason": "edge resolved by the cloud"}, None
+    # the arc's points about the circle as the flanks' about their lines (the noise), and on
+    # average on it: a circle off by a fraction of the noise along a thin wedge's bisector
+    # is off by several times that at the tip
+    bias = float(np.mean(residual[sector & keep])) if sector.any() else math.nan
+    if ((sector & keep).sum() < MIN_ARC_POINTS or not rms <= ARC_RMS * flank_rms
+            or not abs(bias) <= flank_rms):
+        return {**record, "reason": "arc points do not follow the circle"}, None
+    return {**record, "used": True, "reason": ""}, (normals, d0, d1, z_mid, radius)
+
+
+def _geometry_lines(geometry: tuple):
+    """The model's line offsets at heights z (a function) and the angle from its tip to
+    either tangent point (rad)."""
+    normals, d0, d1, z_mid, _ = geometry
+
+    def line_offsets(z: np.ndarray) -> np.ndarray:
+        return d0[None, :] + (z - z_mid)[:, None] * d1[None, :]
+
+    half = math.acos(float(np.clip(normals[0] @ (normals[0] + normals[1])
+                                   / np.linalg.norm(normals[0] + normals[1]), -1.0, 1.0)))
+    return line_offsets, half
+
+
+def _order_against_model(points: np.ndarray, arc: np.ndarray, members: np.ndarray,
+                         geometry: tuple, spacing: float) -> tuple[float, float]:
+    """Scale and shift of the cloud's arc length (from its s) against the model's arc length
+    u on the flanks beyond the model (a straight-line fit: the slope is the local ratio of
+    the parametrisation's length to the model's); NaN when too few flank points follow the
+    model or the slope is off by more than a factor two."""
+    normals, _, _, _, radius = geometry
+    line_offsets, half = _geometry_lines(geometry)
+    xy, offsets = points[members, :2], line_offsets(points[members, 2])
     u = model_arc_length(xy, normals, offsets, radius)
-    on_flank = np.isin(members, np.concatenate([f[fit[3]] for f, fit in zip(flanks, fits,
-                                                                            strict=True)]))
-    # the cloud's arc length (from its s) against the model's on the flanks: a line, whose
-    # slope is the local ratio of the parametrisation's length to the model's
-    scale, shift = np.polyfit(u[on_flank], arc[members[on_flank]], 1)
-    if not 0.5 < scale < 2.0:
-        return {**record, "reason": "the cloud's order does not follow the model"}, None, None
-    perimeter = float(np.median(arc[members[on_flank]]
-                                / _circular(s[members[on_flank]] - centre_s)))
+    distance, _ = edge_distance(xy, normals, offsets, radius)
     cut = radius * half + CUT_SPACINGS * spacing
+    on_flank = (np.abs(u) > cut + spacing) & (np.abs(distance) < TRIM_FLOOR)
+    if on_flank.sum() < 2 * MIN_FLANK_POINTS:
+        return math.nan, math.nan
+    scale, shift = np.polyfit(u[on_flank], arc[members[on_flank]], 1)
+    return (float(scale), float(shift)) if 0.5 < scale < 2.0 else (math.nan, math.nan)
+
+
+def _apply_model(points: np.ndarray, perimeter: np.ndarray, members: np.ndarray,
+                 geometry: tuple, spacing: float, centre_s: float,
+                 z_range: tuple[float, float], order: np.ndarray) -> tuple:
+    """Model points of a slab and the parameters of its cloud points: ((model points, s),
+    replaced indices, other indices, their s). The cloud's order s is unreliable next to a
+    sparse edge: every point of the slab gets the s of its arc length u along the model,
+    through the (smoothed) ``order`` — scale and shift — of :func:`_order_against_model`."""
+    normals, _, _, _, radius = geometry
+    line_offsets, half = _geometry_lines(geometry)
+    xy, offsets = points[members, :2], line_offsets(points[members, 2])
+    u = model_arc_length(xy, normals, offsets, radius)
+    cut = radius * half + CUT_SPACINGS * spacing
+    _, sector = edge_distance(xy, normals, offsets, radius)
+    scale, shift = order
+    length = float(np.median(perimeter[members]))
     model_xyz, model_u = _sample_model(normals, line_offsets, radius, half, cut, z_range,
                                        spacing)
-    model_s = np.mod(centre_s + (shift + scale * model_u) / perimeter, 1.0)
+    model_s = np.mod(centre_s + (shift + scale * model_u) / length, 1.0)
     replaced = sector | (np.abs(u) < cut)  # the model's points, and stray points beyond it
-    members_s = np.mod(centre_s + (shift + scale * u) / perimeter, 1.0)
-    return ({**record, "used": True, "reason": ""}, (model_xyz, model_s),
-            (members[replaced], members[~replaced], members_s[~replaced]))
+    members_s = np.mod(centre_s + (shift + scale * u) / length, 1.0)
+    return ((model_xyz, model_s), members[replaced], members[~replaced],
+            members_s[~replaced])
 
 
 def model_arc_length(xy: np.ndarray, normals: np.ndarray, offsets: np.ndarray, radius: float

@@ -72,7 +72,8 @@ class ReconstructionSettings:
     :mod:`~steamtwin.geometry.fit_guard`); ``penalty_factor`` multiplies the fit's smoothing
     penalty (the guard's repairs raise it); ``model_edges``: the side is fitted to model points
     on circles tangent to both flanks instead of the cloud's own points where an edge is
-    sparsely sampled (:mod:`~steamtwin.geometry.edge_model`).
+    sparsely sampled (:mod:`~steamtwin.geometry.edge_model`) — off by default: on the foreign
+    blades it does not yet raise the pass rate (docs/benchmarks.md, "Edge circles").
     """
 
     segmentation: SegmentationSettings = field(default_factory=SegmentationSettings)
@@ -87,7 +88,7 @@ class ReconstructionSettings:
     span_spacing: float = 1e-3
     guard: GuardSettings | None = field(default_factory=GuardSettings)
     penalty_factor: float = 1.0
-    model_edges: bool = True
+    model_edges: bool = False
 
 
 @dataclass(frozen=True)
