@@ -323,7 +323,7 @@ ORDER_SLABS = 3
 #: Slabs without a fit of their own are given their neighbours' model across at most this
 #: many slabs (a gap of a hole or of stray points; not the long stretch of an edge that the
 #: cloud resolves).
-MAX_BRIDGE = 3
+MAX_BRIDGE = 6
 
 
 def _bridge(fits: list) -> None:
