@@ -1,4 +1,4 @@
-"""The edge model of thin, sparse blade edges (geometry/edge_model.py).
+"""The edge model of thin, sparse blade edges (geometry/edge_model.py, edge_circle.py).
 
 Synthetic sections made here: a wedge closed by a trailing-edge circle of radius r tangent to
 both straight flanks and by a large leading-edge circle (the edge-circle profile of Dixon & Hall
@@ -14,11 +14,8 @@ import numpy as np
 import pytest
 from scipy.spatial import cKDTree
 
-from steamtwin.geometry.edge_model import (
-    edge_distance,
-    model_sparse_edges,
-    tangent_centre,
-)
+from steamtwin.geometry.edge_circle import edge_distance, tangent_centre
+from steamtwin.geometry.edge_model import model_sparse_edges
 from steamtwin.geometry.volume_mesh import REGIONS
 
 LEAN = 0.02  # m of y per m of z: the edge drifts along the span

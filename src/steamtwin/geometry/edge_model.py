@@ -7,8 +7,9 @@ overshoot it (a "beak" beyond the edge, a fold). The standard description of a b
 closes each end with a circle tangent to the pressure and suction sides (Dixon & Hall, "Fluid
 Mechanics and Thermodynamics of Turbomachinery", 7th ed. 2014, §3.3 on profile geometry;
 Pritchard 1985, ASME 85-GT-219, the edge circles of the eleven-parameter profile, as in
-:mod:`~steamtwin.geometry.pritchard`). This module fits that model and hands the fit
-model points instead of the sparse edge's own:
+:mod:`~steamtwin.geometry.pritchard`). This module fits that model
+(:mod:`~steamtwin.geometry.edge_circle`, one section) slab by slab along the span and hands the
+side's fit model points instead of the sparse edge's own:
 
 - in slabs along the span, the flanks next to the edge (side points between ``a`` and ``L``
   of arc length from the edge, on either side of it) are each a plane through their points
@@ -38,8 +39,17 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy.optimize import least_squares, minimize_scalar
 
+from steamtwin.geometry.edge_circle import (
+    MIN_ARC_POINTS,
+    TRIM_FLOOR,
+    edge_distance,
+    fit_tangent_circle,
+    flank_plane,
+    model_arc_length,
+    refine_edge,
+    tangent_centre,
+)
 from steamtwin.geometry.volume_mesh import REGIONS
 
 #: An edge is modelled where its half circle π·r holds fewer than this many point spacings.
@@ -50,26 +60,16 @@ MIN_SLAB = 1.5e-3
 #: Flank window length beyond its start, in point spacings (at least :data:`MIN_FLANK` m).
 FLANK_SPACINGS = 16.0
 MIN_FLANK = 2.0e-3
-#: Fewest points of a flank, and of the arc sector, for a slab to be modelled.
+#: Fewest points of a flank for a slab to be modelled.
 MIN_FLANK_POINTS = 12
-MIN_ARC_POINTS = 4
 #: Wedge angles (rad) within which the tangent-circle construction is well conditioned.
 WEDGE_RANGE = (math.radians(2.0), math.radians(120.0))
 #: Largest relative difference of a slab's radius from the median of its neighbours'.
 SPAN_SPREAD = 0.1
-#: Scale δ (m) of the soft-L1 loss of the circle fit: about the scan noise.
-SOFT_SCALE = 0.02e-3
 #: The model reaches this many point spacings beyond its tangent points along the flanks.
 CUT_SPACINGS = 2.0
 #: Largest RMS of the arc's points about the circle, as a multiple of the flanks' RMS.
 ARC_RMS = 1.5
-#: Whether the lines are refitted together with the circle (:func:`refine_edge`).
-REFINE = True
-#: Radii tried before the bounded search of the circle fit.
-SEARCH_GRID = 40
-#: Smallest residual (m) at which a point is left out of the circle fit: above the scan noise
-#: (σ 0.017 mm, 3.5 σ), below the stray points of a fused scan (0.2–2 mm off).
-TRIM_FLOOR = 0.06e-3
 #: Model points along the arc and along the span, per point spacing.
 ARC_DENSITY = 2.0
 RING_DENSITY = 1.0
@@ -105,125 +105,25 @@ class EdgeModel:
     parameters: np.ndarray
     slabs: tuple[EdgeSlab, ...]
 
+    def fit_data(self, points: np.ndarray, s: np.ndarray, side: np.ndarray) -> tuple:
+        """For the side's fit: the cloud points kept (mask), every point's ``s`` with the
+        model's where it gave one, and (s, z, xy) of the kept points then the model points."""
+        kept = side & ~self.replaced
+        s = np.where(np.isnan(self.parameters), s, self.parameters)
+        return kept, s, (np.concatenate([s[kept], self.s]),
+                         np.concatenate([points[kept, 2], self.points[:, 2]]),
+                         np.vstack([points[kept, :2], self.points[:, :2]]))
+
+    @classmethod
+    def none(cls, count: int) -> EdgeModel:
+        """No model: the ``count`` cloud points keep their own."""
+        return cls(np.empty((0, 3)), np.empty(0), np.zeros(count, dtype=bool),
+                   np.full(count, np.nan), ())
+
 
 def _circular(values: np.ndarray) -> np.ndarray:
     """Values in (−0.5, 0.5] modulo 1."""
     return np.mod(values + 0.5, 1.0) - 0.5
-
-
-def flank_plane(points: np.ndarray, rounds: int = 2) -> tuple[np.ndarray, float, float, np.ndarray]:
-    """A flank as the total least-squares plane of ``points`` (n, 3; m), refitted ``rounds``
-    times without the points beyond 3 robust standard deviations (floor 5 µm). Returns the
-    in-plane unit normal n (2,), d0 and d1 of the line n·p = d0 + d1·(z − z̄) of each section
-    z = const, and the kept-points mask."""
-    keep = np.ones(len(points), dtype=bool)
-    for _ in range(rounds + 1):
-        mean = points[keep].mean(axis=0)
-        _, _, vt = np.linalg.svd(points[keep] - mean, full_matrices=False)
-        normal3 = vt[-1]
-        distance = (points - mean) @ normal3
-        spread = 1.4826 * float(np.median(np.abs(distance[keep])))
-        keep = np.abs(distance) <= 3.0 * max(spread, 5e-6)
-    horizontal = float(np.hypot(normal3[0], normal3[1]))
-    n = normal3[:2] / horizontal
-    slope = float(-normal3[2] / horizontal)
-    # the plane n3·(p − mean) = 0 in the section z: n·p = n·mean_xy + slope·(z − mean_z)
-    return n, float(n @ mean[:2]) - slope * float(mean[2]), slope, keep
-
-
-def tangent_centre(normals: np.ndarray, offsets: np.ndarray, radius: float) -> np.ndarray:
-    """Centre (k, 2) of the circle of ``radius`` (m) tangent to the lines nᵢ·p = dᵢ with
-    inward unit normals ``normals`` (2, 2) and offsets ``offsets`` (k, 2) per height:
-    nᵢ·c = dᵢ + r."""
-    return np.linalg.solve(normals, (offsets + radius).T).T
-
-
-def edge_distance(xy: np.ndarray, normals: np.ndarray, offsets: np.ndarray, radius: float
-                  ) -> tuple[np.ndarray, np.ndarray]:
-    """Signed distance (m, positive outside) of ``xy`` (n, 2) from the edge model — the arc
-    of the circle of ``radius`` tangent to both lines nᵢ·p = dᵢ (``offsets`` (n, 2) at each
-    point's height), then the lines beyond the tangent points c − r·nᵢ — and the mask of the
-    points in the arc's sector (past both tangent points, towards the edge)."""
-    centre = tangent_centre(normals, offsets, radius)
-    tip = -(normals[0] + normals[1]) / np.linalg.norm(normals[0] + normals[1])
-    sector = np.ones(len(xy), dtype=bool)
-    line = np.full(len(xy), np.inf)
-    for i, n in enumerate(normals):
-        away = np.array([n[1], -n[0]])
-        away = -away if away @ tip > 0 else away
-        past = np.einsum("ij,j->i", xy - (centre - radius * n), away) < 0.0
-        sector &= past
-        distance = offsets[:, i] - xy @ n  # positive outside the line
-        beside = ~past & (np.abs(distance) < np.abs(line))
-        line[beside] = distance[beside]
-    circle = np.linalg.norm(xy - centre, axis=1) - radius
-    return np.where(sector | np.isinf(line), circle, line), sector
-
-
-def fit_tangent_circle(xy: np.ndarray, normals: np.ndarray, offsets: np.ndarray,
-                       bounds: tuple[float, float]) -> tuple[float, np.ndarray]:
-    """Radius (m) of the circle tangent to both flank lines whose edge model
-    (:func:`edge_distance`) best fits ``xy`` (n, 2; m) in the geometric sense (Chernov &
-    Lesort 2005) with the soft-L1 loss Σ(√(1 + (d/δ)²) − 1), δ = :data:`SOFT_SCALE` (quadratic
-    within the noise, linear beyond: Triggs et al. 2000, "Bundle adjustment — a modern
-    synthesis", §6.8 on robust cost functions), over ``bounds`` (m); ``offsets`` (n, 2) are
-    the lines' offsets at each point's height. Points beyond 3 robust standard deviations,
-    and at least :data:`TRIM_FLOOR`, are left out and the fit repeated: the few points round
-    a sparse edge must not count as stray ones against the many on the flanks, whose spread is
-    the noise alone. Returns the radius
-    and the mask of the points kept."""
-    keep = np.ones(len(xy), dtype=bool)
-    radius = 0.5 * (bounds[0] + bounds[1])
-    for _ in range(3):
-        def cost(r: float, use: np.ndarray = keep) -> float:
-            ratio = edge_distance(xy[use], normals, offsets[use], r)[0] / SOFT_SCALE
-            return float(np.sum(np.sqrt(1.0 + ratio * ratio) - 1.0))
-
-        # the cost is piecewise (points enter and leave the arc's sector): a grid first,
-        # then Brent's method within the best grid cell
-        grid = np.linspace(bounds[0], bounds[1], SEARCH_GRID)
-        best = int(np.argmin([cost(r) for r in grid]))
-        cell = (grid[max(best - 1, 0)], grid[min(best + 1, SEARCH_GRID - 1)])
-        radius = float(minimize_scalar(cost, bounds=cell, method="bounded",
-                                       options={"xatol": 1e-8}).x)
-        residual = edge_distance(xy, normals, offsets, radius)[0]
-        spread = 1.4826 * float(np.median(np.abs(residual[keep])))
-        new = np.abs(residual) <= max(3.0 * spread, TRIM_FLOOR)
-        if new.sum() < MIN_ARC_POINTS or np.array_equal(new, keep):
-            break
-        keep = new
-    return radius, keep
-
-
-def refine_edge(xy: np.ndarray, dz: np.ndarray, normals: np.ndarray, d0: np.ndarray,
-                d1: np.ndarray, radius: float, keep: np.ndarray, bounds: tuple[float, float]
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
-    """The flank lines and the radius fitted together to the kept points ``xy`` (n, 2; m) at
-    heights ``dz`` (m from the slab's middle): the composite distance of :func:`edge_distance`
-    over the lines' angles, offsets d0 and slopes d1 and the radius, soft-L1 loss of scale
-    :data:`SOFT_SCALE` (scipy ``least_squares``, trust-region reflective; Branch, Coleman & Li
-    1999). In a thin wedge the tip moves along the bisector by δd / sin(β/2) for an error δd
-    of either line: lines fitted to the flanks alone, a little away from the edge, put it off
-    by several times the noise; fitted with the edge points they agree with them."""
-    angles = np.arctan2(normals[:, 1], normals[:, 0])
-
-    def unpack(x: np.ndarray) -> tuple:
-        n = np.column_stack([np.cos(x[:2]), np.sin(x[:2])])
-        return n, x[2:4], x[4:6], x[6]
-
-    def residual(x: np.ndarray) -> np.ndarray:
-        n, e0, e1, r = unpack(x)
-        offsets = e0[None, :] + dz[keep, None] * e1[None, :]
-        return edge_distance(xy[keep], n, offsets, r)[0] / SOFT_SCALE
-
-    start = np.concatenate([angles, d0, d1, [radius]])
-    lower = np.concatenate([angles - 0.2, d0 - 0.2e-3, d1 - 0.5, [bounds[0]]])
-    upper = np.concatenate([angles + 0.2, d0 + 0.2e-3, d1 + 0.5, [bounds[1]]])
-    result = least_squares(residual, start, bounds=(lower, upper), loss="soft_l1",
-                           x_scale=np.concatenate([[1e-2, 1e-2], [1e-5, 1e-5], [1e-2, 1e-2],
-                                                   [1e-5]]), max_nfev=50)
-    n, e0, e1, r = unpack(result.x)
-    return n, e0, e1, float(r)
 
 
 def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labels: np.ndarray,
@@ -390,10 +290,9 @@ def _fit_slab(points: np.ndarray, arc: np.ndarray, members: np.ndarray, spacing:
     # distance whatever the radius; the order s is unreliable right at a sparse edge
     xy, offsets = points[members, :2], line_offsets(points[members, 2])
     radius, keep = fit_tangent_circle(xy, normals, offsets, bounds)
-    if REFINE:
-        normals, d0, d1, radius = refine_edge(xy, points[members, 2] - z_mid, normals, d0, d1,
-                                              radius, keep, bounds)
-        offsets = line_offsets(points[members, 2])
+    normals, d0, d1, radius = refine_edge(xy, points[members, 2] - z_mid, normals, d0, d1,
+                                          radius, keep, bounds)
+    offsets = line_offsets(points[members, 2])
     residual, sector = edge_distance(xy, normals, offsets, radius)
     rms = float(np.sqrt(np.mean(residual[sector & keep] ** 2))) if sector.any() else math.nan
     centre = tangent_centre(normals, line_offsets(np.array([z_mid])), radius)[0]
@@ -467,30 +366,6 @@ def _apply_model(points: np.ndarray, perimeter: np.ndarray, members: np.ndarray,
     members_s = np.mod(centre_s + (shift + scale * u) / length, 1.0)
     return ((model_xyz, model_s), members[replaced], members[~replaced],
             members_s[~replaced])
-
-
-def model_arc_length(xy: np.ndarray, normals: np.ndarray, offsets: np.ndarray, radius: float
-                     ) -> np.ndarray:
-    """Arc length u (m) of the points ``xy`` (n, 2) along the edge model of
-    :func:`edge_distance` from its tip, negative towards line 0: r × the angle from the tip
-    on the arc's sector, r·(π − β)/2 plus the distance along the line beyond it."""
-    centre = tangent_centre(normals, offsets, radius)
-    tip = -(normals[0] + normals[1]) / np.linalg.norm(normals[0] + normals[1])
-    half = math.acos(float(np.clip(-normals[0] @ tip, -1.0, 1.0)))
-    perp = np.array([-tip[1], tip[0]])
-    sign = 1.0 if -normals[0] @ perp > 0 else -1.0  # which way round line 0 lies
-    v = xy - centre
-    u = radius * np.arctan2(-sign * (v @ perp), v @ tip)
-    along, distance = np.zeros((2, len(xy))), np.zeros((2, len(xy)))
-    for i, n in enumerate(normals):
-        away = np.array([n[1], -n[0]])
-        away = -away if away @ tip > 0 else away
-        along[i] = np.einsum("ij,j->i", v + radius * n, away)
-        distance[i] = np.abs(offsets[:, i] - xy @ n)
-    beside = along.max(axis=0) >= 0.0  # not past both tangent points: on a flank
-    line = np.where((along[1] < 0.0) | ((along[0] >= 0.0) & (distance[0] <= distance[1])), 0, 1)
-    flank_u = (radius * half + along[line, np.arange(len(xy))]) * np.where(line == 0, -1.0, 1.0)
-    return np.where(beside, flank_u, u)
 
 
 def _sample_model(normals: np.ndarray, line_offsets, radius: float, half: float, cut: float,

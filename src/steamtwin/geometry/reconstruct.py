@@ -70,10 +70,8 @@ class ReconstructionSettings:
     span; ``chordwise_spacing``, ``sag`` and ``span_spacing`` control the triangulation;
     ``guard`` checks the surface against the cloud (None: not checked,
     :mod:`~steamtwin.geometry.fit_guard`); ``penalty_factor`` multiplies the fit's smoothing
-    penalty (the guard's repairs raise it); ``model_edges``: the side is fitted to model points
-    on circles tangent to both flanks instead of the cloud's own points where an edge is
-    sparsely sampled (:mod:`~steamtwin.geometry.edge_model`) — off by default: on the foreign
-    blades it does not yet raise the pass rate (docs/benchmarks.md, "Edge circles").
+    penalty (the guard's repairs raise it); ``model_edges``: sparse edges as tangent circles,
+    projected points replaced (:mod:`~steamtwin.geometry.edge_model`; off: no gain yet).
     """
 
     segmentation: SegmentationSettings = field(default_factory=SegmentationSettings)
@@ -177,24 +175,17 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
     fit = AdaptiveSurfaceFit(tolerance=settings.tolerance, max_breaks=settings.max_breaks,
                              outlier_distance=settings.outlier_distance,
                              penalty_factor=settings.penalty_factor)
-    replaced = _edge_model(points, s0, have, segmentation, settings)
-    kept = have & ~replaced.replaced
-    s0 = np.where(np.isnan(replaced.parameters), s0, replaced.parameters)
-    fit.fit(np.concatenate([s0[kept], replaced.s]),
-            np.concatenate([points[kept, 2], replaced.points[:, 2]]),
-            np.vstack([points[kept, :2], replaced.points[:, :2]]), breaks, z_knots)
-    surface = fit.surface_
+    model = (model_sparse_edges(points, s0, have, labels, segmentation.perimeter,
+                                segmentation.spacing) if settings.model_edges
+             else EdgeModel.none(len(points)))
+    kept, s0, fit_data = model.fit_data(points, s0, have)
+    surface = fit.fit(*fit_data, breaks, z_knots).surface_
     check_side_fit(fit)
-    # the cloud's own side points: those the edge model stood in for projected onto the fit
-    parameters = np.full(len(points), np.nan)
-    residuals = np.full(len(points), np.nan)
-    inliers = np.zeros(len(points), dtype=bool)
-    count = int(kept.sum())
-    parameters[kept] = fit.parameters_[:count]
-    residuals[kept] = fit.residuals_[:count]
+    parameters, residuals = np.full((2, len(points)), np.nan)
+    inliers, own, count = np.zeros(len(points), bool), model.replaced, int(kept.sum())
+    parameters[kept], residuals[kept] = fit.parameters_[:count], fit.residuals_[:count]
     inliers[kept] = fit.inliers_[:count]
-    own = np.flatnonzero(replaced.replaced)
-    parameters[own] = surface.project(points[own, :2], points[own, 2], s0[own])
+    parameters[own] = surface.project(points[own, :2], points[own, 2], s0[own])  # the replaced
     residuals[own] = surface.residuals(points[own, :2], points[own, 2], parameters[own])
     inliers[own] = np.abs(residuals[own]) <= settings.outlier_distance
     boundaries = patch_boundaries(parameters[have], labels[have])
@@ -209,19 +200,6 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
                                   root=root, tip=tip, residuals=residuals, inliers=inliers,
                                   parameters=parameters, boundaries=boundaries,
                                   fit_history=fit.history_, ring_parameters=ring_s), settings)
-
-
-def _edge_model(points: np.ndarray, s0: np.ndarray, have: np.ndarray, segmentation: Segmentation,
-                settings: ReconstructionSettings) -> EdgeModel:
-    """Model points that stand in for the side points of a sparsely sampled edge
-    (:func:`~steamtwin.geometry.edge_model.model_sparse_edges`); none unless
-    ``settings.model_edges``."""
-    if not settings.model_edges:
-        return EdgeModel(points=np.empty((0, 3)), s=np.empty(0),
-                         replaced=np.zeros(len(points), dtype=bool),
-                         parameters=np.full(len(points), np.nan), slabs=())
-    return model_sparse_edges(points, s0, have, segmentation.labels, segmentation.perimeter,
-                              segmentation.spacing)
 
 
 def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings) -> Reconstruction:
