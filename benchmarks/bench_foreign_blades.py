@@ -15,7 +15,8 @@ a refusal records the pipeline's message. ``seconds`` is the wall time of the re
 also counts the time the process waited for a core).
 
 Run: python benchmarks/bench_foreign_blades.py [--quick] [--members NAME ...]
-     [--points 40000 80000 planned] [--seeds N] [--pose blade|random] [--out DIR]
+     [--points 40000 80000 planned] [--seeds N] [--pose blade|random] [--model-edges]
+     [--out DIR]
 (--quick: 40k points, one seed; "planned": 4.5 points on the smallest edge's half circle.)
 Prints a table; writes foreign_blades.csv and .json to --out (default: the temporary
 directory, steamtwin-bench/foreign_blades).
@@ -43,7 +44,11 @@ from foreign_blades import FAMILY, compare_with_exact, family_blade, laser_cloud
 
 from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.frame import reconstruct_in_any_pose
-from steamtwin.geometry.reconstruct import Reconstruction, reconstruct_blade
+from steamtwin.geometry.reconstruct import (
+    Reconstruction,
+    ReconstructionSettings,
+    reconstruct_blade,
+)
 from steamtwin.geometry.scanner import EDGE_SAMPLES
 
 LIMITS_MM = {"rms": 0.02, "max": 0.1, "worst": 0.5}
@@ -61,9 +66,13 @@ def planned_points(member: str) -> int:
     return math.ceil(family_blade(member).mesh.area * EDGE_SAMPLES**2 / (math.pi * radius) ** 2)
 
 
+#: Settings of every reconstruction (``--model-edges`` turns the edge model on).
+SETTINGS = ReconstructionSettings()
+
+
 def in_blade_frame(points: np.ndarray, seed: int) -> tuple[Reconstruction, np.ndarray]:
     """The cloud as generated (blade frame) reconstructed; its vertices in the blade frame."""
-    result = reconstruct_blade(points)
+    result = reconstruct_blade(points, SETTINGS)
     return result, result.vertices
 
 
@@ -72,7 +81,7 @@ def in_random_pose(points: np.ndarray, seed: int) -> tuple[Reconstruction, np.nd
     found from the data (:func:`~steamtwin.geometry.frame.reconstruct_in_any_pose`); its
     vertices taken back through the scan frame into the generator's blade frame."""
     scan, scan_from_blade = random_pose(points, seed + 1000)
-    result, frame = reconstruct_in_any_pose(scan)
+    result, frame = reconstruct_in_any_pose(scan, SETTINGS)
     in_scan = frame.to_scan(result.vertices)
     rotation, translation = scan_from_blade[:3, :3], scan_from_blade[:3, 3]
     return result, (in_scan - translation) @ rotation
@@ -158,8 +167,11 @@ if __name__ == "__main__":
                         help='cloud sizes: numbers of points or "planned" (planned_points)')
     parser.add_argument("--seeds", type=int, default=2)
     parser.add_argument("--pose", default="blade", choices=list(POSES))
+    parser.add_argument("--model-edges", action="store_true",
+                        help="fit sparse edges as circles tangent to both flanks (edge_model)")
     parser.add_argument("--out", type=Path,
                         default=Path(tempfile.gettempdir()) / "steamtwin-bench" / "foreign_blades")
     args = parser.parse_args()
     sizes, seeds = (["40000"], 1) if args.quick else (args.points, args.seeds)
+    SETTINGS = ReconstructionSettings(model_edges=args.model_edges)
     main(args.members, sizes, seeds, args.pose, args.out)

@@ -37,6 +37,7 @@ import numpy as np
 
 from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.bspline import AdaptiveSurfaceFit, PeriodicSurface, clamped_knots
+from steamtwin.geometry.edge_model import EdgeModel, model_sparse_edges
 from steamtwin.geometry.fit_guard import GuardReport, GuardSettings, guard_surface, refusal_message
 from steamtwin.geometry.mesh_sections import check_closed
 from steamtwin.geometry.pritchard import GeometryError
@@ -69,7 +70,8 @@ class ReconstructionSettings:
     span; ``chordwise_spacing``, ``sag`` and ``span_spacing`` control the triangulation;
     ``guard`` checks the surface against the cloud (None: not checked,
     :mod:`~steamtwin.geometry.fit_guard`); ``penalty_factor`` multiplies the fit's smoothing
-    penalty (the guard's repairs raise it).
+    penalty (the guard's repairs raise it); ``model_edges``: sparse edges as tangent circles,
+    projected points replaced (:mod:`~steamtwin.geometry.edge_model`; off: no gain yet).
     """
 
     segmentation: SegmentationSettings = field(default_factory=SegmentationSettings)
@@ -84,6 +86,7 @@ class ReconstructionSettings:
     span_spacing: float = 1e-3
     guard: GuardSettings | None = field(default_factory=GuardSettings)
     penalty_factor: float = 1.0
+    model_edges: bool = False
 
 
 @dataclass(frozen=True)
@@ -166,23 +169,26 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
     breaks = initial_breaks(boundaries, perimeter, settings,
                             edge_arcs(segmentation, labels, perimeter))
     root, tip = _refit_caps(points, labels, segmentation)
-    z = points[have, 2]
     z_lo, z_hi = _span_range(points[have], root, tip)
     interior = max(0, math.ceil((z_hi - z_lo) / settings.spanwise_knot_spacing) - 1)
     z_knots = clamped_knots(z_lo, z_hi, interior)
     fit = AdaptiveSurfaceFit(tolerance=settings.tolerance, max_breaks=settings.max_breaks,
                              outlier_distance=settings.outlier_distance,
                              penalty_factor=settings.penalty_factor)
-    fit.fit(s0[have], z, points[have, :2], breaks, z_knots)
-    surface = fit.surface_
+    model = (model_sparse_edges(points, s0, have, labels, segmentation.perimeter,
+                                segmentation.spacing) if settings.model_edges
+             else EdgeModel.none(len(points)))
+    kept, s0, fit_data = model.fit_data(points, s0, have)
+    surface = fit.fit(*fit_data, breaks, z_knots).surface_
     check_side_fit(fit)
-    parameters = np.full(len(points), np.nan)
-    parameters[have] = fit.parameters_
-    boundaries = patch_boundaries(fit.parameters_, labels[have])
-    residuals = np.full(len(points), np.nan)
-    inliers = np.zeros(len(points), dtype=bool)
-    residuals[have] = fit.residuals_
-    inliers[have] = fit.inliers_
+    parameters, residuals = np.full((2, len(points)), np.nan)
+    inliers, own, count = np.zeros(len(points), bool), model.replaced, int(kept.sum())
+    parameters[kept], residuals[kept] = fit.parameters_[:count], fit.residuals_[:count]
+    inliers[kept] = fit.inliers_[:count]
+    parameters[own] = surface.project(points[own, :2], points[own, 2], s0[own])  # the replaced
+    residuals[own] = surface.residuals(points[own, :2], points[own, 2], parameters[own])
+    inliers[own] = np.abs(residuals[own]) <= settings.outlier_distance
+    boundaries = patch_boundaries(parameters[have], labels[have])
     for plane, name, outward in ((root, "root", -1.0), (tip, "tip", 1.0)):
         on = labels == REGIONS.index(name)
         residuals[on] = outward * (points[on, 2] - plane.height(points[on, :2]))

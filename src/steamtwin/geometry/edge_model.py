@@ -1,0 +1,400 @@
+"""A model of thin, sparsely sampled blade edges: circles tangent to both flanks.
+
+A leading or trailing edge whose half circle π·r holds only a few points of the cloud (a
+0.2 mm trailing edge at 0.14 mm spacing: about four, each σ = 0.017 mm off) is not resolved by
+the side's B-spline: its few knot spans there either smooth the edge off (cut short) or
+overshoot it (a "beak" beyond the edge, a fold). The standard description of a blade profile
+closes each end with a circle tangent to the pressure and suction sides (Dixon & Hall, "Fluid
+Mechanics and Thermodynamics of Turbomachinery", 7th ed. 2014, §3.3 on profile geometry;
+Pritchard 1985, ASME 85-GT-219, the edge circles of the eleven-parameter profile, as in
+:mod:`~steamtwin.geometry.pritchard`). This module fits that model
+(:mod:`~steamtwin.geometry.edge_circle`, one section) slab by slab along the span and hands the
+side's fit model points instead of the sparse edge's own:
+
+- in slabs along the span, the flanks next to the edge (side points between ``a`` and ``L``
+  of arc length from the edge, on either side of it) are each a plane through their points
+  (total least squares, Pearson 1901: the smallest principal axis), trimmed of stray points
+  and refitted; within the slab's plane z = const each is a line n·p = d(z), n pointing into
+  the blade — d varies linearly with z, so a twisting or leaning edge keeps its tangency over
+  the slab's height;
+- the circles inside the wedge tangent to both lines form a one-parameter family in the radius
+  r: the centre solves n₁·c = d₁ + r, n₂·c = d₂ + r. The radius is the geometric fit of the
+  slab's points to the arc and the lines beyond it (Chernov & Lesort 2005, "Least squares
+  fitting of circles", J. Math. Imaging Vision 23:239; soft-L1 loss; a grid, then Brent's
+  bounded method), then lines and radius are refitted together: in a thin wedge the tip moves
+  along the bisector by δd / sin(β/2) for an error δd of a flank line
+  (:mod:`~steamtwin.geometry.edge_circle`);
+- a slab whose radius is off its neighbours' median by more than :data:`SPAN_SPREAD`, or
+  whose arc points scatter or lean off the circle beyond the flanks' noise, is dropped; gaps of
+  up to :data:`MAX_BRIDGE` slabs get their neighbours' model interpolated along z;
+- the model is sampled on the arc and the flanks next to it (:data:`CUT_SPACINGS` spacings
+  beyond the tangent points), denser than the cloud, and replaces the cloud's points there;
+  every model point and every other point of the slab gets its side parameter ``s`` from its
+  arc length along the model, scaled and shifted to the cloud's own ``s`` on the flanks (a
+  straight-line fit per slab, median over ±:data:`ORDER_SLABS` slabs): the cloud's order is
+  0.3–0.8 mm off within a millimetre of a thin edge, and neighbouring slabs that disagree make
+  the side's spline fold.
+
+An edge is modelled where its circle holds fewer than :data:`MODEL_SAMPLES` points of the
+cloud's spacing on the half circle; a slab whose flanks are not straight within the noise, whose
+wedge is too open or closed, or whose radius lies at a bound of its search, keeps its own points
+(:attr:`EdgeModel.slabs` records why).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from steamtwin.geometry.edge_circle import (
+    MIN_ARC_POINTS,
+    TRIM_FLOOR,
+    edge_distance,
+    fit_tangent_circle,
+    flank_plane,
+    model_arc_length,
+    refine_edge,
+    tangent_centre,
+)
+from steamtwin.geometry.volume_mesh import REGIONS
+
+#: An edge is modelled where its half circle π·r holds fewer than this many point spacings.
+MODEL_SAMPLES = 8.0
+#: Slab height along the span in point spacings (at least :data:`MIN_SLAB` m).
+SLAB_SPACINGS = 6.0
+MIN_SLAB = 1.5e-3
+#: Flank window length beyond its start, in point spacings (at least :data:`MIN_FLANK` m).
+FLANK_SPACINGS = 16.0
+MIN_FLANK = 2.0e-3
+#: Fewest points of a flank for a slab to be modelled.
+MIN_FLANK_POINTS = 12
+#: Wedge angles (rad) within which the tangent-circle construction is well conditioned.
+WEDGE_RANGE = (math.radians(2.0), math.radians(120.0))
+#: Largest relative difference of a slab's radius from the median of its neighbours'.
+SPAN_SPREAD = 0.1
+#: The model reaches this many point spacings beyond its tangent points along the flanks.
+CUT_SPACINGS = 2.0
+#: Largest RMS of the arc's points about the circle, as a multiple of the flanks' RMS.
+ARC_RMS = 1.5
+#: Model points along the arc and along the span, per point spacing.
+ARC_DENSITY = 2.0
+RING_DENSITY = 1.0
+
+
+@dataclass(frozen=True)
+class EdgeSlab:
+    """One slab's fit: ``edge``, ``z`` (m, centre), ``radius`` (m, NaN unless fitted),
+    ``wedge`` angle (rad), RMS of the arc points about the circle (m), ``used`` — whether its
+    model replaced the points —, ``reason`` when not, and the circle's ``centre`` (x, y; m)
+    at ``z`` (NaN unless fitted)."""
+
+    edge: str
+    z: float
+    radius: float
+    wedge: float
+    rms: float
+    used: bool
+    reason: str = ""
+    centre: tuple[float, float] = (math.nan, math.nan)
+
+
+@dataclass(frozen=True)
+class EdgeModel:
+    """Model points of the sparse edges: ``points`` (k, 3; m) and their side parameter ``s``
+    (k,), ``replaced`` the cloud points (mask over the cloud) that they stand in for,
+    ``parameters`` the side parameter from the model of the other cloud points of a modelled
+    slab (NaN elsewhere: keep their own), and the per-slab fits ``slabs``."""
+
+    points: np.ndarray
+    s: np.ndarray
+    replaced: np.ndarray
+    parameters: np.ndarray
+    slabs: tuple[EdgeSlab, ...]
+
+    def fit_data(self, points: np.ndarray, s: np.ndarray, side: np.ndarray) -> tuple:
+        """For the side's fit: the cloud points kept (mask), every point's ``s`` with the
+        model's where it gave one, and (s, z, xy) of the kept points then the model points."""
+        kept = side & ~self.replaced
+        s = np.where(np.isnan(self.parameters), s, self.parameters)
+        return kept, s, (np.concatenate([s[kept], self.s]),
+                         np.concatenate([points[kept, 2], self.points[:, 2]]),
+                         np.vstack([points[kept, :2], self.points[:, :2]]))
+
+    @classmethod
+    def none(cls, count: int) -> EdgeModel:
+        """No model: the ``count`` cloud points keep their own."""
+        return cls(np.empty((0, 3)), np.empty(0), np.zeros(count, dtype=bool),
+                   np.full(count, np.nan), ())
+
+
+def _circular(values: np.ndarray) -> np.ndarray:
+    """Values in (−0.5, 0.5] modulo 1."""
+    return np.mod(values + 0.5, 1.0) - 0.5
+
+
+def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labels: np.ndarray,
+                       perimeter: np.ndarray, spacing: float, noise: float = 0.03e-3
+                       ) -> EdgeModel:
+    """Model points for the sparse leading and trailing edges of a blade side.
+
+    ``points`` (n, 3; m) in the blade frame; ``s`` the side parameter (arc-length fraction
+    anticlockwise from the rear end, NaN off the side) of the points under ``mask``;
+    ``labels`` the segmentation's REGIONS indices; ``perimeter`` each side point's section
+    perimeter (m); ``spacing`` the cloud's point spacing (m); ``noise`` the largest RMS (m)
+    of the flank points about their plane for the flank to count as straight.
+    """
+    pieces, slabs = [], []
+    replaced = np.zeros(len(points), dtype=bool)
+    parameters = np.full(len(points), np.nan)
+    for edge in ("trailing_edge", "leading_edge"):
+        on = mask & (labels == REGIONS.index(edge))
+        if on.sum() < MIN_ARC_POINTS:
+            continue
+        base = 0.0 if edge == "trailing_edge" else 0.5
+        centre_s = float(np.mod(base + np.median(_circular(s[on] - base)), 1.0))
+        result = _model_edge(points, s, mask, perimeter, spacing, noise, edge, centre_s)
+        pieces += result[0]
+        slabs += result[1]
+        replaced |= result[2]
+        parameters = np.where(np.isnan(result[3]), parameters, result[3])
+    model_points = np.vstack([p for p, _ in pieces]) if pieces else np.empty((0, 3))
+    model_s = np.concatenate([q for _, q in pieces]) if pieces else np.empty(0)
+    return EdgeModel(points=model_points, s=model_s, replaced=replaced, parameters=parameters,
+                     slabs=tuple(slabs))
+
+
+def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: np.ndarray,
+                spacing: float, noise: float, edge: str, centre_s: float) -> tuple:
+    """Slabs of one edge: (model point pieces, slab records, replaced mask, parameters)."""
+    arc = np.full(len(points), np.inf)
+    arc[mask] = _circular(s[mask] - centre_s) * perimeter[mask]  # signed arc length (m)
+    # the half circle of a modelled edge is shorter than MODEL_SAMPLES spacings: its tangent
+    # points lie within π r / 2 < MODEL_SAMPLES·spacing / 2 of the edge's middle
+    start = 0.5 * MODEL_SAMPLES * spacing + 2.0 * spacing
+    length = max(FLANK_SPACINGS * spacing, MIN_FLANK)
+    near = np.flatnonzero(np.abs(arc) <= start + length)
+    z_near = points[near, 2]
+    height = max(SLAB_SPACINGS * spacing, MIN_SLAB)
+    lo, hi = float(z_near.min()), float(z_near.max())
+    count = max(1, round((hi - lo) / height))
+    edges_z = np.linspace(lo, hi, count + 1)
+    fits = []
+    for k in range(count):
+        members = near[(z_near >= edges_z[k]) & (z_near <= edges_z[k + 1])]
+        record, geometry = _fit_slab(points, arc, members, spacing, noise,
+                                     0.5 * (edges_z[k] + edges_z[k + 1]), start)
+        fits.append((EdgeSlab(edge=edge, z=0.5 * (edges_z[k] + edges_z[k + 1]), **record),
+                     geometry, members))
+    # along the span the edge changes slowly: a slab whose radius is off the median of its
+    # neighbours' by more than SPAN_SPREAD is a bad fit (in a thin wedge the centre moves
+    # along the bisector by δr / sin(β/2), eight times the radius error at 14°)
+    radii = np.array([slab.radius if slab.used else np.nan for slab, _, _ in fits])
+    for k, (slab, _, members) in enumerate(fits):
+        around = radii[max(0, k - 2): k + 3]
+        typical = float(np.nanmedian(around)) if np.isfinite(around).sum() >= 3 else math.nan
+        if slab.used and not abs(slab.radius - typical) <= SPAN_SPREAD * typical:
+            fits[k] = (replace(slab, used=False, reason="radius off its neighbours'"), None,
+                       members)
+    _bridge(fits)
+    # the cloud's order along the edge, scale and shift of its arc length against the model's
+    # (:func:`_order_against_model`), smoothed along the span: each slab's own is noisy by a
+    # few tenths of a millimetre, and the side's spline, smooth over several slabs, folds
+    # where neighbouring slabs disagree
+    order = np.full((len(fits), 2), np.nan)
+    for k, (_, geometry, members) in enumerate(fits):
+        if geometry is not None:
+            order[k] = _order_against_model(points, arc, members, geometry, spacing)
+    smooth = np.array([np.nanmedian(order[max(0, k - ORDER_SLABS): k + ORDER_SLABS + 1],
+                                    axis=0) if np.isfinite(order[max(0, k - ORDER_SLABS):
+                                                                 k + ORDER_SLABS + 1, 0]).any()
+                       else [np.nan, np.nan] for k in range(len(fits))])
+    pieces, slabs = [], []
+    replaced = np.zeros(len(points), dtype=bool)
+    parameters = np.full(len(points), np.nan)
+    for k, (slab, geometry, members) in enumerate(fits):
+        if geometry is not None and not np.isfinite(smooth[k]).all():
+            slab = replace(slab, used=False, reason="the cloud's order does not follow the model")
+        elif geometry is not None:
+            applied = _apply_model(points, perimeter, members, geometry, spacing, centre_s,
+                                   (edges_z[k], edges_z[k + 1]), smooth[k])
+            pieces.append(applied[0])
+            replaced[applied[1]] = True
+            parameters[applied[2]] = applied[3]
+        slabs.append(slab)
+    return pieces, slabs, replaced, parameters
+
+
+#: Slabs either side over which the cloud's order against the model is smoothed (median).
+ORDER_SLABS = 3
+#: Slabs without a fit of their own are given their neighbours' model across at most this
+#: many slabs (a gap of a hole or of stray points; not the long stretch of an edge that the
+#: cloud resolves).
+MAX_BRIDGE = 6
+
+
+def _bridge(fits: list) -> None:
+    """Slabs whose fit failed, between fitted ones at most :data:`MAX_BRIDGE` slabs apart (or
+    that many beyond the last one at either end), get the model interpolated linearly in z
+    between them — every slab of the edge then has the same parametrisation, which the side's
+    spline, smooth over several slabs, needs — marked ``used`` with the reason "bridged"."""
+    done = [k for k, (slab, _, _) in enumerate(fits) if slab.used]
+    for k, (slab, geometry, members) in enumerate(fits):
+        if slab.used or not done:
+            continue
+        before = [j for j in done if j < k]
+        after = [j for j in done if j > k]
+        lo = before[-1] if before else after[0]
+        hi = after[0] if after else before[-1]
+        if (before and after and hi - lo > MAX_BRIDGE + 1) or min(abs(k - lo),
+                                                                  abs(hi - k)) > MAX_BRIDGE:
+            continue
+        weight = 0.0 if hi == lo else (k - lo) / (hi - lo)
+        a, b = fits[lo][1], fits[hi][1]
+        z = slab.z
+        angles = [(1 - weight) * np.arctan2(a[0][:, 1], a[0][:, 0])
+                  + weight * np.arctan2(b[0][:, 1], b[0][:, 0])]
+        normals = np.column_stack([np.cos(angles[0]), np.sin(angles[0])])
+        d_a, d_b = a[1] + a[2] * (z - a[3]), b[1] + b[2] * (z - b[3])
+        geometry = (normals, (1 - weight) * d_a + weight * d_b,
+                    (1 - weight) * a[2] + weight * b[2], z,
+                    (1 - weight) * a[4] + weight * b[4])
+        fits[k] = (replace(slab, used=True, reason="bridged", radius=geometry[4]), geometry,
+                   members)
+
+
+def _fit_slab(points: np.ndarray, arc: np.ndarray, members: np.ndarray, spacing: float,
+              noise: float, z_mid: float, start: float) -> tuple:
+    """Fit one slab: (EdgeSlab fields, geometry (normals, d0, d1, z_mid, radius) or None)."""
+    failed = {"radius": math.nan, "wedge": math.nan, "rms": math.nan, "used": False}
+    arc_m = arc[members]
+    flanks = [members[arc_m <= -start], members[arc_m >= start]]
+    if min(len(f) for f in flanks) < MIN_FLANK_POINTS:
+        return {**failed, "reason": "too few points"}, None
+    fits = [flank_plane(points[f] - [0.0, 0.0, z_mid]) for f in flanks]
+    normals = np.array([f[0] for f in fits])
+    d0 = np.array([f[1] for f in fits])
+    d1 = np.array([f[2] for f in fits])
+    for i in range(2):  # each normal into the blade: towards the other flank's points
+        if normals[i] @ points[flanks[1 - i], :2].mean(axis=0) < d0[i]:
+            normals[i], d0[i], d1[i] = -normals[i], -d0[i], -d1[i]
+
+    def line_offsets(z: np.ndarray) -> np.ndarray:
+        return d0[None, :] + (z - z_mid)[:, None] * d1[None, :]
+
+    flank_rms = max(float(np.sqrt(np.mean(
+        (np.einsum("ij,j->i", points[f, :2], normals[i])
+         - line_offsets(points[f, 2])[:, i])[fits[i][3]] ** 2))) for i, f in enumerate(flanks))
+    wedge = math.pi - math.acos(float(np.clip(normals[0] @ normals[1], -1.0, 1.0)))
+    record = {**failed, "wedge": wedge}
+    if not WEDGE_RANGE[0] <= wedge <= WEDGE_RANGE[1]:
+        return {**record, "reason": "wedge angle out of range"}, None
+    if flank_rms > noise:
+        return {**record, "reason": f"flanks not straight (RMS {flank_rms * 1e3:.3f} mm)"}, None
+    r_max = MODEL_SAMPLES * spacing / math.pi
+    bounds = (0.02 * r_max, 2.0 * r_max)
+    # all the slab's points: those on the flanks beyond the tangent points are at the lines'
+    # distance whatever the radius; the order s is unreliable right at a sparse edge
+    xy, offsets = points[members, :2], line_offsets(points[members, 2])
+    radius, keep = fit_tangent_circle(xy, normals, offsets, bounds)
+    normals, d0, d1, radius = refine_edge(xy, points[members, 2] - z_mid, normals, d0, d1,
+                                          radius, keep, bounds)
+    offsets = line_offsets(points[members, 2])
+    residual, sector = edge_distance(xy, normals, offsets, radius)
+    rms = float(np.sqrt(np.mean(residual[sector & keep] ** 2))) if sector.any() else math.nan
+    centre = tangent_centre(normals, line_offsets(np.array([z_mid])), radius)[0]
+    record = {**record, "radius": radius, "rms": rms, "centre": (float(centre[0]),
+                                                                 float(centre[1]))}
+    if not bounds[0] * 1.01 < radius < bounds[1] * 0.99:
+        return {**record, "reason": "radius at a bound of its search"}, None
+    if math.pi * radius >= MODEL_SAMPLES * spacing:
+        return {**record, "reason": "edge resolved by the cloud"}, None
+    # the arc's points about the circle as the flanks' about their lines (the noise), and on
+    # average on it: a circle off by a fraction of the noise along a thin wedge's bisector
+    # is off by several times that at the tip
+    bias = float(np.mean(residual[sector & keep])) if sector.any() else math.nan
+    if ((sector & keep).sum() < MIN_ARC_POINTS or not rms <= ARC_RMS * flank_rms
+            or not abs(bias) <= flank_rms):
+        return {**record, "reason": "arc points do not follow the circle"}, None
+    return {**record, "used": True, "reason": ""}, (normals, d0, d1, z_mid, radius)
+
+
+def _geometry_lines(geometry: tuple):
+    """The model's line offsets at heights z (a function) and the angle from its tip to
+    either tangent point (rad)."""
+    normals, d0, d1, z_mid, _ = geometry
+
+    def line_offsets(z: np.ndarray) -> np.ndarray:
+        return d0[None, :] + (z - z_mid)[:, None] * d1[None, :]
+
+    half = math.acos(float(np.clip(normals[0] @ (normals[0] + normals[1])
+                                   / np.linalg.norm(normals[0] + normals[1]), -1.0, 1.0)))
+    return line_offsets, half
+
+
+def _order_against_model(points: np.ndarray, arc: np.ndarray, members: np.ndarray,
+                         geometry: tuple, spacing: float) -> tuple[float, float]:
+    """Scale and shift of the cloud's arc length (from its s) against the model's arc length
+    u on the flanks beyond the model (a straight-line fit: the slope is the local ratio of
+    the parametrisation's length to the model's); NaN when too few flank points follow the
+    model or the slope is off by more than a factor two."""
+    normals, _, _, _, radius = geometry
+    line_offsets, half = _geometry_lines(geometry)
+    xy, offsets = points[members, :2], line_offsets(points[members, 2])
+    u = model_arc_length(xy, normals, offsets, radius)
+    distance, _ = edge_distance(xy, normals, offsets, radius)
+    cut = radius * half + CUT_SPACINGS * spacing
+    on_flank = (np.abs(u) > cut + spacing) & (np.abs(distance) < TRIM_FLOOR)
+    if on_flank.sum() < 2 * MIN_FLANK_POINTS:
+        return math.nan, math.nan
+    scale, shift = np.polyfit(u[on_flank], arc[members[on_flank]], 1)
+    return (float(scale), float(shift)) if 0.5 < scale < 2.0 else (math.nan, math.nan)
+
+
+def _apply_model(points: np.ndarray, perimeter: np.ndarray, members: np.ndarray,
+                 geometry: tuple, spacing: float, centre_s: float,
+                 z_range: tuple[float, float], order: np.ndarray) -> tuple:
+    """Model points of a slab and the parameters of its cloud points: ((model points, s),
+    replaced indices, other indices, their s). The cloud's order s is unreliable next to a
+    sparse edge: every point of the slab gets the s of its arc length u along the model,
+    through the (smoothed) ``order`` — scale and shift — of :func:`_order_against_model`."""
+    normals, _, _, _, radius = geometry
+    line_offsets, half = _geometry_lines(geometry)
+    xy, offsets = points[members, :2], line_offsets(points[members, 2])
+    u = model_arc_length(xy, normals, offsets, radius)
+    cut = radius * half + CUT_SPACINGS * spacing
+    _, sector = edge_distance(xy, normals, offsets, radius)
+    scale, shift = order
+    length = float(np.median(perimeter[members]))
+    model_xyz, model_u = _sample_model(normals, line_offsets, radius, half, cut, z_range,
+                                       spacing)
+    model_s = np.mod(centre_s + (shift + scale * model_u) / length, 1.0)
+    replaced = sector | (np.abs(u) < cut)  # the model's points, and stray points beyond it
+    members_s = np.mod(centre_s + (shift + scale * u) / length, 1.0)
+    return ((model_xyz, model_s), members[replaced], members[~replaced],
+            members_s[~replaced])
+
+
+def _sample_model(normals: np.ndarray, line_offsets, radius: float, half: float, cut: float,
+                  z_range: tuple[float, float], spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Model points (k, 3) for |u| ≤ ``cut`` — the arc between the tangent points, then the
+    flank lines —, in rings every spacing / RING_DENSITY over the slab, ARC_DENSITY per
+    spacing along the model; and their arc length u (m), negative towards line 0."""
+    rings = max(1, math.ceil((z_range[1] - z_range[0]) * RING_DENSITY / spacing))
+    z = z_range[0] + (np.arange(rings) + 0.5) * (z_range[1] - z_range[0]) / rings
+    u = np.linspace(-cut, cut, max(5, math.ceil(2.0 * cut * ARC_DENSITY / spacing) + 1))
+    tip = -(normals[0] + normals[1]) / np.linalg.norm(normals[0] + normals[1])
+    perp = np.array([-tip[1], tip[0]])
+    sign = 1.0 if -normals[0] @ perp > 0 else -1.0
+    angle = np.clip(u / radius, -half, half)
+    direction = np.cos(angle)[:, None] * tip - sign * np.sin(angle)[:, None] * perp
+    beyond = np.maximum(np.abs(u) - radius * half, 0.0)
+    line = np.where(u < 0.0, 0, 1)
+    away = np.array([[n[1], -n[0]] for n in normals])
+    away = np.where((away @ tip > 0)[:, None], -away, away)
+    centres = tangent_centre(normals, line_offsets(z), radius)  # (rings, 2)
+    xy = (centres[:, None, :] + radius * direction[None, :, :]
+          + (beyond[:, None] * away[line])[None, :, :])
+    model_xyz = np.column_stack([xy.reshape(-1, 2), np.repeat(z, len(u))])
+    return model_xyz, np.tile(u, rings)
