@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pandas as pd
 import pytest
@@ -116,11 +114,9 @@ def test_long_stretch_without_data_splits_a_hold() -> None:
     assert find_steady_windows(data, rated_load_w=RATED, load_fraction=0.30) == []
 
 
-def test_fast_on_a_few_hundred_thousand_samples() -> None:
-    data, _ = synthetic_day(step_s=0.3)  # 288 000 samples
-    begin = time.perf_counter()
+def test_a_few_hundred_thousand_samples() -> None:
+    data, _ = synthetic_day(step_s=0.3)  # 288 000 samples (~0.2 s: bench_window_run.py)
     windows = find_steady_windows(data, rated_load_w=RATED)
-    assert time.perf_counter() - begin < 1.5  # typically ~0.2 s
     assert len(windows) == 3
 
 

@@ -103,4 +103,4 @@ def test_speed_paces_the_samples():
             return loop.time() - start
 
     elapsed = asyncio.run(scenario())
-    assert 0.45 <= elapsed < 2.0  # five 1-s steps at 10× real time: 0.5 s
+    assert 0.45 <= elapsed < 10.0  # five 1-s steps at 10× real time: 0.5 s, never less

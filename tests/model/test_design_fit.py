@@ -130,7 +130,7 @@ def test_perturbed_laws_are_recovered_from_the_models_own_heat_balance(reference
     # the rated point says nothing about the Reynolds exponent (m = m_design there)
     assert fit.identified_share.loc["100%", "reynolds_exponent"] < 1e-6
     assert fit.identified_share.loc["30%", "reynolds_exponent"] > 0.2
-    assert fit.wall_time_s < 30.0
+    assert fit.evaluations <= 200  # measured 140 (its time is a benchmark's, not a test's)
 
 
 def test_fit_against_the_virtual_plant_reduces_the_residuals(reference_spec):
@@ -300,7 +300,6 @@ def test_fit_on_the_derived_kit_meets_every_point_within_the_band(kit_fit):
     # the kit states no admission losses of its own: the fit takes them to their lower bound
     assert kit_fit.bound_reached("admission_loss_multiplier") == "lower"
     assert kit_fit.bound_reached("reynolds_exponent") is None
-    assert kit_fit.wall_time_s < 60.0  # measured ~5 s alone
 
 
 def test_outside_band_names_each_residual_beyond_the_acceptance_band():

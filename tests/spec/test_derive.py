@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import re
-import time
 from importlib.resources import files
 
 import pytest
@@ -32,19 +31,16 @@ KIT = files("steamtwin.spec").joinpath("data/example-600mw-heat-balance.toml").r
 
 @pytest.fixture(scope="module")
 def derived():
-    start = time.perf_counter()
-    result = derive_spec(parse_heat_balance(KIT, "kit.toml"))
-    return result, time.perf_counter() - start
+    return derive_spec(parse_heat_balance(KIT, "kit.toml"))
 
 
 @pytest.fixture(scope="module")
 def derived_spec(derived):
-    return parse_spec(derived[0].toml, "derived.toml")
+    return parse_spec(derived.toml, "derived.toml")
 
 
-def test_kit_derives_a_loadable_spec_fast_with_every_figure_explained(derived, derived_spec):
-    result, seconds = derived
-    assert seconds < 10.0  # measured ~2 s on the 2-core machine
+def test_kit_derives_a_loadable_spec_with_every_figure_explained(derived, derived_spec):
+    result = derived
     assert len(derived_spec.stages) == 11 and len(derived_spec.control_stage.valves) == 6
     assert [v.open_at_design for v in derived_spec.control_stage.valves] == [True] * 5 + [False]
     assert [(e.name, e.after_stage) for e in derived_spec.extractions] == [("HP heater 1", 7)]
@@ -216,7 +212,7 @@ def test_valve_drops_come_from_the_kit(derived, derived_spec):
     assert derived_spec.design.valve_pressure_drop == pytest.approx(1 - 16.170 / 16.670,
                                                                     rel=1e-3)
     assert derived_spec.design.valve_outlet_pressure == pytest.approx(16.003e6)
-    toml = derived[0].toml
+    toml = derived.toml
     assert re.search(r"(?m)^valve_pressure_drop = .*# VWO: 1 - valve_outlet_pressure", toml)
     assert re.search(r"(?m)^valve_outlet_pressure = .*# THA: valve_outlet_pressure", toml)
     # machine data win over the VWO point; without either, the 3 % rule
