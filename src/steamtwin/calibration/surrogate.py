@@ -58,6 +58,7 @@ from steamtwin.calibration.ga import check_ga_settings, check_integer, make_ga
 from steamtwin.calibration.objective import PENALTY_RMSE, CalibrationProblem, fitness
 from steamtwin.calibration.search import SearchResult
 from steamtwin.calibration.settings import PARAMETER_NAMES
+from steamtwin.errors import SteamtwinError
 from steamtwin.progress import ProgressCallback
 
 __all__ = ["SurrogateSearch"]
@@ -205,8 +206,9 @@ def _evaluate(problem: CalibrationProblem, unit: np.ndarray, low: np.ndarray,
     return np.vstack([points, unit]), np.concatenate([values, rmse])
 
 
-class _PolishEnded(Exception):
-    """The polish spent its budget or the model rejected a step."""
+class _PolishEnded(SteamtwinError):
+    """The polish spent its budget or the model rejected a step (stops scipy's solver from
+    inside; never leaves :func:`_polish`)."""
 
 
 def _polish(problem: CalibrationProblem, points: np.ndarray, values: np.ndarray,
