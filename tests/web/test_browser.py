@@ -114,14 +114,14 @@ def page(browser, site):
     assert not errors, errors
 
 
-def _open(page, site, path: str) -> None:
+def _open(page, site, path: str, suffix: str = "") -> None:
     page.goto(site.url + path)
     page.wait_for_function("() => document.body.dataset.ready", timeout=15_000)
     assert page.locator("#status.bad").count() == 0, page.locator("#status").text_content()
     folder = os.environ.get("STEAMTWIN_SCREENSHOTS")
     if folder:
         name = path.strip("/").replace("units/unit1", "unit").replace("/", "-") or "fleet"
-        page.screenshot(path=str(Path(folder) / f"web-{name}.png"))
+        page.screenshot(path=str(Path(folder) / f"web-{name}{suffix}.png"))
 
 
 def _stored(site, source: str, signal: str, start_s: int, end_s: int) -> np.ndarray:
@@ -211,6 +211,13 @@ def test_calibration_and_fleet_pages_draw_the_stored_swaps_and_units(page, site)
         .find((t) => t.name === 'flow_coefficient').y""")
     assert flow == [0.99, 0.98]
     assert page.locator("#swaps tr").count() == 3  # header and two swap times
+    before, after = (page.locator("#swaps tr").nth(1).locator("td").nth(k).text_content()
+                     for k in (3, 4))  # the first swap, 00:30:00: 10 min either side
+    residual = "residual", "hp_exhaust_temperature"
+    for text, (start_s, end_s) in ((before, (1200, 1799)), (after, (1800, 2400))):
+        values = _stored(site, *residual, start_s, end_s)
+        assert float(text.split()[-1]) == pytest.approx(np.sqrt(np.mean(values ** 2)),
+                                                        rel=2e-3)
     _open(page, site, "/")
     assert page.locator(".card").count() == 2
     assert "1 active alarm" in page.locator(".card", has_text="unit1").text_content()
@@ -240,7 +247,7 @@ def test_the_pages_fit_a_tablet(browser, site):
     context.add_init_script(f"sessionStorage.setItem('steamtwin-token', '{READ}')")
     tab = context.new_page()
     try:
-        _open(tab, site, "/units/unit1")
+        _open(tab, site, "/units/unit1", "-tablet")
         assert tab.evaluate("document.documentElement.scrollWidth") <= 800
     finally:
         context.close()

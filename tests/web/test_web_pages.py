@@ -29,6 +29,7 @@ def rom_config(tmp_path, serve_config):
     return load_config(source)
 
 
+@pytest.mark.filterwarnings("ignore::steamtwin.rom.estimator.ExtrapolationWarning")
 def test_the_blade_field_is_the_roms_for_the_stored_samples_inputs(tmp_path, rom_config):
     bundle = load_rom(tmp_path / "rom.npz")
     with TestClient(create_app(rom_config.database, rom_config)) as client:

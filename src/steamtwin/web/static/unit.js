@@ -125,6 +125,9 @@
     const temperatures = signals.filter((s) => s.source === "measured" && s.si_unit === "K"
                                          && stored.has(`twin/${s.signal}`));
     for (const info of temperatures) await temperatureChart(info);
+    const units = await api("/api/units");
+    const last = units.find((u) => u.name === unit)?.last_sample;
+    if (last) tiles.time.textContent = utc(last).replace("T", " ").slice(0, 19);
     const residuals = signals.filter((s) => s.source === "residual").map((s) => s.signal);
     await residualChart(residuals);
     await Promise.all([showParameters(), showAlarms()]);
