@@ -116,21 +116,23 @@
     for (const [key, label] of TILES) tile(key, label);
     tile("time", "last sample (UTC)");
     const stored = new Set(signals.map((s) => `${s.source}/${s.signal}`));
-    for (const [key] of TILES) {
-      if (!stored.has(`measured/${key}`)) continue;
-      const last = await series("measured", key);
-      const values = points(last).y;
+    const lastValue = async (key) => {
+      if (!stored.has(`measured/${key}`)) return;
+      const values = points(await series("measured", key)).y;
       tiles[key].textContent = display(values[values.length - 1], siUnits[key]);
-    }
+    };
+    const lastTime = async () => {
+      const units = await api("/api/units");
+      const last = units.find((u) => u.name === unit)?.last_sample;
+      if (last) tiles.time.textContent = utc(last).replace("T", " ").slice(0, 19);
+    };
     const temperatures = signals.filter((s) => s.source === "measured" && s.si_unit === "K"
                                          && stored.has(`twin/${s.signal}`));
-    for (const info of temperatures) await temperatureChart(info);
-    const units = await api("/api/units");
-    const last = units.find((u) => u.name === unit)?.last_sample;
-    if (last) tiles.time.textContent = utc(last).replace("T", " ").slice(0, 19);
     const residuals = signals.filter((s) => s.source === "residual").map((s) => s.signal);
-    await residualChart(residuals);
-    await Promise.all([showParameters(), showAlarms()]);
+    // every request at once (the charts' boxes are placed in order before any answer)
+    await Promise.all([...TILES.map(([key]) => lastValue(key)), lastTime(),
+                       ...temperatures.map(temperatureChart), residualChart(residuals),
+                       showParameters(), showAlarms()]);
     document.body.dataset.ready = "yes";
     follow({ sample: onSample, alarms: showAlarms, alarm: showAlarms });
   }
