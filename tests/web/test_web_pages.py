@@ -62,6 +62,10 @@ def test_the_blade_field_is_the_roms_for_the_stored_samples_inputs(tmp_path, rom
         assert missing.status_code == 404 and "no blade ROM" in missing.json()["error"]
         early = client.get("/api/units/unit1/blade", params={"time": "2026-02-01T00:00:00Z"})
         assert early.status_code == 404 and "no sample" in early.json()["error"]
+    (tmp_path / "rom.npz").write_bytes(b"not a ROM")
+    with TestClient(create_app(rom_config.database, rom_config)) as client:
+        broken = client.get("/api/units/unit1/blade")
+        assert broken.status_code == 503 and "rom.npz" in broken.json()["error"]
 
 
 def test_page_shells_are_open_and_data_free_while_the_api_needs_the_token(tmp_path,

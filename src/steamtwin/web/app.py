@@ -47,6 +47,7 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from steamtwin.errors import DataError, SteamtwinError
 from steamtwin.live.config import ServiceConfig
+from steamtwin.rom.romfile import RomFileError
 from steamtwin.web.access import AccessPolicy, SecurityMiddleware
 from steamtwin.web.apidocs import render_api_docs
 from steamtwin.web.blade import BladeFields, NoRomError
@@ -379,6 +380,8 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
             body = blades.surface(unit)
         except NoRomError as error:
             raise ApiError(404, str(error)) from None
+        except RomFileError as error:  # names the file and what is wrong with it
+            raise ApiError(503, f"the blade ROM cannot be used: {error}") from None
         return JSONResponse(body, headers={"cache-control": "private, max-age=3600"})
 
     @app.get("/api/units/{unit}/blade", summary="The blade's temperature field at a time")
@@ -393,6 +396,8 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
             names = blades.inputs(unit)
         except NoRomError as error:
             raise ApiError(404, str(error)) from None
+        except RomFileError as error:
+            raise ApiError(503, f"the blade ROM cannot be used: {error}") from None
         found = reader.sample_at(unit, at)
         if found is None:
             raise ApiError(404, f"unit {unit!r} has no sample at or before {at.isoformat()}")

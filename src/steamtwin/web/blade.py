@@ -55,7 +55,8 @@ def surface_of(bundle: BladeRom) -> BladeSurface:
 
 
 class BladeFields:
-    """The units' ROMs (of ``config``; None: no unit has one), each loaded on first use."""
+    """The units' ROMs (of ``config``; None: no unit has one), each loaded on first use
+    (:class:`~steamtwin.rom.romfile.RomFileError` if its file is unreadable)."""
 
     def __init__(self, config: ServiceConfig | None) -> None:
         self._paths: dict[str, Path] = {} if config is None else {

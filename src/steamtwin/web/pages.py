@@ -43,6 +43,7 @@ PAGES = (("", "Unit"), ("history", "History"), ("alarms", "Alarms"),
 """(path under /units/{unit}/, title) of each unit page."""
 
 router = APIRouter(include_in_schema=False)
+PLOTLY_TAG = '<script src="/vendor/plotly.min.js"></script>'
 
 
 @cache
@@ -53,8 +54,9 @@ def bundled_style_ids() -> tuple[str, ...]:
 
 
 def _layout(title: str, script: str, body: str, unit: str | None = None,
-            current: str = "") -> HTMLResponse:
-    """A page: navigation (the unit's pages), token field, ``body``, and its scripts."""
+            current: str = "", charts: bool = True) -> HTMLResponse:
+    """A page: navigation (the unit's pages), token field, ``body``, its script and, if it
+    draws ``charts``, plotly.js."""
     links = ""
     if unit is not None:
         base = f"/units/{escape(unit)}"
@@ -78,9 +80,10 @@ def _layout(title: str, script: str, body: str, unit: str | None = None,
         '</span></header>'
         f'<main><h1>{heading}</h1>{body}</main>'
         + "".join(f'<template id="{name}"></template>' for name in bundled_style_ids()) +
-        '<script src="/vendor/plotly.min.js"></script>'
         '<script src="/static/common.js"></script>'
-        f'<script src="/static/{script}.js"></script></body></html>')
+        f'<script src="/static/{script}.js"></script>'
+        # last: the page's script has sent its requests while plotly.js is evaluated
+        f'{PLOTLY_TAG if charts else ""}</body></html>')
 
 
 @router.get("/vendor/plotly.min.js")
@@ -95,7 +98,8 @@ def fleet() -> HTMLResponse:
     """The fleet: one card per unit with its load and active alarms."""
     return _layout("fleet", "fleet", '<div id="cards" class="cards"></div>'
                    '<p class="links"><a href="/docs">API reference</a> · '
-                   '<a href="/health">health</a> · <a href="/metrics">metrics</a></p>')
+                   '<a href="/health">health</a> · <a href="/metrics">metrics</a></p>',
+                   charts=False)
 
 
 @router.get("/units/{unit}", response_class=HTMLResponse)
