@@ -80,10 +80,8 @@ def _layout(title: str, script: str, body: str, unit: str | None = None,
         '</span></header>'
         f'<main><h1>{heading}</h1>{body}</main>'
         + "".join(f'<template id="{name}"></template>' for name in bundled_style_ids()) +
-        '<script src="/static/common.js"></script>'
-        f'<script src="/static/{script}.js"></script>'
-        # last: the page's script has sent its requests while plotly.js is evaluated
-        f'{PLOTLY_TAG if charts else ""}</body></html>')
+        f'{PLOTLY_TAG if charts else ""}<script src="/static/common.js"></script>'
+        f'<script src="/static/{script}.js"></script></body></html>')
 
 
 @router.get("/vendor/plotly.min.js")

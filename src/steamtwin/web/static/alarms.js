@@ -47,7 +47,6 @@
       type: "line", xref: "x", yref: "paper", x0: t.replace(/(Z|\+00:00)$/, ""),
       x1: t.replace(/(Z|\+00:00)$/, ""), y0: 0, y1: 1, line: { dash: "dot", color: "#b00" } }));
     const div = document.getElementById("evidence-chart");
-    await steamtwin.charting;
     await Plotly.react(div, traces, layout(`${alarm.signal || "residuals"} around the alarm`,
                                            { shapes: marks }), plotConfig);
     div.dataset.alarm = alarm.id;

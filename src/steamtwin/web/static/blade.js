@@ -23,7 +23,6 @@
       { type: "scatter3d", mode: "markers+text", x: probe(0), y: probe(1), z: probe(2),
         text: probeNames.map((n) => n.replace("blade_", "")), name: "probes",
         marker: { size: 4, color: "#000" } }];
-    await steamtwin.charting;
     await Plotly.react(div, traces, {
       margin: { l: 0, r: 0, t: 30, b: 0 }, title: { text: `blade temperature at ${field.time}`,
                                                     font: { size: 14 } },

@@ -31,7 +31,6 @@
     }
     const traces = Object.entries(byName).map(([name, t]) => ({
       ...t, name, mode: "lines+markers", line: { shape: "hv" } }));
-    await steamtwin.charting;
     await Plotly.newPlot("trajectory", traces, layout("parameter trajectory (multipliers, -)"),
                          plotConfig);
     const times = [...new Set(answer.trajectory.map((s) => s.time))];

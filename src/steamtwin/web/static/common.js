@@ -110,10 +110,6 @@ const steamtwin = (() => {
     });
   }
 
-  // plotly.js is each page's last script, so that the page's requests are on their way while
-  // the browser evaluates it (4.8 MB); draw after this.
-  const charting = new Promise((done) => document.addEventListener("DOMContentLoaded", done));
-
   const layout = (title, extra = {}) => ({
     title: { text: title, font: { size: 14 } }, margin: { l: 60, r: 20, t: 36, b: 40 },
     legend: { orientation: "h", y: -0.2 }, xaxis: { type: "date" }, ...extra });
@@ -129,5 +125,5 @@ const steamtwin = (() => {
   }
 
   return { unit, api, query, follow, status, display, table, layout, plotConfig, points,
-           headers, utc, utcs, charting };
+           headers, utc, utcs };
 })();

@@ -30,7 +30,6 @@
     const range = { source, signal, start, end, span_s: start ? undefined : 7200 };
     const answer = await api(`${base}/series?${query(range)}`);
     const title = `${source} ${signal} [${siUnits[signal] || "-"}]`;
-    await steamtwin.charting;
     await Plotly.react(chart, traces(answer), layout(title), plotConfig);
     document.getElementById("summary").textContent = `${answer.start} … ${answer.end}: ${
       answer.count} samples${answer.downsampled

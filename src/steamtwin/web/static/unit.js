@@ -51,7 +51,6 @@
       { x: t.x, y: celsius(t.y), mode: "lines", name: "twin", line: { color: "#1f77b4" } },
       { x: m.x, y: celsius(m.y), mode: "lines", name: "measured",
         line: { color: "#d62728", width: 1 } }];
-    await steamtwin.charting;
     await Plotly.newPlot(div, traces, layout(info.meaning || info.signal,
                                              { yaxis: { title: { text: "°C" } } }), plotConfig);
     charts.push({ div, signal: info.signal, sigma,
@@ -63,7 +62,6 @@
     const answers = await Promise.all(names.map((name) => series("residual", name)));
     const traces = answers.map((answer, k) => ({ ...points(answer), mode: "lines",
                                                  name: names[k] }));
-    await steamtwin.charting;
     await Plotly.newPlot(div, traces, layout("measured − twin (SI)"), plotConfig);
     charts.push({ div, keys: names.map((name) => `residual/${name}`) });
   }
