@@ -235,6 +235,22 @@ def test_the_blade_view_renders_the_rom_field(page, site):
     page.click("#query button[type=submit]")
     page.wait_for_function("() => document.getElementById('blade').dataset.time === "
                            "'2026-03-01T00:30:00+00:00'")
+    shown = []  # the replay of 00:29:00 … 00:31:00 every 60 s draws three fields
+    page.expose_function("noteField", lambda time: shown.append(time))
+    page.evaluate("""() => { const div = document.getElementById('blade');
+        new MutationObserver(() => window.noteField(div.dataset.time)).observe(
+            div, {attributes: true, attributeFilter: ['data-time']}); }""")
+    page.fill("#replay-from", "2026-03-01T00:29:00Z")
+    page.fill("#replay-to", "2026-03-01T00:31:00Z")
+    page.fill("#replay-step", "60")
+    page.click("#replay button[type=submit]")
+    page.wait_for_function("() => document.getElementById('blade').dataset.time === "
+                           "'2026-03-01T00:31:00+00:00'")
+    for _ in range(100):  # the last note's round trip to Python
+        if len(shown) >= 3:
+            break
+        page.wait_for_timeout(20)
+    assert shown == [f"2026-03-01T00:{m}:00+00:00" for m in (29, 30, 31)]
     other = page.context.new_page()  # its 404 is expected: no console check on this tab
     other.goto(site.url + "/units/unit2/blade")
     other.wait_for_function("() => document.body.dataset.ready")
@@ -247,7 +263,8 @@ def test_the_pages_fit_a_tablet(browser, site):
     context.add_init_script(f"sessionStorage.setItem('steamtwin-token', '{READ}')")
     tab = context.new_page()
     try:
-        _open(tab, site, "/units/unit1", "-tablet")
-        assert tab.evaluate("document.documentElement.scrollWidth") <= 800
+        for path in ("/units/unit1", "/units/unit1/alarms", "/units/unit1/calibration"):
+            _open(tab, site, path, "-tablet")
+            assert tab.evaluate("document.documentElement.scrollWidth") <= 800, path
     finally:
         context.close()

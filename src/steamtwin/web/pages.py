@@ -18,7 +18,8 @@ Pages: ``/`` (fleet: one card per unit; a single unit goes straight to its page)
 ``/units/{unit}`` (load, main steam, measured vs twin with the instrument-error band,
 residuals, parameters, active alarms; live), ``…/history`` (any range, zoom re-queries the
 downsampled API, CSV/Parquet downloads), ``…/alarms`` (list, evidence plot, acknowledge),
-``…/calibration`` (parameter trajectory), ``…/blade`` (the ROM's blade field, 3-D).
+``…/calibration`` (parameter trajectory), ``…/blade`` (the ROM's blade field, 3-D, at a
+sample or replayed over a range).
 """
 
 from __future__ import annotations
@@ -151,12 +152,18 @@ def calibration_page(unit: str) -> HTMLResponse:
 
 @router.get("/units/{unit}/blade", response_class=HTMLResponse)
 def blade_page(unit: str) -> HTMLResponse:
-    """The control-stage blade's temperature field (ROM) at the last or a chosen sample."""
+    """The control-stage blade's temperature field (ROM) at the last or a chosen sample, or
+    replayed over a range (a ramp)."""
     return _layout("blade", "blade", (
         '<form id="query" class="controls"><label>time <input id="time" size="25" '
         'placeholder="ISO 8601; default: the last sample"></label>'
         '<button type="submit">show</button><button type="button" id="latest">latest'
-        '</button></form><p id="summary"></p>'
+        '</button></form><form id="replay" class="controls"><label>replay from <input '
+        'id="replay-from" size="22" placeholder="ISO 8601"></label><label>to <input '
+        'id="replay-to" size="22" placeholder="ISO 8601"></label><label>every <input '
+        'id="replay-step" size="4" value="60"> s</label><button type="submit">replay'
+        '</button><button type="button" id="replay-stop">stop</button></form>'
+        '<p id="summary"></p>'
         '<div class="columns"><div id="blade" class="chart tall"></div>'
         '<section><h2>Probes</h2><table id="probes"></table></section></div>'),
         unit, "blade")

@@ -1,5 +1,6 @@
 // Blade page: the control-stage blade's outer surface coloured by the ROM's temperature field
-// for the last stored sample or a chosen time (plotly mesh3d), and the probe temperatures.
+// for the last stored sample or a chosen time (plotly mesh3d), and the probe temperatures;
+// "replay" steps through a range (a load ramp) one field per step, as fast as they arrive.
 "use strict";
 
 (() => {
@@ -58,6 +59,26 @@
       timeField.value = "";
       show("").catch((e) => status(e.message, true));
     });
+    let replaying = 0;  // the running replay's number; another number stops it
+    document.getElementById("replay").addEventListener("submit", async (event) => {
+      event.preventDefault();
+      const run = ++replaying;
+      const from = Date.parse(document.getElementById("replay-from").value.trim());
+      const to = Date.parse(document.getElementById("replay-to").value.trim());
+      const step = 1e3 * Number(document.getElementById("replay-step").value);
+      if (!(from <= to) || !(step > 0)) {
+        status("replay: give from ≤ to (ISO 8601 with offset) and a step > 0 s", true);
+        return;
+      }
+      try {
+        for (let t = from; t <= to && run === replaying; t += step) {
+          await show(new Date(t).toISOString());
+        }
+      } catch (error) {
+        status(error.message, true);
+      }
+    });
+    document.getElementById("replay-stop").addEventListener("click", () => { replaying += 1; });
     await show("");
   }
 
