@@ -24,7 +24,7 @@ from web_fixtures import START, fill, unit_block, write_rom, write_serve_config
 
 from steamtwin.live.config import load_config
 from steamtwin.live.historian import LiveHistorian
-from steamtwin.web.access import load_tokens
+from steamtwin.web.access import AccessPolicy, load_tokens
 from steamtwin.web.app import WebSettings
 from steamtwin.web.server import HttpSettings, http_companion
 
@@ -39,21 +39,26 @@ EMPTY_STYLE = "sha256-47DEQpj8HBSa+/TImW+5JCeuQeRkm5NMpJWZG3hSuFU="
 
 
 class _Site:
-    """The service on loopback in a thread of its own; the test thread writes the historian."""
+    """The service on loopback in a thread of its own (with tokens unless not ``tokens``);
+    the test thread writes the historian."""
 
-    def __init__(self, folder: Path) -> None:
+    def __init__(self, folder: Path, tokens: bool = True) -> None:
         db = folder / "twin.duckdb"
         fill(db)
         write_rom(folder / "rom.npz")
         config = write_serve_config(folder, db).source
         config.write_text(config.read_text().replace('name = "unit1"\n',
                                                      'name = "unit1"\nrom = "rom.npz"\n'))
-        tokens = folder / "tokens.toml"
-        tokens.write_text(f'[[tokens]]\nname = "viewer"\nrole = "read"\ntoken = "{READ}"\n'
-                          f'[[tokens]]\nname = "shift-lead"\nrole = "ack"\ntoken = "{ACK}"\n')
+        access = AccessPolicy()
+        if tokens:
+            token_file = folder / "tokens.toml"
+            token_file.write_text(
+                f'[[tokens]]\nname = "viewer"\nrole = "read"\ntoken = "{READ}"\n'
+                f'[[tokens]]\nname = "shift-lead"\nrole = "ack"\ntoken = "{ACK}"\n')
+            access = load_tokens(token_file)
         bound: dict[str, int] = {}
         self.companion = http_companion(
-            HttpSettings(port=0, access=load_tokens(tokens), web=WebSettings(poll_s=0.1)),
+            HttpSettings(port=0, access=access, web=WebSettings(poll_s=0.1)),
             load_config(config), on_bound=lambda _host, port: bound.update(port=port))
         self.url = f"http://127.0.0.1:{bound['port']}"
         self.historian = LiveHistorian(db)
@@ -268,3 +273,20 @@ def test_the_pages_fit_a_tablet(browser, site):
             assert tab.evaluate("document.documentElement.scrollWidth") <= 800, path
     finally:
         context.close()
+
+
+def test_without_tokens_the_operator_named_in_the_page_acknowledges(browser, tmp_path):
+    open_site = _Site(tmp_path, tokens=False)  # loopback, no token file: open access
+    context = browser.new_context(viewport=VIEWPORT)
+    try:
+        page = context.new_page()
+        _open(page, open_site, "/units/unit1/alarms")
+        page.fill("#operator", "A. Operator")
+        page.dispatch_event("#operator", "change")
+        page.locator("#alarms tr[data-alarm='1']").get_by_role("button",
+                                                               name="acknowledge").click()
+        page.wait_for_function("() => document.querySelector(\"#alarms tr[data-alarm='1']\")"
+                               ".textContent.includes('A. Operator')")
+    finally:
+        context.close()
+        open_site.close()
