@@ -204,8 +204,6 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
     def known_units() -> list[str]:
         return sorted(set(catalog.units) | set(reader.last_times(fresh_s)))
 
-    app.state.known_units = known_units
-
     # -- errors: a JSON message, never a traceback ----------------------------------------
     @app.exception_handler(ApiError)
     async def api_error(_request: Request, error: ApiError) -> JSONResponse:
