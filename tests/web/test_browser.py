@@ -23,7 +23,7 @@ import pytest
 from web_fixtures import START, fill, unit_block, write_rom, write_serve_config
 
 from steamtwin.live.config import load_config
-from steamtwin.live.historian import LiveHistorian
+from steamtwin.live.historian import Alarm, BlockEvents, LiveHistorian
 from steamtwin.web.access import AccessPolicy, load_tokens
 from steamtwin.web.app import WebSettings
 from steamtwin.web.server import HttpSettings, http_companion
@@ -70,10 +70,11 @@ class _Site:
                                        args=(self.companion(self.historian, self.done),))
         self.thread.start()
 
-    def commit(self, n: int = 1) -> pd.Timestamp:
-        """``n`` new 1-s samples of unit1, stored as the service stores them; the last time."""
+    def commit(self, n: int = 1, events: BlockEvents | None = None) -> pd.Timestamp:
+        """``n`` new 1-s samples of unit1 (with ``events``), stored as the service stores
+        them; the last time."""
         frames, flags = unit_block(self.next_s, n)
-        self.historian.commit_block("unit1", frames, flags)
+        self.historian.commit_block("unit1", frames, flags, events=events)
         self.next_s += n
         return frames["measured"].index[-1]
 
@@ -178,6 +179,13 @@ def test_the_unit_page_draws_the_database_and_a_new_sample_live(page, site):
                     site.next_s - 1)[0]
     assert page.evaluate("document.querySelector('#temperatures .chart').data[3].y.at(-1)"
                          ) == pytest.approx(value - 273.15)
+    fault = START + pd.Timedelta(seconds=site.next_s)  # a sensor fault, raised live
+    site.commit(events=BlockEvents(alarms=(Alarm("unit1", "sensor_fault", fault,
+                                                 "hp_exhaust_temperature",
+                                                 evidence={"statistic": 8.0}),)))
+    page.wait_for_function("() => document.querySelectorAll('#alarms li').length === 2",
+                           timeout=5_000)
+    assert "sensor_fault (hp_exhaust_temperature)" in page.locator("#alarms").text_content()
 
 
 def test_history_zoom_requeries_raw_samples_and_offers_downloads(page, site):
@@ -225,7 +233,11 @@ def test_calibration_and_fleet_pages_draw_the_stored_swaps_and_units(page, site)
                                                         rel=2e-3)
     _open(page, site, "/")
     assert page.locator(".card").count() == 2
-    assert "1 active alarm" in page.locator(".card", has_text="unit1").text_content()
+    active = site.historian.connection.execute(
+        "SELECT count(*) FROM alarms WHERE unit = 'unit1' AND \"end\" IS NULL").fetchone()[0]
+    assert active >= 1  # the degradation alarm (and the live test's fault, if it ran)
+    assert f"{active} active alarm" in page.locator(".card", has_text="unit1").text_content()
+    assert "0 active alarms" in page.locator(".card", has_text="unit2").text_content()
 
 
 def test_the_blade_view_renders_the_rom_field(page, site):
