@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Debian packages the Python wheels need at run time:
 #   open3d-cpu: libusb-1.0-0, libgl1, libegl1;  gmsh: libglu1-mesa, libxcursor1, libxft2, libxinerama1.
+#   tests/web/test_browser.py: chromium (driven by Playwright with executable_path; no playwright install).
 # Installs only what is missing; uses sudo when not root.
 set -euo pipefail
-packages=(libusb-1.0-0 libgl1 libegl1 libglu1-mesa libxcursor1 libxft2 libxinerama1)
+packages=(libusb-1.0-0 libgl1 libegl1 libglu1-mesa libxcursor1 libxft2 libxinerama1 chromium)
 missing=()
 for package in "${packages[@]}"; do
     dpkg -s "$package" >/dev/null 2>&1 || missing+=("$package")

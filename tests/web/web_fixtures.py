@@ -10,11 +10,14 @@ import dataclasses
 import numpy as np
 import pandas as pd
 
+from steamtwin.blade.mesh import block_mesh
 from steamtwin.dcs.plant import plant_tag_map
 from steamtwin.dcs.quality import Flag
 from steamtwin.dcs.tagmap import write_tag_map
 from steamtwin.live.config import load_config
 from steamtwin.live.historian import Alarm, AlarmEnd, BlockEvents, LiveHistorian
+from steamtwin.rom.estimator import PodRbfRom
+from steamtwin.rom.romfile import BladeRom, probe_nodes, save_rom
 
 START = pd.Timestamp("2026-03-01T00:00:00Z")
 HOURS = 2
@@ -83,3 +86,20 @@ def write_serve_config(folder, db):
     config = folder / "unit.toml"
     config.write_text(f'database = "{db}"\n{units}')
     return load_config(config)
+
+
+ROM_INPUTS = ("control_stage_pressure", "hp_exhaust_temperature")
+"""The test ROM's inputs: two signals :func:`fill` measures."""
+
+
+def write_rom(path) -> None:
+    """A small blade ROM on :data:`ROM_INPUTS` (a field linear in them, on a block 'blade'
+    with the six regions' probes) at ``path``."""
+    mesh = block_mesh(np.linspace(0, 0.02, 4), np.linspace(0, 0.01, 3), np.linspace(0, 0.05, 6))
+    rng = np.random.default_rng(0)
+    conditions = np.column_stack([rng.uniform(8.9e6, 9.8e6, 12), rng.uniform(590.0, 710.0, 12)])
+    scaled = (conditions - [8.9e6, 590.0]) / [0.9e6, 120.0]
+    fields = 700.0 + scaled @ (50.0 * rng.uniform(0.5, 1.0, size=(2, mesh.points.shape[0])))
+    rom = PodRbfRom(energy=0.9999).fit(fields, conditions, input_names=ROM_INPUTS)
+    save_rom(BladeRom(rom, mesh, probe_nodes(mesh),
+                      pd.DataFrame(conditions, columns=list(ROM_INPUTS))), path)

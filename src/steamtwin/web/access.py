@@ -16,6 +16,10 @@
   compared in constant time against every configured token (``hmac.compare_digest`` of
   SHA-256 digests, so neither the length nor the first differing byte leaks; the loop does not
   stop at a match).
+* **Page shells**: a ``GET`` of a dashboard page (``/``, ``/units/…``) or of a static file
+  (``/static/…``, ``/vendor/…``) needs no token: a browser cannot add a header to a
+  navigation, and these carry no data — the pages' scripts fetch every figure from ``/api``
+  with the token the operator typed (:func:`is_page_shell`).
 * **Security headers** on every response, errors included (OWASP Secure Headers Project):
   ``Content-Security-Policy: default-src 'self'; …`` (no inline script, no other origin: the
   pages and their scripts come from the package; W3C CSP Level 3), ``X-Content-Type-Options:
@@ -39,7 +43,7 @@ from starlette.types import ASGIApp, Receive, Scope, Send
 from steamtwin.errors import SteamtwinError
 
 __all__ = ["ROLES", "SECURITY_HEADERS", "AccessError", "AccessPolicy", "SecurityMiddleware",
-           "Token", "check_bind", "is_loopback", "load_tokens"]
+           "Token", "check_bind", "is_loopback", "is_page_shell", "load_tokens"]
 
 ROLES = ("read", "ack")
 LOG = logging.getLogger("steamtwin.web")
@@ -161,6 +165,14 @@ def check_bind(host: str, policy: AccessPolicy) -> None:
                           "a bearer token")
 
 
+PAGE_PREFIXES = ("/units/", "/static/", "/vendor/")
+
+
+def is_page_shell(method: str, path: str) -> bool:
+    """Whether a request fetches a data-free page shell or static file (module docstring)."""
+    return method in ("GET", "HEAD") and (path == "/" or path.startswith(PAGE_PREFIXES))
+
+
 async def _send_json(send, status: int, message: str, extra: tuple = ()) -> None:
     body = json.dumps({"error": message}).encode()
     await send({"type": "http.response.start", "status": status,
@@ -197,7 +209,8 @@ class SecurityMiddleware:
             await send(message)
 
         token = None
-        if self.policy.required:
+        if self.policy.required and not is_page_shell(scope.get("method", ""),
+                                                       scope.get("path", "")):
             header = dict(scope.get("headers", [])).get(b"authorization", b"")
             token = self.policy.authenticate(header.decode("latin-1"))
             if token is None:

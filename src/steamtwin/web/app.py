@@ -12,6 +12,8 @@ values SI):
   /api/alarms/{id}/acknowledge`` (a token of role "ack", or open loopback access);
 * ``GET /api/units/{unit}/parameters`` (trajectory and current), ``…/quality`` (the gate's
   flags), ``GET /api/provenance`` (model files, hashes, versions);
+* ``GET /api/units/{unit}/blade/surface`` (the ROM's blade surface, once) and ``…/blade``
+  (its temperatures for the sample at a time: :mod:`steamtwin.web.blade`);
 * ``GET /api/events`` — server-sent events (:mod:`steamtwin.web.events`);
 * ``GET /health`` (liveness, and whether each unit keeps up: its last stored sample's age),
   ``GET /metrics`` (Prometheus text), ``GET /docs`` (API reference), ``GET /openapi.json``.
@@ -45,8 +47,10 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from steamtwin.errors import DataError, SteamtwinError
 from steamtwin.live.config import ServiceConfig
+from steamtwin.rom.romfile import RomFileError
 from steamtwin.web.access import AccessPolicy, SecurityMiddleware
 from steamtwin.web.apidocs import render_api_docs
+from steamtwin.web.blade import BladeFields, NoRomError
 from steamtwin.web.catalog import Catalog, signal_info
 from steamtwin.web.coalesce import ResponseCoalescer
 from steamtwin.web.events import LiveFeed
@@ -173,6 +177,7 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
     reader = _reader(historian, settings.readers)
     catalog = Catalog(config)
     feed = LiveFeed(reader, poll_s=settings.poll_s)
+    blades = BladeFields(config)
 
     @contextlib.asynccontextmanager
     async def lifespan(_app: FastAPI):
@@ -198,8 +203,6 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
 
     def known_units() -> list[str]:
         return sorted(set(catalog.units) | set(reader.last_times(fresh_s)))
-
-    app.state.known_units = known_units
 
     # -- errors: a JSON message, never a traceback ----------------------------------------
     @app.exception_handler(ApiError)
@@ -365,6 +368,45 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
         document["parameters"] = {unit: reader.current_parameters(unit)
                                   for unit in known_units()}
         return document
+
+    @app.get("/api/units/{unit}/blade/surface", summary="The blade ROM's surface mesh")
+    def blade_surface(unit: str) -> JSONResponse:
+        """Surface points (m), triangles and probe indices; the same while the ROM file is
+        (cacheable for an hour)."""
+        check_unit(unit)
+        try:
+            body = blades.surface(unit)
+        except NoRomError as error:
+            raise ApiError(404, str(error)) from None
+        except RomFileError as error:  # names the file and what is wrong with it
+            raise ApiError(503, f"the blade ROM cannot be used: {error}") from None
+        return JSONResponse(body, headers={"cache-control": "private, max-age=3600"})
+
+    @app.get("/api/units/{unit}/blade", summary="The blade's temperature field at a time")
+    def blade_field(unit: str, time: End = None) -> dict:
+        """The ROM's surface temperatures (K, order of ``…/blade/surface``) and probe
+        temperatures for the last sample at or before ``time`` (default: the last), from that
+        sample's measured ROM inputs (SI)."""
+        check_unit(unit)
+        at = parse_time(time, "time") if time is not None else reader.last_times(
+            fresh_s).get(unit, pd.Timestamp.now(tz="UTC"))
+        try:
+            names = blades.inputs(unit)
+        except NoRomError as error:
+            raise ApiError(404, str(error)) from None
+        except RomFileError as error:
+            raise ApiError(503, f"the blade ROM cannot be used: {error}") from None
+        found = reader.sample_at(unit, at)
+        if found is None:
+            raise ApiError(404, f"unit {unit!r} has no sample at or before {at.isoformat()}")
+        stamp, values = found
+        missing = [name for name in names if values.get(name) is None]
+        if missing:
+            raise ApiError(422, f"the sample of {stamp.isoformat()} has no measured "
+                           f"{', '.join(missing)} (the ROM's inputs: {', '.join(names)})")
+        inputs = {name: values[name] for name in names}
+        return {"unit": unit, "time": stamp.isoformat(), "inputs": inputs,
+                **blades.field(unit, inputs)}
 
     @app.get("/api/events", summary="Live samples and alarms (server-sent events)",
              response_class=StreamingResponse)

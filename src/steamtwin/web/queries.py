@@ -293,3 +293,16 @@ class HistorianReader:
                 counts[name] = counts.get(name, 0) + int(n)
         return {"unit": unit, "start": _iso(start), "end": _iso(end), "signals": signals,
                 "flagged": sum(s["flagged"] for s in signals.values())}
+
+    def sample_at(self, unit: str, at: pd.Timestamp, source: str = "measured"
+                  ) -> tuple[pd.Timestamp, dict[str, float | None]] | None:
+        """``unit``'s last stored sample at or before ``at`` (UTC): its time and the values
+        of ``source`` by signal (SI; None: no value); None if nothing is stored by then."""
+        rows = self._rows(
+            "SELECT time, signal, value FROM series WHERE unit = ? AND source = ? AND time = "
+            "(SELECT max(time) FROM series WHERE unit = ? AND source = ? AND time <= ?) "
+            "ORDER BY signal", [unit, source, unit, source, at.to_pydatetime()])
+        if not rows:
+            return None
+        return (pd.Timestamp(rows[0][0]).tz_convert("UTC"),
+                {signal: _number(value) for _, signal, value in rows})

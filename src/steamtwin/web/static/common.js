@@ -1,0 +1,129 @@
+// steamtwin pages: what every page shares (no framework, no build step).
+// The bearer token the operator types is kept in this tab's sessionStorage and sent with
+// every API request; live samples come from /api/events (server-sent events), read with
+// fetch() so that the token can go in a header (EventSource cannot send one).
+"use strict";
+
+const steamtwin = (() => {
+  const unit = document.body.dataset.unit || null;
+  const tokenField = document.getElementById("token");
+  const statusLine = document.getElementById("status");
+  tokenField.value = sessionStorage.getItem("steamtwin-token") || "";
+  tokenField.addEventListener("change", () => {
+    sessionStorage.setItem("steamtwin-token", tokenField.value.trim());
+    window.location.reload();
+  });
+
+  function headers(extra = {}) {
+    const token = sessionStorage.getItem("steamtwin-token");
+    return token ? { ...extra, Authorization: `Bearer ${token}` } : extra;
+  }
+
+  function status(text, bad = false) {
+    statusLine.textContent = text;
+    statusLine.classList.toggle("bad", bad);
+  }
+
+  // GET (or POST with a JSON body) an API path; the answer's JSON, or an Error carrying the
+  // service's message (and HTTP status) for the status line.
+  async function api(path, body = undefined) {
+    const init = body === undefined ? { headers: headers() }
+      : { method: "POST", headers: headers({ "content-type": "application/json" }),
+          body: JSON.stringify(body) };
+    const response = await fetch(path, init);
+    const answer = await response.json().catch(() => ({}));
+    if (!response.ok) {
+      const error = new Error(answer.error || `${response.status} ${response.statusText}`);
+      error.status = response.status;
+      throw error;
+    }
+    return answer;
+  }
+
+  function query(parameters) {
+    const search = new URLSearchParams();
+    for (const [key, value] of Object.entries(parameters)) {
+      if (value !== undefined && value !== null && value !== "") search.set(key, value);
+    }
+    return search.toString();
+  }
+
+  // Follow the server-sent events of `unit`: handlers[event](data); reconnects after 2 s.
+  async function follow(handlers) {
+    const sleep = (ms) => new Promise((done) => setTimeout(done, ms));
+    for (;;) {
+      try {
+        const response = await fetch(`/api/events?${query({ unit })}`, { headers: headers() });
+        if (!response.ok) throw new Error(`live feed: ${response.status}`);
+        status("live");
+        const reader = response.body.pipeThrough(new TextDecoderStream()).getReader();
+        let buffer = "";
+        for (;;) {
+          const { value, done } = await reader.read();
+          if (done) break;
+          buffer += value;
+          let cut;
+          while ((cut = buffer.indexOf("\n\n")) >= 0) {
+            const block = buffer.slice(0, cut);
+            buffer = buffer.slice(cut + 2);
+            let event = "message";
+            let data = "";
+            for (const line of block.split("\n")) {
+              if (line.startsWith("event:")) event = line.slice(6).trim();
+              else if (line.startsWith("data:")) data += line.slice(5).trim();
+            }
+            if (data && handlers[event]) handlers[event](JSON.parse(data));
+          }
+        }
+      } catch (error) {
+        status(`${error.message}; reconnecting`, true);
+      }
+      await sleep(2000);
+    }
+  }
+
+  // A number in the signal's display unit: K → °C, Pa → MPa, W → MW (as the DCS shows them).
+  const DISPLAY = { K: ["°C", (v) => v - 273.15], Pa: ["MPa", (v) => v / 1e6],
+                    W: ["MW", (v) => v / 1e6] };
+  function display(value, siUnit, digits = 2) {
+    if (value === null || value === undefined) return "—";
+    const [label, convert] = DISPLAY[siUnit] || [siUnit || "", (v) => v];
+    return `${convert(value).toFixed(digits)} ${label}`;
+  }
+
+  function cell(row, text, tag = "td") {
+    const element = document.createElement(tag);
+    element.textContent = text;
+    row.appendChild(element);
+    return element;
+  }
+
+  // Fill a <table> with a header row and rows of text (textContent: never HTML).
+  function table(element, head, rows) {
+    element.replaceChildren();
+    const top = element.insertRow();
+    for (const name of head) cell(top, name, "th");
+    return rows.map((values) => {
+      const row = element.insertRow();
+      for (const value of values) cell(row, value);
+      return row;
+    });
+  }
+
+  const layout = (title, extra = {}) => ({
+    title: { text: title, font: { size: 14 } }, margin: { l: 60, r: 20, t: 36, b: 40 },
+    legend: { orientation: "h", y: -0.2 }, xaxis: { type: "date" }, ...extra });
+  const plotConfig = { responsive: true, displaylogo: false };
+
+  // The API's times are UTC with an offset; plotly's date axes take them without one.
+  const utc = (time) => (time ? time.replace(/(Z|\+00:00)$/, "") : time);
+  const utcs = (times) => times.map(utc);
+
+  // A series answer → {x, y}: the raw values, or the buckets' means when downsampled.
+  function points(series) {
+    return { x: utcs(series.time), y: series.downsampled ? series.mean : series.value };
+  }
+
+  return { unit, api, query, follow, status, display, table, layout, plotConfig, points,
+           headers, utc, utcs };
+})();
