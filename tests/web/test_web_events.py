@@ -20,7 +20,7 @@ class _Historian:
         self.times: dict[str, pd.Timestamp] = {"u1": T0, "u2": T0}
         self.samples: list[tuple[str, pd.Timestamp]] = []
 
-    def last_times(self, max_age_s: float = 0.0) -> dict[str, pd.Timestamp]:
+    def live_times(self) -> dict[str, pd.Timestamp]:
         return dict(self.times)
 
     def alarm_marks(self) -> tuple[int, int]:

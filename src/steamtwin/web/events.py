@@ -87,7 +87,7 @@ class LiveFeed:
     async def poll(self) -> None:
         """One look at the historian: publish the samples and alarms that are new since the
         last look (the first look only takes note of where things stand)."""
-        times = await asyncio.to_thread(self.reader.last_times)
+        times = await asyncio.to_thread(self.reader.live_times)
         marks = await asyncio.to_thread(self.reader.alarm_marks)
         first = self._last is None
         last = self._last if self._last is not None else {}

@@ -15,6 +15,11 @@ Oriented Time Series Data Aggregation", PVLDB 7(10), 2014), so a spike or a dip 
 still shows in a chart of a day. NaN and NULL values (no twin value) are left out of every
 aggregate (DuckDB orders NaN above every number, so a NaN would otherwise be each maximum).
 
+The live feed reads the ``latest_series`` view where the historian has it: the final rows and
+the provisional ones the service stores as each sample arrives, before the quality gate's
+look-ahead has judged it (live/historian.py), so a new value shows within a second rather
+than a minute; everything else reads the final ``series``.
+
 The one write is :meth:`HistorianReader.acknowledge` (an alarm's acknowledgement, a row of the
 ``alarms`` table); nothing writes a file.
 """
@@ -116,6 +121,21 @@ class HistorianReader:
             return connection.execute(sql, list(arguments)).fetchall()
 
     # -- units and signals ---------------------------------------------------------------
+    def _has_provisional(self) -> bool:
+        """Whether the historian has the provisional rows (older databases do not)."""
+        return bool(self._rows("SELECT count(*) FROM information_schema.tables "
+                               "WHERE table_name = 'latest_series'")[0][0])
+
+    def live_times(self) -> dict[str, pd.Timestamp]:
+        """Each unit's newest sample time (UTC), final or provisional."""
+        last = dict(self.last_times())
+        if self._has_provisional():
+            for unit, stamp in self._rows("SELECT unit, max(time) FROM provisional "
+                                          "GROUP BY unit"):
+                last[unit] = max(last.get(unit, pd.Timestamp(stamp)),
+                                 pd.Timestamp(stamp).tz_convert("UTC"))
+        return last
+
     def last_times(self, max_age_s: float = 0.0) -> dict[str, pd.Timestamp]:
         """Each unit's last committed sample time (UTC); an answer at most ``max_age_s`` old
         may be reused (one query serves the requests of that moment)."""
@@ -195,18 +215,24 @@ class HistorianReader:
     def samples_after(self, unit: str, after: pd.Timestamp | None, limit: int = 600
                       ) -> list[dict[str, object]]:
         """``unit``'s samples stored after ``after`` (all sources; the newest ``limit`` when
-        ``after`` is None or older), oldest first: {time, values: {source/signal: value}}."""
+        ``after`` is None or older), oldest first: {time, values: {source/signal: value},
+        provisional: whether the gate has yet to judge it (its final row replaces it)}."""
+        table = "latest_series" if self._has_provisional() else "series"
+        flag = "provisional" if table == "latest_series" else "false"
         clause, arguments = "", [unit]
         if after is not None:
             clause, arguments = " AND time > ?", [unit, after.to_pydatetime()]
         rows = self._rows(
-            "SELECT time, source, signal, value FROM series WHERE unit = ? AND time IN (SELECT "
-            f"DISTINCT time FROM series WHERE unit = ?{clause} ORDER BY time DESC LIMIT ?) "
-            "ORDER BY time, source, signal", [unit, *arguments, limit])
+            f"SELECT time, source, signal, value, {flag} FROM {table} WHERE unit = ? AND time IN "
+            f"(SELECT DISTINCT time FROM {table} WHERE unit = ?{clause} ORDER BY time DESC "
+            "LIMIT ?) ORDER BY time, source, signal", [unit, *arguments, limit])
         samples: dict[pd.Timestamp, dict[str, float | None]] = {}
-        for stamp, source, signal, value in rows:
+        provisional: dict[pd.Timestamp, bool] = {}
+        for stamp, source, signal, value, early in rows:
             samples.setdefault(pd.Timestamp(stamp), {})[f"{source}/{signal}"] = _number(value)
-        return [{"time": _iso(stamp), "values": values} for stamp, values in samples.items()]
+            provisional[pd.Timestamp(stamp)] = bool(early)
+        return [{"time": _iso(stamp), "values": values, "provisional": provisional[stamp]}
+                for stamp, values in samples.items()]
 
     # -- alarms ---------------------------------------------------------------------------
     _ALARM_COLUMNS = ('id, unit, kind, signal, start, "end", evidence, acknowledged_at, '
