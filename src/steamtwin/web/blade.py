@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from steamtwin.errors import SteamtwinError
 from steamtwin.live.config import ServiceConfig
 from steamtwin.rom.estimator import ExtrapolationWarning
 from steamtwin.rom.reconstruction import predict_field
@@ -28,7 +29,7 @@ from steamtwin.rom.romfile import BladeRom, load_rom
 __all__ = ["BladeFields", "BladeSurface", "NoRomError"]
 
 
-class NoRomError(LookupError):
+class NoRomError(SteamtwinError, LookupError):
     """The unit has no ROM configured (the message says so and where to add it)."""
 
 
