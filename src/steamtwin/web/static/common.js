@@ -117,6 +117,15 @@ const steamtwin = (() => {
   // its `data` are what the chart shows.
   const seconds = (time) => Date.parse(time) / 1000;
   const PALETTE = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b"];
+  // 24-hour tick labels (uPlot's axis `values` table: tick step s, its format, then the
+  // format where the year, month, day, hour, minute, second changes, and mode 1)
+  const DAY = "\n{YYYY}-{MM}-{DD}";
+  const TICKS = [
+    [86400 * 365, "{YYYY}", null, null, null, null, null, null, 1],
+    [86400 * 28, "{YYYY}-{MM}", null, null, null, null, null, null, 1],
+    [86400, "{MM}-{DD}", "\n{YYYY}", null, null, null, null, null, 1],
+    [60, "{HH}:{mm}", DAY, null, DAY, null, null, null, 1],
+    [1, "{HH}:{mm}:{ss}", DAY, null, DAY, null, null, null, 1]];
 
   // Draw (or redraw) a chart in `element`: series [{label, stroke?, width?, ...}] and
   // data [xs, ys…]; `bands` fill between two series; `options` are passed on (hooks, cursor).
@@ -128,8 +137,8 @@ const steamtwin = (() => {
       title, width: width(), height, bands,
       tzDate: (ts) => uPlot.tzDate(new Date(ts * 1e3), "Etc/UTC"),
       scales: { x: { time: true } },
-      axes: [{}, { label: yLabel, size: 60 }],
-      series: [{ label: "time (UTC)" }, ...series.map((s, k) => ({
+      axes: [{ values: TICKS }, { label: yLabel, size: 60 }],
+      series: [{ label: "time (UTC)", value: "{YYYY}-{MM}-{DD} {HH}:{mm}:{ss}" }, ...series.map((s, k) => ({
         stroke: PALETTE[k % PALETTE.length], width: 1.5, ...s }))],
       ...options }, data, element);
     element._uplot = plot;
