@@ -6,7 +6,7 @@ The service is :mod:`bench_web_api`'s (``--role service``: a historian prefilled
 sample as the live service does, and the HTTP companion in the same loop), started as a
 process of its own; this script drives Debian's headless chromium with Playwright:
 
-* **load**: ``--loads`` times, a fresh browser context (cold cache: plotly.js's 4.8 MB too)
+* **load**: ``--loads`` times, a fresh browser context (cold cache: the charting library too)
   opens ``/units/unit1`` and waits until the page has drawn every chart (its
   ``data-ready``); then once more in the same context (warm cache);
 * **live**: for ``--seconds``, every redraw of the page's first chart records the wall clock
@@ -38,10 +38,10 @@ from playwright.sync_api import sync_playwright
 CHROMIUM = "/usr/bin/chromium"
 ARGS = ["--no-sandbox", "--disable-gpu", "--disable-background-networking",
         "--disable-component-update", "--disable-sync", "--no-first-run"]
-RECORD = """() => { const div = document.querySelector('#temperatures .chart');
+RECORD = """() => { const chart = document.querySelector('#temperatures .chart')._uplot;
     window.redraws = [];
-    div.on('plotly_afterplot', () => window.redraws.push([Date.now(),
-        Date.parse(div.data[3].x.at(-1) + 'Z')])); }"""
+    chart.hooks.draw = [...(chart.hooks.draw || []), (u) => window.redraws.push([Date.now(),
+        u.data[0].at(-1) * 1e3])]; }"""
 
 
 def _load(context, url: str) -> tuple[float, float]:

@@ -158,9 +158,9 @@ def test_the_unit_page_draws_the_database_and_a_new_sample_live(page, site):
     last_s = site.next_s - 1
     drawn = page.evaluate("""() => {
         const div = document.querySelector('#temperatures .chart');
-        return {signal: div.dataset.signal, names: div.data.map((t) => t.name),
-                measured: div.data[3].y, band: [div.data[0].y.at(-1), div.data[1].y.at(-1),
-                                                div.data[2].y.at(-1)]};
+        const data = div._uplot.data;  // [time (s), twin − 2σ, twin + 2σ, twin, measured]
+        return {signal: div.dataset.signal, measured: data[4],
+                band: [data[1].at(-1), data[2].at(-1), data[3].at(-1)]};
     }""")
     assert drawn["signal"] == "hp_exhaust_temperature"
     expected = _stored(site, "measured", "hp_exhaust_temperature", last_s - 599, last_s)
@@ -172,13 +172,15 @@ def test_the_unit_page_draws_the_database_and_a_new_sample_live(page, site):
     started = time.monotonic()
     stamp = site.commit()
     page.wait_for_function(
-        "(x) => document.querySelector('#temperatures .chart').data[3].x.at(-1) === x",
-        arg=stamp.strftime("%Y-%m-%dT%H:%M:%S"), timeout=5_000)
+        "(x) => document.querySelector('#temperatures .chart')._uplot.data[0].at(-1) === x",
+        arg=stamp.timestamp(), timeout=5_000)
     assert time.monotonic() - started < 3.0
     value = _stored(site, "measured", "hp_exhaust_temperature", site.next_s - 1,
                     site.next_s - 1)[0]
-    assert page.evaluate("document.querySelector('#temperatures .chart').data[3].y.at(-1)"
+    assert page.evaluate("document.querySelector('#temperatures .chart')._uplot.data[4].at(-1)"
                          ) == pytest.approx(value - 273.15)
+    assert page.evaluate("document.querySelector('#temperatures .chart')._uplot.data[0].length"
+                         ) == 600  # the window keeps 10 minutes
     fault = START + pd.Timedelta(seconds=site.next_s)  # a sensor fault, raised live
     site.commit(events=BlockEvents(alarms=(Alarm("unit1", "sensor_fault", fault,
                                                  "hp_exhaust_temperature",
@@ -191,22 +193,35 @@ def test_the_unit_page_draws_the_database_and_a_new_sample_live(page, site):
 def test_history_zoom_requeries_raw_samples_and_offers_downloads(page, site):
     _open(page, site, "/units/unit1/history")
     assert "buckets" in page.locator("#summary").text_content()  # 2 h: downsampled
-    page.evaluate("""() => Plotly.relayout('chart', {'xaxis.range':
-        ['2026-03-01 01:00:00', '2026-03-01 01:04:59']})""")
-    page.wait_for_function("() => document.getElementById('chart').dataset.count === '300'")
-    y = page.evaluate("document.getElementById('chart').data[0].y")
+    # a drag over 01:00:00 … 01:05:00 (as uPlot's selection reports it) re-queries that range
+    page.evaluate("""() => { const plot = document.getElementById('chart')._uplot;
+        const [from, to] = ['2026-03-01T01:00:00Z', '2026-03-01T01:05:00Z'].map(
+            (t) => plot.valToPos(Date.parse(t) / 1e3, 'x'));
+        plot.setSelect({left: from, width: to - from, top: 0, height: 10}); }""")
+    page.wait_for_function("() => !document.getElementById('summary').textContent"
+                           ".includes('buckets')")
+    chart = page.evaluate("""() => { const div = document.getElementById('chart');
+        return {...div.dataset, time: div._uplot.data[0], y: div._uplot.data[1]}; }""")
+    start, end = (pd.Timestamp(chart[k]) for k in ("start", "end"))
+    pixel_s = 7200 / 1200  # the 2-h chart is < 1366 px wide: a pixel is > 6 s
+    assert abs((start - pd.Timestamp("2026-03-01T01:00:00Z")).total_seconds()) < 2 * pixel_s
+    assert abs((end - pd.Timestamp("2026-03-01T01:05:00Z")).total_seconds()) < 2 * pixel_s
     signal = page.locator("#signal").input_value().split("/")
-    np.testing.assert_allclose(y, _stored(site, *signal, 3600, 3899))
+    start_s, end_s = (int((t - START).total_seconds()) for t in (start, end))
+    stored = _stored(site, *signal, start_s, end_s)
+    assert int(chart["count"]) == len(chart["y"]) == len(stored)  # raw samples
+    np.testing.assert_allclose(chart["y"], stored)
+    assert chart["time"][0] == start.timestamp()
     href = page.get_attribute("#csv", "href")
     assert "/series/download" in href and "format=csv" in href
     text = page.evaluate("""async ([href, token]) => (await fetch(href, {headers:
         {Authorization: 'Bearer ' + token}})).text()""", [href, READ])
-    assert text.splitlines()[0].startswith("time,") and len(text.splitlines()) == 301
+    assert text.splitlines()[0].startswith("time,") and len(text.splitlines()) == 1 + len(stored)
 
 
 def test_an_alarm_is_acknowledged_through_the_page(page, site):
     _open(page, site, "/units/unit1/alarms")
-    assert page.evaluate("document.getElementById('evidence-chart').data.length") >= 1
+    assert page.evaluate("document.getElementById('evidence-chart')._uplot.data.length") >= 2
     row = page.locator("#alarms tr[data-alarm='2']")
     assert "active" in row.text_content()
     row.get_by_role("button", name="acknowledge").click()
@@ -220,8 +235,9 @@ def test_an_alarm_is_acknowledged_through_the_page(page, site):
 
 def test_calibration_and_fleet_pages_draw_the_stored_swaps_and_units(page, site):
     _open(page, site, "/units/unit1/calibration")
-    flow = page.evaluate("""() => document.getElementById('trajectory').data
-        .find((t) => t.name === 'flow_coefficient').y""")
+    flow = page.evaluate("""() => { const plot = document.getElementById('trajectory')._uplot;
+        const k = plot.series.findIndex((s) => s.label === 'flow_coefficient');
+        return plot.data[k].filter((v) => v !== undefined); }""")
     assert flow == [0.99, 0.98]
     assert page.locator("#swaps tr").count() == 3  # header and two swap times
     before, after = (page.locator("#swaps tr").nth(1).locator("td").nth(k).text_content()

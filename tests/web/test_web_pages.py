@@ -15,7 +15,7 @@ from steamtwin.rom.reconstruction import predict_field
 from steamtwin.rom.romfile import load_rom
 from steamtwin.web.access import is_page_shell, load_tokens
 from steamtwin.web.app import create_app
-from steamtwin.web.pages import PLOTLY_JS, bundled_style_ids
+from steamtwin.web.pages import PLOTLY_JS, STATIC_DIR, bundled_style_ids
 
 ACK = "a" * 40
 
@@ -95,7 +95,27 @@ def test_plotly_js_comes_from_the_installed_package(serve_config):
         assert script.headers["content-type"].startswith("text/javascript")
         assert len(script.content) == PLOTLY_JS.stat().st_size
         assert "max-age" in script.headers["cache-control"]
-        page = client.get("/units/unit1").text
+        page = client.get("/units/unit1/blade").text  # the one page that draws with it
         for name in bundled_style_ids():  # its inline style sheets are kept out
             assert f'<template id="{name}">' in page
         assert 'id="plotly.js-style-global" class="no-inline-styles"' in page
+
+
+def test_time_series_pages_load_the_vendored_uplot_not_plotly(serve_config):
+    """uPlot (50 kB) rather than plotly.js (4.8 MB) on every time-series page: evaluating
+    plotly.js took most of the Unit page's load time (issue 22); its MIT licence ships
+    beside it."""
+    vendor = STATIC_DIR / "vendor" / "uplot"
+    assert "Permission is hereby granted" in (vendor / "LICENSE").read_text(encoding="utf-8")
+    with TestClient(create_app(serve_config.database, serve_config)) as client:
+        script = client.get("/static/vendor/uplot/uPlot.iife.min.js")
+        assert script.status_code == 200
+        assert script.content.startswith(b"/*! https://github.com/leeoniya/uPlot")
+        assert len(script.content) < 100_000
+        assert client.get("/static/vendor/uplot/uPlot.min.css").status_code == 200
+        for path in ("", "/history", "/alarms", "/calibration"):
+            page = client.get(f"/units/unit1{path}").text
+            assert "/static/vendor/uplot/uPlot.iife.min.js" in page
+            assert "/static/vendor/uplot/uPlot.min.css" in page
+            assert "plotly" not in page, path
+        assert "uPlot" not in client.get("/").text  # the fleet page draws no chart

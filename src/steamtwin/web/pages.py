@@ -1,12 +1,15 @@
 """The service's dashboard pages (issue 22, item 2): a router the app includes, the static
 files (style sheet, the pages' scripts) served from the package's ``static`` folder, and the
-charting library, plotly.js, served from the installed ``plotly`` wheel
-(``plotly/package_data/plotly.min.js``, MIT licence) — the plant network has no CDN. The
-style rules plotly.js would insert inline are in ``static/plotly.css`` (taken from that
-bundle's plotcss module); linked under the id plotly.js looks for, they keep it from inserting
-a ``<style>`` the Content-Security-Policy refuses; the bundle's other inline sheet (MapLibre's,
-for map traces, unused here) is skipped the same way: the page holds an empty element with
-the id the bundle checks for before inserting it (:func:`bundled_style_ids`).
+charting libraries — the plant network has no CDN: the time-series pages draw with uPlot
+(MIT licence, © Leon Sorokin; ``static/vendor/uplot/``, 50 kB, v1.6.32 from the npm registry,
+with its LICENSE), the blade page's 3-D mesh with plotly.js, served from the installed
+``plotly`` wheel (``plotly/package_data/plotly.min.js``, MIT licence, 4.8 MB: evaluating it
+took most of the Unit page's load, issue 22). The style rules plotly.js would insert inline
+are in ``static/plotly.css`` (taken from that bundle's plotcss module); linked under the id
+plotly.js looks for, they keep it from inserting a ``<style>`` the Content-Security-Policy
+refuses; the bundle's other inline sheet (MapLibre's, for map traces, unused here) is skipped
+the same way: the page holds an empty element with the id the bundle checks for before
+inserting it (:func:`bundled_style_ids`).
 
 Every page is a data-free shell rendered here (the unit's name, escaped, and empty
 containers); its script in ``static/`` fetches the figures from ``/api`` with the bearer token
@@ -44,7 +47,11 @@ PAGES = (("", "Unit"), ("history", "History"), ("alarms", "Alarms"),
 """(path under /units/{unit}/, title) of each unit page."""
 
 router = APIRouter(include_in_schema=False)
+PLOTLY_HEAD = ('<link rel="stylesheet" id="plotly.js-style-global" class="no-inline-styles" '
+               'href="/static/plotly.css">')
 PLOTLY_TAG = '<script src="/vendor/plotly.min.js"></script>'
+UPLOT_HEAD = '<link rel="stylesheet" href="/static/vendor/uplot/uPlot.min.css">'
+UPLOT_TAG = '<script src="/static/vendor/uplot/uPlot.iife.min.js"></script>'
 
 
 @cache
@@ -55,9 +62,10 @@ def bundled_style_ids() -> tuple[str, ...]:
 
 
 def _layout(title: str, script: str, body: str, unit: str | None = None,
-            current: str = "", charts: bool = True) -> HTMLResponse:
-    """A page: navigation (the unit's pages), token field, ``body``, its script and, if it
-    draws ``charts``, plotly.js."""
+            current: str = "", charts: str | None = "uplot") -> HTMLResponse:
+    """A page: navigation (the unit's pages), token field, ``body``, its script and the
+    charting library it draws with: ``charts`` "uplot" (time series), "plotly" (3-D) or
+    None."""
     links = ""
     if unit is not None:
         base = f"/units/{escape(unit)}"
@@ -71,8 +79,8 @@ def _layout(title: str, script: str, body: str, unit: str | None = None,
         '<meta name="viewport" content="width=device-width, initial-scale=1">'
         f'<title>{heading} — steamtwin</title>'
         '<link rel="icon" href="data:,"><link rel="stylesheet" href="/static/style.css">'
-        '<link rel="stylesheet" id="plotly.js-style-global" class="no-inline-styles" '
-        'href="/static/plotly.css"></head>'
+        f'{UPLOT_HEAD if charts == "uplot" else PLOTLY_HEAD if charts == "plotly" else ""}'
+        '</head>'
         f'<body data-unit="{escape(unit or "")}">'
         '<header class="bar"><a class="brand" href="/">steamtwin</a>'
         f'<nav>{links}</nav><span class="tools">'
@@ -80,8 +88,9 @@ def _layout(title: str, script: str, body: str, unit: str | None = None,
         'placeholder="if required"></label><span id="status" role="status"></span>'
         '</span></header>'
         f'<main><h1>{heading}</h1>{body}</main>'
-        + "".join(f'<template id="{name}"></template>' for name in bundled_style_ids()) +
-        f'{PLOTLY_TAG if charts else ""}<script src="/static/common.js"></script>'
+        + ("".join(f'<template id="{name}"></template>' for name in bundled_style_ids())
+           + PLOTLY_TAG if charts == "plotly" else UPLOT_TAG if charts == "uplot" else "")
+        + '<script src="/static/common.js"></script>'
         f'<script src="/static/{script}.js"></script></body></html>')
 
 
@@ -98,7 +107,7 @@ def fleet() -> HTMLResponse:
     return _layout("fleet", "fleet", '<div id="cards" class="cards"></div>'
                    '<p class="links"><a href="/docs">API reference</a> · '
                    '<a href="/health">health</a> · <a href="/metrics">metrics</a></p>',
-                   charts=False)
+                   charts=None)
 
 
 @router.get("/units/{unit}", response_class=HTMLResponse)
@@ -166,4 +175,4 @@ def blade_page(unit: str) -> HTMLResponse:
         '<p id="summary"></p>'
         '<div class="columns"><div id="blade" class="chart tall"></div>'
         '<section><h2>Probes</h2><table id="probes"></table></section></div>'),
-        unit, "blade")
+        unit, "blade", charts="plotly")

@@ -4,7 +4,7 @@
 "use strict";
 
 (() => {
-  const { unit, api, query, status, table, layout, plotConfig, points } = steamtwin;
+  const { unit, api, query, status, table, chart, points, seconds } = steamtwin;
   const base = `/api/units/${encodeURIComponent(unit)}`;
   const operator = document.getElementById("operator");
   operator.value = sessionStorage.getItem("steamtwin-operator") || "";
@@ -28,6 +28,23 @@
     await showList();
   }
 
+  // Dotted vertical lines at `times` (s) over the plotting area.
+  function markTimes(plot, times) {
+    const { ctx, bbox } = plot;
+    ctx.save();
+    ctx.strokeStyle = "#b00";
+    ctx.setLineDash([4, 4]);
+    for (const t of times) {
+      const x = plot.valToPos(t, "x", true);
+      if (x < bbox.left || x > bbox.left + bbox.width) continue;
+      ctx.beginPath();
+      ctx.moveTo(x, bbox.top);
+      ctx.lineTo(x, bbox.top + bbox.height);
+      ctx.stroke();
+    }
+    ctx.restore();
+  }
+
   async function evidence(alarm) {
     const detail = await api(`/api/alarms/${alarm.id}`);
     document.getElementById("evidence-title").textContent =
@@ -41,14 +58,13 @@
                                                        : s.source === "residual"));
     const answers = await Promise.all(wanted.map((s) => api(`${base}/series?${
       query({ source: s.source, signal: s.signal, start: from, end: to, max_points: 1200 })}`)));
-    const traces = answers.map((a, k) => ({ ...points(a), mode: "lines",
-                                            name: `${wanted[k].source} ${wanted[k].signal}` }));
-    const marks = [alarm.start, alarm.end].filter(Boolean).map((t) => ({
-      type: "line", xref: "x", yref: "paper", x0: t.replace(/(Z|\+00:00)$/, ""),
-      x1: t.replace(/(Z|\+00:00)$/, ""), y0: 0, y1: 1, line: { dash: "dot", color: "#b00" } }));
+    const marks = [alarm.start, alarm.end].filter(Boolean).map(seconds);
     const div = document.getElementById("evidence-chart");
-    await Plotly.react(div, traces, layout(`${alarm.signal || "residuals"} around the alarm`,
-                                           { shapes: marks }), plotConfig);
+    chart(div, {
+      title: `${alarm.signal || "residuals"} around the alarm (dotted: its start and end)`,
+      series: wanted.map((s) => ({ label: `${s.source} ${s.signal}` })),
+      data: answers.length ? uPlot.join(answers.map(points)) : [[]],
+      options: { hooks: { draw: [(plot) => markTimes(plot, marks)] } } });
     div.dataset.alarm = alarm.id;
   }
 

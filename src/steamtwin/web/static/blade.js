@@ -4,7 +4,7 @@
 "use strict";
 
 (() => {
-  const { unit, api, query, status, table, plotConfig } = steamtwin;
+  const { unit, api, query, status, table } = steamtwin;
   const base = `/api/units/${encodeURIComponent(unit)}`;
   const div = document.getElementById("blade");
   const timeField = document.getElementById("time");
@@ -29,7 +29,7 @@
                                                     font: { size: 14 } },
       scene: { aspectmode: "data", xaxis: { title: { text: "x (mm)" } },
                yaxis: { title: { text: "y (mm)" } }, zaxis: { title: { text: "z (mm)" } } },
-    }, plotConfig);
+    }, { responsive: true, displaylogo: false });
     const inputs = Object.entries(field.inputs).map(([n, v]) => `${n} = ${v.toPrecision(5)}`);
     document.getElementById("summary").textContent = `sample ${field.time}; ROM inputs (SI): ${
       inputs.join(", ")}; surface ${(field.min - 273.15).toFixed(1)} … ${

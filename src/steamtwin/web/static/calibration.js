@@ -4,7 +4,7 @@
 "use strict";
 
 (() => {
-  const { unit, api, query, status, table, layout, plotConfig, utc } = steamtwin;
+  const { unit, api, query, status, table, chart, seconds } = steamtwin;
   const base = `/api/units/${encodeURIComponent(unit)}`;
   const WINDOW_MS = 600e3;
 
@@ -25,14 +25,17 @@
     const answer = await api(`${base}/parameters`);
     const byName = {};
     for (const swap of answer.trajectory) {
-      (byName[swap.name] = byName[swap.name] || { x: [], y: [] });
-      byName[swap.name].x.push(utc(swap.time));
-      byName[swap.name].y.push(swap.value);
+      (byName[swap.name] = byName[swap.name] || [[], []]);
+      byName[swap.name][0].push(seconds(swap.time));
+      byName[swap.name][1].push(swap.value);
     }
-    const traces = Object.entries(byName).map(([name, t]) => ({
-      ...t, name, mode: "lines+markers", line: { shape: "hv" } }));
-    await Plotly.newPlot("trajectory", traces, layout("parameter trajectory (multipliers, -)"),
-                         plotConfig);
+    const names = Object.keys(byName);
+    chart(document.getElementById("trajectory"), {
+      title: "parameter trajectory (multipliers, -)",
+      // a step at each swap: the value holds until the next one
+      series: names.map((label) => ({ label, paths: uPlot.paths.stepped({ align: 1 }),
+                                      points: { show: true, size: 6 } })),
+      data: names.length ? uPlot.join(names.map((name) => byName[name])) : [[]] });
     const times = [...new Set(answer.trajectory.map((s) => s.time))];
     const signals = (await api(`${base}/signals`)).filter((s) => s.source === "residual")
       .map((s) => s.signal);

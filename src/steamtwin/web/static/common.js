@@ -110,20 +110,58 @@ const steamtwin = (() => {
     });
   }
 
-  const layout = (title, extra = {}) => ({
-    title: { text: title, font: { size: 14 } }, margin: { l: 60, r: 20, t: 36, b: 40 },
-    legend: { orientation: "h", y: -0.2 }, xaxis: { type: "date" }, ...extra });
-  const plotConfig = { responsive: true, displaylogo: false };
+  // Time-series charts: uPlot (MIT, © Leon Sorokin; static/vendor/uplot, ~50 kB — plotly.js
+  // is 4.8 MB and only the blade page's 3-D mesh needs it). x is seconds since the epoch,
+  // drawn in UTC; a null y is a gap, an undefined one (uPlot.join's alignment of series
+  // sampled at other times) is spanned. The instance is kept on the element (`_uplot`):
+  // its `data` are what the chart shows.
+  const seconds = (time) => Date.parse(time) / 1000;
+  const PALETTE = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b"];
+  // 24-hour tick labels (uPlot's axis `values` table: tick step s, its format, then the
+  // format where the year, month, day, hour, minute, second changes, and mode 1)
+  const DAY = "\n{YYYY}-{MM}-{DD}";
+  const TICKS = [
+    [86400 * 365, "{YYYY}", null, null, null, null, null, null, 1],
+    [86400 * 28, "{YYYY}-{MM}", null, null, null, null, null, null, 1],
+    [86400, "{MM}-{DD}", "\n{YYYY}", null, null, null, null, null, 1],
+    [60, "{HH}:{mm}", DAY, null, DAY, null, null, null, 1],
+    [1, "{HH}:{mm}:{ss}", DAY, null, DAY, null, null, null, 1]];
 
-  // The API's times are UTC with an offset; plotly's date axes take them without one.
-  const utc = (time) => (time ? time.replace(/(Z|\+00:00)$/, "") : time);
-  const utcs = (times) => times.map(utc);
-
-  // A series answer → {x, y}: the raw values, or the buckets' means when downsampled.
-  function points(series) {
-    return { x: utcs(series.time), y: series.downsampled ? series.mean : series.value };
+  // Draw (or redraw) a chart in `element`: series [{label, stroke?, width?, ...}] and
+  // data [xs, ys…]; `bands` fill between two series; `options` are passed on (hooks, cursor).
+  function chart(element, { title, yLabel, series, data, bands = [], options = {} }) {
+    if (element._uplot) element._uplot.destroy();
+    const height = element.classList.contains("tall") ? 400 : 240;
+    const width = () => Math.max(element.clientWidth, 200);
+    const plot = new uPlot({
+      title, width: width(), height, bands,
+      tzDate: (ts) => uPlot.tzDate(new Date(ts * 1e3), "Etc/UTC"),
+      scales: { x: { time: true } },
+      axes: [{ values: TICKS }, { label: yLabel, size: 60 }],
+      series: [{ label: "time (UTC)", value: "{YYYY}-{MM}-{DD} {HH}:{mm}:{ss}" }, ...series.map((s, k) => ({
+        stroke: PALETTE[k % PALETTE.length], width: 1.5, ...s }))],
+      ...options }, data, element);
+    element._uplot = plot;
+    if (!element._resizes) {  // follow the page's width (1366 px down to a tablet)
+      element._resizes = new ResizeObserver(() => {
+        const current = element._uplot;
+        if (current && current.width !== width()) {
+          current.setSize({ width: width(), height: current.height });
+        }
+      });
+      element._resizes.observe(element);
+    }
+    return plot;
   }
 
-  return { unit, api, query, follow, status, display, table, layout, plotConfig, points,
-           headers, utc, utcs };
+  // A series answer → [xs, ys]: the raw values, or the buckets' means when downsampled.
+  function points(series) {
+    return [series.time.map(seconds), series.downsampled ? series.mean : series.value];
+  }
+
+  // The API's times are UTC with an offset; the tiles show them without one.
+  const utc = (time) => (time ? time.replace(/(Z|\+00:00)$/, "") : time);
+
+  return { unit, api, query, follow, status, display, table, chart, points, seconds, headers,
+           utc };
 })();

@@ -4,7 +4,7 @@
 "use strict";
 
 (() => {
-  const { unit, api, query, status, layout, plotConfig, headers, utcs } = steamtwin;
+  const { unit, api, query, status, chart: draw, seconds, headers } = steamtwin;
   const base = `/api/units/${encodeURIComponent(unit)}`;
   const chart = document.getElementById("chart");
   const select = document.getElementById("signal");
@@ -12,17 +12,28 @@
   const endField = document.getElementById("end");
   let siUnits = {};
 
+  // raw samples: one line; buckets: their min–max band and mean (M4 keeps the extrema)
   function traces(answer) {
-    const x = utcs(answer.time);
+    const x = answer.time.map(seconds);
     if (!answer.downsampled) {
-      return [{ x, y: answer.value, mode: "lines", name: answer.signal }];
+      return { series: [{ label: answer.signal }], data: [x, answer.value], bands: [] };
     }
-    return [
-      { x, y: answer.min, mode: "lines", line: { width: 0 }, showlegend: false,
-        hoverinfo: "skip" },
-      { x, y: answer.max, mode: "lines", line: { width: 0 }, fill: "tonexty",
-        fillcolor: "rgba(31,119,180,0.25)", name: "min–max per bucket" },
-      { x, y: answer.mean, mode: "lines", name: "mean per bucket" }];
+    return {
+      series: [{ label: "min per bucket", stroke: "rgba(31,119,180,0.4)", width: 0 },
+               { label: "max per bucket", stroke: "rgba(31,119,180,0.4)", width: 0 },
+               { label: "mean per bucket", stroke: "#1f77b4" }],
+      data: [x, answer.min, answer.max, answer.mean],
+      bands: [{ series: [2, 1], fill: "rgba(31,119,180,0.25)" }] };
+  }
+
+  // A drag over the chart selects a time range: query it (raw samples once few enough).
+  function zoomed(plot) {
+    if (plot.select.width < 2) return;
+    const iso = (left) => new Date(Math.round(plot.posToVal(left, "x")) * 1e3).toISOString();
+    startField.value = iso(plot.select.left);
+    endField.value = iso(plot.select.left + plot.select.width);
+    plot.setSelect({ left: 0, width: 0, top: 0, height: 0 }, false);
+    show(startField.value, endField.value).catch((error) => status(error.message, true));
   }
 
   async function show(start, end) {
@@ -30,7 +41,9 @@
     const range = { source, signal, start, end, span_s: start ? undefined : 7200 };
     const answer = await api(`${base}/series?${query(range)}`);
     const title = `${source} ${signal} [${siUnits[signal] || "-"}]`;
-    await Plotly.react(chart, traces(answer), layout(title), plotConfig);
+    draw(chart, { title, yLabel: siUnits[signal] || "-", ...traces(answer), options: {
+      cursor: { drag: { x: true, y: false, setScale: false } },
+      hooks: { setSelect: [zoomed] } } });
     document.getElementById("summary").textContent = `${answer.start} … ${answer.end}: ${
       answer.count} samples${answer.downsampled
         ? `, shown as ${answer.time.length} buckets of ${answer.bucket_s} s` : ""}`;
@@ -39,7 +52,7 @@
       link.href = `${base}/series/download?${query({ source, signal, start: answer.start,
                                                       end: answer.end, format })}`;
     }
-    chart.dataset.count = answer.count;
+    Object.assign(chart.dataset, { count: answer.count, start: answer.start, end: answer.end });
     document.body.dataset.ready = "yes";
   }
 
@@ -75,17 +88,6 @@
       document.getElementById(format).addEventListener("click", download);
     }
     await show("", "");
-    chart.on("plotly_relayout", (change) => {
-      // a drag gives "xaxis.range[0]" and "[1]", Plotly.relayout may give "xaxis.range"
-      const [from, to] = change["xaxis.range"]
-        || [change["xaxis.range[0]"], change["xaxis.range[1]"]];
-      if (from === undefined && !change["xaxis.autorange"]) return;
-      // plotly gives the zoomed range as "YYYY-MM-DD hh:mm:ss.sss" in UTC (the data's zone)
-      const iso = (text) => `${text.replace(" ", "T")}Z`;
-      startField.value = from === undefined ? "" : iso(from);
-      endField.value = to === undefined ? "" : iso(to);
-      show(startField.value, endField.value).catch((error) => status(error.message, true));
-    });
   }
 
   start().catch((error) => status(error.message, true));

@@ -4,13 +4,13 @@
 "use strict";
 
 (() => {
-  const { unit, api, query, follow, status, display, table, layout, plotConfig, points, utc,
-          utcs } = steamtwin;
+  const { unit, api, query, follow, status, display, table, chart, points, seconds,
+          utc } = steamtwin;
   const base = `/api/units/${encodeURIComponent(unit)}`;
   const WINDOW = 600;  // samples kept in the live charts (10 min at 1 Hz)
   const TILES = [["load", "load"], ["main_steam_pressure", "main-steam pressure"],
                  ["main_steam_temperature", "main-steam temperature"]];
-  const charts = [];    // {div, keys: ["source/signal" or band…], sigma}
+  const charts = [];    // {div, keys: ["source/signal" or band…], sigma} per series
   const siUnits = {};
   const tiles = {};
 
@@ -37,22 +37,21 @@
     const [measured, twin] = await Promise.all([series("measured", info.signal),
                                                 series("twin", info.signal)]);
     const sigma = info.instrument_sigma;
-    const band = (sign) => twin.downsampled || sigma === null ? [] :
-      twin.value.map((v) => (v === null ? null : v - 273.15 + sign * 2 * sigma));
     const celsius = (values) => values.map((v) => (v === null ? null : v - 273.15));
-    const m = points(measured);
-    const t = points(twin);
-    const traces = [
-      { x: utcs(twin.time), y: band(-1), mode: "lines", line: { width: 0 }, hoverinfo: "skip",
-        showlegend: false, name: "twin − 2σ" },
-      { x: utcs(twin.time), y: band(+1), mode: "lines", line: { width: 0 }, fill: "tonexty",
-        fillcolor: "rgba(31,119,180,0.2)",
-        name: sigma === null ? "no instrument σ in the tag map" : `twin ± 2σ (σ ${sigma} K)` },
-      { x: t.x, y: celsius(t.y), mode: "lines", name: "twin", line: { color: "#1f77b4" } },
-      { x: m.x, y: celsius(m.y), mode: "lines", name: "measured",
-        line: { color: "#d62728", width: 1 } }];
-    await Plotly.newPlot(div, traces, layout(info.meaning || info.signal,
-                                             { yaxis: { title: { text: "°C" } } }), plotConfig);
+    const [tx, ty] = points(twin);
+    const band = (sign) => (twin.downsampled || sigma === null ? tx.map(() => null)
+      : celsius(ty).map((v) => (v === null ? null : v + sign * 2 * sigma)));
+    const [mx, my] = points(measured);
+    chart(div, {
+      title: info.meaning || info.signal, yLabel: "°C",
+      series: [
+        { label: "twin − 2σ", stroke: "rgba(31,119,180,0.3)", width: 0 },
+        { label: sigma === null ? "no instrument σ in the tag map" : `twin + 2σ (σ ${sigma} K)`,
+          stroke: "rgba(31,119,180,0.3)", width: 0 },
+        { label: "twin", stroke: "#1f77b4" },
+        { label: "measured", stroke: "#d62728", width: 1 }],
+      bands: [{ series: [2, 1], fill: "rgba(31,119,180,0.2)" }],
+      data: uPlot.join([[tx, band(-1), band(+1), celsius(ty)], [mx, celsius(my)]]) });
     charts.push({ div, signal: info.signal, sigma,
                   keys: ["band-", "band+", `twin/${info.signal}`, `measured/${info.signal}`] });
   }
@@ -60,9 +59,8 @@
   async function residualChart(names) {
     const div = document.getElementById("residuals");
     const answers = await Promise.all(names.map((name) => series("residual", name)));
-    const traces = answers.map((answer, k) => ({ ...points(answer), mode: "lines",
-                                                 name: names[k] }));
-    await Plotly.newPlot(div, traces, layout("measured − twin (SI)"), plotConfig);
+    chart(div, { title: "measured − twin (SI)", series: names.map((label) => ({ label })),
+                 data: answers.length ? uPlot.join(answers.map(points)) : [[]] });
     charts.push({ div, keys: names.map((name) => `residual/${name}`) });
   }
 
@@ -88,25 +86,34 @@
   }
 
   function onSample(sample) {
-    const x = utc(sample.time);
     for (const [key, label] of TILES) {
       const value = sample.values[`measured/${key}`];
       if (value !== undefined) tiles[key].textContent = display(value, siUnits[key]);
     }
-    tiles.time.textContent = x.replace("T", " ").slice(0, 19);
-    for (const chart of charts) {
-      const twin = sample.values[`twin/${chart.signal}`];
-      const ys = chart.keys.map((key) => {
+    tiles.time.textContent = utc(sample.time).replace("T", " ").slice(0, 19);
+    const t = seconds(sample.time);
+    for (const { div, keys, signal, sigma } of charts) {
+      const twin = sample.values[`twin/${signal}`];
+      const ys = keys.map((key) => {
         if (key === "band-" || key === "band+") {
-          if (chart.sigma === null || twin === undefined || twin === null) return null;
-          return twin - 273.15 + (key === "band+" ? 2 : -2) * chart.sigma;
+          if (sigma === null || twin === undefined || twin === null) return null;
+          return twin - 273.15 + (key === "band+" ? 2 : -2) * sigma;
         }
         const value = sample.values[key];
         if (value === undefined || value === null) return null;
-        return chart.signal ? value - 273.15 : value;
+        return signal ? value - 273.15 : value;
       });
-      Plotly.extendTraces(chart.div, { x: ys.map(() => [x]), y: ys.map((y) => [y]) },
-                          ys.map((_, k) => k), WINDOW);
+      // append the sample (or replace the one at the same time) and keep the last WINDOW
+      const data = div._uplot.data;
+      const last = data[0].length - 1;
+      const at = last >= 0 && data[0][last] === t ? last : data[0].length;
+      const kept = at + 1 > WINDOW ? at + 1 - WINDOW : 0;
+      const next = data.map((column, k) => {
+        const copy = column.slice(kept, at);
+        copy.push(k === 0 ? t : ys[k - 1]);
+        return copy;
+      });
+      div._uplot.setData(next);
     }
   }
 
@@ -118,7 +125,7 @@
     const stored = new Set(signals.map((s) => `${s.source}/${s.signal}`));
     const lastValue = async (key) => {
       if (!stored.has(`measured/${key}`)) return;
-      const values = points(await series("measured", key)).y;
+      const values = points(await series("measured", key))[1];
       tiles[key].textContent = display(values[values.length - 1], siUnits[key]);
     };
     const lastTime = async () => {
