@@ -65,7 +65,7 @@ def test_a_parameter_without_effect_is_flagged_with_a_warning(linear_simulator):
                             workers=1).fit([window])
     table = fitted.identifiability_
     assert not table.loc["heat_transfer_coefficient", "identifiable"]
-    assert table.loc["heat_transfer_coefficient", "rmse_rise_K"] == pytest.approx(0.0, abs=1e-9)
+    assert table.loc["heat_transfer_coefficient", "rmse_rise"] == pytest.approx(0.0, abs=1e-9)
     assert table.loc["heat_transfer_coefficient", "std_error"] == np.inf
     assert table.loc["flow_coefficient", "identifiable"]
 
@@ -88,3 +88,25 @@ def test_integrated_time_of_known_processes():
     for i in range(1, x.size):
         x[i] = phi * x[i - 1] + shocks[i]
     assert integrated_time(x) == pytest.approx(19.0, rel=0.1)
+
+
+def test_with_instrument_errors_the_figures_are_in_sigma_whatever_the_sensors_units(
+        linear_simulator):
+    """A joint calibration's windows carry each sensor's σ (K, or Pa for a pressure): the
+    check weighs residuals as the objective does, r/σ, so its RMSE is in instrument errors (a
+    pressure in Pa no longer swamps the temperatures: the demo's "RMSE's own uncertainty
+    723.770 K"); with one σ for every sensor the figures are the plain ones over σ."""
+    truth = ModelParameters(1.0, 1.2, 1.4)
+    window = _noisy_window(linear_simulator, truth)
+    sigma = {"control_stage_temperature": 0.3, "hp_exhaust_temperature": 0.3,
+             "hp_inner_casing_temperature": 0.3}
+    problem = CalibrationProblem(linear_simulator, [window],
+                                 ObjectiveSettings(priors=None, sigma=sigma))
+    table = identifiability(problem.objective, truth, problem.parameter_bounds)
+    assert table.attrs["unit"] == "σ"
+    assert table.attrs["rmse"] == pytest.approx(1.0, rel=0.1)  # white noise of σ: RMSE 1 σ
+    plain = CalibrationProblem(linear_simulator, [window], ObjectiveSettings(priors=None))
+    in_kelvin = identifiability(plain.objective, truth, plain.parameter_bounds)
+    assert in_kelvin.attrs["unit"] == "K"
+    np.testing.assert_allclose(table["rmse_rise"] * 0.3, in_kelvin["rmse_rise"], rtol=1e-6)
+    assert (table["identifiable"] == in_kelvin["identifiable"]).all()

@@ -1,8 +1,11 @@
 """Can the data identify each parameter? A local, linearised practical-identifiability check.
 
-At the calibrated point the residuals r (simulated − measured, K, every valid sample of every
-selected sensor, weighted by √w) are differentiated by central differences with respect to the
-parameters scaled to their bounds, u = (x − low)/(high − low): J = ∂r/∂u. To first order, moving
+At the calibrated point the residuals r (simulated − measured, every valid sample of every
+selected sensor: in K weighted by √w, or, where the windows carry each sensor's instrument
+error σ as a joint calibration's do, as the objective weighs them, r·√(ω·w)/σ — instrument
+errors, so that a pressure in Pa and a temperature in K add up) are differentiated by central
+differences with respect to the parameters scaled to their bounds, u = (x − low)/(high − low):
+J = ∂r/∂u. To first order, moving
 parameter i by δ (a fraction of its range) while the others move to compensate as well as they
 can raises the sum of squares by δ²/(J^T J)⁻¹_ii (the Schur complement of the Gauss–Newton
 Hessian; Bates & Watts 1988, *Nonlinear Regression Analysis*, §2.2; the same curvature that
@@ -35,6 +38,7 @@ __all__ = [
     "check_identifiability",
     "identifiability",
     "integrated_time",
+    "residual_unit",
     "warn_unidentifiable",
 ]
 
@@ -49,12 +53,23 @@ class IdentifiabilityWarning(UserWarning):
 
 
 def _residuals(objective: Objective, params: ModelParameters) -> list[np.ndarray]:
-    """Weighted residuals (K) per window: rows = samples, one column per sensor, NaN if unused."""
+    """Weighted residuals per window (K, or instrument errors where the window has σ: module
+    docstring): rows = samples, one column per sensor, NaN if unused."""
     result = []
     for window in objective.windows:
         predicted = predict_window(objective.simulator, window, params, objective.sensors)
-        result.append((predicted - window.measured) * np.sqrt(objective.weights))
+        if window.sigma is None:
+            result.append((predicted - window.measured) * np.sqrt(objective.weights))
+        else:
+            result.append((predicted - window.measured)
+                          * np.sqrt(window.weight * objective.weights) / window.sigma)
     return result
+
+
+def residual_unit(objective: Objective) -> str:
+    """The unit :func:`identifiability`'s RMSE figures are in: "K", or "σ" (instrument errors)
+    when the windows carry each sensor's σ."""
+    return "K" if all(window.sigma is None for window in objective.windows) else "σ"
 
 
 def integrated_time(series: np.ndarray, window_factor: float = 5.0) -> float:
@@ -77,10 +92,11 @@ def integrated_time(series: np.ndarray, window_factor: float = 5.0) -> float:
 
 def identifiability(objective: Objective, params: ModelParameters,
                     bounds: dict[str, tuple[float, float]]) -> pd.DataFrame:
-    """One row per parameter: ``rmse_rise_K`` for a :data:`TEST_SHIFT` shift with the others
-    compensating, ``detectable_rise_K`` (RMSE/√(2·n_eff)), ``identifiable``, ``std_error``
-    (linearised standard error in the parameter's own units, from the residual variance and
-    n_eff) and the correlation with each other parameter (``corr:<name>``)."""
+    """One row per parameter: ``rmse_rise`` for a :data:`TEST_SHIFT` shift with the others
+    compensating, ``detectable_rise`` (RMSE/√(2·n_eff)) — both in ``attrs["unit"]``
+    (:func:`residual_unit`) —, ``identifiable``, ``std_error`` (linearised standard error in
+    the parameter's own units, from the residual variance and n_eff) and the correlation with
+    each other parameter (``corr:<name>``)."""
     centre = np.array([getattr(params, name) for name in PARAMETER_NAMES])
     width = np.array([bounds[name][1] - bounds[name][0] for name in PARAMETER_NAMES])
     base = _residuals(objective, params)
@@ -114,8 +130,8 @@ def identifiability(objective: Objective, params: ModelParameters,
         rise = float(np.sqrt(rmse**2 + rise_sse / n) - rmse)
         variance = rmse**2 * inverse[i, i] * n / n_effective if inverse[i, i] > 0 else np.inf
         row: dict[str, object] = {
-            "parameter": name, "value": float(centre[i]), "rmse_rise_K": rise,
-            "detectable_rise_K": float(detectable), "identifiable": bool(rise > detectable),
+            "parameter": name, "value": float(centre[i]), "rmse_rise": rise,
+            "detectable_rise": float(detectable), "identifiable": bool(rise > detectable),
             "std_error": float(np.sqrt(max(variance, 0.0)) * width[i]),
         }
         for j, other in enumerate(PARAMETER_NAMES):
@@ -125,8 +141,8 @@ def identifiability(objective: Objective, params: ModelParameters,
                     else np.nan
         rows.append(row)
     table = pd.DataFrame(rows).set_index("parameter")
-    table.attrs.update(rmse_K=rmse, samples=n, autocorrelation_time_samples=tau,
-                       effective_samples=n_effective)
+    table.attrs.update(rmse=rmse, unit=residual_unit(objective), samples=n,
+                       autocorrelation_time_samples=tau, effective_samples=n_effective)
     return table
 
 
@@ -134,14 +150,16 @@ def warn_unidentifiable(table: pd.DataFrame) -> list[str]:
     """Issue an :class:`IdentifiabilityWarning` per parameter the data cannot identify; returns
     the messages."""
     messages = []
+    unit = table.attrs.get("unit", "K")
     for name, row in table.iterrows():
         if row["identifiable"]:
             continue
         message = (
             f"{name} is not identifiable from these windows: moving it by "
             f"{TEST_SHIFT:.0%} of its range (the others compensating) changes the RMSE by "
-            f"{row['rmse_rise_K']:.3f} K, less than the RMSE's own uncertainty "
-            f"{row['detectable_rise_K']:.3f} K; its value {row['value']:.3f} is whatever fitted "
+            f"{row['rmse_rise']:.3f} {unit}, less than the RMSE's own uncertainty "
+            f"{row['detectable_rise']:.3f} {unit}{' (instrument errors)' if unit == 'σ' else ''};"
+            f" its value {row['value']:.3f} is whatever fitted "
             f"best, not a measurement. Add windows where it acts (the heat-transfer coefficient "
             f"needs load ramps; the friction coefficient several loads)."
         )

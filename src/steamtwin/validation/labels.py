@@ -109,7 +109,7 @@ COLUMN_LABELS: dict[str, tuple[str, str]] = {
     "parameter": ("Parameter", ""), "calibrated": ("Calibrated", ""),
     "low_95": ("95 % interval, low", ""), "high_95": ("95 % interval, high", ""),
     "prior_low_95": ("Prior 95 %, low", ""), "prior_high_95": ("Prior 95 %, high", ""),
-    "identifiable": ("Identifiable", ""), "detectable_rise_K": ("Detectable rise", "K"),
+    "identifiable": ("Identifiable", ""), "detectable_rise": ("Detectable rise", ""),
     "std_error": ("Standard error", ""),
     "setting": ("GA setting", ""), "value": ("Value", ""), "rmse_K": ("RMSE", "K"),
     "evaluations": ("Model runs", ""),
