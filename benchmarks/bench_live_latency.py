@@ -56,9 +56,10 @@ class _Recording(LiveHistorian):
             if final:
                 self.final.setdefault((unit, stamp), now)
 
-    def store_provisional(self, unit, frames, flags=None):
-        rows = super().store_provisional(unit, frames, flags)
-        self._note(unit, frames, final=False)
+    def store_provisional_many(self, batch):
+        rows = super().store_provisional_many(batch)
+        for entry in batch:
+            self._note(entry.unit, entry.frames, final=False)
         return rows
 
     def commit_block(self, unit, frames, flags=None, state=None, events=None):
