@@ -1,6 +1,11 @@
 """The live service: every configured unit's :class:`~steamtwin.live.service.LiveTwin` run side
 by side on one event loop, sharing one DuckDB historian, until its sources end or it is told
-to stop (``steamtwin serve``). Progress and findings go to the ``steamtwin.live`` logger."""
+to stop (``steamtwin serve``). Progress and findings go to the ``steamtwin.live`` logger.
+
+Latency (issue 21): each unit's provisional rows go to a :class:`ProvisionalGroup` that stores
+those of every unit whose sample came in at the same moment in one transaction, before any of
+these units does its final (look-ahead) work; the final work of the units falls in different
+seconds (``settle`` phases in :func:`run_service`)."""
 
 from __future__ import annotations
 
