@@ -11,8 +11,9 @@ committed: first stored (the provisional row, or the final one when it comes fir
 (after the gate's 60-s look-ahead). Latency = stored − written, per unit and sample, after a
 ``--warmup`` of the first samples (connection, first blocks).
 
-Prints p50/p95/p99/max of both latencies, the service's CPU seconds (process time) per second of
-data, and the load average.
+Prints p50/p95/p99/max of both latencies, the units per provisional transaction (group commit,
+``live.runner.ProvisionalGroup``), the service's CPU seconds (process time) per second of data,
+and the load average.
 
 Run: python benchmarks/bench_live_latency.py [--units 10] [--seconds 180] [--warmup 10]
 """
@@ -48,6 +49,7 @@ class _Recording(LiveHistorian):
         super().__init__(path)
         self.first: dict[tuple[str, pd.Timestamp], float] = {}
         self.final: dict[tuple[str, pd.Timestamp], float] = {}
+        self.group_sizes: list[int] = []  # units per provisional transaction
 
     def _note(self, unit: str, frames: Mapping[str, pd.DataFrame], final: bool) -> None:
         now = time.time()
@@ -56,9 +58,11 @@ class _Recording(LiveHistorian):
             if final:
                 self.final.setdefault((unit, stamp), now)
 
-    def store_provisional(self, unit, frames, flags=None):
-        rows = super().store_provisional(unit, frames, flags)
-        self._note(unit, frames, final=False)
+    def store_provisional_many(self, batch):
+        rows = super().store_provisional_many(batch)
+        self.group_sizes.append(len(batch))
+        for entry in batch:
+            self._note(entry.unit, entry.frames, final=False)
         return rows
 
     def commit_block(self, unit, frames, flags=None, state=None, events=None):
@@ -170,6 +174,9 @@ def main() -> None:
     print(f"write → first stored (provisional): {_quantiles(np.array(first))}")
     if final:
         print(f"write → final row (after the gate's look-ahead): {_quantiles(np.array(final))}")
+    if historian.group_sizes:
+        print(f"provisional transactions: {len(historian.group_sizes)}, "
+              f"{np.mean(historian.group_sizes):.1f} units each on average")
     print(f"service CPU {cpu:.1f} s for {args.seconds} s of data "
           f"({cpu / args.seconds * 100:.0f} % of a core); load average "
           f"{os.getloadavg()[0]:.1f}")

@@ -18,7 +18,12 @@ from steamtwin.dcs.plant import plant_tag_map, run_plant, write_plant
 from steamtwin.dcs.readers import read_historian
 from steamtwin.dcs.tagmap import load_tag_map
 from steamtwin.live.plant_server import PlantServer, PlantServerSettings, plant_node_ids
-from steamtwin.live.sources import OpcUaSecurity, OpcUaSource, ReplaySource
+from steamtwin.live.sources import (
+    PUBLISHING_INTERVAL_MS,
+    OpcUaSecurity,
+    OpcUaSource,
+    ReplaySource,
+)
 
 pytestmark = pytest.mark.slow  # 21 s of the full suite (2026-11-27): not in the quick loop
 
@@ -176,6 +181,9 @@ def test_bad_input_becomes_findings_and_the_source_goes_on():
         source = OpcUaSource(endpoint, mapped, INSECURE, settle_s=1.0)
         blocks: list = []
         consumer = await _started(source, blocks)
+        # the server publishes at the interval the source asked for (latency, issue 21)
+        granted = [sub.data.RevisedPublishingInterval for sub in
+                   server.iserver.subscription_service.subscriptions.values()]
         base = datetime(2026, 3, 1, tzinfo=UTC)
 
         async def write(name, value, when, variant=ua.VariantType.Double):
@@ -201,11 +209,12 @@ def test_bad_input_becomes_findings_and_the_source_goes_on():
         source.close()
         await consumer
         await server.stop()
-        return blocks
+        return blocks, granted
 
-    blocks = asyncio.run(scenario())
+    blocks, granted = asyncio.run(scenario())
     findings = [finding for block in blocks for finding in block.findings]
     kinds = {finding.kind: finding for finding in findings}
+    assert granted == [PUBLISHING_INTERVAL_MS] and PUBLISHING_INTERVAL_MS <= 50.0
     assert {"unknown_node", "not_a_number", "future", "backwards"} <= set(kinds)
     assert kinds["unknown_node"].signal == "main_steam_flow" and "NOPE" in \
         kinds["unknown_node"].message

@@ -30,7 +30,7 @@ Times are stored as UTC ``TIMESTAMPTZ``.
 from __future__ import annotations
 
 import json
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,7 +39,8 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
-__all__ = ["SOURCES", "Alarm", "AlarmEnd", "BlockEvents", "LiveHistorian", "export_history"]
+__all__ = ["SOURCES", "Alarm", "AlarmEnd", "BlockEvents", "LiveHistorian", "ProvisionalRows",
+           "export_history"]
 
 SOURCES = ("measured", "twin", "residual")
 KEPT_STATES = 3
@@ -87,6 +88,17 @@ class AlarmEnd:
     kind: str
     signal: str | None
     end: pd.Timestamp
+
+
+@dataclass(frozen=True)
+class ProvisionalRows:
+    """One unit's provisional rows to store: ``frames`` (source → wide SI frame on a UTC
+    index) and the measured samples' ``flags``, as :meth:`LiveHistorian.store_provisional`
+    takes them."""
+
+    unit: str
+    frames: Mapping[str, pd.DataFrame]
+    flags: pd.DataFrame | None = None
 
 
 @dataclass(frozen=True)
@@ -221,29 +233,59 @@ class LiveHistorian:
         on, and :meth:`commit_block` deletes them when it stores their samples' final rows.
         Refuses rows at or before the last committed sample (ValueError); returns the rows
         written."""
-        times = [_utc(frame.index) for frame in frames.values() if len(frame)]
-        if not times:
+        return self.store_provisional_many([ProvisionalRows(unit, frames, flags)])
+
+    def store_provisional_many(self, batch: Sequence[ProvisionalRows]) -> int:
+        """:meth:`store_provisional` for several units at once (at most one entry per unit,
+        else ValueError), in ONE transaction with one DELETE and one INSERT: the service
+        stores every unit's provisional rows of a moment together (group commit: DeWitt et
+        al., "Implementation techniques for main memory database systems", SIGMOD 1984;
+        measured 7 → 2 ms of CPU per unit and sample for ten units, docs/benchmarks.md).
+        Nothing is stored if any entry is refused. Returns the rows written."""
+        units = [entry.unit for entry in batch]
+        if len(set(units)) < len(units):
+            raise ValueError(f"provisional rows of one unit twice in one batch: {units}")
+        tables, firsts = [], {}
+        for entry in batch:
+            times = [_utc(frame.index) for frame in entry.frames.values() if len(frame)]
+            if not times:
+                continue
+            first = min(index[0] for index in times)
+            resume = self.resume_time(entry.unit)
+            if resume is not None and first <= resume:
+                raise ValueError(f"unit {entry.unit!r}: provisional rows from "
+                                 f"{first.isoformat()}, not after the last committed sample "
+                                 f"{resume.isoformat()}")
+            tables += [self._long(entry.unit, source, frame,
+                                  entry.flags if source == "measured" else None)
+                       for source, frame in entry.frames.items() if len(frame)]
+            firsts[entry.unit] = first
+        if not tables:
             return 0
-        first = min(index[0] for index in times)
-        resume = self.resume_time(unit)
-        if resume is not None and first <= resume:
-            raise ValueError(f"unit {unit!r}: provisional rows from {first.isoformat()}, not "
-                             f"after the last committed sample {resume.isoformat()}")
-        rows = pa.concat_tables([
-            self._long(unit, source, frame, flags if source == "measured" else None)
-            for source, frame in frames.items() if len(frame)])
+        rows = pa.concat_tables(tables)
+        replaced = [unit for unit in firsts if self._may_have_provisional(unit)]
         connection = self.connection
         connection.execute("BEGIN TRANSACTION")
         try:
-            if self._may_have_provisional(unit):
-                connection.execute("DELETE FROM provisional WHERE unit = ? AND time >= ?",
-                                   [unit, first.to_pydatetime()]).fetchall()
+            if replaced:
+                connection.register("replaced_from", pa.table({
+                    "unit": pa.array(replaced, type=pa.string()),
+                    "first": pa.array([firsts[unit].to_pydatetime() for unit in replaced],
+                                      type=pa.timestamp("us", tz="UTC"))}))
+                try:
+                    connection.execute(
+                        "DELETE FROM provisional USING replaced_from WHERE provisional.unit = "
+                        "replaced_from.unit AND provisional.time >= replaced_from.first"
+                    ).fetchall()
+                finally:
+                    connection.unregister("replaced_from")
             self._insert_series(rows, "provisional")
             connection.execute("COMMIT")
         except Exception:
             connection.execute("ROLLBACK")
             raise
-        self._provisional[unit] = True
+        for unit in firsts:
+            self._provisional[unit] = True
         return rows.num_rows
 
     def _may_have_provisional(self, unit: str) -> bool:

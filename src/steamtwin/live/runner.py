@@ -1,6 +1,11 @@
 """The live service: every configured unit's :class:`~steamtwin.live.service.LiveTwin` run side
 by side on one event loop, sharing one DuckDB historian, until its sources end or it is told
-to stop (``steamtwin serve``). Progress and findings go to the ``steamtwin.live`` logger."""
+to stop (``steamtwin serve``). Progress and findings go to the ``steamtwin.live`` logger.
+
+Latency (issue 21): each unit's provisional rows go to a :class:`ProvisionalGroup` that stores
+those of every unit whose sample came in at the same moment in one transaction, before any of
+these units does its final (look-ahead) work; the final work of the units falls in different
+seconds (``settle`` phases in :func:`run_service`)."""
 
 from __future__ import annotations
 
@@ -13,7 +18,7 @@ from collections.abc import Awaitable, Callable, Sequence
 from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
 from steamtwin.live.config import ServiceConfig, UnitConfig
 from steamtwin.live.gate import StreamGate, gate_options
-from steamtwin.live.historian import LiveHistorian
+from steamtwin.live.historian import LiveHistorian, ProvisionalRows
 from steamtwin.live.monitor_file import load_monitor
 from steamtwin.live.recalibration import LiveRecalibration, centred_priors
 from steamtwin.live.sensitivity import SensitivityCache
@@ -22,7 +27,7 @@ from steamtwin.live.sources import OpcUaSecurity, OpcUaSource, ReplaySource, Sou
 from steamtwin.live.unit_model import unit_model
 from steamtwin.rom.romfile import load_rom
 
-__all__ = ["Companion", "build_unit", "run_service", "stop_on_signals"]
+__all__ = ["Companion", "ProvisionalGroup", "build_unit", "run_service", "stop_on_signals"]
 
 LOG = logging.getLogger("steamtwin.live")
 
@@ -67,18 +72,56 @@ def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, So
     return twin, source
 
 
+#: Event-loop rounds the group commit waits before it writes (:class:`ProvisionalGroup`): a
+#: data change read from a socket passes through a few tasks (the client's publish loop, the
+#: subscription handler, the source's queue) before its unit has rows; a round with nothing to
+#: do costs microseconds.
+GATHER_ROUNDS = 8
+
+
+class ProvisionalGroup:
+    """Group commit of the units' provisional rows: the rows of every unit whose sample came
+    in while the first one's were being computed are stored in one transaction
+    (:meth:`LiveHistorian.store_provisional_many`; DeWitt et al., SIGMOD 1984). A unit awaits
+    its group's write before it settles, so its final rows never precede its provisional
+    ones."""
+
+    def __init__(self, historian: LiveHistorian) -> None:
+        self.historian = historian
+        self._rows: list[ProvisionalRows] = []
+        self._write: asyncio.Task | None = None
+
+    async def store(self, rows: ProvisionalRows | None) -> None:
+        """Store ``rows`` with the group's; returns once they are committed."""
+        if rows is None:
+            await asyncio.sleep(0)  # the other units' turn (a replay source need not yield)
+            return
+        self._rows.append(rows)
+        if self._write is None:
+            self._write = asyncio.create_task(self._gather_and_write())
+        await asyncio.shield(self._write)
+
+    async def _gather_and_write(self) -> None:
+        for _ in range(GATHER_ROUNDS):
+            await asyncio.sleep(0)
+        batch, self._rows, self._write = self._rows, [], None
+        self.historian.store_provisional_many(batch)
+
+
 async def _run_unit(twin: LiveTwin, source: Source, stop: asyncio.Event,
-                    summary: LiveSummary, settle: tuple[int, int] = (1, 1)) -> LiveSummary:
-    """``settle``: (first, then) — the final samples judged at once, the first time and then
-    (a live unit: its ``block_samples``, the first time at a phase of its own so that the
+                    summary: LiveSummary, group: ProvisionalGroup,
+                    settle: tuple[int, int] = (1, 1)) -> LiveSummary:
+    """``group``: where the unit's provisional rows are stored, with other units' of the same
+    moment. ``settle``: (first, then) — the final samples judged at once, the first time and
+    then (a live unit: its ``block_samples``, the first time at a phase of its own so that the
     units' final work falls in different seconds instead of delaying every unit's provisional
     values in the same one)."""
     blocks = source.blocks()
     first, then = settle
     try:
         async for block in blocks:
-            twin.receive(block, summary)
-            await asyncio.sleep(0)  # every unit's provisional values before anyone's final work
+            # every unit's provisional values of the moment before anyone's final work
+            await group.store(twin.receive_rows(block, summary))
             stored = summary.samples
             twin.settle(summary, first)
             if summary.samples > stored:
@@ -139,6 +182,7 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
         for task in beside:
             task.add_done_callback(stop_if_failed)
         built = [build_unit(unit, historian) for unit in config.units]
+        group = ProvisionalGroup(historian)
         for twin, _ in built:
             resume = twin.resume_after()
             LOG.info("%s: starting%s", twin.name,
@@ -149,7 +193,8 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
             size = config.units[k].block_samples
             settle = ((max(1, round(size * (k + 1) / len(built))), size) if twin.provisional
                       else (1, 1))
-            task = asyncio.create_task(_run_unit(twin, source, stop, summary, settle))
+            task = asyncio.create_task(_run_unit(twin, source, stop, summary, group,
+                                                  settle))
             waiter = asyncio.create_task(stop.wait())
             await asyncio.wait({task, waiter}, return_when=asyncio.FIRST_COMPLETED)
             if not task.done():

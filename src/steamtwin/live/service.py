@@ -56,7 +56,13 @@ import pandas as pd
 
 from steamtwin.live.blocks import Block, BlockAccumulator
 from steamtwin.live.gate import StreamGate
-from steamtwin.live.historian import Alarm, AlarmEnd, BlockEvents, LiveHistorian
+from steamtwin.live.historian import (
+    Alarm,
+    AlarmEnd,
+    BlockEvents,
+    LiveHistorian,
+    ProvisionalRows,
+)
 from steamtwin.live.recalibration import LiveRecalibration, ParameterSwap, swap_values
 from steamtwin.live.residuals import AlarmEvent, ResidualMonitor
 from steamtwin.live.rewind import RewindBuffer
@@ -204,22 +210,31 @@ class LiveTwin:
         """Take a source block into the gate and, with ``provisional``, store the twin's
         provisional values of the samples still waiting for their look-ahead — the fast half
         of :meth:`process` (the service runs every unit's before any unit's :meth:`settle`)."""
+        summary = summary if summary is not None else LiveSummary()
+        rows = self.receive_rows(block, summary)
+        if rows is not None:
+            self.historian.store_provisional_many([rows])
+        return summary
+
+    def receive_rows(self, block: SourceBlock, summary: LiveSummary) -> ProvisionalRows | None:
+        """:meth:`receive` without the write: the provisional rows for the caller to store
+        (the service stores every unit's of a moment in one transaction,
+        :meth:`LiveHistorian.store_provisional_many`) before this twin's next
+        :meth:`receive_rows` or :meth:`settle`; None when there are none."""
         if not self._started:
             self.start()
-        summary = summary if summary is not None else LiveSummary()
         summary.findings += len(block.findings)
         if len(block.frame) == 0:
-            return summary
+            return None
         resume = self._replay_from
         frame, bad = block.frame, block.bad
         if resume is not None and frame.index[0] <= resume:  # what the state has seen already
             keep = frame.index > resume
             frame, bad = frame[keep], bad[keep]
-        if len(frame):
-            self.gate.add(frame, bad)
-            if self.provisional:
-                self._store_provisional()
-        return summary
+        if len(frame) == 0:
+            return None
+        self.gate.add(frame, bad)
+        return self._provisional_rows() if self.provisional else None
 
     def settle(self, summary: LiveSummary | None = None, min_samples: int = 1) -> LiveSummary:
         """Judge, model and store the samples whose look-ahead is in, once there are at least
@@ -228,7 +243,7 @@ class LiveTwin:
         self._store(self.gate.release(min_samples), summary)
         return summary
 
-    def _store_provisional(self) -> None:
+    def _provisional_rows(self) -> ProvisionalRows | None:
         """The twin on the gate's pending samples (verdicts that need no look-ahead: range,
         status, missing), continuing the provisional model state over the samples not yet
         given a value, or restarting it from the final state when the final verdicts took
@@ -243,7 +258,7 @@ class LiveTwin:
             new = values.index > self._provisional_until
             values, flags = values[new], flags[new]
         if values.empty:
-            return
+            return None
         start = self._provisional_state if self._provisional_until is not None else self._state
         complete = _complete(values)
         twin, state, _ = self._predict(values, complete, start)
@@ -251,9 +266,9 @@ class LiveTwin:
         self._provisional_inputs = (used if self._provisional_inputs is None
                                     else pd.concat([self._provisional_inputs, used]))
         self._provisional_state, self._provisional_until = state, values.index[-1]
-        self.historian.store_provisional(
-            self.name, {"measured": values, "twin": twin,
-                        "residual": self._residual(values, twin)}, _flag_objects(flags))
+        return ProvisionalRows(self.name, {"measured": values, "twin": twin,
+                                           "residual": self._residual(values, twin)},
+                               _flag_objects(flags))
 
     def _check_provisional(self, data: pd.DataFrame, complete: np.ndarray) -> None:
         """Keep the provisional chain if the final samples ``data`` fed the model what the

@@ -54,6 +54,17 @@ OVERFLOW_BITS = 0x480
 #: hours of 1-s samples (a server flushing a buffer after a network outage) fits; what does not
 #: is reported through OVERFLOW_BITS by a server that sets them.
 QUEUE_SIZE = 100_000
+#: The subscription's requested publishing interval (ms): how long the server gathers data
+#: changes before it sends them (OPC UA Part 4, §5.13.2), the floor of the source's latency
+#: (on average half of it). 20 ms keeps a 1-Hz sample's delivery well inside issue 21's 200-ms
+#: budget; a server that cannot publish that fast revises it to its fastest (Part 4, §5.13.2:
+#: asyncua's server grants what is asked), at the cost of 50 mostly empty publish cycles a
+#: second on the server (measured, docs/benchmarks.md).
+PUBLISHING_INTERVAL_MS = 20.0
+#: Longest silence (s) before the server sends a keep-alive message on the subscription (the
+#: source checks the connection itself after 0.5 s without data; this only bounds the server's
+#: idle traffic).
+KEEP_ALIVE_S = 5.0
 _ARRIVED = "__arrived__"  # key of a pending sample's first arrival (monotonic s)
 
 
@@ -184,22 +195,29 @@ class OpcUaSource:
     URL; ``tag_map``: each signal's ``node_id`` and wire unit; ``resolution_s``: the sample
     grid the source timestamps are rounded to; ``settle_s``: how long (s of wall time) a
     sample stays open for late tags; ``start_after``: resume after this time (HistoryRead back to
-    it on connection); ``reconnect_s``: wait between connection attempts."""
+    it on connection); ``reconnect_s``: wait between connection attempts;
+    ``publishing_interval_ms``: the subscription's requested publishing interval (ms, see
+    :data:`PUBLISHING_INTERVAL_MS`)."""
 
     def __init__(self, endpoint: str, tag_map: TagMap, security: OpcUaSecurity,
                  resolution_s: float = 1.0, settle_s: float = 2.0,
                  start_after: pd.Timestamp | None = None, reconnect_s: float = 1.0,
-                 history_limit: int = 10_000, timeout_s: float = 10.0) -> None:
+                 history_limit: int = 10_000, timeout_s: float = 10.0,
+                 publishing_interval_ms: float = PUBLISHING_INTERVAL_MS) -> None:
         missing = [name for name, spec in tag_map.signals.items() if spec.node_id is None]
         if missing:
             raise ValueError(f"{tag_map.source}: signals {missing} have no node_id; the OPC UA "
                              "source needs one per signal")
         if not resolution_s > 0.0:
             raise ValueError(f"resolution_s must be positive (got {resolution_s!r})")
+        if not publishing_interval_ms > 0.0:
+            raise ValueError("publishing_interval_ms must be positive (ms; got "
+                             f"{publishing_interval_ms!r})")
         self.endpoint, self.tag_map, self.security = endpoint, tag_map, security
         self.resolution_s, self.settle_s = resolution_s, settle_s
         self.start_after, self.reconnect_s = start_after, reconnect_s
         self.history_limit, self.timeout_s = history_limit, timeout_s
+        self.publishing_interval_ms = publishing_interval_ms
         self._closed = asyncio.Event()
         self.connections = 0
 
@@ -232,7 +250,7 @@ class OpcUaSource:
                 queue: asyncio.Queue = asyncio.Queue()
                 signal_of = {node.nodeid: name for name, node in nodes.items()}
                 subscription = await client.create_subscription(
-                    100, _Collector(queue, signal_of))
+                    self._subscription_parameters(), _Collector(queue, signal_of))
                 # every new source timestamp is a sample, even when value and status repeat
                 # (a quantised reading): trigger StatusValueTimestamp (OPC UA Part 4, §7.22.2);
                 # asyncua's subscribe_data_change takes no filter, its _subscribe does
@@ -288,6 +306,19 @@ class OpcUaSource:
         block = self._settled(pending, latest_per_signal, [], flush=True)
         if block is not None:
             yield block
+
+    def _subscription_parameters(self) -> ua.CreateSubscriptionParameters:
+        """The subscription asked for: ``publishing_interval_ms``, a keep-alive message after
+        :data:`KEEP_ALIVE_S` without data and a lifetime of asyncua's default 10 000 intervals
+        (≥ 3 keep-alives, OPC UA Part 4, §5.13.2) — asked for in counts of intervals that the
+        server need not revise (asyncua's own choice at 20 ms exceeds its server's cap)."""
+        interval = self.publishing_interval_ms
+        keep_alive = max(1, math.ceil(KEEP_ALIVE_S * 1e3 / interval))
+        return ua.CreateSubscriptionParameters(
+            RequestedPublishingInterval=interval, RequestedLifetimeCount=max(10_000,
+                                                                             3 * keep_alive),
+            RequestedMaxKeepAliveCount=keep_alive, MaxNotificationsPerPublish=10_000,
+            PublishingEnabled=True, Priority=0)
 
     def _note_gap(self, last: pd.Timestamp | None, block: SourceBlock) -> None:
         """A finding for samples that never arrived between ``last`` and the block."""
