@@ -107,6 +107,9 @@ def test_demo_maps_its_options_and_prints_the_runs_figures(tmp_path, monkeypatch
 
     def fake_run(out, settings, progress):
         seen["settings"] = settings
+        import logging
+
+        logging.getLogger("asyncua.client").warning("Publish iteration crashed")
         for k, stage in enumerate(settings.stages):  # as run_demo: equal shares, named
             progress(k / len(STAGES), stage)
             progress((k + 1) / len(STAGES), f"{stage}: done")
@@ -134,6 +137,10 @@ def test_demo_maps_its_options_and_prints_the_runs_figures(tmp_path, monkeypatch
     assert "flow 0.9800" in text and "2.00 → 0.50 K (−75 %)" in text
     assert "mean abs deviation 0.21 K, max 1.22 K" in text
     assert "warning: IdentifiabilityWarning: test" in text
+    # the libraries' log goes to a file in the output folder, not between the progress bars
+    assert "Publish iteration crashed" not in result.output
+    log = (tmp_path / "demo.log").read_text()
+    assert "WARNING asyncua.client: Publish iteration crashed" in log
     result = runner.invoke(app, ["demo", "--out", str(tmp_path / "quick"), "--quick",
                                  "--turbine", "unit.toml"])
     assert result.exit_code == 0, result.output

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import logging
+from contextlib import contextmanager
 from pathlib import Path
 
 import typer
@@ -58,10 +60,26 @@ def demo(
             if done >= 1.0:
                 progress.stop_task(task)
 
-        result = run_demo(out, settings, progress=report)
+        with _log_to(out / "demo.log"):
+            result = run_demo(out, settings, progress=report)
     for message in result.warnings:
         console.print(f"warning: {message}")
     _summary(console, result)
+
+
+@contextmanager
+def _log_to(path: Path):
+    """The libraries' log records (the live stage's OPC UA client and server: reconnections,
+    their tracebacks) go to ``path`` instead of between the progress bars."""
+    handler = logging.FileHandler(path, encoding="utf-8")
+    handler.setFormatter(logging.Formatter("%(asctime)s %(levelname)s %(name)s: %(message)s"))
+    root = logging.getLogger()
+    root.addHandler(handler)
+    try:
+        yield
+    finally:
+        root.removeHandler(handler)
+        handler.close()
 
 
 def _summary(console: Console, result) -> None:  # result: steamtwin.pipeline.DemoResult
