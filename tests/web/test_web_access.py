@@ -48,8 +48,12 @@ def test_token_file_mistakes_name_file_and_entry(tmp_path):
     with pytest.raises(AccessError, match=r"tokens\[1\].token is used twice"):
         load_tokens(_token_file(tmp_path, "".join(
             f'[[tokens]]\nname = "{n}"\nrole = "read"\ntoken = "{READ}"\n' for n in "ab")))
-    with pytest.raises(AccessError, match="no such token file"):
+    with pytest.raises(AccessError, match=r"missing\.toml: cannot read the token file"):
         load_tokens(tmp_path / "missing.toml")
+    binary = tmp_path / "binary.toml"
+    binary.write_bytes(bytes(range(256)))
+    with pytest.raises(AccessError, match=r"binary.toml: not UTF-8 text \(byte 0x80"):
+        load_tokens(binary)
 
 
 def test_bearer_tokens_are_matched_to_their_holder(policy):

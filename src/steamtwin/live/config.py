@@ -40,6 +40,7 @@ from pathlib import Path
 from typing import Any
 
 from steamtwin.errors import DataError
+from steamtwin.textfile import read_utf8_text
 
 __all__ = ["ConfigError", "RecalibrationConfig", "ServiceConfig", "SourceConfig", "UnitConfig",
            "load_config"]
@@ -191,9 +192,8 @@ def load_config(path: str | Path) -> ServiceConfig:
     """Read and check a service configuration (see the module docstring)."""
     path = Path(path).resolve()
     try:
-        document = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise ConfigError(f"{path}: no such configuration file") from None
+        document = tomllib.loads(read_utf8_text(path, "service configuration", "TOML",
+                                                ConfigError))
     except tomllib.TOMLDecodeError as error:
         raise ConfigError(f"{path}: not valid TOML: {error}") from None
     base = path.parent

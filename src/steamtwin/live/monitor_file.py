@@ -33,6 +33,7 @@ from steamtwin.live.unit_model import unit_model
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
+from steamtwin.textfile import read_utf8_text
 
 __all__ = ["MONITOR_FORMAT", "UNSTATED_FLOOR", "MonitorFileError", "block_floor", "fit_monitor",
            "fit_monitor_files", "load_monitor", "save_monitor"]
@@ -118,9 +119,7 @@ def load_monitor(path: str | Path) -> ResidualMonitor:
     file and the key otherwise."""
     path = Path(path)
     try:
-        document = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise MonitorFileError(f"{path}: no such monitor file") from None
+        document = json.loads(read_utf8_text(path, "monitor file", "JSON", MonitorFileError))
     except json.JSONDecodeError as error:
         raise MonitorFileError(f"{path}: not JSON ({error})") from None
     if not isinstance(document, dict) or document.get("format") != MONITOR_FORMAT:

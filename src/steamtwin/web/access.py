@@ -41,6 +41,7 @@ from pathlib import Path
 from starlette.types import ASGIApp, Receive, Scope, Send
 
 from steamtwin.errors import SteamtwinError
+from steamtwin.textfile import read_utf8_text
 
 __all__ = ["ROLES", "SECURITY_HEADERS", "AccessError", "AccessPolicy", "SecurityMiddleware",
            "Token", "check_bind", "is_loopback", "is_page_shell", "load_tokens"]
@@ -116,9 +117,7 @@ def load_tokens(path: str | Path) -> AccessPolicy:
     the entry for every mistake."""
     path = Path(path)
     try:
-        document = tomllib.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise AccessError(f"{path}: no such token file") from None
+        document = tomllib.loads(read_utf8_text(path, "token file", "TOML", AccessError))
     except tomllib.TOMLDecodeError as error:
         raise AccessError(f"{path}: not valid TOML: {error}") from None
     entries = document.get("tokens")
