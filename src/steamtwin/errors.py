@@ -18,6 +18,7 @@ __all__ = [
     "MeshError",
     "ModelError",
     "RomError",
+    "RotorAreaError",
     "SpecAreaError",
     "SteamtwinError",
 ]
@@ -45,6 +46,12 @@ class CalibrationAreaError(SteamtwinError, ValueError):
 
 class RomError(SteamtwinError, ValueError):
     """A reduced-order model file, envelope or provenance that cannot be used."""
+
+
+class RotorAreaError(SteamtwinError, ValueError):
+    """Rotor geometry, material data, thermal/stress solutions and life figures that cannot be
+    used (missing ``[rotor]`` data, a negative dimension, an allowable below the standing
+    stress)."""
 
 
 class GeometryAreaError(SteamtwinError, ValueError):
