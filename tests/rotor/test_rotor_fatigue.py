@@ -15,7 +15,7 @@ from steamtwin.rotor.fatigue import (
     neuber_range,
     rainflow_cycles,
 )
-from steamtwin.rotor.steel import steel
+from steamtwin.rotor.steel import StrainLife, steel
 
 KELVIN_500 = 500.0 + 273.15
 MATERIAL = steel("30CrMoNiV5-11")
@@ -144,3 +144,16 @@ def test_bad_input_is_refused_with_a_clear_message():
         cycles_to_failure(-1e-3, 0.0, CURVE)
     with pytest.raises(RotorAreaError, match="mean_stress_correction"):
         cycles_to_failure(1e-3, 0.0, CURVE, mean_stress_correction="goodman")
+
+
+def test_measured_strain_life_constants_replace_the_estimate():
+    measured = StrainLife(youngs_modulus=170e9, fatigue_strength_coefficient=800e6,
+                          fatigue_strength_exponent=-0.1, fatigue_ductility_coefficient=0.3,
+                          fatigue_ductility_exponent=-0.6)
+    cycles = 2.0e3
+    sigma_a = 800e6 * (2 * cycles) ** -0.1
+    eps_a = sigma_a / 170e9 + 0.3 * (2 * cycles) ** -0.6
+    sigma_e = np.sqrt(170e9 * sigma_a * eps_a)
+    result = fatigue_damage([-sigma_e, sigma_e, -sigma_e], np.full(3, KELVIN_500), MATERIAL,
+                            strain_life=lambda temperature: measured)
+    assert result.total_damage == pytest.approx(1.0 / cycles, rel=1e-7)

@@ -9,8 +9,8 @@ integrated with the trapezoidal rule on the rate 1/t_r (exact for a constant hol
 
 Scope, stated so nothing is extrapolated silently:
 
-* below 371 °C (700 °F) a ferritic steel's creep is negligible (the ASME BPVC III Division 5 /
-  former Subsection NH threshold for ferritic steels): no damage;
+* below 371 °C (700 °F) creep is neglected: the limit of ASME BPVC III Division 1 (Subsection
+  NB) for ferritic steels, above which Division 5 requires creep to be considered;
 * temperatures above the highest rupture-data temperature are refused;
 * stresses above the highest rupture-data stress are refused where creep counts; stresses
   below the lowest one use the rupture time at the lowest one (conservative: shorter than the
@@ -32,7 +32,7 @@ from steamtwin.rotor.steel import CreepRuptureData, TabulatedSteel
 __all__ = ["CREEP_THRESHOLD", "CreepResult", "LarsonMillerCurve", "creep_damage"]
 
 CREEP_THRESHOLD = (700.0 - 32.0) / 1.8 + 273.15
-"""K: 371 °C (700 °F), below which ferritic-steel creep is neglected (ASME III Div. 5)."""
+"""K: 371 °C (700 °F), below which ferritic-steel creep is neglected (ASME III Div. 1 NB limit)."""
 SECONDS_PER_HOUR = 3600.0
 
 

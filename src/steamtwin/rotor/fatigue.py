@@ -9,9 +9,10 @@ Steps (Dowling, *Mechanical Behavior of Materials*, 4th ed., 2013, ch. 14):
    strain satisfy σ·ε = σ_e²/E, with the cyclic Ramberg–Osgood curve ε = σ/E + (σ/K')^(1/n') for
    the largest-magnitude peak and Masing's doubled curve Δε = Δσ/E + 2(Δσ/2K')^(1/n') for the
    range (Dowling §14.5). The local mean stress is that peak minus (toward) half the range.
-3. **Manson–Coffin–Basquin** with **Morrow's mean-stress correction** (Dowling eq. 14.23):
-   ε_a = (σ'_f − σ_m)/E·(2N)^b + ε'_f·(2N)^c, solved for N by Brent's method in log10(2N).
-   Morrow is the default: Dowling (Int. J. Fatigue 31 (2009) 1004) finds it accurate for steels,
+3. **Manson–Coffin–Basquin** with **Morrow's mean-stress correction** (Dowling ch. 14):
+   ε_a = (σ'_f − σ_m)/E·(2N)^b + ε'_f·(2N)^c, solved for N by Newton's method in log10(2N).
+   Morrow is the default: Dowling (Fatigue Fract. Eng. Mater. Struct. 32 (2009) 1004) finds it
+   reasonable for steels,
    and unlike Smith–Watson–Topper (σ_max·ε_a = σ'_f²/E·(2N)^2b + σ'_f·ε'_f·(2N)^(b+c), offered
    as ``"swt"``) it gives a finite life to the compressive-mean cycles a rotor surface sees on
    heating. ``"none"`` drops the mean stress.
@@ -34,7 +35,6 @@ import numpy as np
 import pandas as pd
 import rainflow
 from numpy.typing import ArrayLike
-from scipy.optimize import brentq
 
 from steamtwin.errors import RotorAreaError
 from steamtwin.rotor.steel import StrainLife, TabulatedSteel
@@ -92,68 +92,117 @@ def rainflow_cycles(stress: ArrayLike, temperature: ArrayLike) -> pd.DataFrame:
     return frame
 
 
-def _neuber_solve(elastic: float, strain_of: Callable[[float], np.ndarray],
-                  modulus: float) -> float:
-    """σ ≥ 0 with σ·ε(σ) = elastic²/E (the elastic value is the upper bracket)."""
-    if elastic <= 0.0:
-        return 0.0
-    target = elastic * elastic / modulus
-    return brentq(lambda s: s * strain_of(s) - target, 0.0, elastic, xtol=1e-9 * elastic,
-                  rtol=1e-13)
+NEWTON_TOLERANCE = 1e-13
+"""Relative step at which the monotone Newton iterations below stop."""
+NEWTON_ITERATIONS = 200
 
 
-def neuber_range(elastic_range: float, curve: StrainLife) -> tuple[float, float]:
-    """Local (stress range Pa, strain range) of an elastic stress range (Pa) by Neuber's rule on
+def _monotone_newton(residual: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
+                     start: np.ndarray, active: np.ndarray) -> np.ndarray:
+    """Newton's method, elementwise, for residuals that are convex and monotone on the side
+    of the root the start lies on, so the iterates approach the root monotonically without
+    overshoot (Ortega & Rheinboldt, *Iterative Solution of Nonlinear Equations*, 1970, §13.3)."""
+    x = np.array(start, dtype=float)
+    todo = np.array(active, dtype=bool)
+    for _ in range(NEWTON_ITERATIONS):
+        if not todo.any():
+            break
+        value, slope = residual(x)
+        step = np.where(todo, value / np.where(slope == 0.0, np.inf, slope), 0.0)
+        x = x - step
+        todo &= np.abs(step) > NEWTON_TOLERANCE * np.maximum(np.abs(x), 1.0)
+    return x
+
+
+def _neuber_solve(elastic: ArrayLike, curve: StrainLife) -> np.ndarray:
+    """σ ≥ 0 with σ·ε(σ) = σ_e²/E on the cyclic curve, elementwise. The residual
+    g(σ) = σ²/E + σ·(σ/K')^(1/n') − σ_e²/E is convex and increasing for σ > 0 and g(σ_e) ≥ 0, so
+    Newton from σ_e converges from above."""
+    e = np.asarray(curve.youngs_modulus, dtype=float)
+    k, inv_n = curve.cyclic_strength_coefficient, 1.0 / curve.cyclic_hardening_exponent
+    sigma_e = np.abs(np.asarray(elastic, dtype=float))
+
+    def residual(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        plastic = (s / k) ** inv_n
+        return (s * s / e + s * plastic - sigma_e * sigma_e / e,
+                2.0 * s / e + (1.0 + inv_n) * plastic)
+
+    return _monotone_newton(residual, sigma_e, sigma_e > 0.0)
+
+
+def neuber_range(elastic_range: ArrayLike, curve: StrainLife) -> tuple[np.ndarray, np.ndarray]:
+    """Local (stress range Pa, strain range) of elastic stress ranges (Pa) by Neuber's rule on
     Masing's doubled cyclic curve."""
-    stress = 2.0 * _neuber_solve(0.5 * abs(elastic_range), curve.strain_amplitude,
-                                 curve.youngs_modulus)
-    return stress, 2.0 * float(curve.strain_amplitude(0.5 * stress))
+    half = _neuber_solve(0.5 * np.abs(np.asarray(elastic_range, dtype=float)), curve)
+    return 2.0 * half, 2.0 * curve.strain_amplitude(half)
 
 
-def neuber_peak(elastic_peak: float, curve: StrainLife) -> float:
-    """Local stress (Pa, signed) at an elastic peak (Pa) by Neuber's rule on the cyclic curve."""
-    return float(np.sign(elastic_peak)) * _neuber_solve(abs(elastic_peak),
-                                                        curve.strain_amplitude,
-                                                        curve.youngs_modulus)
+def neuber_peak(elastic_peak: ArrayLike, curve: StrainLife) -> np.ndarray:
+    """Local stress (Pa, signed) at elastic peaks (Pa) by Neuber's rule on the cyclic curve."""
+    peak = np.asarray(elastic_peak, dtype=float)
+    return np.sign(peak) * _neuber_solve(peak, curve)
 
 
-def _mean_curve_life(strain_amplitude: float, mean_stress: float, curve: StrainLife,
-                     correction: str) -> float:
+def _stress_amplitude_of(strain_amplitude: np.ndarray, curve: StrainLife) -> np.ndarray:
+    """Inverse of the cyclic curve, σ_a with ε_a(σ_a) = the strain amplitude: the residual is
+    convex increasing and E·ε_a bounds the root from above."""
+    e = curve.youngs_modulus
+    k, inv_n = curve.cyclic_strength_coefficient, 1.0 / curve.cyclic_hardening_exponent
+
+    def residual(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        plastic = (s / k) ** inv_n
+        return s / e + plastic - strain_amplitude, 1.0 / e + inv_n * plastic / np.maximum(s, 1e-30)
+
+    return _monotone_newton(residual, e * strain_amplitude, strain_amplitude > 0.0)
+
+
+def _mean_curve_life(strain_amplitude: np.ndarray, mean_stress: np.ndarray,
+                     stress_amplitude: np.ndarray, curve: StrainLife,
+                     correction: str) -> np.ndarray:
+    """Cycles N solving the strain-life equation elementwise; in x = log10(2N) the residual
+    (a sum of decaying exponentials minus the target) is convex and decreasing, so Newton from
+    x = 0 converges from below. 0.5 if the first reversal fails, inf past 10²⁰ reversals."""
     e = curve.youngs_modulus
     sf, b = curve.fatigue_strength_coefficient, curve.fatigue_strength_exponent
     ef, c = curve.fatigue_ductility_coefficient, curve.fatigue_ductility_exponent
+    ln10 = np.log(10.0)
     if correction == "swt":
-        peak = mean_stress + float(_stress_amplitude_of(strain_amplitude, curve))
-        if peak <= 0.0:
-            return np.inf
-        target = peak * strain_amplitude
-
-        def residual(log_rev: float) -> float:
-            rev = 10.0 ** log_rev
-            return sf * sf / e * rev ** (2 * b) + sf * ef * rev ** (b + c) - target
+        peak = mean_stress + stress_amplitude
+        first, e1 = sf * sf / e, 2.0 * b
+        second, e2 = sf * ef, b + c
+        target = np.maximum(peak, 0.0) * strain_amplitude
+        possible = peak > 0.0
     else:
-        sm = mean_stress if correction == "morrow" else 0.0
-        if sm >= sf:
-            return 0.5
+        sm = mean_stress if correction == "morrow" else np.zeros_like(mean_stress)
+        first, e1 = (sf - sm) / e, b
+        second, e2 = ef, c
         target = strain_amplitude
+        possible = sm < sf
+    first = first * np.ones_like(target)
 
-        def residual(log_rev: float) -> float:
-            rev = 10.0 ** log_rev
-            return (sf - sm) / e * rev ** b + ef * rev ** c - target
-    if residual(0.0) <= 0.0:
-        return 0.5
-    if residual(LOG_REVERSALS_MAX) >= 0.0:
-        return np.inf
-    return 0.5 * 10.0 ** brentq(residual, 0.0, LOG_REVERSALS_MAX, xtol=1e-12)
+    def residual(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        a, d = first * 10.0 ** (e1 * x), second * 10.0 ** (e2 * x)
+        return a + d - target, ln10 * (e1 * a + e2 * d)
+
+    at_start = residual(np.zeros_like(target))[0]
+    at_end = residual(np.full_like(target, LOG_REVERSALS_MAX))[0]
+    solve = possible & (at_start > 0.0) & (at_end < 0.0)
+    x = _monotone_newton(residual, np.zeros_like(target), solve)
+    life = np.where(at_start <= 0.0, 0.5, np.where(at_end >= 0.0, np.inf, 0.5 * 10.0 ** x))
+    # Impossible cases: SWT with σ_max ≤ 0 never cracks; Morrow with σ_m ≥ σ'_f fails at once.
+    return np.where(possible, life, np.inf if correction == "swt" else 0.5)
 
 
-def _stress_amplitude_of(strain_amplitude: float, curve: StrainLife) -> float:
-    """Inverse of the cyclic curve: σ_a with ε_a(σ_a) = the given strain amplitude."""
-    upper = curve.youngs_modulus * strain_amplitude
-    if upper <= 0.0:
-        return 0.0
-    return brentq(lambda s: float(curve.strain_amplitude(s)) - strain_amplitude, 0.0, upper,
-                  xtol=1e-9 * upper)
+def _lives(strain_amplitude: np.ndarray, mean_stress: np.ndarray, stress_amplitude: np.ndarray,
+           curve: StrainLife, correction: str, design: DesignFactors | None) -> np.ndarray:
+    life = _mean_curve_life(strain_amplitude, mean_stress, stress_amplitude, curve, correction)
+    if design is not None:
+        factored_strain = design.strain * strain_amplitude
+        factored = _mean_curve_life(factored_strain, mean_stress,
+                                    _stress_amplitude_of(factored_strain, curve), curve,
+                                    correction)
+        life = np.minimum(factored, life / design.cycles)
+    return np.where(strain_amplitude > 0.0, life, np.inf)
 
 
 def cycles_to_failure(strain_amplitude: float, mean_stress: float, curve: StrainLife, *,
@@ -162,21 +211,21 @@ def cycles_to_failure(strain_amplitude: float, mean_stress: float, curve: Strain
     """Cycles to crack initiation for a local strain amplitude and mean stress (Pa); ``inf``
     beyond 10²⁰ reversals, 0.5 when the first reversal already fails. ``design`` applies the
     design-curve factors (min of the life at factor × strain and life / factor)."""
-    if mean_stress_correction not in MEAN_STRESS_CORRECTIONS:
-        raise RotorAreaError(f"mean_stress_correction must be one of {MEAN_STRESS_CORRECTIONS}, "
-                             f"got {mean_stress_correction!r}")
+    _check_correction(mean_stress_correction)
     if not (np.isfinite(strain_amplitude) and strain_amplitude >= 0.0
             and np.isfinite(mean_stress)):
         raise RotorAreaError(f"strain amplitude must be finite and ≥ 0 and mean stress (Pa) "
                              f"finite, got {strain_amplitude!r}, {mean_stress!r}")
-    if strain_amplitude == 0.0:
-        return np.inf
-    life = _mean_curve_life(strain_amplitude, mean_stress, curve, mean_stress_correction)
-    if design is None:
-        return life
-    factored = _mean_curve_life(design.strain * strain_amplitude, mean_stress, curve,
-                                mean_stress_correction)
-    return min(factored, life / design.cycles)
+    amplitude = np.array([strain_amplitude], dtype=float)
+    return float(_lives(amplitude, np.array([mean_stress], dtype=float),
+                        _stress_amplitude_of(amplitude, curve), curve, mean_stress_correction,
+                        design)[0])
+
+
+def _check_correction(correction: str) -> None:
+    if correction not in MEAN_STRESS_CORRECTIONS:
+        raise RotorAreaError(f"mean_stress_correction must be one of {MEAN_STRESS_CORRECTIONS}, "
+                             f"got {correction!r}")
 
 
 def miner_damage(counts: ArrayLike, cycles_to_failure: ArrayLike) -> np.ndarray:
@@ -224,34 +273,27 @@ class FatigueResult:
 
 def fatigue_damage(stress: ArrayLike, temperature: ArrayLike, material: TabulatedSteel, *,
                    mean_stress_correction: str = "morrow",
-                   design: DesignFactors | None = None) -> FatigueResult:
+                   design: DesignFactors | None = None,
+                   strain_life: Callable[[ArrayLike], StrainLife] | None = None) -> FatigueResult:
     """Fatigue damage of an elastic stress series at the critical point (Pa, e.g. the signed
     von Mises or the largest principal stress at the groove) with its metal temperatures (K).
 
-    Raises :class:`RotorAreaError` for NaN samples or temperatures outside the steel's
-    strain-life data (0–550 °C for 30CrMoNiV5-11)."""
+    ``strain_life`` replaces the steel's estimated constants (``material.strain_life``) with
+    measured ones: a function of the temperatures (K, array) returning a :class:`StrainLife`
+    with array fields. Raises :class:`RotorAreaError` for NaN samples or temperatures outside
+    the strain-life data (0–550 °C for 30CrMoNiV5-11)."""
+    _check_correction(mean_stress_correction)
     cycles = rainflow_cycles(stress, temperature)
-    local_range, strain_range, local_mean, life = [], [], [], []
-    curves: dict[float, StrainLife] = {}
-    for rng, mean, temp in cycles[["range_pa", "mean_pa", "temperature_k"]].itertuples(
-            index=False):
-        curve = curves.get(temp)
-        if curve is None:
-            curve = curves[temp] = material.strain_life(temp)
-        d_sigma, d_eps = neuber_range(rng, curve)
-        peak_elastic = mean + 0.5 * rng if abs(mean + 0.5 * rng) >= abs(mean - 0.5 * rng) \
-            else mean - 0.5 * rng
-        peak = neuber_peak(peak_elastic, curve)
-        mean_local = peak - np.sign(peak_elastic) * 0.5 * d_sigma
-        local_range.append(d_sigma)
-        strain_range.append(d_eps)
-        local_mean.append(mean_local)
-        life.append(cycles_to_failure(0.5 * d_eps, mean_local, curve,
-                                      mean_stress_correction=mean_stress_correction,
-                                      design=design))
-    cycles["local_range_pa"] = np.array(local_range, dtype=float)
-    cycles["strain_range"] = np.array(strain_range, dtype=float)
-    cycles["local_mean_pa"] = np.array(local_mean, dtype=float)
-    cycles["cycles_to_failure"] = np.array(life, dtype=float)
+    curve = (strain_life or material.strain_life)(cycles["temperature_k"].to_numpy())
+    ranges, means = cycles["range_pa"].to_numpy(), cycles["mean_pa"].to_numpy()
+    d_sigma, d_eps = neuber_range(ranges, curve)
+    upper, lower = means + 0.5 * ranges, means - 0.5 * ranges
+    peak_elastic = np.where(np.abs(upper) >= np.abs(lower), upper, lower)
+    local_mean = neuber_peak(peak_elastic, curve) - np.sign(peak_elastic) * 0.5 * d_sigma
+    cycles["local_range_pa"] = d_sigma
+    cycles["strain_range"] = d_eps
+    cycles["local_mean_pa"] = local_mean
+    cycles["cycles_to_failure"] = _lives(0.5 * d_eps, local_mean, 0.5 * d_sigma, curve,
+                                         mean_stress_correction, design)
     cycles["damage"] = miner_damage(cycles["count"], cycles["cycles_to_failure"])
     return FatigueResult(cycles)

@@ -80,17 +80,18 @@ class PropertyTable:
 @dataclass(frozen=True)
 class StrainLife:
     """Manson–Coffin–Basquin constants at one temperature (Dowling, *Mechanical Behavior of
-    Materials*, 4th ed., 2013, eq. 14.4):  ε_a = σ'_f/E·(2N)^b + ε'_f·(2N)^c.
+    Materials*, 4th ed., 2013, ch. 14):  ε_a = σ'_f/E·(2N)^b + ε'_f·(2N)^c.
 
-    Stresses in Pa, strains dimensionless, N in cycles. The cyclic Ramberg–Osgood curve
+    Stresses in Pa, strains dimensionless, N in cycles; the fields may be arrays (one entry per
+    cycle, each at its own temperature). The cyclic Ramberg–Osgood curve
     ε_a = σ_a/E + (σ_a/K')^(1/n') uses the compatibility relations n' = b/c and
-    K' = σ'_f/ε'_f^(b/c) (Dowling eq. 14.11), so the Neuber loop and the life curve agree.
+    K' = σ'_f/ε'_f^(b/c) (Dowling ch. 14), so the Neuber loop and the life curve agree.
     """
 
-    youngs_modulus: float
-    fatigue_strength_coefficient: float
+    youngs_modulus: float | np.ndarray
+    fatigue_strength_coefficient: float | np.ndarray
     fatigue_strength_exponent: float
-    fatigue_ductility_coefficient: float
+    fatigue_ductility_coefficient: float | np.ndarray
     fatigue_ductility_exponent: float
 
     @property
@@ -99,7 +100,7 @@ class StrainLife:
         return self.fatigue_strength_exponent / self.fatigue_ductility_exponent
 
     @property
-    def cyclic_strength_coefficient(self) -> float:
+    def cyclic_strength_coefficient(self) -> float | np.ndarray:
         """K' = σ'_f / ε'_f^(b/c), Pa."""
         return (self.fatigue_strength_coefficient
                 / self.fatigue_ductility_coefficient ** self.cyclic_hardening_exponent)
@@ -196,13 +197,13 @@ class TabulatedSteel:
         """Ultimate tensile strength R_m, Pa, at ``temperature`` (K)."""
         return self.tensile_strength_table(temperature, self.name)
 
-    def strain_life(self, temperature: float) -> StrainLife:
-        """Manson–Coffin–Basquin constants at ``temperature`` (K) by the Uniform Material Law
-        from R_m(T) and E(T) (module docstring); the range is that of the tensile table."""
-        strength = float(self.tensile_strength(temperature))
-        modulus = float(self.youngs_modulus(temperature))
-        ratio = strength / modulus
-        psi = 1.0 if ratio <= 0.003 else 1.375 - 125.0 * ratio
+    def strain_life(self, temperature: ArrayLike) -> StrainLife:
+        """Manson–Coffin–Basquin constants at ``temperature`` (K, scalar or array: the fields
+        then are arrays) by the Uniform Material Law from R_m(T) and E(T) (module docstring);
+        the range is that of the tensile table."""
+        strength = self.tensile_strength(temperature)
+        modulus = self.youngs_modulus(temperature)
+        psi = np.where(strength / modulus <= 0.003, 1.0, 1.375 - 125.0 * strength / modulus)
         return StrainLife(youngs_modulus=modulus,
                           fatigue_strength_coefficient=UML_STRENGTH_RATIO * strength,
                           fatigue_strength_exponent=UML_STRENGTH_EXPONENT,
@@ -243,8 +244,8 @@ CRMOV_ROTOR = TabulatedSteel(
         tuple(m * 1e6 * PSI for m in _E_MSI),
         "ASME B31.1 Table C-6 / BPVC II-D Table TM-1, Cr-Mo steels 1/2–2 % Cr (group value)"),
     poisson_ratio_value=0.30,
-    poisson_source="0.30 for carbon and low-alloy steels, temperature-independent (ASME BPVC "
-                   "II-D Table PRD; the 31CrMo12 EN 10085 record gives 0.3)",
+    poisson_source="0.30, temperature-independent: the 31CrMo12 (EN 10085) record; the "
+                   "20MnCr5/55Cr3 records give 0.28 (low-alloy steel group value)",
     expansion_table=PropertyTable(
         "mean thermal expansion", tuple(fahrenheit_to_celsius(f) for f in _TE_F),
         tuple(b * 1.8e-6 for b in _TE_B),
