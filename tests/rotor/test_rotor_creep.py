@@ -52,3 +52,14 @@ def test_bad_input_is_refused_with_the_data_range():
         creep_damage([np.nan, 100e6], [800.0, 800.0], time, MATERIAL)
     with pytest.raises(RotorAreaError, match="strictly increasing"):
         creep_damage([100e6, 100e6], [800.0, 800.0], [0.0, 0.0], MATERIAL)
+
+
+def test_damage_per_window_splits_the_history_additively():
+    time = np.arange(0.0, 11.0) * 3600.0
+    stress = np.linspace(150e6, 250e6, 11)
+    result = creep_damage(stress, np.full(11, 800.0), time, MATERIAL)
+    windows = result.damage_per_window([0, 3, 10])
+    assert windows.sum() == pytest.approx(result.total_damage)
+    assert windows[0] == pytest.approx(result.interval_damage[:3].sum())
+    with pytest.raises(RotorAreaError, match="strictly increasing sample indices in 0…10"):
+        result.damage_per_window([0, 12])

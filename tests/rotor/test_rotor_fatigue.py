@@ -37,6 +37,12 @@ def test_rainflow_reproduces_the_astm_e1049_example_table():
     assert full["temperature_k"] == pytest.approx(temperature[5])  # the hotter reversal
 
 
+def test_a_two_sample_series_is_one_half_cycle():
+    cycles = rainflow_cycles([0.0, 3e8], [700.0, 720.0])
+    assert cycles[["range_pa", "mean_pa", "count", "start", "end", "temperature_k"]].to_numpy(
+    ).tolist() == [[3e8, 1.5e8, 0.5, 0.0, 1.0, 720.0]]
+
+
 def test_neuber_range_recovers_a_chosen_elastic_plastic_loop():
     d_sigma = 900e6  # local stress range beyond the cyclic yield
     d_eps = d_sigma / E + 2.0 * (d_sigma / (2.0 * CURVE.cyclic_strength_coefficient)) ** (

@@ -110,6 +110,16 @@ class CreepResult:
         """Σ Δt / t_r (dimensionless; 1 = creep rupture)."""
         return float(self.interval_damage.sum())
 
+    def damage_per_window(self, edges: ArrayLike) -> np.ndarray:
+        """Damage in each window [edges[i], edges[i+1]] of sample indices (per ramp, per day)."""
+        bounds = np.asarray(edges, dtype=int)
+        if (bounds.ndim != 1 or bounds.size < 2 or np.any(np.diff(bounds) <= 0)
+                or bounds[0] < 0 or bounds[-1] > self.interval_damage.size):
+            raise RotorAreaError(f"window edges must be ≥ 2 strictly increasing sample indices "
+                                 f"in 0…{self.interval_damage.size}")
+        cumulative = np.concatenate([[0.0], np.cumsum(self.interval_damage)])
+        return np.diff(cumulative[bounds])
+
 
 def creep_damage(stress: ArrayLike, temperature: ArrayLike, time_s: ArrayLike,
                  material: TabulatedSteel) -> CreepResult:
