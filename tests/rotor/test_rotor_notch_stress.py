@@ -84,7 +84,7 @@ def test_u_groove_in_a_shaft_in_tension_matches_peterson_within_7_percent():
     # x = 2h/D, σ_nom = 4P/(πd²). The chart rests largely on Neuber's approximate theory,
     # which body-force-method analyses of notched round bars (Nisitani & Noda's series; Noda &
     # Takase, Int. J. Fatigue 28 (2006) 151) found non-conservative by up to about 7 %; this
-    # solver gives 3–6 % above the fit over 2h/D = 0.05…0.3 (converged to 0.5 %), while it
+    # solver gives 3.7–6.5 % above the fit over 2h/D = 0.05…0.3 (converged to 0.5 %), while it
     # meets Goodier's exact cavity (above) to 0.1 %.
     groove = 0.05
     mesh = notched_mesh([(0.0, 0.0), (RADIUS - groove, 0.0), (RADIUS, groove),
