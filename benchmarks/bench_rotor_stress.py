@@ -1,6 +1,6 @@
 """Verification and timing of the rotor's axisymmetric thermo-elastic stress solver.
 
-Run: python benchmarks/bench_rotor_stress.py [--nodes 20000] — prints
+Run: python benchmarks/bench_rotor_stress.py [--nodes 5000] — prints
 
 1. the point-stress error of a long hollow cylinder (b/a = 5, parabolic ΔT, free ends =
    generalized plane strain) against Timoshenko & Goodier §151 at the bore and the outer
@@ -89,7 +89,7 @@ def timing(nodes: int) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--nodes", type=int, default=20000)
+    parser.add_argument("--nodes", type=int, default=5000)
     args = parser.parse_args()
     convergence()
     timing(args.nodes)
