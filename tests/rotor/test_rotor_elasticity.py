@@ -237,6 +237,15 @@ def test_principal_and_von_mises_stress_of_a_known_state():
     np.testing.assert_allclose(state.von_mises, [expected])
 
 
+def test_a_point_just_outside_the_polygonal_mesh_is_evaluated_on_the_nearest_element():
+    # a point of a curved surface off the chord (sagitta h²/8R) keeps the element's O(h²) value
+    mesh = cylinder(0.1, 0.5, 24)
+    model = AxisymmetricElasticity(mesh, STEEL)
+    solution = model.solve(REFERENCE_TEMPERATURE + 80.0 * ((mesh.p[0] - 0.1) / 0.4) ** 2, 0.0)
+    on, off = model.stress(solution, [[0.5, 0.021], [0.5 + 1e-4, 0.021]]).hoop
+    assert off == pytest.approx(on, rel=1e-3)
+
+
 def test_bad_input_is_refused_with_a_message_naming_it():
     mesh = cylinder(0.1, 0.5, 3)
     model = AxisymmetricElasticity(mesh, STEEL)
@@ -257,5 +266,8 @@ def test_bad_input_is_refused_with_a_message_naming_it():
         model.stress(solution, [[0.9, 0.02]])
     with pytest.raises(RotorAreaError, match="radius must be"):
         model.stress(solution, [[-0.2, 0.02]])
+    operator = model.stress_operator([[0.3, 0.02]])
     with pytest.raises(RotorAreaError, match="nodal values"):
-        model.stress_operator([[0.3, 0.02]])(uniform[:-2])
+        operator(uniform[:-2])
+    with pytest.raises(RotorAreaError, match="speed"):
+        operator(uniform, speed=float("nan"))

@@ -131,6 +131,11 @@ def _hooke_matrix(lam: np.ndarray, mu: np.ndarray) -> sp.csr_matrix:
     return sp.block_diag(blocks, format="csr")
 
 
+def _check_speed(speed: float) -> None:
+    if not np.isfinite(speed) or speed < 0.0:
+        raise RotorAreaError(f"rotor speed must be finite and ≥ 0 rad/s, got {speed!r}")
+
+
 @dataclass(frozen=True)
 class ElasticSolution:
     """P2 displacement dofs (m) of ``temperature`` (K, nodal) at ``speed`` (rad/s)."""
@@ -158,6 +163,7 @@ class StressOperator:
         """Stress for nodal temperatures (n_nodes,) or (n_times, n_nodes) in K at ``speed``
         (rad/s); arrays (n_points,) or (n_times, n_points) in Pa."""
         field = np.asarray(temperature, dtype=float)
+        _check_speed(speed)
         if field.shape[-1:] != self.thermal.shape[-1:]:
             raise RotorAreaError(f"temperature field has shape {field.shape}, expected "
                                  f"(…, {self.thermal.shape[-1]}) nodal values in K")
@@ -269,8 +275,7 @@ class AxisymmetricElasticity:
         """Displacement under nodal ``temperature`` (K, thermal strain from 20 °C) and the
         centrifugal load at ``speed`` (rad/s, default 3000 rpm)."""
         field = self._checked_temperature(temperature)
-        if not np.isfinite(speed) or speed < 0.0:
-            raise RotorAreaError(f"rotor speed must be finite and ≥ 0 rad/s, got {speed!r}")
+        _check_speed(speed)
         at_points, lam, mu = self._quadrature_properties(field)
         strain = np.asarray(self.material.thermal_strain(at_points))
         load = (asm(_thermal_load, self.basis, bulk_strain=(3.0 * lam + 2.0 * mu) * strain)
