@@ -270,6 +270,8 @@ def test_bad_input_is_refused_with_a_message_naming_it():
     operator = model.stress_operator([[0.3, 0.02]], REFERENCE_TEMPERATURE)
     with pytest.raises(RotorAreaError, match="nodal values"):
         operator(uniform[:-2])
+    with pytest.raises(RotorAreaError, match="finite"):
+        operator.linearised(600.0)(np.full_like(uniform, np.nan))
     with pytest.raises(RotorAreaError, match="speed"):
         operator(uniform, speed=float("nan"))
     with pytest.raises(RotorAreaError, match="linearisation temperature"):

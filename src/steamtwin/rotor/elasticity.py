@@ -154,7 +154,9 @@ def _check_speed(speed: float) -> None:
 
 @dataclass(frozen=True)
 class ElasticSolution:
-    """P2 displacement dofs (m) of ``temperature`` (K, nodal) at ``speed`` (rad/s)."""
+    """``displacement`` (m): the P2 dofs (u_r, u_z) in the order of the solver's ``basis``
+    (``basis.nodal_dofs`` picks the mesh nodes'), under nodal ``temperature`` (K) at
+    ``speed`` (rad/s)."""
 
     displacement: np.ndarray
     temperature: np.ndarray
@@ -176,9 +178,11 @@ def _thermal_stiffness(material: RotorMaterial, temperature: float) -> float:
 
 
 def _nodal_field(field: np.ndarray, n_nodes: int) -> np.ndarray:
-    if field.shape[-1:] != (n_nodes,):
+    if field.ndim not in (1, 2) or field.shape[-1:] != (n_nodes,):
         raise RotorAreaError(f"temperature field has shape {field.shape}, expected "
-                             f"(…, {n_nodes}) nodal values in K")
+                             f"({n_nodes},) or (n_times, {n_nodes}) nodal values in K")
+    if not np.all(np.isfinite(field)):
+        raise RotorAreaError("temperature field must be finite (K)")
     return field
 
 
@@ -341,12 +345,11 @@ class AxisymmetricElasticity:
             raise RotorAreaError("temperature field must be finite and positive (K)")
         return field
 
-    def _quadrature_properties(self, temperature: np.ndarray):
-        """T (K), λ and μ (Pa) at the quadrature points."""
+    def _quadrature_lame(self, temperature: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """λ and μ (Pa) at the quadrature points of the nodal ``temperature`` (K)."""
         at_points = np.asarray(self.temperature_basis.interpolate(temperature))
-        lam, mu = _lame(np.asarray(self.material.youngs_modulus(at_points)),
-                        np.asarray(self.material.poisson_ratio(at_points)))
-        return at_points, lam, mu
+        return _lame(np.asarray(self.material.youngs_modulus(at_points)),
+                     np.asarray(self.material.poisson_ratio(at_points)))
 
     def _solver(self, lam: np.ndarray, mu: np.ndarray):
         """LU factors of PᵀKP for these Lamé fields (reused while they do not change)."""
@@ -366,7 +369,7 @@ class AxisymmetricElasticity:
         centrifugal load at ``speed`` (rad/s, default 3000 rpm)."""
         field = self._checked_temperature(temperature)
         _check_speed(speed)
-        _, lam, mu = self._quadrature_properties(field)
+        lam, mu = self._quadrature_lame(field)
         strain = np.asarray(self.temperature_basis.interpolate(
             np.asarray(self.material.thermal_strain(field))))
         load = (asm(_thermal_load, self.basis, bulk_strain=(3.0 * lam + 2.0 * mu) * strain)
@@ -395,7 +398,7 @@ class AxisymmetricElasticity:
         point_array = checked_points(points)
         frozen = float(frozen_temperature)
         uniform = self._checked_temperature(np.full(self.n_nodes, frozen))
-        _, lam, mu = self._quadrature_properties(uniform)
+        lam, mu = self._quadrature_lame(uniform)
         coupling = asm(_thermal_coupling, self.temperature_basis, self.basis,
                        bulk=3.0 * lam + 2.0 * mu)
         volumes = np.asarray(asm(_volume, self.temperature_basis))
