@@ -81,6 +81,11 @@ def test_long_cylinder_under_radial_temperature_matches_timoshenko_within_1_perc
     np.testing.assert_allclose(got, expected, atol=0.01 * scale)
     # the surface stress fatigue is computed from, and the bore's, each within 1 % of itself
     np.testing.assert_allclose(got[1:, [0, -1]], expected[1:, [0, -1]], rtol=0.01)
+    # the plane upper end moves by the area-mean thermal strain (zero net axial force)
+    top = np.flatnonzero(mesh.p[1] == mesh.p[1].max())
+    lift = solution.displacement[model.basis.nodal_dofs[1, top]]
+    mean_strain = 2 * ALPHA * quad(lambda r: rise(r) * r, inner, 0.5)[0] / (0.5 ** 2 - inner ** 2)
+    np.testing.assert_allclose(lift / LENGTH, mean_strain, rtol=1e-3)
 
 
 @pytest.mark.parametrize("inner", [0.0, 0.1])
