@@ -1,0 +1,105 @@
+"""The [rotor] spec section, the drawn section's checks and its graded (r, z) mesh."""
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from steamtwin.errors import RotorAreaError, SteamtwinError
+from steamtwin.rotor.conduction import RotorConduction
+from steamtwin.rotor.geometry import RotorGeometry, critical_nodes, rotor_geometry, rotor_mesh
+from steamtwin.rotor.material import ConstantMaterial
+from steamtwin.spec import load_spec, parse_spec
+from steamtwin.spec.loader import SpecError
+
+STEEL = ConstantMaterial("test", density_=7850.0, specific_heat_=460.0, conductivity_=40.0,
+                         youngs_modulus_=2.1e11, poisson_ratio_=0.3, expansion_coefficient=1.2e-5)
+
+
+@pytest.fixture(scope="module")
+def reference():
+    return rotor_geometry(load_spec("reference"))
+
+
+@pytest.fixture(scope="module")
+def mesh(reference):
+    return rotor_mesh(reference, 0.03)
+
+
+def test_reference_rotor_loads_with_its_defaults(reference):
+    section = reference.section
+    assert section.material == "30CrMoNiV5-11"
+    assert section.rotational_speed == pytest.approx(2 * math.pi * 50.0)
+    assert reference.solid and reference.groups == ("control stage", "HP stages 1-4")
+    assert reference.groove_root == pytest.approx((0.36 - 0.025, 0.10))
+
+
+def test_mesh_names_its_boundaries_and_has_nodes_at_the_critical_points(reference, mesh):
+    assert set(mesh.boundaries) == {"ends", "axis", "steam:control stage", "steam:HP stages 1-4"}
+    nodes = critical_nodes(mesh, reference)
+    np.testing.assert_allclose(mesh.p[:, nodes["groove_root"]], reference.groove_root)
+    np.testing.assert_allclose(mesh.p[:, nodes["bore"]], (0.0, 0.10))
+    assert 500 < mesh.p.shape[1] < 3000  # small enough for a 24-h run at 1-s steps
+
+
+def test_wetted_areas_are_the_drawn_surfaces_of_revolution(reference, mesh):
+    """Σb = ∫2πr ds: a cylinder for the pressure stages; for the control stage the cylinder less
+    the groove's mouth, the groove's two flanks (annuli) and semicircular root (Pappus: arc
+    length times 2π times its centroid's radius, r_c − 2ρ/π), and the radius step's face."""
+    system = RotorConduction(mesh, STEEL).system(600.0)
+    areas = dict(zip(system.groups, (load.sum() for load in system.robin_load), strict=True))
+    assert areas["HP stages 1-4"] == pytest.approx(2 * math.pi * 0.43 * 0.35, rel=1e-12)
+    radius, rho, depth = 0.36, 0.008, 0.025
+    centre = radius - depth + rho
+    expected = (2 * math.pi * radius * (0.25 - 2 * rho) + 2 * math.pi * (radius**2 - centre**2)
+                + 2 * math.pi * math.pi * rho * (centre - 2 * rho / math.pi)
+                + math.pi * (0.43**2 - radius**2))
+    assert areas["control stage"] == pytest.approx(expected, rel=1e-4)
+
+
+def test_a_shallow_groove_is_a_circular_segment_and_a_bored_rotor_has_a_bore(reference):
+    section = dataclasses.replace(reference.section, groove_depth=0.004, bore_radius=0.05)
+    geometry = RotorGeometry(section)
+    mesh = rotor_mesh(geometry, 0.04)
+    assert "bore" in mesh.boundaries and "axis" not in mesh.boundaries
+    assert section.groove_half_width == pytest.approx(math.sqrt(0.008**2 - 0.004**2))
+    np.testing.assert_allclose(mesh.p[:, critical_nodes(mesh, geometry)["bore"]], (0.05, 0.10))
+
+
+@pytest.mark.parametrize(("change", "message"), [
+    ({"groove_depth": 0.36}, "rotor.groove_depth = 0.36 m leaves less than 0.01 m"),
+    ({"bore_radius": 0.36}, "rotor.bore_radius = 0.36 m leaves less than"),
+    ({"groove_position": 0.245}, "the groove .* must lie inside one constant-radius part"),
+    ({"stage_start": 0.7}, "rotor.stage_start = 0.7 m must lie in"),
+])
+def test_an_undrawable_section_is_refused_naming_the_field(reference, change, message):
+    with pytest.raises(RotorAreaError, match=message):
+        RotorGeometry(dataclasses.replace(reference.section, **change))
+
+
+REFERENCE_TEXT = (load_spec.__globals__["resources"].files("steamtwin.spec") / "data"
+                  / "reference.toml").read_text(encoding="utf-8")
+
+
+@pytest.mark.parametrize(("old", "new", "message"), [
+    ('groove_depth = "25 mm"', 'groove_depth = "-25 mm"',
+     r"rotor.groove_depth = '-25 mm' is outside the valid range \[0.001, 0.5\] m"),
+    ('groove_depth = "25 mm"', 'groove_depth = "0.4 m"', "rotor.groove_depth = 0.4 m leaves"),
+    ('group = "HP stages 1-4"', 'group = "HP stages 1-3"', r"rotor.steam\[2\].group = 'HP "
+     r"stages 1-3' names no metal group"),
+    ('end = "0.60 m"', 'end = "0.70 m"', r"rotor.steam\[2\] \('HP stages 1-4'\): start = "),
+])
+def test_a_bad_rotor_section_in_a_spec_is_refused_naming_the_field(old, new, message):
+    assert old in REFERENCE_TEXT
+    with pytest.raises(SpecError, match=message):
+        parse_spec(REFERENCE_TEXT.replace(old, new, 1), "unit.toml")
+
+
+def test_a_spec_without_rotor_loads_and_says_what_to_add():
+    start = REFERENCE_TEXT.index("[rotor]")
+    text = REFERENCE_TEXT[:start] + REFERENCE_TEXT[REFERENCE_TEXT.index("[sliding_pressure]"):]
+    spec = parse_spec(text, "unit.toml")
+    assert spec.rotor is None
+    with pytest.raises(SteamtwinError, match=r"no \[rotor\] section: add one .*groove_radius"):
+        rotor_geometry(spec)
