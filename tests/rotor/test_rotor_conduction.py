@@ -5,6 +5,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 import pytest
+from scipy.optimize import brentq
+from scipy.special import j0, j1
 from skfem import Basis, BilinearForm, ElementTriP1, FacetBasis, Functional, LinearForm, MeshTri
 from skfem.helpers import dot, grad
 
@@ -86,7 +88,7 @@ def test_steady_hollow_cylinder_converges_at_second_order_to_the_closed_form():
         mesh = annulus(cells)
         field = RotorConduction(mesh, STEEL).steady([800.0, 300.0], [800.0, 500.0])
         basis = Basis(mesh, ElementTriP1(), intorder=4)
-        r = basis.global_coordinates().value[0]
+        r = basis.global_coordinates()[0]
         exact = hollow_cylinder_profile(r, 800.0, 800.0, 300.0, 500.0, 40.0)
         squared = Functional(lambda w: (w.field - w.exact) ** 2)
         errors.append(np.sqrt(squared.assemble(basis, field=basis.interpolate(field),
@@ -153,3 +155,36 @@ def test_bad_inputs_are_refused_with_what_was_expected():
         conduction.transient(600.0, [0.0, 0.0], np.ones((2, 2)), np.ones((2, 2)))
     with pytest.raises(RotorAreaError, match="positive htc"):
         conduction.steady([0.0, 0.0], [600.0, 600.0])
+
+
+def solid_cylinder_step(r, t, radius, biot, diffusivity, roots=60):
+    """Solid cylinder at 0, its surface exposed at t = 0 to unit steam temperature through a
+    Biot number h·a/k: Carslaw & Jaeger 1959, §7.7 eq. (6), θ = 1 − Σ 2·Bi·J0(βₙr/a)·
+    exp(−βₙ²·κt/a²)/((βₙ² + Bi²)·J0(βₙ)) over the roots of β·J1(β) = Bi·J0(β)."""
+    def condition(beta):
+        return beta * j1(beta) - biot * j0(beta)
+
+    grid = np.linspace(1e-9, 4.0 * roots, 40 * roots)
+    values = condition(grid)
+    brackets = np.flatnonzero(np.sign(values[:-1]) != np.sign(values[1:]))[:roots]
+    beta = np.array([brentq(condition, grid[i], grid[i + 1]) for i in brackets])
+    terms = (2 * biot * j0(np.outer(r / radius, beta)) / ((beta**2 + biot**2) * j0(beta))
+             * np.exp(-beta**2 * diffusivity * t / radius**2))
+    return 1.0 - terms.sum(axis=1)
+
+
+def test_implicit_euler_converges_at_first_order_in_time_to_the_solid_cylinder_series():
+    radius, htc, duration = 0.3, 1000.0, 1800.0
+    mesh = MeshTri.init_tensor(np.linspace(0.0, radius, 65), np.linspace(0.0, 0.02, 2))
+    mesh = mesh.with_boundaries({"steam:surface": lambda x: np.isclose(x[0], radius)})
+    conduction = RotorConduction(mesh, STEEL)
+    exact = solid_cylinder_step(mesh.p[0], duration, radius, htc * radius / 40.0,
+                                40.0 / (7850.0 * 460.0))
+    errors = []
+    for steps in (15, 30, 60):
+        times = np.linspace(0.0, duration, steps + 1)
+        run = conduction.transient(0.0, times, np.full((steps + 1, 1), htc),
+                                   np.ones((steps + 1, 1)))
+        errors.append(np.max(np.abs(run.final - exact)))
+    orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    assert np.all((orders > 0.85) & (orders < 1.1)), (errors, orders)
