@@ -150,12 +150,12 @@ class RotorConduction:
         steam = self._inputs(steam_temperature, "steam_temperature")
         if not np.any(h > 0.0):
             raise RotorAreaError("a steady state needs a positive htc on some group")
-        system = self.system(steam.mean())
-        load = system.load(h, steam)
+        load = sum(g * s * b for g, s, (_, b) in zip(h, steam, self._robin, strict=True))
+        robin = sum(g * matrix for g, (matrix, _) in zip(h, self._robin, strict=True))
         temperature = np.full(self.size, steam.mean())
         for _ in range(max_iterations):
             _, stiffness = self.matrices(temperature)
-            operator = stiffness + sum(g * m for g, m in zip(h, system.robin, strict=True))
+            operator = stiffness + robin
             new = spla.spsolve(operator.tocsc(), load)
             change = np.max(np.abs(new - temperature))
             temperature = new
