@@ -37,7 +37,7 @@ def test_control_stage_htc_is_dittus_boelter_at_the_kernels_relative_velocity(
     reynolds, prandtl = velocity * diameter / (v * mu), cp * mu / k
     expected = 0.023 * reynolds**0.8 * prandtl**0.3 * k / diameter
     assert frame[htc_column("control stage")].iloc[0] == pytest.approx(expected, rel=1e-10)
-    assert 1e3 < expected < 2e4  # W/(m²·K): HP control-stage rotors, 1-10 kW/(m²·K)
+    assert 1e3 < expected < 2e4  # W/(m²·K): 12.7 kW at the reference design point
 
 
 def test_the_calibrated_multiplier_scales_the_htc_and_part_load_lowers_it(
@@ -70,3 +70,33 @@ def test_an_unknown_group_is_refused(reference_model, design_run):
     inputs, run = design_run
     with pytest.raises(RotorAreaError, match=r"metal groups \['HP stages 1-3'\] are not"):
         steam_side(reference_model, inputs, groups=["HP stages 1-3"], run=run)
+
+
+def test_a_fom_driven_ramp_moves_the_groove_root_before_the_axis(reference_model,
+                                                                 reference_spec):
+    """FOM → steam side → rotor FEM on a 10-min ramp 100 → 50 % load (10-s steps): the surface
+    at the groove follows the control-stage steam, the axis lags (a rotor's time constant a²/κ
+    is hours), and the heat the steam gives equals the rotor's stored energy change."""
+    from steamtwin.rotor.conduction import RotorConduction
+    from steamtwin.rotor.geometry import critical_nodes, rotor_geometry, rotor_mesh
+    from steamtwin.rotor.material import ConstantMaterial
+
+    loads = np.clip(1.0 - 0.05 / 6.0 * np.arange(61), 0.5, 1.0)
+    inputs = load_profile_inputs(reference_spec, loads, step_seconds=10.0)
+    geometry = rotor_geometry(reference_spec)
+    frame = steam_side(reference_model, inputs, groups=list(geometry.groups))
+    mesh = rotor_mesh(geometry, 0.04)
+    steel = ConstantMaterial("CrMoV", 7850.0, 540.0, 34.0, 2.1e11, 0.3, 1.25e-5)
+    conduction = RotorConduction(mesh, steel, geometry.groups)
+    first = frame.iloc[0]
+    initial = conduction.steady([first[htc_column(g)] for g in geometry.groups],
+                                [first[steam_temperature_column(g)] for g in geometry.groups])
+    run = conduction.transient_frame(initial, frame, probes=critical_nodes(mesh, geometry))
+    change = run.probes.iloc[-1] - run.probes.iloc[0]
+    steam_change = (frame[steam_temperature_column("control stage")].iloc[-1]
+                    - first[steam_temperature_column("control stage")])
+    assert abs(steam_change) > 5.0
+    assert np.sign(change["groove_root"]) == np.sign(steam_change)
+    assert abs(change["groove_root"]) > 5.0 * abs(change["bore"])
+    supplied = run.heat_in[1:] * np.diff(run.times)
+    np.testing.assert_allclose(supplied.sum(), run.stored.sum(), rtol=1e-9)
