@@ -149,8 +149,13 @@ def test_bad_inputs_are_refused_with_what_was_expected():
     with pytest.raises(RotorAreaError, match="no steam boundary for \\['nozzle'\\]"):
         RotorConduction(mesh, STEEL, groups=["nozzle"])
     conduction = RotorConduction(mesh, STEEL)
-    with pytest.raises(RotorAreaError, match=r"htc must be finite with shape \(3, 2\)"):
+    with pytest.raises(RotorAreaError, match=r"htc must have shape \(3, 2\)"):
         conduction.transient(600.0, [0.0, 1.0, 2.0], np.ones((3, 3)), np.ones((3, 2)))
+    steam = np.full((3, 2), 600.0)
+    steam[2, 1] = np.nan
+    with pytest.raises(RotorAreaError, match=r"steam_temperature at sample 3 \(1-based\), "
+                                             r"group 'outer' is nan: expected .* in K, > 0"):
+        conduction.transient(600.0, [0.0, 1.0, 2.0], np.ones((3, 2)), steam)
     with pytest.raises(RotorAreaError, match="strictly increasing"):
         conduction.transient(600.0, [0.0, 0.0], np.ones((2, 2)), np.ones((2, 2)))
     with pytest.raises(RotorAreaError, match="positive htc"):

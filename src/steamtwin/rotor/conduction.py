@@ -135,15 +135,21 @@ class RotorConduction:
                                 groups=self.groups)
 
     def _inputs(self, values: ArrayLike, name: str, rows: int | None = None) -> np.ndarray:
+        """``values`` checked: shape (groups,) or (rows, groups), finite, htc ≥ 0, T > 0 K;
+        the error names the first bad sample (1-based) and group."""
         array = np.asarray(values, dtype=float)
         shape = (len(self.groups),) if rows is None else (rows, len(self.groups))
-        if array.shape != shape or not np.all(np.isfinite(array)):
-            raise RotorAreaError(f"{name} must be finite with shape {shape} (one column per "
-                                 f"group {list(self.groups)}), got shape {array.shape}")
-        if name == "htc" and np.any(array < 0.0):
-            raise RotorAreaError("htc must be ≥ 0 W/(m²·K)")
-        if name == "steam_temperature" and np.any(array <= 0.0):
-            raise RotorAreaError("steam_temperature must be in K (> 0)")
+        if array.shape != shape:
+            raise RotorAreaError(f"{name} must have shape {shape} (one column per group "
+                                 f"{list(self.groups)}), got shape {array.shape}")
+        low, unit = (0.0, "W/(m²·K), ≥ 0") if name == "htc" else (1e-300, "K, > 0")
+        bad = np.argwhere(~(np.isfinite(array) & (array >= low)))
+        if bad.size:
+            *row, column = bad[0]
+            where = f"sample {row[0] + 1} (1-based), " if row else ""
+            raise RotorAreaError(f"{name} at {where}group {self.groups[column]!r} is "
+                                 f"{float(array[tuple(bad[0])])!r}: expected a finite value in "
+                                 f"{unit}")
         return array
 
     def heat_in(self, temperature: np.ndarray, htc: np.ndarray,
