@@ -193,3 +193,18 @@ def test_implicit_euler_converges_at_first_order_in_time_to_the_solid_cylinder_s
         errors.append(np.max(np.abs(run.final - exact)))
     orders = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
     assert np.all((orders > 0.85) & (orders < 1.1)), (errors, orders)
+
+
+def test_the_cooling_factor_applies_only_while_the_surface_is_hotter_than_the_steam():
+    """The kernel's switch of Dittus–Boelter's Prandtl exponent: a rotor cooled by its steam
+    sees factor × htc, one heated by it the htc as given."""
+    conduction = RotorConduction(annulus(4), STEEL)
+    times = np.arange(0.0, 100.0, 10.0)
+    htc = np.full((times.size, 2), 500.0)
+    factor = np.full((times.size, 2), 2.0)
+    for steam, expected_factor in ((500.0, 2.0), (700.0, 1.0)):  # rotor at 600 K
+        temperature = np.full((times.size, 2), steam)
+        switched = conduction.transient(600.0, times, htc, temperature, cooling_factor=factor)
+        plain = conduction.transient(600.0, times, expected_factor * htc, temperature)
+        np.testing.assert_array_equal(switched.final, plain.final)
+        np.testing.assert_array_equal(switched.htc, expected_factor * htc)

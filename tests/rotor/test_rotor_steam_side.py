@@ -8,7 +8,11 @@ import pytest
 from steamtwin.errors import RotorAreaError
 from steamtwin.model.operating import load_profile_inputs
 from steamtwin.model.parameters import ModelParameters
-from steamtwin.rotor.conduction import htc_column, steam_temperature_column
+from steamtwin.rotor.conduction import (
+    cooling_factor_column,
+    htc_column,
+    steam_temperature_column,
+)
 from steamtwin.rotor.steam_side import group_flows, steam_side
 from steamtwin.steam import if97
 
@@ -37,6 +41,9 @@ def test_control_stage_htc_is_dittus_boelter_at_the_kernels_relative_velocity(
     reynolds, prandtl = velocity * diameter / (v * mu), cp * mu / k
     expected = 0.023 * reynolds**0.8 * prandtl**0.3 * k / diameter
     assert frame[htc_column("control stage")].iloc[0] == pytest.approx(expected, rel=1e-10)
+    # the rotor heating the steam: Pr^0.4 instead of Pr^0.3
+    assert frame[cooling_factor_column("control stage")].iloc[0] == pytest.approx(
+        prandtl**0.1, rel=1e-12)
     assert 1e3 < expected < 2e4  # W/(m²·K): 12.7 kW at the reference design point
 
 

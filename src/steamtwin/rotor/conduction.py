@@ -53,6 +53,12 @@ def htc_column(group: str) -> str:
     return f"htc:{group}"
 
 
+def cooling_factor_column(group: str) -> str:
+    """Column of a boundary-condition frame holding the factor (dimensionless, > 0; Pr^0.1
+    for Dittus–Boelter) on ``group``'s htc while the rotor surface is hotter than the steam."""
+    return f"cooling_factor:{group}"
+
+
 @dataclass(frozen=True)
 class TransientResult:
     """A transient run: ``times`` (s, N + 1 samples from the initial one); ``probes`` (K) the
@@ -60,7 +66,8 @@ class TransientResult:
     rotor at each sample (implicit-Euler flux at the step's end; row 0 at the initial field);
     ``stored`` (J) the change of 1ᵀ·M·T over each step (row 0 zero); ``final`` (K) the last
     field; ``snapshots`` (K, rows = sampled fields) every ``snapshot_every`` steps from the
-    first, empty when not asked for."""
+    first, empty when not asked for; ``htc`` (W/(m²·K), samples × groups) what each step
+    applied, the cooling factor included."""
 
     times: np.ndarray
     probes: pd.DataFrame
@@ -68,6 +75,7 @@ class TransientResult:
     stored: np.ndarray
     final: np.ndarray
     snapshots: np.ndarray
+    htc: np.ndarray
 
 
 class RotorConduction:
@@ -142,7 +150,8 @@ class RotorConduction:
         if array.shape != shape:
             raise RotorAreaError(f"{name} must have shape {shape} (one column per group "
                                  f"{list(self.groups)}), got shape {array.shape}")
-        low, unit = (0.0, "W/(m²·K), ≥ 0") if name == "htc" else (1e-300, "K, > 0")
+        low, unit = {"htc": (0.0, "W/(m²·K), ≥ 0"), "cooling_factor": (1e-300, "(-), > 0")
+                      }.get(name, (1e-300, "K, > 0"))
         bad = np.argwhere(~(np.isfinite(array) & (array >= low)))
         if bad.size:
             *row, column = bad[0]
@@ -183,18 +192,27 @@ class RotorConduction:
 
     def transient(self, initial: ArrayLike, times: ArrayLike, htc: ArrayLike,
                   steam_temperature: ArrayLike, probes: Mapping[str, int] | None = None,
-                  snapshot_every: int = 0, progress: ProgressCallback | None = None
-                  ) -> TransientResult:
+                  snapshot_every: int = 0, progress: ProgressCallback | None = None,
+                  cooling_factor: ArrayLike | None = None) -> TransientResult:
         """March from ``initial`` (K, per node or one) at ``times[0]`` through ``times`` (s,
         increasing) with ``htc`` (W/(m²·K)) and ``steam_temperature`` (K), arrays (samples,
         groups): implicit Euler, the inputs of sample n act over the step ending at it.
-        ``probes`` names nodes whose temperature is recorded (e.g. :func:`critical_nodes`)."""
+        ``probes`` names nodes whose temperature is recorded (e.g. :func:`critical_nodes`).
+        ``cooling_factor`` (samples, groups; default 1) multiplies a group's htc in a step
+        whose previous field has the group's mean surface temperature above the steam's — the
+        kernel's switch of Dittus–Boelter's Prandtl exponent (steamtwin.model.metal)."""
         t = np.asarray(times, dtype=float)
         if t.ndim != 1 or t.size < 2 or np.any(np.diff(t) <= 0.0) or not np.all(np.isfinite(t)):
             raise RotorAreaError("times must be ≥ 2 finite, strictly increasing seconds")
-        h = self._inputs(htc, "htc", t.size)
+        given = self._inputs(htc, "htc", t.size)
         steam = self._inputs(steam_temperature, "steam_temperature", t.size)
+        factor = (np.ones_like(given) if cooling_factor is None
+                  else self._inputs(cooling_factor, "cooling_factor", t.size))
         field = np.array(np.broadcast_to(np.asarray(initial, dtype=float), (self.size,)))
+        wetted = self._robin_loads.sum(axis=1)
+        h = given.copy()  # the htc each step applies, the cooling factor's switch included
+        h[0] = np.where(self._robin_loads @ field / wetted > steam[0], factor[0] * given[0],
+                        given[0])
         probes = dict(probes or {})
         nodes = np.array(list(probes.values()), dtype=int)
         recorded = np.empty((t.size, nodes.size))
@@ -205,6 +223,8 @@ class RotorConduction:
         key, solve = None, None
         for n in range(1, t.size):
             dt = t[n] - t[n - 1]
+            cooled = self._robin_loads @ field / wetted > steam[n]
+            h[n] = np.where(cooled, factor[n] * given[n], given[n])
             mass_data, stiffness_data = self._volume_data(field)
             mass = pattern.matrix(mass_data)
             step_key = (dt, tuple(h[n]), mass_data.tobytes(), stiffness_data.tobytes())
@@ -222,14 +242,15 @@ class RotorConduction:
         return TransientResult(times=t, probes=pd.DataFrame(recorded, index=t,
                                                             columns=list(probes)),
                                heat_in=heat, stored=stored, final=field,
-                               snapshots=np.array(snapshots).reshape(-1, self.size))
+                               snapshots=np.array(snapshots).reshape(-1, self.size), htc=h)
 
     def transient_frame(self, initial: ArrayLike, frame: pd.DataFrame,
                         probes: Mapping[str, int] | None = None, snapshot_every: int = 0,
                         progress: ProgressCallback | None = None) -> TransientResult:
         """:meth:`transient` over a frame of :func:`steam_temperature_column` (K) and
-        :func:`htc_column` (W/(m²·K)) columns per group, indexed by seconds or by time stamps
-        (times from the first)."""
+        :func:`htc_column` (W/(m²·K)) columns per group (and :func:`cooling_factor_column`,
+        used when there for every group), indexed by seconds or by time stamps (times from the
+        first), as :func:`steamtwin.rotor.steam_side.steam_side` makes it."""
         columns = [name for group in self.groups
                    for name in (steam_temperature_column(group), htc_column(group))]
         missing = [name for name in columns if name not in frame.columns]
@@ -239,11 +260,13 @@ class RotorConduction:
         index = frame.index
         seconds = ((index - index[0]).total_seconds() if isinstance(index, pd.DatetimeIndex)
                    else index)
+        factors = [cooling_factor_column(g) for g in self.groups]
         return self.transient(
             initial, np.asarray(seconds, dtype=float),
             frame[[htc_column(g) for g in self.groups]].to_numpy(dtype=float),
             frame[[steam_temperature_column(g) for g in self.groups]].to_numpy(dtype=float),
-            probes, snapshot_every, progress)
+            probes, snapshot_every, progress,
+            frame[factors].to_numpy(dtype=float) if set(factors) <= set(frame.columns) else None)
 
 
 def _factorized(matrix: sp.spmatrix) -> Callable[[np.ndarray], np.ndarray]:

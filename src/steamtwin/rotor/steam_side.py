@@ -33,7 +33,7 @@ from steamtwin.model.design import active_leakages
 from steamtwin.model.fom import FullOrderModel, SimulationResult
 from steamtwin.model.metal import dittus_boelter_htc, rotor_relative_velocity
 from steamtwin.model.parameters import ModelParameters
-from steamtwin.rotor.conduction import htc_column, steam_temperature_column
+from steamtwin.rotor.conduction import cooling_factor_column, htc_column, steam_temperature_column
 from steamtwin.steam import if97
 
 
@@ -82,16 +82,18 @@ def group_steam_states(fom: FullOrderModel, run: SimulationResult
 
 
 def steam_side(fom: FullOrderModel, inputs: pd.DataFrame, params: ModelParameters | None = None,
-               groups: Sequence[str] | None = None, run: SimulationResult | None = None,
-               steam_heats_rotor: bool = True) -> pd.DataFrame:
+               groups: Sequence[str] | None = None, run: SimulationResult | None = None
+               ) -> pd.DataFrame:
     """Per-group steam temperature (K) and rotor htc (W/(m²·K)) over ``inputs`` (the FOM's SI
     input frame), as :func:`~steamtwin.rotor.conduction.steam_temperature_column` and
     :func:`~steamtwin.rotor.conduction.htc_column` columns on the inputs' index.
 
     ``groups``: the metal groups to give (default all); ``run``: the FOM's
-    ``simulate_detailed(inputs, params, stages=True)`` if already at hand. Dittus–Boelter's
-    Prandtl exponent is 0.3 when the steam heats the rotor (``steam_heats_rotor``), 0.4 when
-    it cools it; the two differ by Pr^0.1, 1–4 % for superheated steam (Pr ≈ 1–1.5).
+    ``simulate_detailed(inputs, params, stages=True)`` if already at hand. The htc is the one
+    for steam heating the rotor (Dittus–Boelter's Prandtl exponent 0.3); the
+    :func:`~steamtwin.rotor.conduction.cooling_factor_column` holds Pr^0.1, the factor to the
+    exponent 0.4 of a rotor heating the steam, which the conduction solver applies per step
+    from the rotor's surface temperature as the FOM's kernel does (1–4 % for superheated steam).
     """
     params = params or ModelParameters()
     names = [group.name for group in fom.spec.metal_groups]
@@ -115,8 +117,10 @@ def steam_side(fom: FullOrderModel, inputs: pd.DataFrame, params: ModelParameter
         axial = flows[:, g] * v / metal.flow_area[g]
         htc = np.array([dittus_boelter_htc(
             rotor_relative_velocity(axial[i], metal.rotor_speed[g]), metal.hydraulic_diameter[g],
-            v[i], viscosity[i], conductivity[i], heat_capacity[i], not steam_heats_rotor)
+            v[i], viscosity[i], conductivity[i], heat_capacity[i], False)
             for i in range(t.size)])
         columns[steam_temperature_column(name)] = t
         columns[htc_column(name)] = params.heat_transfer_coefficient * htc
+        # Pr^(0.4 − 0.3): Dittus–Boelter with the rotor heating the steam over the steam heating it
+        columns[cooling_factor_column(name)] = (heat_capacity * viscosity / conductivity) ** 0.1
     return pd.DataFrame(columns, index=inputs.index)
