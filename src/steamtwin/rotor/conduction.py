@@ -110,6 +110,10 @@ class RotorConduction:
         self._robin_data = np.array([self._volume_pattern.data_of(matrix)
                                      for matrix, _ in self._robin])
         self._robin_loads = np.array([load for _, load in self._robin])
+        empty = [g for g, load in zip(self.groups, self._robin_loads, strict=True)
+                 if not load.sum() > 0.0]
+        if empty:
+            raise RotorAreaError(f"the steam boundaries of {empty} have no wetted area")
 
     @property
     def size(self) -> int:
