@@ -208,3 +208,18 @@ def test_the_cooling_factor_applies_only_while_the_surface_is_hotter_than_the_st
         plain = conduction.transient(600.0, times, expected_factor * htc, temperature)
         np.testing.assert_array_equal(switched.final, plain.final)
         np.testing.assert_array_equal(switched.htc, expected_factor * htc)
+
+
+def test_steady_state_with_temperature_dependent_conductivity_meets_kirchhoffs_transform():
+    """With U = ∫k dT (Kirchhoff's transform, Carslaw & Jaeger 1959, §1.7) the steady radial
+    field has U linear in ln r between the surface temperatures (here held by h = 10⁸)."""
+    mesh = annulus(32)
+    steel = LinearSteel()
+    field = RotorConduction(mesh, steel).steady([1e8, 1e8], [800.0, 500.0])
+
+    def kirchhoff(t):
+        return 42.0 * (t - 293.15) - 0.0075 * (t - 293.15) ** 2
+
+    share = np.log(mesh.p[0] / INNER) / np.log(OUTER / INNER)
+    expected = kirchhoff(800.0) + (kirchhoff(500.0) - kirchhoff(800.0)) * share
+    np.testing.assert_allclose(kirchhoff(field), expected, atol=42.0 * 0.05)  # 0.05 K
