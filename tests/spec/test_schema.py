@@ -39,7 +39,7 @@ DOCS = Path(__file__).resolve().parents[2] / "docs"
 #: Which entry of each array of tables the range tests change (0-based): the third stage, the
 #: second valve and metal group, the only bleed — so messages must count from 1.
 POSITIONS = {"stages": 2, "control_stage.valves": 1, "metal.groups": 1, "extractions": 0,
-             "leakages": 0}
+             "leakages": 0, "rotor.steam": 0}
 #: The reference plus one leakage to the outside, so that every leakage field has a value.
 WITH_LEAKAGE = {**REFERENCE, "leakages": [{"name": "HP-IP gland", "from_stage": 0,
                                             "to": "outside", "design_flow": "18 t/h",

@@ -20,7 +20,7 @@ from __future__ import annotations
 import itertools
 import tomllib
 from collections.abc import Mapping
-from dataclasses import fields
+from dataclasses import fields, replace
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -31,6 +31,7 @@ from steamtwin.keys import unknown_key_message
 from steamtwin.spec.schema import FORMAT_VERSION, METAL_DEPTH_RANGE_M, Field, field_for
 from steamtwin.spec.turbine import (
     DEFAULT_CASING_THERMOCOUPLE_DEPTH,
+    DEFAULT_ROTOR_MATERIAL,
     ControlStage,
     DesignPoint,
     Extraction,
@@ -41,6 +42,8 @@ from steamtwin.spec.turbine import (
     MetalGroup,
     PartLoad,
     PressureStage,
+    RotorSection,
+    RotorSteam,
     SlidingPressureLine,
     StageGeometry,
     TemperatureSchedule,
@@ -67,7 +70,7 @@ _GEOMETRY = ("axial_length", "rotor_radius", "casing_inner_radius", "casing_wall
 SPEC_KEYS: Mapping[str, frozenset[str]] = {
     "": frozenset({"format_version", "name", "description", "sensors", "design",
                    "control_stage", "stages", "extractions", "metal", "sliding_pressure",
-                   "part_load", "temperature_schedule", "leakages"}),
+                   "part_load", "temperature_schedule", "leakages", "rotor"}),
     "design": frozenset({"main_steam_pressure", "main_steam_temperature", "main_steam_flow",
                          "control_stage_pressure", "hp_exhaust_pressure",
                          "hp_exhaust_temperature", "hp_power", "generator_power",
@@ -86,6 +89,10 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
     "metal.rotor_material": _MATERIAL,
     "metal.groups": frozenset({"name", "stages", "insulation_conductance", *_MASS_AND_AREA,
                                *_GEOMETRY, "rotor_bore_radius"}),
+    "rotor": frozenset({"axial_length", "control_stage_radius", "stage_radius", "stage_start",
+                        "bore_radius", "groove_radius", "groove_depth", "groove_position",
+                        "material", "rotational_speed", "steam"}),
+    "rotor.steam": frozenset({"group", "start", "end"}),
     "sliding_pressure": frozenset({"load_fraction", "pressure"}),
     "part_load": _PART_LOAD,
     "temperature_schedule": frozenset({"load_fraction", "main_steam_temperature",
@@ -98,7 +105,8 @@ SPEC_KEYS: Mapping[str, frozenset[str]] = {
 #: nozzle throat areas unless they are given; without a temperature schedule the boiler holds
 #: the design main-steam temperature at every load; a unit may state no leakages and no tip
 #: leakage, and only a leakage to the outside has a sink pressure; a metal group gives either
-#: its masses and areas or its geometry; the casing thermocouple depth has a default.
+#: its masses and areas or its geometry; the casing thermocouple depth has a default; a unit
+#: without a rotor stress model has no ``[rotor]``, whose bore, steel and speed have defaults.
 OPTIONAL_KEYS = frozenset({"extractions", "part_load", "control_stage.valve_overlap",
                            "control_stage.valve_characteristic", "design.valve_outlet_pressure",
                            "control_stage.valves.throat_area",
@@ -106,7 +114,9 @@ OPTIONAL_KEYS = frozenset({"extractions", "part_load", "control_stage.valve_over
                            "temperature_schedule", "temperature_schedule.reheat_temperature",
                            "leakages", "leakages.sink_pressure", "stages.tip_leakage",
                            *(f"metal.groups.{key}" for key in (*_MASS_AND_AREA, *_GEOMETRY)),
-                           "metal.groups.rotor_bore_radius", "metal.casing_thermocouple_depth"})
+                           "metal.groups.rotor_bore_radius", "metal.casing_thermocouple_depth",
+                           "rotor", "rotor.bore_radius", "rotor.material",
+                           "rotor.rotational_speed"})
 
 
 class SpecError(SpecAreaError):
@@ -290,6 +300,9 @@ def parse_spec(text: str, source: str = "<string>") -> TurbineSpec:
         if "casing_thermocouple_depth" in metal.data else DEFAULT_CASING_THERMOCOUPLE_DEPTH,
     )
     _check_consistency(spec, source)
+    if "rotor" in document.data:  # after the groups it names are known to be consistent
+        spec = replace(spec, rotor=_rotor(document.table("rotor"), design,
+                                          {group.name for group in groups}))
     return spec
 
 
@@ -515,6 +528,33 @@ def _metal_geometry(table: _Table, given: Mapping[str, float]) -> MetalGeometry 
                          rotor_bore_radius=bore,
                          casing_inner_radius=given["casing_inner_radius"],
                          casing_wall_thickness=given["casing_wall_thickness"])
+
+
+def _rotor(table: _Table, design: DesignPoint, group_names: set[str]) -> RotorSection:
+    """The drawn rotor section: every dimension in range, the groove and bore drawable, each
+    wetted interval inside the section and naming a metal group."""
+    steam = []
+    for interval in table.tables("steam"):
+        group = interval.text("group")
+        if group not in group_names:
+            raise SpecError(f"{interval.label}: {interval.path}.group = {group!r} names no "
+                            f"metal group (known: {', '.join(sorted(group_names))})")
+        steam.append(RotorSteam(group=group, start=interval.quantity("start"),
+                                end=interval.quantity("end")))
+    section = RotorSection(
+        **{key: table.quantity(key) for key in (
+            "axial_length", "control_stage_radius", "stage_radius", "stage_start",
+            "groove_radius", "groove_depth", "groove_position")},
+        steam=tuple(steam),
+        rotational_speed=table.quantity("rotational_speed")
+        if "rotational_speed" in table.data else design.rotational_speed,
+        bore_radius=table.quantity("bore_radius") if "bore_radius" in table.data else 0.0,
+        material=table.text("material") if "material" in table.data
+        else DEFAULT_ROTOR_MATERIAL)
+    problems = section.problems(METAL_DEPTH_RANGE_M[0])
+    if problems:
+        raise SpecError(f"{table.source}: {problems[0]}")
+    return section
 
 
 def _sliding_pressure(table: _Table) -> SlidingPressureLine:

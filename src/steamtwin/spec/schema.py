@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 from steamtwin.dcs.signals import SIGNALS
+from steamtwin.spec.turbine import DEFAULT_ROTOR_MATERIAL
 from steamtwin.units import convert
 
 FORMAT_VERSION = 1
@@ -170,6 +171,7 @@ def _material(table: str, what: str) -> tuple[Field, ...]:
 
 
 HBD = "Rated-load (THA) heat-balance diagram of the OEM thermal kit"
+ROTOR_DRAWING = "OEM rotor drawing (longitudinal section)"
 FIT = "Fitted to the thermal kit's part-load heat balances (steamtwin.model.design_fit)"
 
 #: Every field of the spec, in document order; tables and arrays of tables are fields too.
@@ -450,6 +452,67 @@ FIELDS: tuple[Field, ...] = (
           "Steam-temperature schedule, reheat axis; part-load heat balances, IP inlet.",
           "K", "515 degC", 573.15, 923.15, items="quantity", min_items=2,
           default="not scheduled: the HP-exhaust pressure follows the flow alone"),
+    Field("rotor", "table",
+          "The HP rotor section around the control stage as drawn (r, z half-section), for the "
+          "2-D rotor thermal-stress and fatigue-life model (docs/rotor.md): outer radii, bore, "
+          "heat-relief groove and where each metal group's steam wets it.",
+          "OEM rotor drawing (longitudinal section) and rotor forging certificate.",
+          default="none: the unit has no rotor stress model; `steamtwin.rotor` asks for it"),
+    Field("rotor.axial_length", "quantity",
+          "Axial length of the modelled section, z = 0 at its upstream end; both ends are cuts "
+          "taken as adiabatic, so place them a rotor radius or more from the groove.",
+          f"{ROTOR_DRAWING}: from the front gland side of the control-stage wheel to past the "
+          "first pressure stages.", "m", "0.60 m", 0.05, 10.0),
+    Field("rotor.control_stage_radius", "quantity",
+          "Outer radius of the rotor body at the control stage (beside its wheel, where the "
+          "heat-relief groove usually is), from z = 0 to stage_start.",
+          f"{ROTOR_DRAWING}.", "m", "0.36 m", 0.05, 1.5),
+    Field("rotor.stage_radius", "quantity",
+          "Outer radius of the rotor drum at the first pressure stages (their blade-root "
+          "radius), from stage_start to axial_length.",
+          f"{ROTOR_DRAWING}; root diameter of the first pressure stages / 2.",
+          "m", "0.43 m", 0.05, 1.5),
+    Field("rotor.stage_start", "quantity",
+          "Axial position (from the section's start) where the drum radius changes from "
+          "control_stage_radius to stage_radius; equal to axial_length for one radius throughout.",
+          f"{ROTOR_DRAWING}.", "m", "0.25 m", 0.0, 10.0, low_inclusive=False,
+          bound_note="in (0, rotor.axial_length]"),
+    Field("rotor.bore_radius", "quantity",
+          "Radius of the central bore; 0 for a solid forging. The bore is adiabatic.",
+          f"{ROTOR_DRAWING} (inspection bore).", "m", "0 m", 0.0, 1.0,
+          default="0 m: a solid forging"),
+    Field("rotor.groove_radius", "quantity",
+          "Root (fillet) radius of the heat-relief groove.",
+          f"{ROTOR_DRAWING}, groove detail; 5-15 mm usual [Leyzerovich].", "m", "8 mm",
+          1e-3, 0.1),
+    Field("rotor.groove_depth", "quantity",
+          "Depth of the groove below the local outer radius: a circular segment up to "
+          "groove_radius, a U (semicircular root, parallel flanks) beyond; it must leave "
+          f"{METAL_DEPTH_RANGE_M[0]:g} m of metal above the bore.",
+          f"{ROTOR_DRAWING}, groove detail.", "m", "25 mm", 1e-3, 0.5),
+    Field("rotor.groove_position", "quantity",
+          "Axial position of the groove's centre; the whole groove lies on one side of "
+          "stage_start.", f"{ROTOR_DRAWING}.", "m", "0.10 m", 0.0, 10.0, low_inclusive=False,
+          bound_note="inside (0, rotor.axial_length), clear of rotor.stage_start"),
+    Field("rotor.material", "string",
+          "Rotor steel, by the name the rotor life model knows its properties under.",
+          "Rotor forging certificate; 30CrMoNiV5-11 (1CrMoV class, GB 30Cr1Mo1V) for HP rotors "
+          "of this class.", example=DEFAULT_ROTOR_MATERIAL,
+          default=f"{DEFAULT_ROTOR_MATERIAL}"),
+    Field("rotor.rotational_speed", "quantity", "Shaft speed for the rotor's centrifugal load.",
+          "Nameplate.", "rad/s", "3000 rpm", 100.0, 420.0,
+          default="design.rotational_speed"),
+    Field("rotor.steam", "tables",
+          "Where each metal group's steam wets the modelled surface: one table per wetted "
+          "interval, intervals not overlapping; surface outside them is adiabatic (e.g. under a "
+          "seal). Its temperature and heat-transfer coefficient come from the model's group.",
+          f"{ROTOR_DRAWING} with the flow-path drawing.", min_items=1),
+    Field("rotor.steam[].group", "string", "Name of the metal group (metal.groups[].name).",
+          "As in [[metal.groups]].", example="control stage"),
+    Field("rotor.steam[].start", "quantity", "Axial start of the wetted interval.",
+          f"{ROTOR_DRAWING}.", "m", "0 m", 0.0, 10.0),
+    Field("rotor.steam[].end", "quantity", "Axial end of the wetted interval, above start.",
+          f"{ROTOR_DRAWING}.", "m", "0.25 m", 0.0, 10.0),
     Field("part_load", "table",
           "Design-level part-load laws the off-design points of a thermal kit identify; every "
           "field optional, the defaults leave the blading laws alone.",
@@ -509,6 +572,10 @@ CONSISTENCY_RULES: tuple[str, ...] = (
     "m; with the geometry, `rotor_bore_radius` lies at least "
     f"{METAL_DEPTH_RANGE_M[0]:g} m below `rotor_radius`, `rotor_radius` below and "
     "`casing_inner_radius` above every mean blade radius of the group's stages.",
+    "`[rotor]`: `stage_start` ≤ `axial_length`; `bore_radius` and the groove each leave "
+    f"≥ {METAL_DEPTH_RANGE_M[0]:g} m of metal; the groove lies within one constant-radius part "
+    "of the section; `rotor.steam` intervals lie within the section, do not overlap and name "
+    "metal groups.",
     "`metal.casing_thermocouple_depth` is at most the wall depth of the "
     "`metal.casing_sensor_group` (its `casing_wall_thickness`, or `casing_mass / (density × "
     "casing_area)`).",

@@ -3,12 +3,14 @@
 A :class:`TurbineSpec` holds the design heat balance at rated load, the control stage with its
 governing valves, the pressure stages, extractions, the metal of rotor and inner casing per stage
 group, the sliding-pressure line, the DCS sensors the unit has and, optionally, the boiler's
-steam-temperature schedule against load. It is built from TOML by
+steam-temperature schedule against load and, optionally, the drawn HP rotor section
+(:class:`RotorSection`). It is built from TOML by
 :func:`steamtwin.spec.load_spec`; all values are SI (Pa, K, kg/s, W, m, m², kg, rad, rad/s).
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -242,6 +244,93 @@ class PartLoad:
     flow_capacity_multiplier: float = 1.0
 
 
+#: Rotor steel of :class:`RotorSection` when the spec names none: the CrMoNiV forging steel of
+#: HP/IP rotors (EN 10269 / SEW 555 grade 30CrMoNiV5-11, the 1CrMoV class of GB 30Cr1Mo1V).
+DEFAULT_ROTOR_MATERIAL = "30CrMoNiV5-11"
+
+
+@dataclass(frozen=True)
+class RotorSteam:
+    """The rotor surface wetted by one metal group's steam: axial interval ``start``–``end`` (m)."""
+
+    group: str
+    start: float
+    end: float
+
+
+@dataclass(frozen=True)
+class RotorSection:
+    """The HP rotor around the control stage as drawn, for the 2-D thermal and stress models.
+
+    Axial coordinate z from 0 to ``axial_length`` (m) along the modelled section; the rotor body
+    has outer radius ``control_stage_radius`` for z < ``stage_start`` and ``stage_radius`` from
+    there on (m), a central bore of ``bore_radius`` (0: solid). The heat-relief groove is a
+    notch of root (fillet) radius ``groove_radius``, ``groove_depth`` deep below the local outer
+    radius, centred at z = ``groove_position`` (m): a circular segment when the depth is at most
+    the radius, else a U (semicircular root, parallel flanks). ``steam`` lists the wetted
+    intervals; surface outside them is adiabatic. ``rotational_speed`` in rad/s.
+    """
+
+    axial_length: float
+    control_stage_radius: float
+    stage_radius: float
+    stage_start: float
+    groove_radius: float
+    groove_depth: float
+    groove_position: float
+    steam: tuple[RotorSteam, ...]
+    rotational_speed: float
+    bore_radius: float = 0.0
+    material: str = DEFAULT_ROTOR_MATERIAL
+
+    def outer_radius(self, z: float) -> float:
+        """Outer radius (m) of the rotor body at axial position ``z`` (m), groove aside."""
+        return self.control_stage_radius if z < self.stage_start else self.stage_radius
+
+    @property
+    def groove_half_width(self) -> float:
+        """Half the groove's width at the surface (m)."""
+        rho, depth = self.groove_radius, self.groove_depth
+        return rho if depth >= rho else math.sqrt(rho**2 - (rho - depth) ** 2)
+
+    def problems(self, thinnest: float) -> list[str]:
+        """What makes the drawn section impossible, each naming the ``rotor.`` fields; empty
+        when it is drawable. ``thinnest`` (m): the least metal to leave under groove and bore."""
+        found = []
+        if not 0.0 < self.stage_start <= self.axial_length:
+            found.append(f"rotor.stage_start = {self.stage_start:g} m must lie in "
+                         f"(0, rotor.axial_length = {self.axial_length:g} m]")
+        smallest = min(self.control_stage_radius, self.stage_radius)
+        if self.bore_radius > smallest - thinnest:
+            found.append(f"rotor.bore_radius = {self.bore_radius:g} m leaves less than "
+                         f"{thinnest:g} m of metal under the smallest outer radius {smallest:g} m")
+        radius = self.outer_radius(self.groove_position)
+        if self.groove_depth > radius - self.bore_radius - thinnest:
+            found.append(f"rotor.groove_depth = {self.groove_depth:g} m leaves less than "
+                         f"{thinnest:g} m of metal between the groove root and the bore "
+                         f"(outer radius {radius:g} m, bore {self.bore_radius:g} m there)")
+        left = self.groove_position - self.groove_half_width
+        right = self.groove_position + self.groove_half_width
+        segment = ((0.0, self.stage_start) if self.groove_position < self.stage_start
+                   else (self.stage_start, self.axial_length))
+        if left <= segment[0] or right >= segment[1]:
+            found.append(f"rotor.groove_position = {self.groove_position:g} m: the groove "
+                         f"({left:g}–{right:g} m) must lie inside one constant-radius part of "
+                         f"the section, {segment[0]:g}–{segment[1]:g} m (rotor.stage_start "
+                         "splits it)")
+        for number, steam in enumerate(self.steam, start=1):
+            if not 0.0 <= steam.start < steam.end <= self.axial_length:
+                found.append(f"rotor.steam[{number}] ({steam.group!r}): start = {steam.start:g} "
+                             f"m and end = {steam.end:g} m must satisfy 0 ≤ start < end ≤ "
+                             f"rotor.axial_length = {self.axial_length:g} m")
+        ordered = sorted(self.steam, key=lambda steam: steam.start)
+        for before, after in itertools.pairwise(ordered):
+            if after.start < before.end:
+                found.append(f"rotor.steam: the intervals of {before.group!r} and "
+                             f"{after.group!r} overlap ({before.end:g} m > {after.start:g} m)")
+        return found
+
+
 @dataclass(frozen=True)
 class TurbineSpec:
     """A complete, validated turbine description (SI units)."""
@@ -263,3 +352,5 @@ class TurbineSpec:
     temperature_schedule: TemperatureSchedule | None = None
     leakages: tuple[Leakage, ...] = ()
     casing_thermocouple_depth: float = DEFAULT_CASING_THERMOCOUPLE_DEPTH
+    rotor: RotorSection | None = None
+
