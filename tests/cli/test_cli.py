@@ -61,6 +61,9 @@ def test_turbine_show_prints_heat_balance_and_stages():
     assert result.exit_code == 0, result.output
     assert "13.03 MPa" in result.output and "1800 t/h" in result.output
     assert "GV4" in result.output and "0.1155" not in result.output
+    # the drawn rotor section of the reference spec's [rotor], in mm and rpm
+    assert "HP rotor section (30CrMoNiV5-11, 3000 rpm)" in result.output
+    assert "600.0" in result.output and "25.0" in result.output
 
 
 def test_simulate_round_trip_in_wire_units(tmp_path, reference_model, reference_spec):

@@ -46,8 +46,9 @@ _PREPARING = "running the model's design step (the first run compiles it, ~20 s)
 
 @turbine_app.command("show")
 def show(turbine: str = TURBINE_ARGUMENT) -> None:
-    """Print the design heat balance beside the model's own design point, the valves and the
-    stage table. Exit code 1, with the reason, if the model cannot run the spec.
+    """Print the design heat balance beside the model's own design point, the valves, the
+    stage table and the drawn HP rotor section (when the spec has ``[rotor]``).
+    Exit code 1, with the reason, if the model cannot run the spec.
 
     Example: steamtwin turbine show reference
     """
@@ -63,6 +64,9 @@ def show(turbine: str = TURBINE_ARGUMENT) -> None:
     console.print(turbine_tables.heat_balance_table(spec, model_point))
     console.print(turbine_tables.valve_table(spec))
     console.print(turbine_tables.stage_table(spec))
+    rotor = turbine_tables.rotor_table(spec)
+    if rotor is not None:
+        console.print(rotor)
     if reason is not None:
         fail(f"the model cannot run this spec: {reason}", 1)
 

@@ -12,8 +12,8 @@ from rich.table import Table
 from steamtwin.model.design_check import line_in_engineering_units
 from steamtwin.spec import TurbineSpec
 
-__all__ = ["design_point_table", "heat_balance_table", "line_table", "stage_table",
-           "valve_table"]
+__all__ = ["design_point_table", "heat_balance_table", "line_table", "rotor_table",
+           "stage_table", "valve_table"]
 
 _KELVIN = 273.15
 _LINE_HEADERS = ("p0 (MPa)", "T0 (°C)", "flow (t/h)", "p1 (MPa)", "T1 (°C)", "p ex (MPa)",
@@ -106,6 +106,28 @@ def valve_table(spec: TurbineSpec) -> Table:
     for valve in spec.control_stage.valves:
         table.add_row(valve.name, str(valve.opening_order), f"{valve.admission_arc:.2f}",
                       "yes" if valve.open_at_design else "no")
+    return table
+
+
+def rotor_table(spec: TurbineSpec) -> Table | None:
+    """The drawn HP rotor section (spec ``[rotor]``, mm, rpm) and its steam-wetted intervals;
+    None when the spec has no ``[rotor]``."""
+    rotor = spec.rotor
+    if rotor is None:
+        return None
+    table = Table(title=f"HP rotor section ({rotor.material}, "
+                        f"{rotor.rotational_speed * 30.0 / math.pi:.0f} rpm)")
+    for column in ("item", "value (mm)"):
+        table.add_column(column, justify="right")
+    rows = (("section length", rotor.axial_length), ("radius at the control stage",
+            rotor.control_stage_radius), ("radius from the first stage", rotor.stage_radius),
+            ("first stage starts at z", rotor.stage_start), ("bore radius", rotor.bore_radius),
+            ("groove root radius", rotor.groove_radius), ("groove depth", rotor.groove_depth),
+            ("groove centre at z", rotor.groove_position))
+    for name, metres in rows:
+        table.add_row(name, f"{metres * 1e3:.1f}")
+    for steam in rotor.steam:
+        table.add_row(f"steam of {steam.group}", f"z {steam.start * 1e3:.1f}–{steam.end * 1e3:.1f}")
     return table
 
 
