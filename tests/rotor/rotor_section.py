@@ -57,6 +57,9 @@ def _robin_load(v, w):
     return v * 2 * np.pi * w.x[0]
 
 
+_volume = _robin_load  # ∫φᵢ·2πr: on facets the wetted area, on cells the volume (m², m³)
+
+
 class Section:
     """The mesh, its bases and the assembled operators."""
 
@@ -112,6 +115,30 @@ def ramp(rate_per_min: float, dt: float, hold_s: float = 600.0) -> np.ndarray:
     times = np.arange(1, int((3 * hold_s + 2 * ramp_s) / dt) + 1) * dt
     knots = np.cumsum([0.0, hold_s, ramp_s, hold_s, ramp_s, hold_s])
     return np.interp(times, knots, [1.0, 1.0, 0.3, 0.3, 1.0, 1.0])
+
+
+def peak_shaving_day(dt: float, random_state: int) -> np.ndarray:
+    """24 h of load: ramps between random levels in [30, 100] % at random rates of 1–8 %/min,
+    each followed by a hold of 10–90 min (a deep peak-shaving day)."""
+    rng = np.random.default_rng(random_state)
+    knots_s, levels = [0.0], [1.0]
+    while knots_s[-1] < 86400.0:
+        target = rng.uniform(0.3, 1.0)
+        knots_s.append(knots_s[-1] + abs(target - levels[-1]) * 100.0 / rng.uniform(1, 8) * 60)
+        levels.append(target)
+        knots_s.append(knots_s[-1] + rng.uniform(600.0, 5400.0))
+        levels.append(target)
+    return np.interp(np.arange(1, int(86400 / dt) + 1) * dt, knots_s, levels)
+
+
+def surface_stress_operator(section: Section, nodes: list[int]) -> np.ndarray:
+    """S with σ_i = E·α/(1 − ν)·(T̄ − T_i) (Pa), the surface thermal stress of a long cylinder
+    (Timoshenko & Goodier, *Theory of Elasticity*, 3rd ed., 1970, §150) at ``nodes``, T̄ the
+    volume mean; CrMoV-like E = 210 GPa, α = 13e-6 /K, ν = 0.3."""
+    volume = asm(_volume, section.basis)
+    rows = np.tile(volume / volume.sum(), (len(nodes), 1))
+    rows[np.arange(len(nodes)), nodes] -= 1.0
+    return 2.1e11 * 1.3e-5 / (1 - 0.3) * rows
 
 
 def random_walk(steps: int, random_state: int) -> np.ndarray:

@@ -8,8 +8,15 @@ import json
 
 import numpy as np
 import pytest
-from rotor_section import BORE, RIM, Section, ramp, random_walk, steam_history
-from skfem import LinearForm, asm
+from rotor_section import (
+    BORE,
+    RIM,
+    Section,
+    ramp,
+    random_walk,
+    steam_history,
+    surface_stress_operator,
+)
 
 from steamtwin.errors import RotorAreaError
 from steamtwin.rotor.implicit_euler import SteamHistory
@@ -18,9 +25,6 @@ from steamtwin.rotor.transient_rom import ConductionRom, RomState, full_order_ru
 DT = 30.0
 OPERATING_K = 780.0
 REFERENCES = (700.0, 760.0, 820.0)
-# Surface thermal stress of a long cylinder, σ_θ = σ_z = E·α/(1 − ν)·(T̄ − T_surface)
-# (Timoshenko & Goodier, Theory of Elasticity, 3rd ed., 1970, §150), CrMoV-like E, α, ν.
-STRESS_PER_K = 2.1e11 * 1.3e-5 / (1 - 0.3)
 CENTRIFUGAL_PA = 1.0e8
 
 
@@ -37,12 +41,8 @@ def critical(section: Section) -> list[int]:
 
 @pytest.fixture(scope="module")
 def stress(section: Section, critical: list[int]) -> tuple[np.ndarray, np.ndarray]:
-    """S, s₀ of the surface thermal stress at the two rim nodes plus a centrifugal offset."""
-    volume = asm(LinearForm(lambda v, w: v * 2 * np.pi * w.x[0]), section.basis)
-    rows = np.tile(volume / volume.sum(), (2, 1))
-    rows[0, critical[0]] -= 1.0
-    rows[1, critical[1]] -= 1.0
-    return STRESS_PER_K * rows, np.full(2, CENTRIFUGAL_PA)
+    """S, s₀: the surface thermal stress at the two rim nodes plus a centrifugal offset."""
+    return surface_stress_operator(section, critical[:2]), np.full(2, CENTRIFUGAL_PA)
 
 
 @pytest.fixture(scope="module")
