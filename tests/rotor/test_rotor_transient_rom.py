@@ -8,6 +8,9 @@ import json
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
 from rotor_section import (
     BORE,
     RIM,
@@ -150,12 +153,26 @@ def test_properties_interpolated_in_the_mean_temperature_track_local_properties(
 def test_error_based_truncation_keeps_the_fewest_modes_within_the_tolerance(section, training,
                                                                              critical, rom):
     operators = section.operators(OPERATING_K)
-    tight = ConductionRom(tolerance=0.05).fit(operators, training, temperature_nodes=critical)
+    reports = []
+    tight = ConductionRom(tolerance=0.05).fit(operators, training, temperature_nodes=critical,
+                                              progress=lambda f, m: reports.append((f, m)))
     assert tight.training_error_ <= 0.05
+    fractions = [fraction for fraction, _ in reports]
+    assert fractions == sorted(fractions) and fractions[-1] == 1.0
+    assert f"{tight.n_modes_} modes" in reports[-1][1]
     assert tight.n_modes_ < rom.n_modes_  # the energy criterion alone keeps more
     fewer = ConductionRom(max_modes=tight.n_modes_ - 1).fit(operators, training,
                                                             temperature_nodes=critical)
     assert fewer.training_error_ > 0.05
+
+
+@given(arrays(float, st.integers(1, 40), elements=st.floats(allow_nan=False)),
+       st.floats(0.0, 1e9))
+def test_a_state_survives_json_bit_for_bit(coordinates, time_s):
+    state = RomState(coordinates, time_s)
+    restored = RomState.from_dict(json.loads(json.dumps(state.to_dict())))
+    np.testing.assert_array_equal(restored.coordinates, coordinates)
+    assert restored.time_s == time_s
 
 
 def test_a_saved_rom_loads_and_runs_identically(rom, tmp_path):
