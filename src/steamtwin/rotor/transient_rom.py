@@ -242,14 +242,18 @@ class ConductionRom:
 
     ``energy``: fraction of the snapshots' non-uniform M₀-energy the POD modes keep (1.0: all);
     ``max_modes``: cap on the modes (the uniform one included); ``tolerance``: if set, the
-    fewest modes whose training runs stay within it (K) at the temperature nodes.
+    fewest modes whose training runs stay within it (K) at the temperature nodes;
+    ``max_snapshots``: evenly spaced columns the POD reads at most (its thin SVD costs
+    nodes × snapshots²; 1-s snapshots of a rotor are nearly collinear), ``None`` for all — a ROM
+    with every mode then reproduces its training runs to round-off.
     """
 
     def __init__(self, energy: float = 1.0 - 1e-9, max_modes: int | None = None,
-                 tolerance: float | None = None) -> None:
+                 tolerance: float | None = None, max_snapshots: int | None = 2000) -> None:
         self.energy = energy
         self.max_modes = max_modes
         self.tolerance = tolerance
+        self.max_snapshots = max_snapshots
 
     # --- fit -------------------------------------------------------------------------------
     def fit(self, operators: AffineConduction | Sequence[AffineConduction],
@@ -269,6 +273,8 @@ class ConductionRom:
             raise RotorAreaError(f"energy must lie in (0, 1], got {self.energy!r}")
         if self.max_modes is not None and self.max_modes < 1:
             raise RotorAreaError(f"max_modes must be ≥ 1, got {self.max_modes!r}")
+        if self.max_snapshots is not None and self.max_snapshots < 2:
+            raise RotorAreaError(f"max_snapshots must be ≥ 2 or None, got {self.max_snapshots!r}")
         if self.tolerance is not None and not self.tolerance > 0.0:
             raise RotorAreaError(f"tolerance must be a positive number of kelvin, "
                                  f"got {self.tolerance!r}")
@@ -288,7 +294,11 @@ class ConductionRom:
             runs.append(full_order_run(table.operators, history,
                                        reference_temperatures=table.reference_temperatures))
         extra = [np.asarray(block, dtype=float).reshape(n, -1) for block in snapshots]
-        basis, singular = _pod(np.hstack([run.T for run in runs] + extra), table.first.mass)
+        columns = np.hstack([run.T for run in runs] + extra)
+        if self.max_snapshots is not None and columns.shape[1] > self.max_snapshots:
+            columns = columns[:, np.linspace(0, columns.shape[1] - 1, self.max_snapshots).round()
+                              .astype(np.int64)]
+        basis, singular = _pod(columns, table.first.mass)
         self.singular_values_ = singular
         self._project(table, basis, nodes, stress, stress_offset)
         energy_rank = self._energy_rank(singular)
@@ -449,7 +459,8 @@ class ConductionRom:
         metadata = {"format": FORMAT, "format_version": FORMAT_VERSION,
                     "groups": list(self.groups_), "n_modes": self.n_modes_,
                     "energy": self.energy, "max_modes": self.max_modes,
-                    "tolerance": self.tolerance, "training_error_k": self.training_error_,
+                    "tolerance": self.tolerance, "max_snapshots": self.max_snapshots,
+                    "training_error_k": self.training_error_,
                     "units": {"temperature": "K", "htc": "W/(m2 K)", "time": "s"}}
         with path.open("wb") as handle:
             np.savez_compressed(handle, metadata=np.array(json.dumps(metadata)),
@@ -471,7 +482,8 @@ class ConductionRom:
             raise RotorAreaError(f"{path}: format {metadata.get('format')!r} version "
                                  f"{metadata.get('format_version')!r}, expected {FORMAT!r} "
                                  f"version {FORMAT_VERSION}")
-        rom = cls(metadata["energy"], metadata["max_modes"], metadata["tolerance"])
+        rom = cls(metadata["energy"], metadata["max_modes"], metadata["tolerance"],
+                  metadata["max_snapshots"])
         for name, value in arrays.items():
             setattr(rom, name, value)
         rom.groups_ = tuple(metadata["groups"])
