@@ -1,5 +1,8 @@
 """Transient reduced-order model of the rotor conduction: POD–Galerkin on an AffineConduction.
 
+(Just over 500 lines: the compiled kernel, the estimator and its file format share the reduced
+arrays' layout, so they stay in one module; the full-order integrator is its own.)
+
 **Why POD–Galerkin, not balanced truncation.** The rotor system
 M·dT/dt + (K + Σ_g h_g(t)·H_g)·T = Σ_g h_g·T_g·b_g is *bilinear*: the heat-transfer
 coefficients multiply the state. Balanced truncation (Moore, IEEE TAC 26 (1981) 17) balances
@@ -70,8 +73,8 @@ _RANK_TOLERANCE = 1e-13
 
 @dataclass(frozen=True)
 class RomState:
-    """The ROM's carried state: reduced coordinates (K·√(J/K)·(J/K)⁻¹ᐟ², i.e. the field's
-    components in the M₀-orthonormal basis) and the time ``time_s`` (s) since the start."""
+    """The ROM's carried state: reduced coordinates (K·√(J/K), the field's components in the
+    M₀-orthonormal basis) and the time ``time_s`` (s) since the start."""
 
     coordinates: np.ndarray
     time_s: float = 0.0
@@ -242,7 +245,8 @@ class ConductionRom:
 
     ``energy``: fraction of the snapshots' non-uniform M₀-energy the POD modes keep (1.0: all);
     ``max_modes``: cap on the modes (the uniform one included); ``tolerance``: if set, the
-    fewest modes whose training runs stay within it (K) at the temperature nodes;
+    fewest modes whose training runs stay within it (K) at the temperature nodes (if none does,
+    all the energy criterion's, and ``training_error_`` says by how much it was missed);
     ``max_snapshots``: evenly spaced columns the POD reads at most (its thin SVD costs
     nodes × snapshots²; 1-s snapshots of a rotor are nearly collinear), ``None`` for all — a ROM
     with every mode then reproduces its training runs to round-off.
@@ -293,7 +297,11 @@ class ConductionRom:
                 progress(0.9 * index / len(training), f"full-order training run {index + 1}")
             runs.append(full_order_run(table.operators, history,
                                        reference_temperatures=table.reference_temperatures))
-        extra = [np.asarray(block, dtype=float).reshape(n, -1) for block in snapshots]
+        extra = [np.asarray(block, dtype=float) for block in snapshots]
+        for index, block in enumerate(extra):
+            if block.ndim != 2 or block.shape[0] != n or not np.all(np.isfinite(block)):
+                raise RotorAreaError(f"snapshots[{index}] has shape {block.shape}; expected "
+                                     f"finite ({n}, columns) nodal temperatures in K")
         columns = np.hstack([run.T for run in runs] + extra)
         if self.max_snapshots is not None and columns.shape[1] > self.max_snapshots:
             columns = columns[:, np.linspace(0, columns.shape[1] - 1, self.max_snapshots).round()
