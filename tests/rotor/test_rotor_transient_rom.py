@@ -76,6 +76,18 @@ def test_rom_without_truncation_reproduces_the_full_order_run(section, training,
     np.testing.assert_allclose(full.field(run.final), fom[-1], rtol=0, atol=1e-8)
 
 
+def test_snapshots_from_another_solver_alone_make_a_rom(section, training, critical):
+    operators = section.operators(OPERATING_K)
+    fom = full_order_run(operators, training[1])
+    external = ConductionRom(energy=1.0).fit(operators, [], snapshots=[fom.T],
+                                             temperature_nodes=critical)
+    assert np.isnan(external.training_error_)
+    run = external.simulate(training[1], external.state_from_field(fom[0]))
+    np.testing.assert_allclose(run.temperature, fom[1:, critical], rtol=0, atol=1e-8)
+    with pytest.raises(RotorAreaError, match=r"snapshots\[0\] has shape \(3, 99\)"):
+        ConductionRom().fit(operators, [], snapshots=[np.ones((3, 99))])
+
+
 @pytest.mark.parametrize("load", [ramp(5.0, DT), random_walk(240, random_state=3)],
                          ids=["5 %/min ramp", "random walk"])
 def test_unseen_loads_within_a_hundredth_of_the_one_kelvin_target(rom, section, critical,
