@@ -135,12 +135,13 @@ def _cholesky_solve(matrix: np.ndarray, rhs: np.ndarray) -> None:
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _observe(coordinates: np.ndarray, outputs: np.ndarray, offset: np.ndarray,
-             out: np.ndarray) -> None:
+             out: np.ndarray, row: int) -> None:
+    """out[row] = outputs·coordinates + offset."""
     for o in range(outputs.shape[0]):
         value = offset[o]
         for p in range(coordinates.shape[0]):
             value += outputs[o, p] * coordinates[p]
-        out[o] = value
+        out[row, o] = value
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -172,8 +173,9 @@ def _advance(coordinates: np.ndarray, htc: np.ndarray, steam_temperature: np.nda
                 value_rhs += htc[step, g] * steam_temperature[step, g] * load[g, p]
             rhs[p] = value_rhs
         _cholesky_solve(matrix, rhs)
-        state[:] = rhs
-        _observe(state, outputs, offset, out[step])
+        for p in range(r):
+            state[p] = rhs[p]
+        _observe(state, outputs, offset, out, step)
     return state
 
 
@@ -181,16 +183,16 @@ def _advance(coordinates: np.ndarray, htc: np.ndarray, steam_temperature: np.nda
 def _checked_step(coordinates: np.ndarray, htc: np.ndarray, steam_temperature: np.ndarray,
                   dt: float, references: np.ndarray, mass: np.ndarray, stiffness: np.ndarray,
                   robin: np.ndarray, load: np.ndarray,
-                  mean_weights: np.ndarray) -> np.ndarray | None:
+                  mean_weights: np.ndarray) -> np.ndarray:
     """One :func:`_advance` step after the checks of :class:`SteamHistory` (finite, htc ≥ 0,
-    T > 0 K, dt > 0 s); ``None`` if they fail. One compiled call keeps the streaming step
+    T > 0 K, dt > 0 s); an empty array if they fail. One compiled call keeps the streaming step
     within its µs budget (each argument a Python call passes costs a fraction of one)."""
     for g in range(htc.shape[0]):
         if not (np.isfinite(htc[g]) and htc[g] >= 0.0 and np.isfinite(steam_temperature[g])
                 and steam_temperature[g] > 0.0):
-            return None
+            return np.empty(0)
     if not (np.isfinite(dt) and dt > 0.0):
-        return None
+        return np.empty(0)
     return _advance(coordinates, htc.reshape(1, -1), steam_temperature.reshape(1, -1), dt,
                     references, mass, stiffness, robin, load, mean_weights,
                     np.empty((0, coordinates.shape[0])), np.empty(0), np.empty((1, 0)))
@@ -442,21 +444,21 @@ class ConductionRom:
         self._check_fitted()
         htc = np.asarray(htc, dtype=float)
         steam_temperature = np.asarray(steam_temperature, dtype=float)
-        final = None
+        final = np.empty(0)
         if htc.shape == steam_temperature.shape == (len(self.groups_),):
             final = _checked_step(self._coordinates(state), htc, steam_temperature, float(dt),
                                   self.reference_temperatures_, *self._online)
-        if final is None:
+        if not final.size:
             self._history(htc, steam_temperature, dt)  # raises the error that says what is wrong
         return RomState(final, state.time_s + dt)
 
     def observe(self, state: RomState) -> tuple[np.ndarray, np.ndarray]:
         """(temperature at the temperature nodes in K, output y = S·T + s₀) of ``state``."""
         self._check_fitted()
-        out = np.empty(self.output_matrix_.shape[0])
-        _observe(self._coordinates(state), self._outputs, self.output_offset_, out)
+        out = np.empty((1, self.output_matrix_.shape[0]))
+        _observe(self._coordinates(state), self._outputs, self.output_offset_, out, 0)
         k = self.temperature_nodes_.size
-        return out[:k], out[k:]
+        return out[0, :k], out[0, k:]
 
     # --- file ------------------------------------------------------------------------------
     def save(self, path: str | Path) -> Path:
