@@ -22,7 +22,7 @@ from rotor_section import (
 )
 
 from steamtwin.errors import RotorAreaError
-from steamtwin.rotor.implicit_euler import SteamHistory
+from steamtwin.rotor.implicit_euler import SteamHistory, bracket
 from steamtwin.rotor.transient_rom import ConductionRom, RomState, full_order_run
 
 DT = 30.0
@@ -176,6 +176,17 @@ def test_error_based_truncation_keeps_the_fewest_modes_within_the_tolerance(sect
     fewer = ConductionRom(max_modes=tight.n_modes_ - 1).fit(operators, training,
                                                             temperature_nodes=critical)
     assert fewer.training_error_ > 0.05
+
+
+@given(st.lists(st.floats(200.0, 1200.0), min_size=1, max_size=5, unique=True),
+       st.floats(0.0, 1500.0), st.floats(-1e3, 1e3), st.floats(-10.0, 10.0))
+def test_bracket_interpolates_linear_properties_exactly_and_clamps(references, mean, a, b):
+    references = np.sort(references)
+    i, j, theta = bracket(mean, references)
+    assert 0.0 <= theta <= 1.0 and j in (i, i + 1)
+    value = (1 - theta) * (a + b * references[i]) + theta * (a + b * references[j])
+    clamped = np.clip(mean, references[0], references[-1])
+    assert value == pytest.approx(a + b * clamped, rel=1e-9, abs=1e-9 * (abs(a) + 1e4))
 
 
 @given(arrays(float, st.integers(1, 40), elements=st.floats(allow_nan=False)),
