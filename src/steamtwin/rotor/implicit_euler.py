@@ -219,9 +219,12 @@ def full_order_run(operators: AffineConduction | Sequence[AffineConduction],
                                  f"({first.size},) nodal temperatures in K")
     fields = np.empty((history.steps + 1, first.size))
     fields[0] = field
+    factored, factor = np.empty(0), None
     for k in range(history.steps):
         htc, steam = history.htc[k], history.steam_temperature[k]
         matrix, mass = table.system(float(weights @ field), htc, history.dt)
-        field = spla.spsolve(matrix, mass @ field / history.dt + first.load(htc, steam))
+        if not np.array_equal(matrix.data, factored):  # a hold with frozen properties reuses it
+            factored, factor = matrix.data, spla.splu(matrix, permc_spec="MMD_AT_PLUS_A")
+        field = factor.solve(mass @ field / history.dt + first.load(htc, steam))
         fields[k + 1] = field
     return fields
