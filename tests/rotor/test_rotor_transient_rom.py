@@ -65,14 +65,21 @@ def test_rom_without_truncation_reproduces_the_full_order_run(section, training,
                                                               stress, references):
     operators = [section.operators(t) for t in references]
     kwargs = {"reference_temperatures": references} if len(references) > 1 else {}
+    # E/(1 − ν) falls with temperature: one stress operator per reference, interpolated too
+    factors = np.linspace(1.0, 0.9, len(references))[:, None, None]
     full = ConductionRom(energy=1.0).fit(operators, training[:1], temperature_nodes=critical,
-                                         output_operator=stress[0], output_offset=stress[1],
-                                         **kwargs)
+                                         output_operator=factors * stress[0],
+                                         output_offset=factors[:, :, 0] * stress[1], **kwargs)
     fom = full_order_run(operators, training[0], **kwargs)
     run = full.simulate(training[0])
     np.testing.assert_allclose(run.temperature, fom[1:, critical], rtol=0, atol=1e-8)
-    np.testing.assert_allclose(run.output, fom[1:] @ stress[0].T + stress[1], rtol=1e-12,
-                               atol=1e-3)  # Pa, of stresses ~1e8
+    capacity = operators[0].mass @ np.ones(operators[0].size)
+    mean = fom[1:] @ capacity / capacity.sum()
+    theta = np.clip((mean - references[0]) / (references[-1] - references[0] + 1e-300), 0, 1)
+    stress_k = factors[:, None, :, 0] * (fom[1:] @ stress[0].T + stress[1])  # (refs, t, out)
+    expected = (1 - theta[:, None]) * stress_k[0] + theta[:, None] * stress_k[-1]
+    assert 0 < theta.min() < theta.max() < 1 or len(references) == 1
+    np.testing.assert_allclose(run.output, expected, rtol=1e-12, atol=1e-3)  # Pa, of ~1e8
     np.testing.assert_allclose(full.field(run.final), fom[-1], rtol=0, atol=1e-8)
 
 
@@ -230,6 +237,9 @@ def test_bad_input_is_refused_with_a_clear_message(rom, section, training):
     with pytest.raises(RotorAreaError, match="output_operator has shape"):
         ConductionRom().fit(section.operators(OPERATING_K), training,
                             output_operator=np.ones((2, 5)))
+    with pytest.raises(RotorAreaError, match=r"one per reference temperature"):
+        ConductionRom().fit(section.operators(OPERATING_K), training,
+                            output_operator=np.ones((2, 3, section.basis.N)))
     with pytest.raises(RotorAreaError, match="strictly ascending"):
         ConductionRom().fit([section.operators(t) for t in REFERENCES[:2]], training,
                             reference_temperatures=REFERENCES[1::-1])

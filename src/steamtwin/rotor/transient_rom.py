@@ -135,13 +135,20 @@ def _cholesky_solve(matrix: np.ndarray, rhs: np.ndarray) -> None:
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _observe(coordinates: np.ndarray, outputs: np.ndarray, offset: np.ndarray,
-             out: np.ndarray, row: int) -> None:
-    """out[row] = outputs·coordinates + offset."""
-    for o in range(outputs.shape[0]):
-        value = offset[o]
+             references: np.ndarray, mean_weights: np.ndarray, out: np.ndarray,
+             row: int) -> None:
+    """out[row] = outputs·coordinates + offset, both interpolated in the mean temperature of
+    ``coordinates`` like the conduction operators."""
+    mean = 0.0
+    for p in range(coordinates.shape[0]):
+        mean += mean_weights[p] * coordinates[p]
+    i, j, theta = bracket(mean, references)
+    for o in range(outputs.shape[1]):
+        low, high = offset[i, o], offset[j, o]
         for p in range(coordinates.shape[0]):
-            value += outputs[o, p] * coordinates[p]
-        out[row, o] = value
+            low += outputs[i, o, p] * coordinates[p]
+            high += outputs[j, o, p] * coordinates[p]
+        out[row, o] = (1.0 - theta) * low + theta * high
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -175,7 +182,7 @@ def _advance(coordinates: np.ndarray, htc: np.ndarray, steam_temperature: np.nda
         _cholesky_solve(matrix, rhs)
         for p in range(r):
             state[p] = rhs[p]
-        _observe(state, outputs, offset, out, step)
+        _observe(state, outputs, offset, references, mean_weights, out, step)
     return state
 
 
@@ -195,7 +202,7 @@ def _checked_step(coordinates: np.ndarray, htc: np.ndarray, steam_temperature: n
         return np.empty(0)
     return _advance(coordinates, htc.reshape(1, -1), steam_temperature.reshape(1, -1), dt,
                     references, mass, stiffness, robin, load, mean_weights,
-                    np.empty((0, coordinates.shape[0])), np.empty(0), np.empty((1, 0)))
+                    np.empty((1, 0, coordinates.shape[0])), np.empty((1, 0)), np.empty((1, 0)))
 
 
 def _m_orthonormal(basis: np.ndarray, mass: sp.spmatrix) -> np.ndarray:
@@ -219,22 +226,27 @@ def _pod(snapshots: np.ndarray, mass: sp.spmatrix) -> tuple[np.ndarray, np.ndarr
 
 
 def _output_map(operator: np.ndarray | sp.spmatrix | None, offset: np.ndarray | None,
-                n: int) -> tuple[np.ndarray, np.ndarray]:
-    """The output operator S (outputs × n, dense) and offset s₀, validated."""
+                n: int, references: int) -> tuple[np.ndarray, np.ndarray]:
+    """The output operator S (references × outputs × n, dense) and offset s₀ (references ×
+    outputs), validated; one S (outputs × n) serves every reference temperature."""
     if operator is None:
         if offset is not None:
             raise RotorAreaError("output_offset given without an output_operator")
-        return np.zeros((0, n)), np.zeros(0)
-    matrix = operator.toarray() if sp.issparse(operator) else np.atleast_2d(
-        np.asarray(operator, dtype=float))
-    if matrix.ndim != 2 or matrix.shape[1] != n or not np.all(np.isfinite(matrix)):
-        raise RotorAreaError(f"output_operator has shape {matrix.shape}; expected finite "
-                             f"(outputs, {n}) mapping nodal temperatures (K) to the outputs")
-    shift = np.zeros(matrix.shape[0]) if offset is None else np.asarray(offset, dtype=float)
-    if shift.shape != (matrix.shape[0],):
-        raise RotorAreaError(f"output_offset has shape {shift.shape}, expected "
-                             f"({matrix.shape[0]},) like the output_operator's rows")
-    return matrix, shift
+        return np.zeros((references, 0, n)), np.zeros((references, 0))
+    matrix = operator.toarray() if sp.issparse(operator) else np.asarray(operator, dtype=float)
+    if matrix.ndim == 2:
+        matrix = np.broadcast_to(matrix, (references, *matrix.shape))
+    if matrix.ndim != 3 or matrix.shape[0] != references or matrix.shape[2] != n or not np.all(
+            np.isfinite(matrix)):
+        raise RotorAreaError(f"output_operator has shape {np.shape(operator)}; expected finite "
+                             f"(outputs, {n}) or ({references}, outputs, {n}) — one per "
+                             "reference temperature — mapping nodal temperatures (K) to outputs")
+    shape = matrix.shape[:2]
+    shift = np.zeros(shape) if offset is None else np.asarray(offset, dtype=float)
+    if shift.shape not in (shape, shape[1:]) or not np.all(np.isfinite(shift)):
+        raise RotorAreaError(f"output_offset has shape {shift.shape}, expected finite "
+                             f"({shape[1]},) or {shape} like the output_operator")
+    return matrix, np.broadcast_to(shift, shape)
 
 
 _ARRAYS = ("modes_", "projector_", "reference_temperatures_", "reduced_mass_",
@@ -290,7 +302,8 @@ class ConductionRom:
         if np.any((nodes < 0) | (nodes >= n)):
             raise RotorAreaError(f"temperature_nodes must be node indices in [0, {n}), got "
                                  f"{nodes[(nodes < 0) | (nodes >= n)].tolist()}")
-        stress, stress_offset = _output_map(output_operator, output_offset, n)
+        stress, stress_offset = _output_map(output_operator, output_offset, n,
+                                            len(table.operators))
         if not training and not snapshots:
             raise RotorAreaError("fit needs at least one training history or snapshot block")
         runs = []
@@ -348,16 +361,19 @@ class ConductionRom:
         self.reduced_load_ = np.stack([basis.T @ b for b in first.robin_load])
         self.mean_weights_ = table.mean_weights @ basis
         self.temperature_nodes_ = nodes
-        self.output_matrix_ = np.vstack([basis[nodes], stress @ basis])
-        self.output_offset_ = np.concatenate([np.zeros(nodes.size), stress_offset])
+        references = len(table.operators)
+        self.output_matrix_ = np.stack([np.vstack([basis[nodes], matrix @ basis])
+                                        for matrix in stress])
+        self.output_offset_ = np.hstack([np.zeros((references, nodes.size)), stress_offset])
 
     def _training_error(self, history: SteamHistory, reference: np.ndarray,
                         nodes: np.ndarray) -> float:
         rows = self.modes_[nodes] if nodes.size else self.modes_
         out = np.empty((history.steps, rows.shape[0]))
         start = self.initial_state(history.htc[0], history.steam_temperature[0])
-        self._kernel(start.coordinates, history, np.ascontiguousarray(rows[:, :self.n_modes_]),
-                     np.zeros(rows.shape[0]), out)
+        self._kernel(start.coordinates, history,
+                     np.ascontiguousarray(rows[None, :, :self.n_modes_]),
+                     np.zeros((1, rows.shape[0])), out)
         return float(np.max(np.abs(out - reference)))
 
     # --- online ----------------------------------------------------------------------------
@@ -373,7 +389,7 @@ class ConductionRom:
                         self.reduced_stiffness_[:, :rank, :rank].copy(),
                         self.reduced_robin_[:, :rank, :rank].copy(),
                         self.reduced_load_[:, :rank].copy(), self.mean_weights_[:rank].copy())
-        self._outputs = np.ascontiguousarray(self.output_matrix_[:, :rank])
+        self._outputs = np.ascontiguousarray(self.output_matrix_[:, :, :rank])
 
     def _kernel(self, start: np.ndarray, history: SteamHistory, outputs: np.ndarray,
                 offset: np.ndarray, out: np.ndarray) -> np.ndarray:
@@ -430,7 +446,7 @@ class ConductionRom:
         history = self._history(history.htc, history.steam_temperature, history.dt)
         if initial is None:
             initial = self.initial_state(history.htc[0], history.steam_temperature[0])
-        out = np.empty((history.steps, self._outputs.shape[0]))
+        out = np.empty((history.steps, self._outputs.shape[1]))
         final = self._kernel(self._coordinates(initial), history, self._outputs,
                              self.output_offset_, out)
         k = self.temperature_nodes_.size
@@ -455,8 +471,9 @@ class ConductionRom:
     def observe(self, state: RomState) -> tuple[np.ndarray, np.ndarray]:
         """(temperature at the temperature nodes in K, output y = S·T + s₀) of ``state``."""
         self._check_fitted()
-        out = np.empty((1, self.output_matrix_.shape[0]))
-        _observe(self._coordinates(state), self._outputs, self.output_offset_, out, 0)
+        out = np.empty((1, self._outputs.shape[1]))
+        _observe(self._coordinates(state), self._outputs, self.output_offset_,
+                 self.reference_temperatures_, self._online[-1], out, 0)
         k = self.temperature_nodes_.size
         return out[0, :k], out[0, k:]
 
@@ -504,7 +521,9 @@ class ConductionRom:
                     "reduced_stiffness_": (rom.reference_temperatures_.size, modes, modes),
                     "reduced_robin_": (len(rom.groups_), modes, modes),
                     "reduced_load_": (len(rom.groups_), modes),
-                    "output_matrix_": (rom.output_offset_.size, modes)}
+                    "output_matrix_": (*rom.output_offset_.shape, modes),
+                    "output_offset_": (rom.reference_temperatures_.size,
+                                       rom.output_offset_.shape[-1])}
         wrong = [f"{name.rstrip('_')} {getattr(rom, name).shape} (expected {shape})"
                  for name, shape in expected.items() if getattr(rom, name).shape != shape]
         if wrong or not 1 <= metadata["n_modes"] <= modes:
