@@ -371,9 +371,11 @@ class ConductionRom:
         rows = self.modes_[nodes] if nodes.size else self.modes_
         out = np.empty((history.steps, rows.shape[0]))
         start = self.initial_state(history.htc[0], history.steam_temperature[0])
+        rows = rows[:, :self.n_modes_]
+        references = self.reference_temperatures_.size  # the kernel reads one block per reference
         self._kernel(start.coordinates, history,
-                     np.ascontiguousarray(rows[None, :, :self.n_modes_]),
-                     np.zeros((1, rows.shape[0])), out)
+                     np.ascontiguousarray(np.broadcast_to(rows, (references, *rows.shape))),
+                     np.zeros((references, rows.shape[0])), out)
         return float(np.max(np.abs(out - reference)))
 
     # --- online ----------------------------------------------------------------------------
