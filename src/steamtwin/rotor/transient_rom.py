@@ -1,6 +1,6 @@
 """Transient reduced-order model of the rotor conduction: POD–Galerkin on an AffineConduction.
 
-(Just over 500 lines: the compiled kernel, the estimator and its file format share the reduced
+(About 530 lines: the compiled kernel, the estimator and its file format share the reduced
 arrays' layout, so they stay in one module; the full-order integrator is its own.)
 
 **Why POD–Galerkin, not balanced truncation.** The rotor system
