@@ -38,7 +38,7 @@ from typing import Annotated, Literal
 
 import duckdb
 import pandas as pd
-from fastapi import FastAPI, Query, Request
+from fastapi import FastAPI, Header, Query, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, JSONResponse, Response, StreamingResponse
 from fastapi.staticfiles import StaticFiles
@@ -410,12 +410,17 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
 
     @app.get("/api/events", summary="Live samples and alarms (server-sent events)",
              response_class=StreamingResponse)
-    async def events(unit: str | None = None) -> StreamingResponse:
+    async def events(unit: str | None = None, last_event_id: Annotated[str | None, Header(
+            description="the id (sample time, ISO 8601) of the last event received: the "
+            "stream starts with the samples stored since, and the active alarms")] = None
+                     ) -> StreamingResponse:
         """``text/event-stream``: ``sample`` (time, values by source/signal), ``alarm`` (a
-        new alarm), ``alarms`` (the active list after a change)."""
+        new alarm), ``alarms`` (the active list after a change). A reconnecting client that
+        sends ``Last-Event-ID`` first gets the samples it missed (:mod:`steamtwin.web.events`)."""
         if unit is not None:
             await asyncio.to_thread(check_unit, unit)
-        return StreamingResponse(feed.stream(unit), media_type="text/event-stream",
+        since = None if not last_event_id else parse_time(last_event_id, "Last-Event-ID")
+        return StreamingResponse(feed.stream(unit, since), media_type="text/event-stream",
                                  headers={"cache-control": "no-store",
                                           "x-accel-buffering": "no"})
 
