@@ -197,15 +197,18 @@ class HistorianReader:
         return last
 
     def signals(self, unit: str, max_age_s: float = 0.0) -> list[tuple[str, str]]:
-        """(source, signal) pairs stored for ``unit``'s last committed sample, sorted; an
-        answer at most ``max_age_s`` old may be reused."""
+        """(source, signal) pairs stored for ``unit``'s last committed sample — or, before
+        its first final block (a service just started: the gate's look-ahead), its newest
+        provisional sample — sorted; an answer at most ``max_age_s`` old may be reused."""
         now = time.monotonic()
         cached = self._signals.get(unit)
         if cached is not None and now - cached[0] <= max_age_s:
             return cached[1]
-        last = self.last_times(max_age_s).get(unit)
+        last, table = self.last_times(max_age_s).get(unit), "series"
+        if last is None and self._has_provisional():
+            last, table = self.live_times().get(unit), "provisional"
         pairs = [] if last is None else [(source, signal) for source, signal in self._rows(
-            "SELECT DISTINCT source, signal FROM series WHERE unit = ? AND time = ? "
+            f"SELECT DISTINCT source, signal FROM {table} WHERE unit = ? AND time = ? "
             "ORDER BY source, signal", [unit, last.to_pydatetime()])]
         self._signals[unit] = (now, pairs)
         return pairs
