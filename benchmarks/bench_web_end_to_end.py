@@ -7,8 +7,9 @@
   which every tag of a sample has been written is recorded;
 * **service**: the real CLI, ``steamtwin serve --config … --http-port …`` in a process of its
   own (an OPC UA source, so provisional rows are on: ``live.runner``), reading that server;
-* **browser**: Debian's headless chromium through Playwright opens ``/units/unit1`` once the
-  service has stored its first final block (the page lists the signals stored so far), and a
+* **browser**: Debian's headless chromium through Playwright opens ``/units/unit1`` as soon
+  as the service has stored its first (provisional) sample, or with ``--after-final`` once it
+  has stored its first final block (after the gate's 60-s look-ahead), and a
   hook on the first temperature chart's uPlot ``draw`` records the wall clock (``Date.now()``,
   the same clock) and the newest sample time drawn.
 
@@ -93,23 +94,29 @@ class _Plant(threading.Thread):
         await server.stop()
 
 
-def _first_final_sample(url: str, timeout_s: float = 300.0) -> None:
-    """Wait until the service has stored its first final block (/api/units' last_sample)."""
+def _first_sample(url: str, final: bool, timeout_s: float = 300.0) -> None:
+    """Wait until the service has stored its first sample: a provisional one (its signals are
+    listed), or with ``final`` its first final block (/api/units' last_sample)."""
     deadline = time.monotonic() + timeout_s
+    path = "/api/units" if final else "/api/units/unit1/signals"
     while time.monotonic() < deadline:
         try:
-            with urllib.request.urlopen(f"{url}/api/units", timeout=5) as answer:
-                if json.loads(answer.read())[0]["last_sample"]:
+            with urllib.request.urlopen(f"{url}{path}", timeout=5) as answer:
+                found = json.loads(answer.read())
+                if found and (not final or found[0]["last_sample"]):
                     return
         except OSError:
             pass  # not listening yet
         time.sleep(1.0)
-    raise SystemExit(f"no final sample stored within {timeout_s:.0f} s")
+    raise SystemExit(f"no sample stored within {timeout_s:.0f} s")
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--changes", type=int, default=120, help="samples timed in the page")
+    parser.add_argument("--after-final", action="store_true",
+                        help="open the page after the first final block (default: as soon as "
+                        "the first provisional sample is stored)")
     args = parser.parse_args()
     signals = run_plant("deep-peak-50", hours=0.15, random_state=0).measured
     plant = _Plant(signals, _free_port())
@@ -129,7 +136,7 @@ def main() -> None:
              str(base / "service.toml"), "--http-port", str(http_port), "--log-level",
              "warning"], stdout=subprocess.DEVNULL)
         try:
-            _first_final_sample(url)
+            _first_sample(url, args.after_final)
             with sync_playwright() as playwright:
                 browser = playwright.chromium.launch(executable_path=CHROMIUM, args=ARGS)
                 page = browser.new_page(viewport={"width": 1366, "height": 768})
