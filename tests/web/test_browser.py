@@ -143,8 +143,9 @@ def _stored(site, source: str, signal: str, start_s: int, end_s: int) -> np.ndar
 
 def test_the_api_refuses_a_request_without_the_token(browser, site):
     page = browser.new_page()
-    page.goto(site.url + "/units/unit1/history")  # the shell itself carries no data
+    page.goto(site.url + "/units/unit1")  # the shell itself carries no data
     assert "bearer token is required" in page.locator("#status.bad").text_content()
+    assert page.locator("#tiles > *, #temperatures > *, canvas, td").count() == 0
     answers = page.evaluate("""async (token) => Promise.all([
         fetch('/api/units').then((r) => r.status),
         fetch('/api/units', {headers: {Authorization: 'Bearer ' + token}}).then((r) => r.status),

@@ -70,3 +70,33 @@ def test_one_poll_reaches_every_subscriber_and_a_slow_one_is_dropped():
     assert ['"unit":"u1"' in text for text in got_both] == [True, False]
     assert [text.split("\n")[0] for text in got_slow] == [
         "event: sample", "event: sample", "event: sample", "event: dropped"]
+
+
+def test_a_reconnecting_client_gets_what_it_missed_once():
+    """Last-Event-ID: the samples after it from the historian, the active alarms, then live;
+    a sample both stored before the historian was read and queued live is sent once."""
+
+    async def run() -> list[str]:
+        historian = _Historian()
+        historian.alarms = lambda unit, active: [{"id": 1, "unit": unit}]
+        feed = LiveFeed(historian)
+        await feed.poll()
+        for k in (1, 2, 3):
+            historian.store("u1", k)
+        stream = feed.stream("u1", T0 + pd.Timedelta(seconds=1))
+        assert await anext(stream) == "retry: 2000\n\n"  # subscribed from here on
+        historian.store("u1", 4)
+        await feed.poll()  # queues 2, 3, 4 live while the historian also holds them
+        got = [await anext(stream) for _ in range(4)]
+        historian.store("u1", 5)
+        await feed.poll()
+        got.append(await anext(stream))
+        return got
+
+    got = asyncio.run(run())
+    ids = [line.removeprefix("id: ") for text in got for line in text.split("\n")
+           if line.startswith("id: ")]
+    assert ids == [(T0 + pd.Timedelta(seconds=k)).isoformat() for k in (2, 3, 4, 5)]
+    assert [text.split("\n")[0] for text in got] == [
+        "event: sample", "event: sample", "event: sample", "event: alarms", "event: sample"]
+    assert '"active":[{"id":1,"unit":"u1"}]' in got[3]

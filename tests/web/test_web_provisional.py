@@ -37,3 +37,22 @@ def test_provisional_rows_reach_the_feed_and_give_way_to_the_final_ones(tmp_path
             assert reader.live_times()["unit1"] == START + 64 * SECOND
         finally:
             reader.close()
+
+
+def test_before_the_first_final_block_the_signals_are_the_provisional_samples(tmp_path):
+    """A service just started has only provisional rows (the gate's look-ahead): the pages
+    still learn which signals the unit has, so they draw the live samples."""
+    with LiveHistorian(tmp_path / "twin.duckdb") as historian:
+        early, early_flags = unit_block(0, 5)
+        historian.store_provisional("unit1", early, early_flags)
+        reader = HistorianReader(historian.connection.cursor, size=1)
+        try:
+            expected = sorted((source, signal) for source, frame in early.items()
+                              for signal in frame.columns)
+            assert reader.last_times() == {}
+            assert reader.signals("unit1") == expected
+            historian.commit_block("unit1", *unit_block(0, 5))
+            assert reader.signals("unit1") == expected  # now from the final rows
+            assert reader.signals("unit2") == []
+        finally:
+            reader.close()

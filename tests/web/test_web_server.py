@@ -104,6 +104,71 @@ def test_a_committed_sample_and_alarm_reach_the_event_stream(filled_db):
     assert [s.value for s in buckets] == sorted(s.value for s in buckets)  # cumulative
 
 
+async def _reconnect(db) -> tuple[dict, list[tuple[str, dict]], list[tuple[str, dict]]]:
+    """Samples stored while a client was away; it reconnects with the last id it saw."""
+    bound: dict[str, int] = {}
+    companion = http_companion(HttpSettings(port=0, web=WebSettings(poll_s=0.05)),
+                               on_bound=lambda _host, port: bound.update(port=port))
+    historian = LiveHistorian(db)
+    historian.open()
+    frames, flags = unit_block(7200, 5)
+    historian.commit_block("unit1", frames, flags)  # stored while the client was away
+    missed = dict(frames["twin"]["blade_leading_edge"].items())
+    done = asyncio.Event()
+    server = asyncio.create_task(companion(historian, done))
+    try:
+        async with httpx.AsyncClient(base_url=f"http://127.0.0.1:{bound['port']}",
+                                     timeout=5.0) as client:
+            async with asyncio.timeout(5.0):
+                while True:  # until uvicorn has started
+                    try:
+                        await client.get("/health")
+                        break
+                    except httpx.TransportError:
+                        await asyncio.sleep(0.05)
+            bad = (await client.get("/api/events", headers={"last-event-id": "yesterday"})
+                   ).json()
+            seen = (START + pd.Timedelta(seconds=7201)).isoformat()
+            async with client.stream("GET", "/api/events?unit=unit1",
+                                     headers={"last-event-id": seen}) as stream:
+                lines = stream.aiter_lines()
+                backfill = [await _named_event(lines, 1.0) for _ in range(4)]
+                frames, flags = unit_block(7205, 1)
+                historian.commit_block("unit1", frames, flags)
+                live = [await _named_event(lines, 5.0)]
+    finally:
+        done.set()
+        await server
+        historian.close()
+    assert all(pd.Timestamp(data["time"]) in missed for name, data in backfill
+               if name == "sample")
+    return bad, backfill, live
+
+
+async def _named_event(lines, timeout_s: float) -> tuple[str, dict]:
+    """The next event's name and data on an SSE line stream."""
+    event = None
+    async with asyncio.timeout(timeout_s):
+        async for line in lines:
+            if line.startswith("event: "):
+                event = line.removeprefix("event: ")
+            elif line.startswith("data: ") and event is not None:
+                return event, json.loads(line.removeprefix("data: "))
+    raise AssertionError("the stream ended")
+
+
+def test_a_client_reconnecting_with_last_event_id_gets_the_samples_it_missed(filled_db):
+    bad, backfill, live = asyncio.run(_reconnect(filled_db))
+    assert "Last-Event-ID='yesterday': not an ISO 8601 time" in bad["error"]
+    second = pd.Timedelta(seconds=1)
+    assert [(name, data.get("time")) for name, data in backfill] == [
+        ("sample", (START + k * second).isoformat()) for k in (7202, 7203, 7204)] + [
+        ("alarms", None)]
+    assert [alarm["kind"] for alarm in backfill[3][1]["active"]] == ["degradation"]
+    assert [(name, data["time"]) for name, data in live] == [
+        ("sample", (START + 7205 * second).isoformat())]
+
+
 def test_a_port_in_use_is_a_clear_error():
     taken = bind_socket("127.0.0.1", 0)
     try:

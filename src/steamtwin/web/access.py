@@ -16,10 +16,20 @@
   compared in constant time against every configured token (``hmac.compare_digest`` of
   SHA-256 digests, so neither the length nor the first differing byte leaks; the loop does not
   stop at a match).
-* **Page shells**: a ``GET`` of a dashboard page (``/``, ``/units/…``) or of a static file
-  (``/static/…``, ``/vendor/…``) needs no token: a browser cannot add a header to a
-  navigation, and these carry no data — the pages' scripts fetch every figure from ``/api``
-  with the token the operator typed (:func:`is_page_shell`).
+* **Page shells**: a ``GET`` of a dashboard page (``/``, ``/units/…``), of a static file
+  (``/static/…``, ``/vendor/…``) or of the API reference (``/docs``, ``/openapi.json``)
+  needs no token (:func:`is_page_shell`): a browser cannot add a header to a navigation, and
+  these carry no data — a unit page's shell is the same for any name in the path (the unit is
+  not looked up, so the shells do not even tell which units exist); the pages' scripts fetch
+  every figure from ``/api`` with the token the operator typed, kept in the tab's
+  ``sessionStorage`` and sent as the ``Authorization`` header. Deliberately no login page and
+  no session cookie: a cookie is sent by the browser on its own, so the acknowledge ``POST``
+  would need cross-site request forgery defences (OWASP CSRF Prevention Cheat Sheet), and a
+  token in the URL (query or path) would land in the history and in proxy logs (RFC 6750
+  §5.3: "Don't pass bearer tokens in page URLs"); a header sent by the page's own script has
+  neither problem. ``/health`` and ``/metrics`` (last-sample times, alarm counts) need the
+  token like ``/api`` (a Prometheus scrape job can send one: ``authorization`` in its
+  ``scrape_config``).
 * **Security headers** on every response, errors included (OWASP Secure Headers Project):
   ``Content-Security-Policy: default-src 'self'; …`` (no inline script, no other origin: the
   pages and their scripts come from the package; W3C CSP Level 3), ``X-Content-Type-Options:
@@ -165,11 +175,13 @@ def check_bind(host: str, policy: AccessPolicy) -> None:
 
 
 PAGE_PREFIXES = ("/units/", "/static/", "/vendor/")
+PAGE_PATHS = ("/", "/docs", "/openapi.json")
 
 
 def is_page_shell(method: str, path: str) -> bool:
-    """Whether a request fetches a data-free page shell or static file (module docstring)."""
-    return method in ("GET", "HEAD") and (path == "/" or path.startswith(PAGE_PREFIXES))
+    """Whether a request fetches a data-free page shell, static file or the API reference
+    (module docstring)."""
+    return method in ("GET", "HEAD") and (path in PAGE_PATHS or path.startswith(PAGE_PREFIXES))
 
 
 async def _send_json(send, status: int, message: str, extra: tuple = ()) -> None:

@@ -38,7 +38,7 @@ from typing import Annotated, Literal
 
 import duckdb
 import pandas as pd
-from fastapi import FastAPI, Query, Request
+from fastapi import FastAPI, Header, Query, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import HTMLResponse, JSONResponse, Response, StreamingResponse
 from fastapi.staticfiles import StaticFiles
@@ -89,7 +89,8 @@ class WebSettings:
     feed's poll interval (s); ``cache_s``: how old an answer to an identical GET, and the
     units' last-sample times, may be when reused across requests (s; 0: never reused —
     :mod:`steamtwin.web.coalesce`); ``signals_cache_s``: the same for each unit's signal
-    list."""
+    list and the unit names; ``recent_s``: the recent past of each unit's series kept in
+    memory for short raw ranges (s; 0: none — :mod:`steamtwin.web.queries`)."""
 
     max_points: int = 2000
     max_span_s: float = 400 * 86_400.0
@@ -100,6 +101,7 @@ class WebSettings:
     poll_s: float = 0.25
     cache_s: float = 0.2
     signals_cache_s: float = 5.0
+    recent_s: float = 600.0
 
 
 class ApiError(SteamtwinError, ValueError):
@@ -149,16 +151,16 @@ def parse_time(text: str, name: str) -> pd.Timestamp:
 
 
 def _reader(historian: str | Path | HistorianReader | Callable[[], duckdb.DuckDBPyConnection],
-            size: int) -> HistorianReader:
+            size: int, recent_s: float) -> HistorianReader:
     if isinstance(historian, HistorianReader):
         return historian
     if callable(historian):
-        return HistorianReader(historian, size)
+        return HistorianReader(historian, size, recent_s=recent_s)
     path = Path(historian)
     if not path.is_file():
         raise FileNotFoundError(f"{path}: no such historian database")
     try:
-        return HistorianReader(lambda: duckdb.connect(str(path)), size)
+        return HistorianReader(lambda: duckdb.connect(str(path)), size, recent_s=recent_s)
     except duckdb.IOException as error:  # e.g. the file is locked by a service elsewhere
         raise DataError(f"{path}: cannot open the historian ({error}); DuckDB lets one process "
                         "write a database: serve it from that process (steamtwin serve "
@@ -174,7 +176,7 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
     loopback only) and ``settings`` (see the module docstring)."""
     settings = settings or WebSettings()
     access = access or AccessPolicy()
-    reader = _reader(historian, settings.readers)
+    reader = _reader(historian, settings.readers, settings.recent_s)
     catalog = Catalog(config)
     feed = LiveFeed(reader, poll_s=settings.poll_s)
     blades = BladeFields(config)
@@ -221,7 +223,10 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
 
     # -- helpers --------------------------------------------------------------------------
     def check_unit(unit: str) -> str:
-        units = known_units()
+        # a unit once seen stays: its name may come from a list up to signals_cache_s old
+        if unit in catalog.units or unit in reader.last_times(settings.signals_cache_s):
+            return unit
+        units = known_units()  # perhaps new since the list was kept: look again
         if unit not in units:
             raise ApiError(404, f"unknown unit {unit!r}; units: {', '.join(units) or 'none'}")
         return unit
@@ -410,12 +415,17 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
 
     @app.get("/api/events", summary="Live samples and alarms (server-sent events)",
              response_class=StreamingResponse)
-    async def events(unit: str | None = None) -> StreamingResponse:
+    async def events(unit: str | None = None, last_event_id: Annotated[str | None, Header(
+            description="the id (sample time, ISO 8601) of the last event received: the "
+            "stream starts with the samples stored since, and the active alarms")] = None
+                     ) -> StreamingResponse:
         """``text/event-stream``: ``sample`` (time, values by source/signal), ``alarm`` (a
-        new alarm), ``alarms`` (the active list after a change)."""
+        new alarm), ``alarms`` (the active list after a change). A reconnecting client that
+        sends ``Last-Event-ID`` first gets the samples it missed (:mod:`steamtwin.web.events`)."""
         if unit is not None:
             await asyncio.to_thread(check_unit, unit)
-        return StreamingResponse(feed.stream(unit), media_type="text/event-stream",
+        since = None if not last_event_id else parse_time(last_event_id, "Last-Event-ID")
+        return StreamingResponse(feed.stream(unit, since), media_type="text/event-stream",
                                  headers={"cache-control": "no-store",
                                           "x-accel-buffering": "no"})
 

@@ -48,12 +48,18 @@ const steamtwin = (() => {
     return search.toString();
   }
 
-  // Follow the server-sent events of `unit`: handlers[event](data); reconnects after 2 s.
-  async function follow(handlers) {
+  // Follow the server-sent events of `unit`: handlers[event](data); reconnects after 2 s,
+  // sending the last event's id (Last-Event-ID, as EventSource does) so that the service
+  // first sends the samples stored meanwhile. `since`: the last sample time the page already
+  // shows (its first request asks for what came after).
+  async function follow(handlers, since = null) {
     const sleep = (ms) => new Promise((done) => setTimeout(done, ms));
+    let lastId = since;
     for (;;) {
       try {
-        const response = await fetch(`/api/events?${query({ unit })}`, { headers: headers() });
+        const extra = lastId ? { "Last-Event-ID": lastId } : {};
+        const response = await fetch(`/api/events?${query({ unit })}`,
+                                     { headers: headers(extra) });
         if (!response.ok) throw new Error(`live feed: ${response.status}`);
         status("live");
         const reader = response.body.pipeThrough(new TextDecoderStream()).getReader();
@@ -71,6 +77,7 @@ const steamtwin = (() => {
             for (const line of block.split("\n")) {
               if (line.startsWith("event:")) event = line.slice(6).trim();
               else if (line.startsWith("data:")) data += line.slice(5).trim();
+              else if (line.startsWith("id:")) lastId = line.slice(3).trim();
             }
             if (data && handlers[event]) handlers[event](JSON.parse(data));
           }

@@ -106,6 +106,7 @@
       // append the sample (or replace the one at the same time) and keep the last WINDOW
       const data = div._uplot.data;
       const last = data[0].length - 1;
+      if (last >= 0 && t < data[0][last]) continue;  // already drawn (a backfilled sample)
       const at = last >= 0 && data[0][last] === t ? last : data[0].length;
       const kept = at + 1 > WINDOW ? at + 1 - WINDOW : 0;
       const next = data.map((column, k) => {
@@ -128,10 +129,11 @@
       const values = points(await series("measured", key))[1];
       tiles[key].textContent = display(values[values.length - 1], siUnits[key]);
     };
+    let shown = null;  // the last stored sample when the page loaded
     const lastTime = async () => {
       const units = await api("/api/units");
-      const last = units.find((u) => u.name === unit)?.last_sample;
-      if (last) tiles.time.textContent = utc(last).replace("T", " ").slice(0, 19);
+      shown = units.find((u) => u.name === unit)?.last_sample || null;
+      if (shown) tiles.time.textContent = utc(shown).replace("T", " ").slice(0, 19);
     };
     const temperatures = signals.filter((s) => s.source === "measured" && s.si_unit === "K"
                                          && stored.has(`twin/${s.signal}`));
@@ -141,7 +143,8 @@
                        ...temperatures.map(temperatureChart), residualChart(residuals),
                        showParameters(), showAlarms()]);
     document.body.dataset.ready = "yes";
-    follow({ sample: onSample, alarms: showAlarms, alarm: showAlarms });
+    // the samples stored since `shown` (the provisional ones too) come first
+    follow({ sample: onSample, alarms: showAlarms, alarm: showAlarms }, shown);
   }
 
   start().catch((error) => status(error.message, true));
