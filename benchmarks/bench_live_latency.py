@@ -122,18 +122,34 @@ def _serve(signals: pd.DataFrame, ports: list[int], seconds: int, out: str) -> N
     asyncio.run(main())
 
 
-def _timed(method, record: list[tuple[float, float, int]]):
+def _timed(method, record: list[tuple[float, float, int]],
+           spans: list[tuple[float, float]] | None = None):
     """``method`` (LiveTwin.settle or receive_rows) noting (wall s, thread CPU s, samples
-    stored) per call."""
+    stored) per call, and in ``spans`` the wall-clock (start, end) of the calls that stored
+    samples."""
     def timed(self, *args):
         summary = next((a for a in args if isinstance(a, LiveSummary)), None)
         stored = summary.samples if summary is not None else 0
-        wall, cpu = time.perf_counter(), time.thread_time()
+        began, wall, cpu = time.time(), time.perf_counter(), time.thread_time()
         result = method(self, *args)
         record.append((time.perf_counter() - wall, time.thread_time() - cpu,
                        (summary.samples if summary is not None else 0) - stored))
+        if spans is not None and record[-1][2] > 0:
+            spans.append((began, time.time()))
         return result
     return timed
+
+
+def _noting_arrival(method, arrived: dict[tuple[str, pd.Timestamp], float]):
+    """``LiveTwin.receive_rows`` noting when each (unit, sample) reached the service (the
+    source's block handed to the twin): write → arrival is the OPC UA delivery, arrival →
+    stored the service's own work and waits."""
+    def noting(self, block, *args):
+        now = time.time()
+        for stamp in block.frame.index:
+            arrived.setdefault((self.name, stamp), now)
+        return method(self, block, *args)
+    return noting
 
 
 def _profile_line(name: str, record: list[tuple[float, float, int]], storing: bool) -> str:
@@ -160,9 +176,12 @@ def main() -> None:
     args = parser.parse_args()
     settles: list[tuple[float, float, int]] = []
     receives: list[tuple[float, float, int]] = []
+    spans: list[tuple[float, float]] = []  # wall clock of the final blocks
+    arrived: dict[tuple[str, pd.Timestamp], float] = {}
     if args.profile:
-        LiveTwin.settle = _timed(LiveTwin.settle, settles)
-        LiveTwin.receive_rows = _timed(LiveTwin.receive_rows, receives)
+        LiveTwin.settle = _timed(LiveTwin.settle, settles, spans)
+        LiveTwin.receive_rows = _noting_arrival(_timed(LiveTwin.receive_rows, receives),
+                                                arrived)
     signals = run_plant("deep-peak-50", hours=0.05, random_state=0).measured
     ports = _free_ports(args.units)
     with tempfile.TemporaryDirectory() as folder:
@@ -195,12 +214,17 @@ def main() -> None:
         cpu = asyncio.run(service())
         child.join()
         written = json.loads(written_file.read_text(encoding="utf-8"))
-    first, final = [], []
+    first, final, during, delivery, work = [], [], [], [], []
     for k, port in enumerate(ports):
         for stamp, at in written[str(port)][args.warmup:]:
             key = (f"unit{k}", pd.Timestamp(stamp))
             if key in historian.first:
                 first.append(historian.first[key] - at)
+                during.append(any(start < historian.first[key] and end > at
+                                  for start, end in spans))
+                if key in arrived:
+                    delivery.append(arrived[key] - at)
+                    work.append(historian.first[key] - arrived[key])
             if key in historian.final:
                 final.append(historian.final[key] - at)
     sent = sum(len(v) - args.warmup for v in written.values())
@@ -218,6 +242,16 @@ def main() -> None:
     if args.profile:
         print(_profile_line("final work (settle) storing samples", settles, True))
         print(_profile_line("provisional work (receive_rows)", receives, False))
+        if delivery:
+            print(f"write → arrival at the service (OPC UA delivery): "
+                  f"{_quantiles(np.array(delivery))}")
+            print(f"arrival → first stored (the service): {_quantiles(np.array(work))}")
+        overlapped = np.array(during, dtype=bool)
+        for name, chosen in (("overlapping a final block", overlapped),
+                             ("overlapping none", ~overlapped)):
+            if chosen.any():
+                print(f"write → first stored, samples {name}: "
+                      f"{_quantiles(np.array(first)[chosen])}")
 
 
 if __name__ == "__main__":

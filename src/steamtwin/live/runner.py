@@ -7,10 +7,12 @@ those of every unit whose sample came in at the same moment in one transaction, 
 these units does its final (look-ahead) work; the final work of the units falls in different
 seconds (``settle`` phases in :func:`run_service`) and runs on one final-work thread, not on the
 event loop: a unit's 60-sample final block (gate over its look-ahead context, FOM, ROM,
-residuals, recalibration filter, DuckDB commit: 60–150 ms under load, measured in
-``bench_live_latency.py --profile``) would otherwise hold up every other unit's provisional
-values of that second, the tail of the latency (docs/benchmarks.md, "Latency, third pass").
-The thread gets the CPU while the loop waits on its sockets, and the FOM's numba kernels
+residuals, recalibration filter, DuckDB commit: 20–33 ms of CPU, 40–110 ms of wall time under
+load, measured in ``bench_live_latency.py --profile``) would otherwise hold the loop and every
+other unit's provisional values that arrive meanwhile. (Measured, the staggered phases and the
+group commit already put it between arrivals — 0–6 of 900 samples waited on one —
+docs/benchmarks.md, "Latency, third pass"; the thread keeps it so with more units or longer
+blocks.) The thread gets the CPU while the loop waits on its sockets, and the FOM's numba kernels
 (``nogil``) and DuckDB release the GIL for much of it. Per unit nothing changes order: a unit
 hands its block to the thread and awaits it before it takes its next samples, so its
 provisional and final rows are stored in the order they are without the thread; one thread for
