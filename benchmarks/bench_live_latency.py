@@ -15,7 +15,12 @@ Prints p50/p95/p99/max of both latencies, the units per provisional transaction 
 ``live.runner.ProvisionalGroup``), the service's CPU seconds (process time) per second of data,
 and the load average.
 
+``--profile`` also times every unit's final work (``LiveTwin.settle``: wall and thread CPU per
+call that stored samples) and its provisional work (``LiveTwin.receive_rows``), the two halves
+whose serial cost on one event loop makes the tail.
+
 Run: python benchmarks/bench_live_latency.py [--units 10] [--seconds 180] [--warmup 10]
+[--profile]
 """
 
 from __future__ import annotations
@@ -40,6 +45,7 @@ from steamtwin.live.config import load_config
 from steamtwin.live.historian import LiveHistorian
 from steamtwin.live.plant_server import PlantServer, PlantServerSettings, plant_node_ids
 from steamtwin.live.runner import run_service
+from steamtwin.live.service import LiveSummary, LiveTwin
 
 
 class _Recording(LiveHistorian):
@@ -116,6 +122,44 @@ def _serve(signals: pd.DataFrame, ports: list[int], seconds: int, out: str) -> N
     asyncio.run(main())
 
 
+def _timed(method, record: list[tuple[float, float, int]],
+           spans: list[tuple[float, float]] | None = None):
+    """``method`` (LiveTwin.settle or receive_rows) noting (wall s, thread CPU s, samples
+    stored) per call, and in ``spans`` the wall-clock (start, end) of the calls that stored
+    samples."""
+    def timed(self, *args):
+        summary = next((a for a in args if isinstance(a, LiveSummary)), None)
+        stored = summary.samples if summary is not None else 0
+        began, wall, cpu = time.time(), time.perf_counter(), time.thread_time()
+        result = method(self, *args)
+        record.append((time.perf_counter() - wall, time.thread_time() - cpu,
+                       (summary.samples if summary is not None else 0) - stored))
+        if spans is not None and record[-1][2] > 0:
+            spans.append((began, time.time()))
+        return result
+    return timed
+
+
+def _noting_arrival(method, arrived: dict[tuple[str, pd.Timestamp], float]):
+    """``LiveTwin.receive_rows`` noting when each (unit, sample) reached the service (the
+    source's block handed to the twin): write → arrival is the OPC UA delivery, arrival →
+    stored the service's own work and waits."""
+    def noting(self, block, *args):
+        now = time.time()
+        for stamp in block.frame.index:
+            arrived.setdefault((self.name, stamp), now)
+        return method(self, block, *args)
+    return noting
+
+
+def _profile_line(name: str, record: list[tuple[float, float, int]], storing: bool) -> str:
+    calls = np.array([(w, c) for w, c, n in record if (n > 0) == storing] or [(0.0, 0.0)])
+    wall, cpu = calls[:, 0] * 1e3, calls[:, 1] * 1e3
+    return (f"{name}: {len(calls)} calls, wall p50 {np.median(wall):.1f} / p99 "
+            f"{np.percentile(wall, 99):.1f} / max {wall.max():.1f} ms, thread CPU p50 "
+            f"{np.median(cpu):.1f} / max {cpu.max():.1f} ms")
+
+
 def _quantiles(values: np.ndarray) -> str:
     p50, p95, p99 = np.percentile(values, [50, 95, 99]) * 1e3
     return (f"p50 {p50:.0f} ms, p95 {p95:.0f} ms, p99 {p99:.0f} ms, "
@@ -127,7 +171,17 @@ def main() -> None:
     parser.add_argument("--units", type=int, default=10)
     parser.add_argument("--seconds", type=int, default=180, help="samples each server sends")
     parser.add_argument("--warmup", type=int, default=10, help="first samples not counted")
+    parser.add_argument("--profile", action="store_true",
+                        help="time the units' final and provisional work")
     args = parser.parse_args()
+    settles: list[tuple[float, float, int]] = []
+    receives: list[tuple[float, float, int]] = []
+    spans: list[tuple[float, float]] = []  # wall clock of the final blocks
+    arrived: dict[tuple[str, pd.Timestamp], float] = {}
+    if args.profile:
+        LiveTwin.settle = _timed(LiveTwin.settle, settles, spans)
+        LiveTwin.receive_rows = _noting_arrival(_timed(LiveTwin.receive_rows, receives),
+                                                arrived)
     signals = run_plant("deep-peak-50", hours=0.05, random_state=0).measured
     ports = _free_ports(args.units)
     with tempfile.TemporaryDirectory() as folder:
@@ -160,12 +214,17 @@ def main() -> None:
         cpu = asyncio.run(service())
         child.join()
         written = json.loads(written_file.read_text(encoding="utf-8"))
-    first, final = [], []
+    first, final, during, delivery, work = [], [], [], [], []
     for k, port in enumerate(ports):
         for stamp, at in written[str(port)][args.warmup:]:
             key = (f"unit{k}", pd.Timestamp(stamp))
             if key in historian.first:
                 first.append(historian.first[key] - at)
+                during.append(any(start < historian.first[key] and end > at
+                                  for start, end in spans))
+                if key in arrived:
+                    delivery.append(arrived[key] - at)
+                    work.append(historian.first[key] - arrived[key])
             if key in historian.final:
                 final.append(historian.final[key] - at)
     sent = sum(len(v) - args.warmup for v in written.values())
@@ -180,6 +239,19 @@ def main() -> None:
     print(f"service CPU {cpu:.1f} s for {args.seconds} s of data "
           f"({cpu / args.seconds * 100:.0f} % of a core); load average "
           f"{os.getloadavg()[0]:.1f}")
+    if args.profile:
+        print(_profile_line("final work (settle) storing samples", settles, True))
+        print(_profile_line("provisional work (receive_rows)", receives, False))
+        if delivery:
+            print(f"write → arrival at the service (OPC UA delivery): "
+                  f"{_quantiles(np.array(delivery))}")
+            print(f"arrival → first stored (the service): {_quantiles(np.array(work))}")
+        overlapped = np.array(during, dtype=bool)
+        for name, chosen in (("overlapping a final block", overlapped),
+                             ("overlapping none", ~overlapped)):
+            if chosen.any():
+                print(f"write → first stored, samples {name}: "
+                      f"{_quantiles(np.array(first)[chosen])}")
 
 
 if __name__ == "__main__":

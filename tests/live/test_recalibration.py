@@ -208,3 +208,37 @@ def test_without_an_alarm_the_parameters_change_only_on_schedule(reference_spec,
     assert list(kept.trajectory_.index) == list(tracker.trajectory_.index[-2:])
     with pytest.raises(ValueError, match="trajectory_rows"):
         ParameterTracker(model, sigma=SIGMA, trajectory_rows=0).start()
+
+
+def test_a_block_with_several_swaps_records_only_the_one_that_applied(
+        tmp_path, reference_spec, model_plant):
+    """Tracker steps of 100 s under a degradation alarm: every step's estimate is a swap, and a
+    300-sample block holds several; the parameters table holds one swap per block, the set the
+    twin then runs with (issue 21: "two swaps in one block are both recorded")."""
+    model = FullOrderModel(reference_spec)
+    data = model_plant(reference_spec, np.full(600, 0.5), np.full(600, 0.97), SIGMA, seed=6)
+    tracker = ParameterTracker(model, sigma=SIGMA, step_s=100.0)
+    twin = LiveTwin("unit1", model, ModelParameters(flow_coefficient=0.99),
+                    StreamGate(gate_options(plant_tag_map())), LiveHistorian(tmp_path / "l.db"),
+                    monitored=SENSORS,
+                    recalibration=LiveRecalibration(tracker, every_s=86_400.0)).start()
+    twin.recalibration.on_alarm("degradation", "flow_coefficient", data.index[0], False)
+    recorded = []
+    for first in (0, 300, None):
+        if first is None:
+            summary = twin.finish()
+        else:
+            frame = data.iloc[first:first + 300]
+            summary = twin.process(SourceBlock(frame, pd.DataFrame(
+                False, index=frame.index, columns=frame.columns)))
+        stored = twin.historian.connection.execute(
+            "SELECT value FROM parameters WHERE name = 'flow_coefficient' ORDER BY time"
+        ).df()["value"].tolist()
+        assert len(stored) - len(recorded) == summary.swaps <= 1
+        if summary.swaps:  # the stored set is the one the twin runs with
+            assert stored[-1] == twin.params.flow_coefficient
+        recorded = stored
+    twin.close()
+    steps = len(tracker.trajectory_)
+    assert len(recorded) < steps  # several steps' sets in a block, one recorded per block
+    assert abs(recorded[-1] - 0.97) < 0.005

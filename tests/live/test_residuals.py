@@ -238,3 +238,52 @@ def test_the_long_run_factor_of_an_ar1_series():
         x[k] = 0.6 * x[k - 1] + rng.normal()
     assert _long_run_factor(x) == pytest.approx(2.0, rel=0.05)
     assert _long_run_factor(rng.normal(size=5000)) == pytest.approx(1.0, abs=0.05)
+
+
+def _after_a_degradation_swap(rebase: bool, seed: int = 12) -> tuple[list, list]:
+    """A flow step flagged as degradation; the twin's coefficient then swapped in (the J
+    pattern gone) but a plant response the twin lacks leaves the casing thermocouple 0.35 K
+    (≈ 3.5 σ) off; 100 min later a real 0.35-K bias on the exhaust thermocouple. Returns
+    (events before the swap, events after it)."""
+    monitor = _monitor()
+    day = _healthy(300, np.random.default_rng(seed))
+    step = np.where(np.arange(300) >= 30, -0.02, 0.0)
+    for sensor in SENSORS:
+        day[sensor] += J.loc[sensor, "flow_coefficient"] * step
+    before = [e for t, row in day.iloc[:50].iterrows() for e in monitor.update(t, row, J)]
+    after_swap = day.iloc[50:].copy()
+    for sensor in SENSORS:  # the swapped coefficient explains the pattern ...
+        after_swap[sensor] -= J.loc[sensor, "flow_coefficient"] * -0.02
+    after_swap["hp_inner_casing_temperature"] += 0.35  # ... but not the casing's answer
+    after_swap.iloc[100:, 2] += 0.35  # a real exhaust bias, 100 min after the swap
+    monitor.restart(day.index[49] if rebase else None)  # blocks after the 50th re-based
+    after = []
+    for k, (t, row) in enumerate(after_swap.iterrows()):
+        if k == 5:  # a restart from the saved state mid-window
+            monitor = ResidualMonitor(SENSORS, {s: 0.5 * v for s, v in SIGMA.items()}
+                                      ).set_state(json.loads(json.dumps(monitor.get_state())))
+        after += monitor.update(t, row, J)
+    return before, after
+
+
+def test_a_degradation_swap_re_bases_the_residuals():
+    """The rule of the module docstring (control chart revised after an assignable cause,
+    CUSUM restarted: Montgomery §5.3/§6.2; Page 1954): without it the casing's leftover
+    offset is a 'sensor fault' for as long as the data last; with it, none — and a real
+    sensor bias after the window is still flagged as one."""
+    before, stale = _after_a_degradation_swap(rebase=False)
+    assert [(e.kind, e.signal) for e in before if not e.ended] == [
+        ("degradation", "flow_coefficient")]
+    assert ("sensor_fault", "hp_inner_casing_temperature") in [
+        (e.kind, e.signal) for e in stale if not e.ended]
+    _, rebased = _after_a_degradation_swap(rebase=True)
+    starts = [e for e in rebased if not e.ended]
+    assert [(e.kind, e.signal) for e in starts] == [("sensor_fault", "hp_exhaust_temperature")]
+    swap = pd.Timestamp("2026-03-01", tz="UTC") + pd.Timedelta(minutes=50)
+    bias = swap + pd.Timedelta(minutes=100)
+    assert bias < starts[0].time <= bias + pd.Timedelta(minutes=15)
+    # the degradation alarm ended once the re-based residuals were healthy
+    assert [(e.kind, e.signal) for e in rebased if e.ended] == [
+        ("degradation", "flow_coefficient")]
+    with pytest.raises(ValueError, match="rebase_blocks"):
+        MonitorSettings(rebase_blocks=0)

@@ -25,14 +25,23 @@ ACID, durable at commit through its write-ahead log; DuckDB docs, "Transaction
 Management"), so after a crash (even SIGKILL) the file holds whole blocks only, and
 :meth:`resume_time` says where the stream must resume: no sample lost, none stored twice.
 Times are stored as UTC ``TIMESTAMPTZ``.
+
+Threads: the service stores provisional rows from its event loop and commits final blocks from
+its final-work thread (:mod:`steamtwin.live.runner`); a ``DuckDBPyConnection`` is not
+thread-safe (DuckDB Python docs, "use cursor() to create one per thread"), so every method that
+uses the connection holds the historian's lock: one statement sequence at a time, as on one
+thread, and no two transactions of this writer ever overlap.
 """
 
 from __future__ import annotations
 
+import functools
 import json
-from collections.abc import Mapping, Sequence
+import threading
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TypeVar, cast
 
 import duckdb
 import numpy as np
@@ -118,6 +127,18 @@ def _utc(times: pd.DatetimeIndex | pd.Series) -> pd.DatetimeIndex:
     return index.tz_convert("UTC")
 
 
+_Method = TypeVar("_Method", bound=Callable[..., object])
+
+
+def _serialised(method: _Method) -> _Method:
+    """Run ``method`` holding its historian's lock (see "Threads" in the module docstring)."""
+    @functools.wraps(method)
+    def locked(self: LiveHistorian, *args: object, **kwargs: object) -> object:
+        with self._lock:
+            return method(self, *args, **kwargs)
+    return cast(_Method, locked)
+
+
 class LiveHistorian:
     """The DuckDB file at ``path`` (created with its tables if missing); use as a context
     manager or call :meth:`close`."""
@@ -127,6 +148,7 @@ class LiveHistorian:
         self._connection: duckdb.DuckDBPyConnection | None = None
         self._last_times: dict[str, pd.Timestamp | None] = {}  # what progress holds
         self._provisional: dict[str, bool] = {}  # unit → it may have provisional rows
+        self._lock = threading.RLock()
 
     def __enter__(self) -> LiveHistorian:
         self.open()
@@ -135,6 +157,7 @@ class LiveHistorian:
     def __exit__(self, *_exc: object) -> None:
         self.close()
 
+    @_serialised
     def open(self) -> None:
         """Open (or create) the database and its tables."""
         if self._connection is None:
@@ -145,6 +168,7 @@ class LiveHistorian:
                 connection.execute(statement)
             self._connection = connection
 
+    @_serialised
     def close(self) -> None:
         """Close the database (idempotent)."""
         if self._connection is not None:
@@ -160,6 +184,7 @@ class LiveHistorian:
             raise RuntimeError(f"{self.path}: the historian is not open")
         return self._connection
 
+    @_serialised
     def resume_time(self, unit: str) -> pd.Timestamp | None:
         """The last committed sample's time of ``unit`` (UTC), None before the first. Read
         from the database once, then kept up to date by :meth:`commit_block` (DuckDB lets one
@@ -171,6 +196,7 @@ class LiveHistorian:
                                       else pd.Timestamp(row[0]).tz_convert("UTC"))
         return self._last_times[unit]
 
+    @_serialised
     def commit_block(self, unit: str, frames: Mapping[str, pd.DataFrame],
                      flags: pd.DataFrame | None = None,
                      state: Mapping[str, object] | None = None,
@@ -235,6 +261,7 @@ class LiveHistorian:
         written."""
         return self.store_provisional_many([ProvisionalRows(unit, frames, flags)])
 
+    @_serialised
     def store_provisional_many(self, batch: Sequence[ProvisionalRows]) -> int:
         """:meth:`store_provisional` for several units at once (at most one entry per unit,
         else ValueError), in ONE transaction with one DELETE and one INSERT: the service
@@ -360,6 +387,7 @@ class LiveHistorian:
             "flag": pa.array(flag_values, type=pa.string()),
         })
 
+    @_serialised
     def latest_state(self, unit: str) -> tuple[pd.Timestamp, dict] | None:
         """The newest state snapshot of ``unit`` and its time, None if there is none."""
         row = self.connection.execute(
@@ -369,6 +397,7 @@ class LiveHistorian:
             return None
         return pd.Timestamp(row[0]).tz_convert("UTC"), json.loads(row[1])
 
+    @_serialised
     def record_parameters(self, unit: str, time: pd.Timestamp, values: Mapping[str, float],
                           reason: str) -> None:
         """One swap of the live parameters (name → value) and why it happened."""
@@ -377,6 +406,7 @@ class LiveHistorian:
                                     [[unit, stamp, name, float(value), reason]
                                      for name, value in values.items()])
 
+    @_serialised
     def raise_alarm(self, alarm: Alarm) -> int:
         """Store ``alarm``; return its id."""
         connection = self.connection
@@ -390,11 +420,13 @@ class LiveHistorian:
              json.dumps(dict(alarm.evidence or {}))])
         return int(next_id)
 
+    @_serialised
     def end_alarm(self, alarm_id: int, end: pd.Timestamp) -> None:
         """Mark alarm ``alarm_id`` as ended at ``end``."""
         self.connection.execute('UPDATE alarms SET "end" = ? WHERE id = ?',
                                 [_utc(pd.DatetimeIndex([end]))[0].to_pydatetime(), alarm_id])
 
+    @_serialised
     def acknowledge(self, alarm_id: int, by: str, at: pd.Timestamp) -> None:
         """Acknowledge alarm ``alarm_id`` (KeyError if there is no such alarm)."""
         found = self.connection.execute("SELECT count(*) FROM alarms WHERE id = ?",
@@ -405,6 +437,7 @@ class LiveHistorian:
             "UPDATE alarms SET acknowledged_at = ?, acknowledged_by = ? WHERE id = ?",
             [_utc(pd.DatetimeIndex([at]))[0].to_pydatetime(), by, alarm_id])
 
+    @_serialised
     def alarms(self, unit: str | None = None) -> pd.DataFrame:
         """Every alarm (of ``unit``), oldest first, evidence parsed."""
         query = "SELECT * FROM alarms" + (" WHERE unit = ?" if unit else "") + " ORDER BY id"
@@ -412,6 +445,7 @@ class LiveHistorian:
         frame["evidence"] = [json.loads(text) if text else {} for text in frame["evidence"]]
         return frame
 
+    @_serialised
     def series(self, unit: str, start: pd.Timestamp | None = None,
                end: pd.Timestamp | None = None, sources: tuple[str, ...] = SOURCES
                ) -> pd.DataFrame:

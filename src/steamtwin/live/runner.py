@@ -5,7 +5,20 @@ to stop (``steamtwin serve``). Progress and findings go to the ``steamtwin.live`
 Latency (issue 21): each unit's provisional rows go to a :class:`ProvisionalGroup` that stores
 those of every unit whose sample came in at the same moment in one transaction, before any of
 these units does its final (look-ahead) work; the final work of the units falls in different
-seconds (``settle`` phases in :func:`run_service`)."""
+seconds (``settle`` phases in :func:`run_service`) and runs on one final-work thread, not on the
+event loop: a unit's 60-sample final block (gate over its look-ahead context, FOM, ROM,
+residuals, recalibration filter, DuckDB commit: 20–33 ms of CPU, 40–110 ms of wall time under
+load, measured in ``bench_live_latency.py --profile``) would otherwise hold the loop and every
+other unit's provisional values that arrive meanwhile. (Measured, the staggered phases and the
+group commit already put it between arrivals — 0–6 of 900 samples waited on one —
+docs/benchmarks.md, "Latency, third pass"; the thread keeps it so with more units or longer
+blocks.) The thread gets the CPU while the loop waits on its sockets, and the FOM's numba kernels
+(``nogil``) and DuckDB release the GIL for much of it. Per unit nothing changes order: a unit
+hands its block to the thread and awaits it before it takes its next samples, so its
+provisional and final rows are stored in the order they are without the thread; one thread for
+all units keeps the final blocks one at a time, as on the loop. A replay at full speed has no
+provisional values and nobody waiting, so its final work stays on the loop (the order of every
+unit's commits as before)."""
 
 from __future__ import annotations
 
@@ -14,6 +27,7 @@ import contextlib
 import logging
 import signal
 from collections.abc import Awaitable, Callable, Sequence
+from concurrent.futures import Executor, ThreadPoolExecutor
 
 from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
 from steamtwin.live.config import ServiceConfig, UnitConfig
@@ -110,20 +124,26 @@ class ProvisionalGroup:
 
 async def _run_unit(twin: LiveTwin, source: Source, stop: asyncio.Event,
                     summary: LiveSummary, group: ProvisionalGroup,
-                    settle: tuple[int, int] = (1, 1)) -> LiveSummary:
+                    settle: tuple[int, int] = (1, 1),
+                    final_work: Executor | None = None) -> LiveSummary:
     """``group``: where the unit's provisional rows are stored, with other units' of the same
     moment. ``settle``: (first, then) — the final samples judged at once, the first time and
     then (a live unit: its ``block_samples``, the first time at a phase of its own so that the
     units' final work falls in different seconds instead of delaying every unit's provisional
-    values in the same one)."""
+    values in the same one). ``final_work``: where :meth:`LiveTwin.settle` runs (None: on the
+    loop); the unit awaits it before its next block."""
     blocks = source.blocks()
     first, then = settle
+    loop = asyncio.get_running_loop()
     try:
         async for block in blocks:
             # every unit's provisional values of the moment before anyone's final work
             await group.store(twin.receive_rows(block, summary))
             stored = summary.samples
-            twin.settle(summary, first)
+            if final_work is None:
+                twin.settle(summary, first)
+            else:
+                await loop.run_in_executor(final_work, twin.settle, summary, first)
             if summary.samples > stored:
                 first = then
             for finding in block.findings:
@@ -172,6 +192,7 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
     historian.open()
     done = asyncio.Event()
     beside: list[asyncio.Task] = []
+    final_work = ThreadPoolExecutor(max_workers=1, thread_name_prefix="steamtwin-final")
     try:
         beside = [asyncio.create_task(companion(historian, done)) for companion in companions]
 
@@ -193,8 +214,9 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
             size = config.units[k].block_samples
             settle = ((max(1, round(size * (k + 1) / len(built))), size) if twin.provisional
                       else (1, 1))
-            task = asyncio.create_task(_run_unit(twin, source, stop, summary, group,
-                                                  settle))
+            task = asyncio.create_task(_run_unit(
+                twin, source, stop, summary, group, settle,
+                final_work if twin.provisional else None))
             waiter = asyncio.create_task(stop.wait())
             await asyncio.wait({task, waiter}, return_when=asyncio.FIRST_COMPLETED)
             if not task.done():
@@ -210,6 +232,7 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
                                          for k, (t, s) in enumerate(built)))
         return {twin.name: result for (twin, _), result in zip(built, results, strict=True)}
     finally:
+        final_work.shutdown(wait=True)  # a block cancelled mid-way still commits (or fails)
         done.set()
         outcomes = await asyncio.gather(*beside, return_exceptions=True)
         historian.close()

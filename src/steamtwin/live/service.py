@@ -16,7 +16,9 @@
    hypotheses; an alarm has a start, an end and an acknowledgement (:meth:`LiveTwin.acknowledge`);
 5. given a :class:`~steamtwin.live.recalibration.LiveRecalibration`, the good samples feed its
    filter, and the parameters it swaps in (on schedule, or step by step while a degradation
-   alarm is active) apply from the next sample on;
+   alarm is active) apply from the next sample on — when a block holds several filter steps,
+   the last step's set (which includes the earlier ones' changes) is the one applied and the
+   only one recorded: the earlier ones never applied to a sample;
 6. the DuckDB historian stores measured, twin and residual series with the gate's flags, the
    alarms started and ended, the parameter swaps, and the state (model, gate context, monitor,
    open block, J cache, filter, live parameters) — all in one transaction per block.
@@ -47,6 +49,7 @@ what follows its checkpoint: Gray & Reuter, *Transaction Processing*, 1993, §11
 from __future__ import annotations
 
 import math
+import threading
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -77,6 +80,11 @@ from steamtwin.rom.reconstruction import FLAG_EXTRAPOLATED, FLAG_INVALID, predic
 from steamtwin.rom.romfile import BladeRom
 
 __all__ = ["LiveSummary", "LiveTwin"]
+
+_WARNING_FILTERS = threading.Lock()
+"""Held around ``warnings.catch_warnings`` (not thread-safe: it swaps the module-global filter
+list; Python docs, ``warnings.catch_warnings``): the service predicts provisional values on its
+event loop and final ones on its final-work thread."""
 
 MONITORED = ("control_stage_pressure", "control_stage_temperature", "hp_exhaust_temperature",
              "hp_inner_casing_temperature")
@@ -311,8 +319,9 @@ class LiveTwin:
         residual = self._residual(data, twin)
         alarms = [] if self.monitor is None else self._alarms(data, residual, final)
         swaps = [] if self.recalibration is None else self.recalibration.feed(data, self.params)
-        if swaps:  # the new set applies from the next sample on
-            self._swap(swaps[-1])
+        if swaps:  # the last set applies from the next sample on; the block's earlier steps'
+            swaps = swaps[-1:]  # sets applied to no sample, so only the last is recorded
+            self._swap(swaps[0], data.index[-1])
         flags = _flag_objects(passed.flags)
         end = data.index[-1]
         snapshot = final or self._last_snapshot is None or (
@@ -355,7 +364,7 @@ class LiveTwin:
         values[complete, :len(columns)] = outputs.to_numpy(dtype=float)
         extrapolated = 0
         if self.rom is not None:
-            with warnings.catch_warnings():  # counted by the caller, not a warning per block
+            with _WARNING_FILTERS, warnings.catch_warnings():  # counted by the caller
                 warnings.simplefilter("ignore", ExtrapolationWarning)
                 predicted = predict_series(self.rom, data[complete]).sensors
             extrapolated = int(predicted[FLAG_EXTRAPOLATED].sum())
@@ -375,17 +384,18 @@ class LiveTwin:
                             - twin.to_numpy(dtype=float)[:, modelled],
                             index=data.index, columns=sensors)
 
-    def _swap(self, swap: ParameterSwap) -> None:
-        """Make ``swap``'s parameters live. The model's carried state (metal temperatures,
-        sensor lags) is recomputed with them from the start of the data the estimate rests on:
+    def _swap(self, swap: ParameterSwap, last: pd.Timestamp) -> None:
+        """Make ``swap``'s parameters live from the sample after ``last`` on. The model's
+        carried state (metal temperatures, sensor lags) is recomputed with them from the start
+        of the data the estimate rests on:
         a state grown under the old set would keep its metal a transient behind the plant's and
         show, for the casing's time constant, a residual that no sensor or parameter explains."""
         self.params = swap.params
         self._reset_provisional()
         if self.sensitivity is not None:
             self.sensitivity.clear()
-        if self.monitor is not None:
-            self.monitor.restart()
+        if self.monitor is not None:  # a degradation's swap is a known change: re-base
+            self.monitor.restart(last if swap.reason.startswith("degradation") else None)
         assert self.recalibration is not None
         since = swap.time - pd.Timedelta(seconds=self.recalibration.tracker.step_s)
         replayed = self._rewind.replay(self.model, self.params, since)
