@@ -26,7 +26,7 @@ import numba
 
 __all__ = ["cache_root", "jit_cache_dir", "njit"]
 
-_COMPILED_PACKAGES = ("steam", "model", "rom")
+_COMPILED_PACKAGES = ("steam", "model", "rom", "rotor")
 
 
 def cache_root() -> Path:
