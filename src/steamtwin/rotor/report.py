@@ -32,7 +32,7 @@ from __future__ import annotations
 import json
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -41,21 +41,33 @@ import pandas as pd
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
+from steamtwin.dcs.history import History
 from steamtwin.errors import RotorAreaError
+from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.simulator import INPUT_SIGNALS
+from steamtwin.progress import ProgressCallback, scaled
+from steamtwin.rotor.conduction import steam_temperature_column
+from steamtwin.rotor.geometry import rotor_geometry
+from steamtwin.rotor.life import rotor_life
+from steamtwin.rotor.model import LOCATIONS, RotorModel
 from steamtwin.rotor.steel import TabulatedSteel
+from steamtwin.spec import TurbineSpec
 from steamtwin.units import convert
 from steamtwin.validation.html import ValidationReport
 from steamtwin.validation.render import json_value
 from steamtwin.validation.summary import Headline
 
-__all__ = ["LOCATIONS", "RotorLifeResult", "checked_allowable", "default_allowable",
-           "life_table", "rainflow_matrix", "rainflow_matrix_figure", "ramp_life_figure",
-           "rotor_headlines", "stress_figure", "temperature_figure", "write_rotor_report"]
+__all__ = ["CONTIGUOUS_GAP_S", "RotorLifeResult", "checked_allowable", "default_allowable",
+           "groove_steam_group", "life_table", "rainflow_matrix", "rainflow_matrix_figure",
+           "ramp_life_figure", "rotor_headlines", "rotor_stress", "stress_figure",
+           "temperature_figure", "write_rotor_report"]
 
-LOCATIONS = ("groove", "bore")
-"""The critical points of the run frame, each a column prefix (``groove_von_mises``, …)."""
 MPA = 1e6
 """Pa per MPa."""
+CONTIGUOUS_GAP_S = 60.0
+"""s: a record starting at most this long after the previous one ends carries its rotor state
+on (files of one historian that follow each other); after a longer gap the metal starts in
+equilibrium with the record's first sample again."""
 MATRIX_BINS = 12
 """Bins of the rainflow matrix along each axis (range and mean)."""
 
@@ -118,9 +130,10 @@ def stress_figure(frame: pd.DataFrame, allowable_pa: float, path: str | Path) ->
     top.set(ylabel="von Mises stress (MPa)")
     bottom.axhline(0.0, color="black", lw=0.6)
     bottom.set(xlabel="time (h)", ylabel="equivalent stress (MPa)")
+    top.set_ylim(0.0, 1.15 * max(peak, allowable_pa) / MPA)  # the allowable line in view
     for axis in (top, bottom):
         axis.grid(alpha=0.3)
-        axis.legend(loc="best", fontsize=8)
+        axis.legend(loc="lower right", fontsize=8)
     figure.suptitle("Rotor thermal and centrifugal stress")
     figure.tight_layout()
     figure.savefig(path, dpi=110)
@@ -310,3 +323,81 @@ def write_rotor_report(directory: str | Path, frame: pd.DataFrame, life: object,
     report.timings["write the report"] = time.perf_counter() - clock
     files["report.html"] = report.write(directory)
     return RotorLifeResult(frame, life, allowable_pa, allowable_source, files)
+
+
+# ------------------------------------------------------------------------------------------
+# the command's library call
+
+
+def groove_steam_group(spec: TurbineSpec) -> str:
+    """The metal group whose steam wets the rotor surface at the groove's axial position
+    (the spec's ``[[rotor.steam]]`` intervals)."""
+    section = spec.rotor
+    for steam in section.steam:
+        if steam.start <= section.groove_position <= steam.end:
+            return steam.group
+    raise RotorAreaError(f"turbine spec {spec.name!r}: no [[rotor.steam]] interval covers the "
+                         f"groove at rotor.groove_position = {section.groove_position:g} m")
+
+
+def rotor_stress(histories: Sequence[History], spec: TurbineSpec, directory: str | Path, *,
+                 params: ModelParameters | None = None, allowable_pa: float | None = None,
+                 mesh_size: float | None = None, settings: Mapping[str, object] | None = None,
+                 progress: ProgressCallback | None = None) -> RotorLifeResult:
+    """Stress and life of ``spec``'s HP rotor over cleaned historian records, written into
+    ``directory`` by :func:`write_rotor_report` (module docstring).
+
+    ``histories``: records in time order (e.g. of
+    :func:`~steamtwin.calibration.histories.load_histories`); samples the quality gate
+    excluded hold the input's last good value. ``params``: the twin's parameters (its
+    heat-transfer multiplier scales the rotor's htc); ``allowable_pa`` (Pa, > 0): the limit of
+    the groove's peak von Mises stress, None for :func:`default_allowable`. Raises
+    :class:`RotorAreaError` for a spec without ``[rotor]`` (saying what to add) or a
+    non-positive allowable, before any work.
+    """
+    if allowable_pa is not None:
+        allowable_pa = checked_allowable(allowable_pa)
+    if not histories:
+        raise ValueError("give at least one historian record")
+    rotor_geometry(spec)  # a spec without [rotor] or an undrawable one: refused, saying why
+    group = groove_steam_group(spec)
+    timings: dict[str, float] = {}
+    clock = time.perf_counter()
+    model = RotorModel(spec, mesh_size=mesh_size).fit(
+        params, progress=scaled(progress, 0.0, 0.6, "fit the rotor model: "))
+    timings["fit the rotor model"] = time.perf_counter() - clock
+    clock = time.perf_counter()
+    frames, steam, loads, state, last = [], [], [], None, None
+    for k, history in enumerate(histories):
+        inputs = history.data[list(INPUT_SIGNALS)].ffill().bfill()
+        if last is not None and (inputs.index[0] - last).total_seconds() > CONTIGUOUS_GAP_S:
+            state = None
+        boundary = model.steam_side(inputs, params)  # one FOM run: for the ROM and the figure
+        run = model.simulate_steam(boundary, state)
+        frames.append(run.frame)
+        state, last = run.state, inputs.index[-1]
+        steam.append(boundary[steam_temperature_column(group)])
+        if "load" in history.data.columns:
+            loads.append(history.data["load"].ffill().bfill())
+        if progress is not None:
+            progress(0.6 + 0.3 * (k + 1) / len(histories), f"record {k + 1} of {len(histories)}")
+    frame = pd.concat(frames)
+    timings["run the rotor ROM"] = time.perf_counter() - clock
+    clock = time.perf_counter()
+    life = rotor_life(frame, model.steel,
+                      load=pd.concat(loads) if len(loads) == len(frames) else None)
+    timings["count the life"] = time.perf_counter() - clock
+    if allowable_pa is None:
+        allowable_pa = default_allowable(model.steel, frame["groove_temperature"])
+        source = "3 S_m = R_m(T_max), ASME III NB-3222.2"
+    else:
+        source = "user (--allowable)"
+    result = write_rotor_report(
+        directory, frame, life, allowable_pa=allowable_pa, allowable_source=source,
+        steam_temperature=pd.concat(steam), steam_label=f"steam, {group}",
+        title=f"Rotor thermal stress and life: {spec.name}", settings=settings,
+        timings=timings)
+    if progress is not None:
+        progress(1.0, "report written")
+    return result
+
