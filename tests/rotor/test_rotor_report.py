@@ -1,11 +1,9 @@
 """The rotor stress report (steamtwin.rotor.report): files, figures, summary and life table on a
-synthetic run frame of the RotorModel contract's columns, with the life counted by the fatigue
-and creep modules."""
+synthetic run frame of the RotorModel's columns, with the life of rotor_life."""
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -14,8 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from steamtwin.errors import RotorAreaError
-from steamtwin.rotor.creep import creep_damage
-from steamtwin.rotor.fatigue import fatigue_damage
+from steamtwin.rotor.life import rotor_life
 from steamtwin.rotor.report import (
     checked_allowable,
     default_allowable,
@@ -47,34 +44,11 @@ def run_frame(hours: float = 6.0, step_s: float = 60.0) -> pd.DataFrame:
     return frame
 
 
-@dataclass
-class Life:
-    """The RotorLife contract's fields, from the fatigue and creep modules."""
-
-    cycles: pd.DataFrame
-    fatigue_damage: float
-    creep_damage: float
-    per_ramp: pd.DataFrame
-    per_day: pd.DataFrame
-
-    def summary(self) -> dict:
-        return {"fatigue_damage": self.fatigue_damage, "creep_damage": self.creep_damage}
-
-
-def life_of(frame: pd.DataFrame) -> Life:
-    stress, temperature = frame["groove_equivalent"], frame["groove_temperature"]
-    fatigue = fatigue_damage(stress, temperature, STEEL)
-    seconds = (frame.index - frame.index[0]).total_seconds().to_numpy()
-    creep = creep_damage(frame["groove_von_mises"], temperature, seconds, STEEL)
-    edges = [0, len(frame) // 2, len(frame) - 1]  # sample indices; cycles close before the end
-    ramps = pd.DataFrame({"start": frame.index[edges[:-1]], "end": frame.index[edges[1:]],
-                          "from_load": [1.0, 0.3], "to_load": [0.3, 1.0],
-                          "fatigue_damage": fatigue.damage_per_window([*edges[:-1],
-                                                                       len(frame)]),
-                          "creep_damage": creep.damage_per_window(edges)})
-    day = pd.DataFrame({"day": ["2026-01-01"], "fatigue_damage": [fatigue.total_damage],
-                        "creep_damage": [creep.total_damage]})
-    return Life(fatigue.cycles, fatigue.total_damage, creep.total_damage, ramps, day)
+def life_of(frame: pd.DataFrame):
+    """rotor_life at the groove with a load falling 100 → 30 % and back each 3 h."""
+    hours = (frame.index - frame.index[0]).total_seconds().to_numpy() / 3600.0
+    load = pd.Series(0.65 + 0.35 * np.cos(2.0 * np.pi * hours / 3.0), index=frame.index)
+    return rotor_life(frame, STEEL, load=load)
 
 
 def test_report_writes_every_file_with_the_run_and_the_summary(tmp_path):
@@ -96,8 +70,9 @@ def test_report_writes_every_file_with_the_run_and_the_summary(tmp_path):
     assert peak["value"] == pytest.approx(frame["groove_von_mises"].max() / 1e6)
     assert peak["limit"] == pytest.approx(450.0) and peak["passed"]
     saved = json.loads((tmp_path / "rotor_life.json").read_text(encoding="utf-8"))
-    assert sum(r["fatigue_damage"] for r in saved["per_ramp"]) == pytest.approx(
-        life.fatigue_damage, rel=1e-9)
+    assert len(saved["per_ramp"]) == len(life.per_ramp) == 4  # two falls, two rises
+    assert sum(r["damage"] for r in saved["per_ramp"]) == pytest.approx(
+        life.fatigue_damage + life.creep_damage, rel=1e-9)
     html = (tmp_path / "report.html").read_text(encoding="utf-8")
     assert html.index("Summary") < html.index("Life consumed")
 

@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+from matplotlib.colors import LogNorm
 from matplotlib.figure import Figure
 from numpy.typing import ArrayLike
 
@@ -187,14 +188,19 @@ def rainflow_matrix_figure(cycles: pd.DataFrame, path: str | Path) -> Path:
     figure = Figure(figsize=(7.5, 6))
     axis = figure.subplots()
     shown = np.ma.masked_equal(counts.T, 0.0)
-    image = axis.pcolormesh(range_edges / MPA, mean_edges / MPA, shown, cmap="viridis")
+    # logarithmic colours: a record's many small (noise) cycles and its few ramp cycles
+    norm = LogNorm(vmin=0.5, vmax=max(float(counts.max()), 1.0))
+    image = axis.pcolormesh(range_edges / MPA, mean_edges / MPA, shown, cmap="viridis",
+                            norm=norm)
     figure.colorbar(image, ax=axis, label="cycles (half cycles count ½)")
     for i, j in zip(*np.nonzero(counts), strict=True):
+        count = counts[i, j]
         axis.text(0.5 * (range_edges[i] + range_edges[i + 1]) / MPA,
-                  0.5 * (mean_edges[j] + mean_edges[j + 1]) / MPA, f"{counts[i, j]:g}",
-                  ha="center", va="center", fontsize=7, color="white")
+                  0.5 * (mean_edges[j] + mean_edges[j + 1]) / MPA,
+                  f"{count:,.0f}" if count >= 10 else f"{count:g}", ha="center", va="center",
+                  fontsize=7, color="white" if count < 0.3 * counts.max() else "black")
     axis.set(xlabel="stress range (MPa)", ylabel="mean stress (MPa)")
-    axis.set_title(f"{cycles['count'].sum():g} cycles at the groove (ASTM E1049 rainflow)",
+    axis.set_title(f"{cycles['count'].sum():,g} cycles at the groove (ASTM E1049 rainflow)",
                    fontsize=9)
     figure.suptitle("Rainflow matrix: range × mean")
     figure.tight_layout()
@@ -377,8 +383,8 @@ def rotor_stress(histories: Sequence[History], spec: TurbineSpec, directory: str
         frames.append(run.frame)
         state, last = run.state, inputs.index[-1]
         steam.append(boundary[steam_temperature_column(group)])
-        if "load" in history.data.columns:
-            loads.append(history.data["load"].ffill().bfill())
+        if "load" in history.data.columns:  # W → fraction of the rated generator output
+            loads.append(history.data["load"].ffill().bfill() / spec.design.generator_power)
         if progress is not None:
             progress(0.6 + 0.3 * (k + 1) / len(histories), f"record {k + 1} of {len(histories)}")
     frame = pd.concat(frames)
