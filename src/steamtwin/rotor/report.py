@@ -135,10 +135,7 @@ def stress_figure(frame: pd.DataFrame, allowable_pa: float, path: str | Path) ->
     for axis in (top, bottom):
         axis.grid(alpha=0.3)
         axis.legend(loc="lower right", fontsize=8)
-    figure.suptitle("Rotor thermal and centrifugal stress")
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    return Path(path)
+    return _saved(figure, "Rotor thermal and centrifugal stress", path)
 
 
 def temperature_figure(frame: pd.DataFrame, path: str | Path,
@@ -158,10 +155,7 @@ def temperature_figure(frame: pd.DataFrame, path: str | Path,
     axis.set(xlabel="time (h)", ylabel="temperature (°C)")
     axis.grid(alpha=0.3)
     axis.legend(loc="best", fontsize=8)
-    figure.suptitle("Rotor metal temperature at the critical points and the steam")
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    return Path(path)
+    return _saved(figure, "Rotor metal temperature at the critical points and the steam", path)
 
 
 def rainflow_matrix(cycles: pd.DataFrame, bins: int = MATRIX_BINS
@@ -202,10 +196,7 @@ def rainflow_matrix_figure(cycles: pd.DataFrame, path: str | Path) -> Path:
     axis.set(xlabel="stress range (MPa)", ylabel="mean stress (MPa)")
     axis.set_title(f"{cycles['count'].sum():,g} cycles at the groove (ASTM E1049 rainflow)",
                    fontsize=9)
-    figure.suptitle("Rainflow matrix: range × mean")
-    figure.tight_layout()
-    figure.savefig(path, dpi=110)
-    return Path(path)
+    return _saved(figure, "Rainflow matrix: range × mean", path)
 
 
 def ramp_life_figure(per_ramp: pd.DataFrame, path: str | Path) -> Path:
@@ -225,7 +216,12 @@ def ramp_life_figure(per_ramp: pd.DataFrame, path: str | Path) -> Path:
     axis.ticklabel_format(axis="y", style="sci", scilimits=(-3, 3))
     axis.grid(alpha=0.3, axis="y")
     axis.legend(loc="best", fontsize=8)
-    figure.suptitle("Life consumed per load ramp")
+    return _saved(figure, "Life consumed per load ramp", path)
+
+
+def _saved(figure: Figure, title: str, path: str | Path) -> Path:
+    """``figure`` titled and written to ``path`` (PNG)."""
+    figure.suptitle(title)
     figure.tight_layout()
     figure.savefig(path, dpi=110)
     return Path(path)
