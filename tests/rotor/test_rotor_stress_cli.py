@@ -14,6 +14,7 @@ from typer.testing import CliRunner
 import steamtwin.rotor.report as rotor_report
 from steamtwin.cli.main import app
 from steamtwin.dcs.plant import run_plant, write_plant
+from steamtwin.model.parameters import ModelParameters
 from steamtwin.spec.fingerprint import load_spec_and_text
 
 runner = CliRunner()
@@ -41,9 +42,11 @@ def stress_run(plant_files, tmp_path_factory):
     out = tmp_path_factory.mktemp("rotor-report")
     patch = pytest.MonkeyPatch()
     patch.setattr(rotor_report, "RotorModel", CoarseRotorModel)
+    params = out / "params.json"
+    ModelParameters(heat_transfer_coefficient=1.2).to_json(params)
     result = runner.invoke(app, ["rotor", "stress", "--data", str(plant_files["historian"]),
                                  "--tags", str(plant_files["tag_map"]), "--report", str(out),
-                                 "--allowable", "450 MPa"])
+                                 "--params", str(params), "--allowable", "450 MPa"])
     patch.undo()
     return result, out
 
@@ -70,6 +73,7 @@ def test_the_report_files_agree_with_the_input_and_each_other(stress_run, plant_
     assert life["peak_groove_von_mises_pa"] == pytest.approx(series["groove_von_mises"].max())
     report = json.loads((out / "report.json").read_text(encoding="utf-8"))
     assert report["headlines"][0]["limit"] == pytest.approx(450.0)
+    assert report["settings"]["params"].endswith("params.json")
     assert np.all(np.isfinite(series.to_numpy(dtype=float)))
     assert "peak von Mises at the groove" in result.output
 

@@ -34,7 +34,7 @@ def stress(
     report: Path = typer.Option(..., help="Folder for report.html, rotor_stress.parquet/.csv, "
                                 "rotor_cycles.csv, rotor_life.json and the figures."),
     turbine: str = typer.Option("reference", help="'reference' or a turbine spec TOML with a "
-                                "[rotor] section."),
+                                "\\[rotor] section."),
     params: Path | None = typer.Option(
         None, help="Parameter JSON of the twin (from 'steamtwin calibrate'): its heat-transfer "
         "multiplier sets the rotor's steam-side htc. Default: empirical (1, 1, 1)."),
