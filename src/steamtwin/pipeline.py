@@ -26,7 +26,10 @@ report is computed in the run):
    parameters; Figure 9 and its errors at held-out conditions the ROM was not built on.
 6. **Monitoring** (:meth:`Twin.validate`): the day run's 30 % and 50 % holds (data neither
    the calibration nor the ROM saw): Table 5, Table 8, Figure 10.
-7. **Sensitivity**: Sobol' indices of the three parameters on the 50 % run's ramp, and the
+7. **Rotor life** (:func:`steamtwin.rotor.report.rotor_stress`): the HP rotor's thermal stress
+   and the life it consumed over the day run, with the twin's (calibrated) parameters; its own
+   report in ``rotor/``, the life table and two figures in the demo's.
+8. **Sensitivity**: Sobol' indices of the three parameters on the 50 % run's ramp, and the
    propagation of main-steam temperature noise (σ = 0.5 and 1.0 K) on the 50 % hold.
 
 :func:`run_demo` writes everything into one folder: the twin (:meth:`Twin.save`: ``spec.toml``,
@@ -73,6 +76,7 @@ from steamtwin.model.operating import load_profile_inputs, ramp_profile
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.progress import ProgressCallback
 from steamtwin.rom.estimator import ExtrapolationWarning
+from steamtwin.rotor.report import life_table, rotor_stress
 from steamtwin.spec import TurbineSpec, load_spec
 from steamtwin.spec.fingerprint import spec_hash
 from steamtwin.twin import Twin
@@ -91,7 +95,8 @@ __all__ = ["STAGES", "DemoResult", "DemoSettings", "run_demo"]
 
 STAGES: tuple[str, ...] = (
     "full-order model", "geometry", "virtual plant", "calibration", "GA sensitivity (Table 7)",
-    "blade ROM", "Sobol indices and noise propagation", "live twin", "monitoring and report",
+    "blade ROM", "rotor life", "Sobol indices and noise propagation", "live twin",
+    "monitoring and report",
 )
 """Stage names in order; each progress message starts with its stage's name."""
 
@@ -102,9 +107,10 @@ NEEDS: dict[str, tuple[str, ...]] = {
     "calibration": ("virtual plant",),
     "GA sensitivity (Table 7)": ("calibration",),
     "Sobol indices and noise propagation": ("virtual plant",),
+    "rotor life": ("virtual plant",),
 }
 #: Stages on the virtual plant, which simulates the built-in reference unit.
-PLANT_STAGES = ("virtual plant", "calibration", "GA sensitivity (Table 7)",
+PLANT_STAGES = ("virtual plant", "calibration", "GA sensitivity (Table 7)", "rotor life",
                 "Sobol indices and noise propagation", "live twin")
 
 VALIDATION_LOADS = (0.30, 0.50)
@@ -278,6 +284,9 @@ def run_demo(out: str | Path, settings: DemoSettings | None = None,
             with clock.stage("blade ROM") as report:
                 reference = _rom_stage(twin, mesh, settings, report,
                                        held_out="virtual plant" in run)
+        if "rotor life" in run:
+            with clock.stage("rotor life") as report:
+                sections += _rotor_stage(twin, plant, out, report)
         if "Sobol indices and noise propagation" in run:
             with clock.stage("Sobol indices and noise propagation") as report:
                 sections += _sensitivity_stage(twin, plant, settings, out, report)
@@ -656,7 +665,38 @@ def _rom_stage(twin: Twin, mesh: object | None, settings: DemoSettings,
 
 
 # ------------------------------------------------------------------------------------------
-# 7. sensitivity
+# 7. rotor life
+
+
+def _rotor_stage(twin: Twin, plant: _PlantData, out: Path,
+                 report: Callable[..., None]) -> list[Section]:
+    """The HP rotor over the day run (``steamtwin rotor stress`` on its historian file): the
+    life consumed, the peak groove stress against the default allowable, two figures."""
+    result = rotor_stress([plant.validation], twin.spec, out / "rotor", params=twin.parameters,
+                          settings={"data": "the virtual plant's day run"},
+                          progress=lambda fraction, message="": report(fraction, message))
+    index = plant.validation.data.index
+    hours = (index[-1] - index[0]).total_seconds() / 3600.0
+    table = life_table(result.life)
+    peak = float(result.frame["groove_von_mises"].max())
+    table["peak_groove_von_mises_MPa"] = peak / 1e6
+    table["allowable_MPa"] = result.allowable_pa / 1e6
+    return [
+        TableSection("rotor_life_day", table,
+                     f"HP rotor life consumed by the day run ({hours:.1f} h of the 24-h "
+                     "load-following programme: its holds scaled with the demo's hold length), "
+                     f"{len(result.life.per_ramp)} ramps; allowable "
+                     f"{result.allowable_source}; full rotor report in rotor/report.html"),
+        FigureSection(result.files["report.html"].with_name("rotor_stress.png"),
+                      "HP rotor: stress at the groove root and the bore over the day run"),
+        *([FigureSection(result.files["report.html"].with_name("rotor_ramps.png"),
+                         "HP rotor: life consumed per load ramp of the day run")]
+          if len(result.life.per_ramp) else []),
+    ]
+
+
+# ------------------------------------------------------------------------------------------
+# 8. sensitivity
 
 
 def _sensitivity_stage(twin: Twin, plant: _PlantData, settings: DemoSettings, out: Path,

@@ -54,12 +54,13 @@ def test_report_holds_every_table_and_figure_of_the_method(demo):
     document = json.loads((result.out / "report.json").read_text(encoding="utf-8"))
     for table in ("table5_operating", "table6_rmse", "table7_ga_sensitivity",
                   "table8_deviation", "sobol_indices", "noise_propagation",
-                  "geometry_fidelity", "scan_uncertainty", "figure9_field_error", "live_twin"):
+                  "geometry_fidelity", "scan_uncertainty", "figure9_field_error", "live_twin",
+                  "rotor_life_day"):
         assert document["tables"][table]["records"], table
         assert (result.out / document["tables"][table]["csv"]).stat().st_size > 0
     files = {figure["file"] for figure in document["figures"]}
     for pattern in ("figure7", "figure8", "figure9", "figure10", "sobol", "noise",
-                    "deviation_map"):
+                    "deviation_map", "rotor/rotor_stress"):
         matches = [name for name in files if name.startswith(pattern)]
         assert matches, pattern
         assert all((result.out / name).stat().st_size > 10_000 for name in matches)

@@ -24,6 +24,7 @@ from steamtwin.cli.history import history_app
 from steamtwin.cli.monitor import monitor_app
 from steamtwin.cli.plant import plant_app
 from steamtwin.cli.rom import rom_app
+from steamtwin.cli.rotor import rotor_app
 from steamtwin.cli.serve import serve
 from steamtwin.cli.simulate import simulate
 from steamtwin.cli.turbine import turbine_app
@@ -108,6 +109,7 @@ app.add_typer(turbine_app, name="turbine")
 app.add_typer(dcs_app, name="dcs")
 app.add_typer(geometry_app, name="geometry")
 app.add_typer(rom_app, name="rom")
+app.add_typer(rotor_app, name="rotor")
 app.add_typer(history_app, name="history")
 app.add_typer(monitor_app, name="monitor")
 app.command()(simulate)

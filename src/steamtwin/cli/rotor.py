@@ -1,0 +1,19 @@
+"""``steamtwin rotor``: HP rotor thermal stress and fatigue life (issue 23).
+
+One module per command: ``stress`` (:mod:`steamtwin.cli.rotor_stress`) — stress and life over
+a historian record, as a report; each command parses its options, makes one library call and
+prints the result.
+"""
+
+from __future__ import annotations
+
+import typer
+
+from steamtwin.cli.rotor_stress import stress
+
+rotor_app = typer.Typer(
+    help="HP rotor thermal stress and fatigue life: stress and life over historian records.",
+    no_args_is_help=True,
+)
+
+rotor_app.command()(stress)
