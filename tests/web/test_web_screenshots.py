@@ -105,6 +105,17 @@ def test_a_missing_browser_is_a_message_not_an_exception(monkeypatch, tmp_path):
     assert CHROMIUM_ENV in text.paragraphs[0]
 
 
+def test_a_browser_that_does_not_answer_fails_each_page_without_raising(tmp_path):
+    shots = screenshot_pages("http://127.0.0.1:9", "unit1", tmp_path,
+                             [PAGES["Unit"], PAGES["History"]], chromium="/bin/true")
+    assert [shot.page.name for shot in shots] == ["Unit", "History"]
+    assert all(not shot.rendered and shot.png is None for shot in shots)
+    assert "Chromium closed its DevTools pipe" in shots[0].detail
+    shots = screenshot_pages("http://127.0.0.1:9", "unit1", tmp_path, [PAGES["Unit"]],
+                             chromium=tmp_path)  # a folder: cannot be started
+    assert "did not start" in shots[0].detail
+
+
 def test_a_failed_page_is_named_in_the_section_beside_its_screenshot(tmp_path):
     png = tmp_path / "dashboard-unit.png"
     png.write_bytes(_png(4, 3))
