@@ -40,7 +40,7 @@ def _png(width: int, height: int) -> bytes:
 
 
 def _dom(ready: str | None, charts: list[int], bad: str = "", unit: str = "unit1") -> str:
-    """A page as Chromium's --dump-dom prints it (the shell of steamtwin.web.pages)."""
+    """A page's DOM as Chromium gives it (the shell of steamtwin.web.pages)."""
     body = f'<body data-unit="{unit}"' + (f' data-ready="{ready}"' if ready else "") + ">"
     status = (f'<span id="status" role="status" class="bad">{bad}</span>' if bad
               else '<span id="status" role="status">live</span>')

@@ -120,7 +120,7 @@ def png_size(path: str | Path) -> tuple[int, int]:
 
 
 class _PageDom(HTMLParser):
-    """What the check needs from a dumped DOM: the body's data attributes, the status line
+    """What the check needs from a page's DOM: the body's data attributes, the status line
     (class and text) and each chart's ``data-points``."""
 
     def __init__(self) -> None:
@@ -153,7 +153,7 @@ class _PageDom(HTMLParser):
 
 
 def page_check(dom: str, page: DashboardPage) -> tuple[bool, str]:
-    """Whether the dumped ``dom`` of ``page`` shows it drawn with data, and what it showed:
+    """Whether the DOM ``dom`` of ``page`` shows it drawn with data, and what it showed:
     the body's ``data-ready`` is "yes", the status line is not an error, every chart drew
     at least one value and (``page.charts``) there is a chart."""
     parsed = _PageDom()
@@ -163,7 +163,7 @@ def page_check(dom: str, page: DashboardPage) -> tuple[bool, str]:
     if parsed.status_bad:
         return False, f"error on the page: {parsed.status_text.strip()}; {charts}"
     if ready != "yes":
-        why = {"": "its script did not finish drawing within the time budget",
+        why = {"": "its script did not finish drawing in the time given",
                "no-rom": "the unit has no blade ROM"}.get(ready, f"data-ready = {ready!r}")
         return False, f"not drawn ({why}); {charts}"
     if page.charts and not parsed.charts:
