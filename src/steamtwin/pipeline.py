@@ -355,7 +355,14 @@ def _stored(database: Path) -> int:
 def _live_stage(twin: Twin, settings: DemoSettings, out: Path,
                 report: Callable[..., None]) -> list[Section]:
     """The virtual plant published over OPC UA on loopback, the live service reading it with
-    the calibrated parameters into ``out/live.duckdb``: what was stored, what the twin said."""
+    the calibrated parameters (and the blade ROM, when built) into ``out/live.duckdb`` and
+    serving the dashboard on a free loopback port: what was stored, what the twin said, and a
+    screenshot of each dashboard page (``out/dashboard/``) once the run is stored."""
+    # imported here: the web service (FastAPI, uvicorn) loads only when this stage runs
+    from steamtwin.rom.romfile import save_rom
+    from steamtwin.web.screenshots import DASHBOARD_PAGES, dashboard_sections, screenshot_pages
+    from steamtwin.web.server import HttpSettings, http_companion
+
     run = run_plant("deep-peak-50", hours=LIVE_HOURS, random_state=settings.random_state + 1000)
     report(0.3)
     tags = out / "live-tags.toml"
@@ -368,15 +375,20 @@ def _live_stage(twin: Twin, settings: DemoSettings, out: Path,
     server_settings = PlantServerSettings(port=port, speed=None)
     database = out / "live.duckdb"
     database.unlink(missing_ok=True)
+    rom_path = None if twin.blade_rom is None else save_rom(twin.blade_rom, out / "live-rom.npz")
     config = ServiceConfig(database=database, source=out / "live (demo)", units=(UnitConfig(
-        name="unit1", turbine=str(settings.spec), tags=tags, params=params_path, block_samples=60,
-        source=SourceConfig("opcua", endpoint=server_settings.endpoint,
-                            allow_insecure=True)),))
+        name="unit1", turbine=str(settings.spec), tags=tags, params=params_path, rom=rom_path,
+        block_samples=60, source=SourceConfig("opcua", endpoint=server_settings.endpoint,
+                                              allow_insecure=True)),))
+    bound: dict[str, int] = {}
+    unit_pages = [page for page in DASHBOARD_PAGES if page.name != "Fleet"]  # one unit
+    dashboard = http_companion(HttpSettings(port=0), config,
+                               on_bound=lambda _host, http_port: bound.update(port=http_port))
 
-    async def live() -> dict:
+    async def live() -> tuple[dict, list]:
         stop = asyncio.Event()
         async with PlantServer(run.measured, plant_tag_map(), server_settings) as server:
-            service = asyncio.create_task(run_service(config, stop))
+            service = asyncio.create_task(run_service(config, stop, companions=[dashboard]))
             await server.wait_for_subscribers(len(plant_tag_map().signals))
             await server.publish()
             # until every sample but the gate's last look-ahead minute is stored (on a loaded
@@ -385,11 +397,16 @@ def _live_stage(twin: Twin, settings: DemoSettings, out: Path,
             while (_stored(database) < len(run.measured) - LOOK_AHEAD_SAMPLES
                    and time.perf_counter() < deadline and not service.done()):
                 await asyncio.sleep(0.25)
+            # the dashboard as the run left it, drawn by the service still serving (in a
+            # thread: the service's loop answers the browser meanwhile)
+            shots = await asyncio.to_thread(screenshot_pages, f"http://127.0.0.1:{bound['port']}",
+                                            "unit1", out / "dashboard", unit_pages)
             stop.set()
-            return await service
+            return await service, shots
 
     clock = time.perf_counter()
-    summary = asyncio.run(live())["unit1"]
+    summaries, shots = asyncio.run(live())
+    summary = summaries["unit1"]
     elapsed = time.perf_counter() - clock
     report(0.9)
     with LiveHistorian(database) as historian:
@@ -399,16 +416,23 @@ def _live_stage(twin: Twin, settings: DemoSettings, out: Path,
         "quantity": ["samples published over OPC UA", "samples stored", "without a twin value "
                      "(an input the gate rejected)", "source and gate findings",
                      "HP-exhaust residual, mean abs (K)", "HP-exhaust residual, max abs (K)",
-                     "wall time of the live stage (s)"],
+                     "wall time of the live stage (s)", "of which dashboard screenshots (s)"],
         "value": [len(run.measured), summary.samples, summary.without_twin, summary.findings,
                   float(exhaust.abs().mean()) if len(exhaust) else float("nan"),
-                  float(exhaust.abs().max()) if len(exhaust) else float("nan"), elapsed]})
+                  float(exhaust.abs().max()) if len(exhaust) else float("nan"), elapsed,
+                  sum(shot.seconds for shot in shots)]})
     report(1.0)
+    note = ("The live service's dashboard (`steamtwin serve --http-port`) at 1366 × 768, "
+            "taken while the service still ran, after the plant's run was stored. The Fleet "
+            "page is not shown: with one unit it forwards to that unit's page. The Calibration "
+            "page's trajectory stays empty here: the service stores parameter swaps, and this "
+            "unit runs without recalibration.")
     return [TableSection("live_twin", table, "Live twin: the virtual plant's deep-peak-50 run "
                          "published over OPC UA on 127.0.0.1 (asyncua, no security: a test plant) "
                          "and read by `steamtwin serve`'s runner with the calibrated parameters — "
                          "gate, streamed full-order model, residuals, DuckDB (live.duckdb); the "
-                         "last minute waits for the gate's look-ahead when the stage stops")]
+                         "last minute waits for the gate's look-ahead when the stage stops"),
+            *dashboard_sections(shots, note)]
 
 
 

@@ -11,6 +11,7 @@ import pytest
 from steamtwin.pipeline import STAGES, DemoSettings, run_demo
 from steamtwin.twin import Twin
 from steamtwin.validation.html import format_value
+from steamtwin.web.screenshots import find_chromium, png_size
 
 pytestmark = pytest.mark.slow  # 71 s of the full suite (2026-11-27): not in the quick loop
 
@@ -111,3 +112,25 @@ def test_the_live_stage_stored_what_the_plant_published(demo):
     assert published - 61 <= stored <= published  # all but the gate's last look-ahead
     assert 0.0 < rows["HP-exhaust residual, mean abs (K)"] < 10.0
     assert (result.out / "live.duckdb").stat().st_size > 0
+
+
+def test_the_report_shows_each_dashboard_page_or_what_to_install(demo):
+    """Issue 22, item 4: the live stage's dashboard, a 1366 × 768 screenshot of each unit page
+    in the report (the Unit, History and Blade pages drew the run's data); without chromium,
+    the section says what to install."""
+    result, _ = demo
+    document = json.loads((result.out / "report.json").read_text(encoding="utf-8"))
+    html = (result.out / "report.html").read_text(encoding="utf-8")
+    assert "Dashboard screenshots</h2>" in html
+    shots = {figure["file"]: figure["caption"] for figure in document["figures"]
+             if figure["file"].startswith("dashboard/")}
+    if find_chromium() is None:
+        assert not shots and "apt-get install chromium" in html
+        return
+    names = ("unit", "history", "alarms", "calibration", "blade")
+    assert sorted(shots) == sorted(f"dashboard/dashboard-{name}.png" for name in names)
+    for file in shots:
+        assert png_size(result.out / file) == (1366, 768)
+    for name in ("unit", "history", "blade"):
+        caption = shots[f"dashboard/dashboard-{name}.png"]
+        assert "did not render" not in caption and " points" in caption, caption

@@ -11,82 +11,29 @@ refuse a request without the token. Chromium missing is a failure, not a skip: C
 
 from __future__ import annotations
 
-import asyncio
 import os
-import threading
 import time
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
-from web_fixtures import START, fill, unit_block, write_rom, write_serve_config
+from web_fixtures import ACK, READ, START, ServedSite
 
-from steamtwin.live.config import load_config
-from steamtwin.live.historian import Alarm, BlockEvents, LiveHistorian
-from steamtwin.web.access import AccessPolicy, load_tokens
-from steamtwin.web.app import WebSettings
-from steamtwin.web.server import HttpSettings, http_companion
+from steamtwin.live.historian import Alarm, BlockEvents
 
 pytestmark = pytest.mark.slow
 
 CHROMIUM = Path("/usr/bin/chromium")
-READ, ACK = "r" * 40, "a" * 40
 VIEWPORT = {"width": 1366, "height": 768}
 EMPTY_STYLE = "sha256-47DEQpj8HBSa+/TImW+5JCeuQeRkm5NMpJWZG3hSuFU="
 """CSP hash of an empty style: plotly.js clears a colour bar rect's style attribute (d3
 ``.attr("style", "")``); the policy blocks that no-op, the only inline style left."""
 
 
-class _Site:
-    """The service on loopback in a thread of its own (with tokens unless not ``tokens``);
-    the test thread writes the historian."""
-
-    def __init__(self, folder: Path, tokens: bool = True) -> None:
-        db = folder / "twin.duckdb"
-        fill(db)
-        write_rom(folder / "rom.npz")
-        config = write_serve_config(folder, db).source
-        config.write_text(config.read_text().replace('name = "unit1"\n',
-                                                     'name = "unit1"\nrom = "rom.npz"\n'))
-        access = AccessPolicy()
-        if tokens:
-            token_file = folder / "tokens.toml"
-            token_file.write_text(
-                f'[[tokens]]\nname = "viewer"\nrole = "read"\ntoken = "{READ}"\n'
-                f'[[tokens]]\nname = "shift-lead"\nrole = "ack"\ntoken = "{ACK}"\n')
-            access = load_tokens(token_file)
-        bound: dict[str, int] = {}
-        self.companion = http_companion(
-            HttpSettings(port=0, access=access, web=WebSettings(poll_s=0.1)),
-            load_config(config), on_bound=lambda _host, port: bound.update(port=port))
-        self.url = f"http://127.0.0.1:{bound['port']}"
-        self.historian = LiveHistorian(db)
-        self.historian.open()
-        self.next_s = 7200
-        self.loop = asyncio.new_event_loop()
-        self.done = asyncio.Event()
-        self.thread = threading.Thread(target=self.loop.run_until_complete,
-                                       args=(self.companion(self.historian, self.done),))
-        self.thread.start()
-
-    def commit(self, n: int = 1, events: BlockEvents | None = None) -> pd.Timestamp:
-        """``n`` new 1-s samples of unit1 (with ``events``), stored as the service stores
-        them; the last time."""
-        frames, flags = unit_block(self.next_s, n)
-        self.historian.commit_block("unit1", frames, flags, events=events)
-        self.next_s += n
-        return frames["measured"].index[-1]
-
-    def close(self) -> None:
-        self.loop.call_soon_threadsafe(self.done.set)
-        self.thread.join(10.0)
-        self.historian.close()
-
-
 @pytest.fixture(scope="module")
 def site(tmp_path_factory):
-    served = _Site(tmp_path_factory.mktemp("site"))
+    served = ServedSite(tmp_path_factory.mktemp("site"))
     yield served
     served.close()
 
@@ -305,7 +252,7 @@ def test_the_pages_fit_a_tablet(browser, site):
 
 
 def test_without_tokens_the_operator_named_in_the_page_acknowledges(browser, tmp_path):
-    open_site = _Site(tmp_path, tokens=False)  # loopback, no token file: open access
+    open_site = ServedSite(tmp_path, tokens=False)  # loopback, no token file: open access
     context = browser.new_context(viewport=VIEWPORT)
     try:
         page = context.new_page()

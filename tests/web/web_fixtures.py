@@ -5,7 +5,10 @@ instrument errors."""
 
 from __future__ import annotations
 
+import asyncio
 import dataclasses
+import threading
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -18,6 +21,9 @@ from steamtwin.live.config import load_config
 from steamtwin.live.historian import Alarm, AlarmEnd, BlockEvents, LiveHistorian
 from steamtwin.rom.estimator import PodRbfRom
 from steamtwin.rom.romfile import BladeRom, probe_nodes, save_rom
+from steamtwin.web.access import AccessPolicy, load_tokens
+from steamtwin.web.app import WebSettings
+from steamtwin.web.server import HttpSettings, http_companion
 
 START = pd.Timestamp("2026-03-01T00:00:00Z")
 HOURS = 2
@@ -103,3 +109,55 @@ def write_rom(path) -> None:
     rom = PodRbfRom(energy=0.9999).fit(fields, conditions, input_names=ROM_INPUTS)
     save_rom(BladeRom(rom, mesh, probe_nodes(mesh),
                       pd.DataFrame(conditions, columns=list(ROM_INPUTS))), path)
+
+
+READ, ACK = "r" * 40, "a" * 40
+"""The tokens of :class:`ServedSite`: read-only and allowed to acknowledge alarms."""
+
+
+class ServedSite:
+    """The HTTP companion on loopback (any free port: :attr:`url`) in a thread of its own, on
+    :func:`fill`'s historian with :func:`write_rom`'s ROM for unit1, with the tokens
+    :data:`READ` and :data:`ACK` unless not ``tokens``; the test thread writes the
+    historian (:meth:`commit`)."""
+
+    def __init__(self, folder: Path, tokens: bool = True) -> None:
+        db = folder / "twin.duckdb"
+        fill(db)
+        write_rom(folder / "rom.npz")
+        config = write_serve_config(folder, db).source
+        config.write_text(config.read_text().replace('name = "unit1"\n',
+                                                     'name = "unit1"\nrom = "rom.npz"\n'))
+        access = AccessPolicy()
+        if tokens:
+            token_file = folder / "tokens.toml"
+            token_file.write_text(
+                f'[[tokens]]\nname = "viewer"\nrole = "read"\ntoken = "{READ}"\n'
+                f'[[tokens]]\nname = "shift-lead"\nrole = "ack"\ntoken = "{ACK}"\n')
+            access = load_tokens(token_file)
+        bound: dict[str, int] = {}
+        self.companion = http_companion(
+            HttpSettings(port=0, access=access, web=WebSettings(poll_s=0.1)),
+            load_config(config), on_bound=lambda _host, port: bound.update(port=port))
+        self.url = f"http://127.0.0.1:{bound['port']}"
+        self.historian = LiveHistorian(db)
+        self.historian.open()
+        self.next_s = 7200
+        self.loop = asyncio.new_event_loop()
+        self.done = asyncio.Event()
+        self.thread = threading.Thread(target=self.loop.run_until_complete,
+                                       args=(self.companion(self.historian, self.done),))
+        self.thread.start()
+
+    def commit(self, n: int = 1, events: BlockEvents | None = None) -> pd.Timestamp:
+        """``n`` new 1-s samples of unit1 (with ``events``), stored as the service stores
+        them; the last time."""
+        frames, flags = unit_block(self.next_s, n)
+        self.historian.commit_block("unit1", frames, flags, events=events)
+        self.next_s += n
+        return frames["measured"].index[-1]
+
+    def close(self) -> None:
+        self.loop.call_soon_threadsafe(self.done.set)
+        self.thread.join(10.0)
+        self.historian.close()

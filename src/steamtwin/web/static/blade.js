@@ -40,6 +40,7 @@
           Object.entries(field.probes).map(([n, t]) => [n.replace("blade_", ""),
                                                         (t - 273.15).toFixed(1)]));
     div.dataset.time = field.time;
+    div.dataset.points = celsius.filter((v) => Number.isFinite(v)).length;
     document.body.dataset.ready = "yes";
   }
 

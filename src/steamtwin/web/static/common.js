@@ -136,8 +136,16 @@ const steamtwin = (() => {
 
   // Draw (or redraw) a chart in `element`: series [{label, stroke?, width?, ...}] and
   // data [xs, ys…]; `bands` fill between two series; `options` are passed on (hooks, cursor).
+  // After each draw, `data-points` holds the number of finite y values drawn (the demo's
+  // screenshot check reads it from the page's DOM: steamtwin.web.screenshots).
   function chart(element, { title, yLabel, series, data, bands = [], options = {} }) {
     if (element._uplot) element._uplot.destroy();
+    const counted = (plot) => {
+      element.dataset.points = plot.data.slice(1).reduce(
+        (n, ys) => n + ys.filter((v) => Number.isFinite(v)).length, 0);
+    };
+    const hooks = { ...(options.hooks || {}) };
+    hooks.draw = [...(hooks.draw || []), counted];
     const height = element.classList.contains("tall") ? 400 : 240;
     const width = () => Math.max(element.clientWidth, 200);
     const plot = new uPlot({
@@ -147,7 +155,7 @@ const steamtwin = (() => {
       axes: [{ values: TICKS }, { label: yLabel, size: 60 }],
       series: [{ label: "time (UTC)", value: "{YYYY}-{MM}-{DD} {HH}:{mm}:{ss}" }, ...series.map((s, k) => ({
         stroke: PALETTE[k % PALETTE.length], width: 1.5, ...s }))],
-      ...options }, data, element);
+      ...options, hooks }, data, element);
     element._uplot = plot;
     if (!element._resizes) {  // follow the page's width (1366 px down to a tablet)
       element._resizes = new ResizeObserver(() => {
