@@ -27,7 +27,8 @@ exist that the advisor does not offer (conservative).
 **Start-up / shut-down curve.** :meth:`RampAdvisor.curve` splits a load change into bands
 (default 10 % of load) and advises each in turn from the state the previous band's ramp left
 (without its hold), each band's check including a hold after it, so the unit may stop at any band
-edge within the allowable.
+edge within the allowable; where no rate is feasible the unit soaks at the band edge until one
+is (the hold points of a start-up curve).
 
 **Margin.** The stress each candidate sees is the ROM's, so the search keeps a share
 ``margin`` (default :data:`ROM_MARGIN`, 2 %) of each allowed excursion — window edge minus
@@ -56,7 +57,8 @@ from steamtwin.rotor.model import RotorModel, RotorState
 from steamtwin.spec.fingerprint import load_spec_and_text
 from steamtwin.units import parse_quantity
 
-__all__ = ["LOCATIONS", "AdviceResult", "RampAdvice", "RampAdvisor", "RampCurve", "advise_ramp"]
+__all__ = ["LOCATIONS", "AdviceResult", "NoFeasibleRampError", "RampAdvice", "RampAdvisor",
+           "RampCurve", "advise_ramp"]
 
 LOCATIONS = ("groove", "bore")
 """The critical points whose equivalent stress the advisor keeps within the allowable."""
@@ -75,6 +77,15 @@ tests/rotor/test_rotor_model.py checks it on an unseen ramp)."""
 STATE_SLACK_K = 5.0
 """Margin (K) over the hottest steam within which a carried state's metal may lie (the ROM's
 temperature error is ≤ 1 K, docs/rotor.md)."""
+
+
+SOAK_STEP_S = 600.0
+"""Soak added at a band edge of a start-up/shut-down curve while no rate is feasible (s)."""
+
+
+class NoFeasibleRampError(RotorAreaError):
+    """No ramp rate down to the advisor's ``min_rate`` keeps the rotor within the allowable
+    from the given state (the rotor must soak first)."""
 
 
 def _column(location: str, quantity: str) -> str:
@@ -126,26 +137,28 @@ class RampAdvice:
 
 @dataclass(frozen=True)
 class RampCurve:
-    """A stress-limited start-up or shut-down curve: one advice per load band."""
+    """A stress-limited start-up or shut-down curve: one advice per load band, and the soak
+    (s) at each band's start before it may ramp."""
 
     bands: list[RampAdvice]
+    soaks_s: list[float]
 
     @property
     def table(self) -> pd.DataFrame:
         """One row per band: from/to load, rate (fraction/min), duration (s), peak stresses
         (Pa), what limited the rate, and the band's fatigue and creep damage per location."""
         return pd.DataFrame([{
-            "from_load": b.from_load, "to_load": b.to_load, "rate_per_min": b.rate_per_min,
-            "ramp_s": b.ramp_s, "limited_by": b.limited_by,
+            "from_load": b.from_load, "to_load": b.to_load, "soak_s": soak,
+            "rate_per_min": b.rate_per_min, "ramp_s": b.ramp_s, "limited_by": b.limited_by,
             **{f"{loc}_peak_pa": b.peak_pa[loc] for loc in b.peak_pa},
             **{f"{loc}_fatigue_damage": b.fatigue_damage[loc] for loc in b.fatigue_damage},
             **{f"{loc}_creep_damage": b.creep_damage[loc] for loc in b.creep_damage},
-        } for b in self.bands])
+        } for b, soak in zip(self.bands, self.soaks_s, strict=True)])
 
     @property
     def duration_s(self) -> float:
-        """Time of all the bands' ramps (s), without holds."""
-        return float(sum(b.ramp_s for b in self.bands))
+        """Time of all the bands' soaks and ramps (s), without the checked holds."""
+        return float(sum(b.ramp_s for b in self.bands) + sum(self.soaks_s))
 
 
 class RampAdvisor:
@@ -256,22 +269,37 @@ class RampAdvisor:
             evaluations=frame, monotone=bool(monotone))
 
     def curve(self, state: RotorState | None, from_load: float, to_load: float, *,
-              band: float = 0.10, hold_after_s: float = 3600.0) -> RampCurve:
+              band: float = 0.10, hold_after_s: float = 3600.0,
+              max_soak_s: float = 4 * 3600.0) -> RampCurve:
         """A stress-limited start-up (or shut-down) curve: the load change in bands of ``band``
         (fraction of rated load), each the fastest ramp from the state the previous band's ramp
-        left, checked with a hold of ``hold_after_s`` (s) after it."""
+        left, checked with a hold of ``hold_after_s`` (s) after it. When no rate is feasible at
+        a band edge the unit soaks there (steady steam of that load) in steps of
+        :data:`SOAK_STEP_S` until one is, up to ``max_soak_s`` (s) per band — the hold points of
+        a start-up curve."""
         self._check_fitted()
         start, end = self._check_load(from_load, "from_load"), self._check_load(to_load, "to_load")
         if not (0.0 < band <= 1.0):
             raise RotorAreaError(f"band must lie in (0, 1] (fraction of rated load), got {band!r}")
         count = max(1, int(np.ceil(abs(end - start) / band - 1e-9)))
         edges = np.linspace(start, end, count + 1)
-        bands = []
+        state = self._start_state(state, start)
+        bands, soaks = [], []
         for a, b in itertools.pairwise(edges):
-            advice = self.advise(state, float(a), float(b), hold_after_s=hold_after_s)
+            soak = 0.0
+            while True:
+                try:
+                    advice = self.advise(state, float(a), float(b), hold_after_s=hold_after_s)
+                    break
+                except NoFeasibleRampError:
+                    if soak + SOAK_STEP_S > max_soak_s:
+                        raise
+                    state = self._soak(state, float(a), SOAK_STEP_S)
+                    soak += SOAK_STEP_S
             bands.append(advice)
+            soaks.append(soak)
             state = advice.end_state
-        return RampCurve(bands)
+        return RampCurve(bands, soaks)
 
     # --- internals ------------------------------------------------------------------------
 
@@ -295,9 +323,10 @@ class RampAdvisor:
     def _start_state(self, state: RotorState | None, load: float) -> RotorState:
         """``state`` checked to be this rotor's, or the steady state at ``load``.
 
-        A state of another ROM (another number of modes) is refused; so is one whose groove or
-        bore metal is hotter than the hottest steam of the operating line (+ :data:`STATE_SLACK_K`)
-        or below 0 °C: by the maximum principle of the heat equation with convective boundaries
+        A state of another ROM (another number of modes) is refused; so is one whose metal at
+        the ROM's observed nodes (groove, bore, strain-interpolation nodes) is hotter than the
+        hottest steam of the operating line (+ :data:`STATE_SLACK_K`) or below 0 °C: by the
+        maximum principle of the heat equation with convective boundaries
         (Carslaw & Jaeger §1.5) the metal cannot exceed the hottest steam it has seen, so such a
         state belongs to another rotor or unit."""
         if state is None:
@@ -308,16 +337,16 @@ class RampAdvisor:
             raise RotorAreaError(f"rotor state has {coordinates.shape} reduced coordinates; "
                                  f"this rotor model's ROM has {modes} modes: the state is "
                                  "from another rotor model")
-        observed = self.model.observe(state)
+        temperatures, _ = self.model.rom_.observe(state.rom)  # groove, bore, strain nodes (K)
         hottest = float(self.steam_[[c for c in self.steam_.columns
                                      if c.startswith("steam_temperature:")]].to_numpy().max())
-        for location in LOCATIONS:
-            temperature = observed[_column(location, "temperature")]
-            if not 273.15 <= temperature <= hottest + STATE_SLACK_K:
-                raise RotorAreaError(
-                    f"rotor state: {location} temperature {temperature:.1f} K lies outside "
-                    f"273.15…{hottest + STATE_SLACK_K:.1f} K (0 °C to the hottest steam of "
-                    f"turbine {self.model.spec.name!r}): the state is from another rotor")
+        outside = temperatures[(temperatures < 273.15)
+                               | (temperatures > hottest + STATE_SLACK_K)]
+        if outside.size:
+            raise RotorAreaError(
+                f"rotor state: metal temperature {float(outside[0]):.1f} K lies outside "
+                f"273.15…{hottest + STATE_SLACK_K:.1f} K (0 °C to the hottest steam of "
+                f"turbine {self.model.spec.name!r}): the state is from another rotor")
         return state
 
     def _limits(self, start: float, end: float) -> dict[str, StressLimit]:
@@ -346,24 +375,40 @@ class RampAdvisor:
                           dtype=float) * self.step_s
         return from_load + (to_load - from_load) * np.clip(times / ramp_s, 0.0, 1.0)
 
+    def steam_frame(self, from_load: float, to_load: float, rate: float,
+                    hold_after_s: float) -> pd.DataFrame:
+        """The quasi-steady steam side (:meth:`RotorModel.steam_side`'s columns) of a ramp at
+        ``rate`` (fraction/min) and its hold, every ``step_s`` s from the start (first row at
+        ``from_load``), with a ``load_fraction`` column — what the advisor runs the ROM over, and
+        what :meth:`RotorModel.simulate_steam` (``full_order=True``) takes to check it."""
+        loads = np.concatenate([[from_load],
+                                self.ramp_loads(from_load, to_load, rate, hold_after_s)])
+        steam = self._steam_at(loads).set_axis(
+            pd.Timestamp("2000-01-01T00:00:00Z")
+            + pd.to_timedelta(np.arange(loads.size) * self.step_s, unit="s"))
+        steam["load_fraction"] = loads
+        return steam
+
     def _predict(self, state: RotorState, start: float, end: float, rate: float,
                  hold_after_s: float) -> pd.DataFrame:
         """The ROM's run over the ramp and hold from ``state`` (its first row: ``state`` at
         ``start``), with a ``load_fraction`` column."""
-        loads = np.concatenate([[start], self.ramp_loads(start, end, rate, hold_after_s)])
-        steam = self._steam_at(loads).set_axis(
-            pd.Timestamp("2000-01-01T00:00:00Z")
-            + pd.to_timedelta(np.arange(loads.size) * self.step_s, unit="s"))
+        steam = self.steam_frame(start, end, rate, hold_after_s)
         run = self.model.simulate_steam(steam, state).frame
-        run["load_fraction"] = loads
+        run["load_fraction"] = steam["load_fraction"]
         return run
+
+    def _soak(self, state: RotorState, load: float, seconds: float) -> RotorState:
+        """The state after ``seconds`` (s) of steady steam at ``load``."""
+        steps = int(np.ceil(seconds / self.step_s - 1e-9))
+        steam = self._steam_at(np.full(steps + 1, load)).set_axis(
+            pd.RangeIndex(steps + 1) * self.step_s)
+        return self.model.simulate_steam(steam, state).state
 
     def _end_state(self, state: RotorState, start: float, end: float, rate: float
                    ) -> RotorState:
         """The rotor's state at the last step of the ramp (no hold)."""
-        loads = np.concatenate([[start], self.ramp_loads(start, end, rate, 0.0)])
-        steam = self._steam_at(loads).set_axis(pd.RangeIndex(loads.size) * self.step_s)
-        return self.model.simulate_steam(steam, state).state
+        return self.model.simulate_steam(self.steam_frame(start, end, rate, 0.0), state).state
 
     def _fastest(self, excess) -> tuple[float, str]:
         """(rate, what limited it): halving from the cap to a feasible rate, then bisection."""
@@ -373,7 +418,7 @@ class RampAdvisor:
         low = 0.5 * high
         while (value := excess(low)) > 0.0:
             if low <= self.min_rate:
-                raise RotorAreaError(
+                raise NoFeasibleRampError(
                     f"no ramp rate down to {100 * self.min_rate:.2g} %/min keeps the rotor within "
                     f"the allowable from this state (at that rate the peak stress is "
                     f"{value / 1e6:.1f} MPa past it); wait for the rotor to settle or raise the "
