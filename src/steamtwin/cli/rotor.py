@@ -11,6 +11,12 @@ from steamtwin.cli.rotor_advise import rotor_advise
 
 __all__ = ["rotor_app"]
 
-rotor_app = typer.Typer(help="HP rotor thermal stress, fatigue life and ramp-rate advice.",
-                        no_args_is_help=True)
+rotor_app = typer.Typer(no_args_is_help=True)
+
+
+@rotor_app.callback()
+def rotor() -> None:
+    """HP rotor thermal stress, fatigue life and ramp-rate advice."""
+
+
 rotor_app.command("advise")(rotor_advise)

@@ -50,7 +50,7 @@ import pandas as pd
 from steamtwin.errors import RotorAreaError
 from steamtwin.model.operating import operating_point
 from steamtwin.model.parameters import ModelParameters
-from steamtwin.progress import ProgressCallback
+from steamtwin.progress import ProgressCallback, scaled
 from steamtwin.rotor.allowable import StressLimit, cycle_limit, user_limit
 from steamtwin.rotor.life import rotor_life
 from steamtwin.rotor.model import RotorModel, RotorState
@@ -203,8 +203,8 @@ class RampAdvisor:
             raise RotorAreaError(f"step_s must be > 0 s and rate_tolerance in (0, 0.5), got "
                                  f"{self.step_s!r}, {self.rate_tolerance!r}")
         spec = self.model.spec
-        top = min(float(spec.sliding_pressure.load_fraction[-1]), HIGHEST_LOAD)
-        loads = np.unique(np.append(np.arange(LOWEST_LOAD, top, TABLE_STEP), top).round(6))
+        low, top = self.operating_range()
+        loads = np.unique(np.append(np.arange(low, top, TABLE_STEP), top).round(6))
         rows, standing = [], []
         for k, load in enumerate(loads):
             boundary = operating_point(spec, load)
@@ -231,7 +231,7 @@ class RampAdvisor:
         state of another rotor, an allowable below the standing stress, or when no rate down to
         ``min_rate`` stays within it."""
         self._check_fitted()
-        start, end = self._check_load(from_load, "from_load"), self._check_load(to_load, "to_load")
+        start, end = self.check_load(from_load, "from_load"), self.check_load(to_load, "to_load")
         if start == end:
             raise RotorAreaError(f"from_load and to_load are both {start!r}: nothing to ramp")
         if not (np.isfinite(hold_after_s) and hold_after_s >= 0.0):
@@ -278,7 +278,7 @@ class RampAdvisor:
         :data:`SOAK_STEP_S` until one is, up to ``max_soak_s`` (s) per band — the hold points of
         a start-up curve."""
         self._check_fitted()
-        start, end = self._check_load(from_load, "from_load"), self._check_load(to_load, "to_load")
+        start, end = self.check_load(from_load, "from_load"), self.check_load(to_load, "to_load")
         if not (0.0 < band <= 1.0):
             raise RotorAreaError(f"band must lie in (0, 1] (fraction of rated load), got {band!r}")
         count = max(1, int(np.ceil(abs(end - start) / band - 1e-9)))
@@ -307,11 +307,20 @@ class RampAdvisor:
         if not hasattr(self, "steam_"):
             raise RotorAreaError("RampAdvisor is not fitted: call fit() first")
 
-    def _check_load(self, load: float, name: str) -> float:
-        low, high = float(self.loads_[0]), float(self.loads_[-1])
+    def operating_range(self) -> tuple[float, float]:
+        """The loads the advisor covers (fractions of rated): 20 % to rated load, or to the
+        sliding-pressure line's end if lower."""
+        return LOWEST_LOAD, min(float(self.model.spec.sliding_pressure.load_fraction[-1]),
+                                HIGHEST_LOAD)
+
+    def check_load(self, load: float, name: str) -> float:
+        """``load`` (fraction of rated) if inside :meth:`operating_range`, else
+        :class:`RotorAreaError` naming ``name`` and the value."""
+        low, high = self.operating_range()
         if not (np.isfinite(load) and low <= load <= high):
-            raise RotorAreaError(f"{name} = {load!r} is outside the unit's operating range "
-                                 f"{low:g}…{high:g} of rated load (the sliding-pressure line)")
+            raise RotorAreaError(f"{name} = {load!r} ({100 * load:g} % of rated load) is outside "
+                                 f"the unit's operating range {100 * low:g}…{100 * high:g} % "
+                                 "(the sliding-pressure line up to rated load)")
         return float(load)
 
     def _steam_at(self, load: np.ndarray | float) -> pd.DataFrame:
@@ -464,18 +473,25 @@ def advise_ramp(turbine: str | Path, from_load: float, to_load: float, *,
     if allowable is not None and cycles is not None:
         raise RotorAreaError("give either an allowable stress or a cycle count, not both")
     spec, _ = load_spec_and_text(turbine)
+    allowable_pa = None if allowable is None else parse_quantity(allowable, "Pa", "allowable")
     params = ModelParameters.from_json(params_file) if params_file is not None else None
-    if model_file is not None:
-        model = RotorModel.load(model_file, spec)
-    else:
-        model = RotorModel(spec).fit(params, progress=progress)
     state = None
     if state_file is not None:
-        state = RotorState.from_dict(json.loads(Path(state_file).read_text(encoding="utf-8")))
-    advisor = RampAdvisor(
-        model, None if allowable is None else parse_quantity(allowable, "Pa", "allowable"),
-        cycles=None if allowable is not None else (cycles or DEFAULT_CYCLES),
-        max_rate=max_rate, params=params).fit()
+        try:
+            state = RotorState.from_dict(json.loads(Path(state_file).read_text(encoding="utf-8")))
+        except (ValueError, TypeError, KeyError) as error:
+            raise RotorAreaError(f"{state_file}: not a rotor state (JSON of "
+                                 f"RotorState.to_dict): {error}") from None
+    model = (RotorModel.load(model_file, spec) if model_file is not None
+             else RotorModel(spec))
+    advisor = RampAdvisor(model, allowable_pa,
+                          cycles=None if allowable is not None else (cycles or DEFAULT_CYCLES),
+                          max_rate=max_rate, params=params)
+    advisor.check_load(from_load, "from_load")
+    advisor.check_load(to_load, "to_load")
+    if model_file is None:
+        model.fit(params, progress=scaled(progress, 0.0, 0.9, "rotor model: "))
+    advisor.fit(scaled(progress, 0.9 if model_file is None else 0.0, 1.0, "advisor: "))
     advice = advisor.advise(state, from_load, to_load, hold_after_s=hold_after_s)
     bands = (advisor.curve(state, from_load, to_load, hold_after_s=hold_after_s)
              if curve else None)
