@@ -87,7 +87,7 @@ ramp, a hold, the ramp back and a hold (:data:`TRAINING_HOLD_S`). 2 and 8 %/min 
 MAX_STRAIN_SNAPSHOTS = 2000
 """Evenly spaced training fields the thermal-strain POD reads at most."""
 
-STRAIN_ENERGY = 1.0 - 1e-12
+STRAIN_ENERGY = 1.0 - 1e-10
 """Fraction of the thermal-strain snapshots' energy the interpolation basis keeps."""
 
 TRAINING_HOLD_S = 3600.0
