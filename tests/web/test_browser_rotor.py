@@ -80,8 +80,14 @@ def test_the_rotor_page_draws_the_stored_stress_and_life(site):
             "async () => (await fetch('/api/units/unit1/series?source=twin&signal="
             "rotor_groove_stress&span_s=86400', {headers: {Authorization: 'Bearer "
             f"{READ}'}}}})).json()")
+        drawn_without_errors = list(errors)  # the advice's 404 below is logged by chromium
+        page.click("#advise button")  # rotor = "fit": no model file to advise from
+        page.wait_for_function("() => !document.getElementById('advice-note').textContent"
+                               ".startsWith('computing')", timeout=15_000)
+        advice_note = page.locator("#advice-note").inner_text()
         browser.close()
-    assert not errors, errors
+    assert not drawn_without_errors, drawn_without_errors
+    assert "ramp advice needs the rotor model file" in advice_note
     # the page draws the API's answer for the day (2 h stored: equal buckets of 43 s, each
     # drawn at its mean), in MPa; those means lie within the stored values' range
     means = np.array([np.nan if v is None else v for v in api["mean"]], dtype=float)

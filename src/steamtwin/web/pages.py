@@ -196,4 +196,9 @@ def rotor_page(unit: str) -> HTMLResponse:
         '<p class="note">Fatigue: rainflow, Neuber, Manson–Coffin–Basquin with Morrow\'s '
         'mean stress and the ASME design factors; creep: Larson–Miller time fraction '
         '(docs/rotor.md).</p><table id="life" class="wide"></table>'
-        '<h2>Per day</h2><table id="days" class="wide"></table>'), unit, "rotor")
+        '<h2>Per day</h2><table id="days" class="wide"></table>'
+        '<h2>Ramp advice</h2><form id="advise" class="controls"><label>to load <input '
+        'id="advice-to" size="4" value="30"> % of rated</label><label>hold after <input '
+        'id="advice-hold" size="5" value="60"> min</label><button type="submit">advise'
+        '</button></form><p id="advice-note" class="note"></p>'
+        '<table id="advice" class="wide"></table>'), unit, "rotor")

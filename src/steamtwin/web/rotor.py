@@ -10,14 +10,23 @@ The life needs only the rotor steel of the unit's spec (``[rotor]`` section's ma
 the rotor model file, so it works the same for ``rotor = "fit"``. Its answers are cached per
 (unit, range, last stored sample): a range that ends before the last sample never changes,
 and a page polling the current range recomputes only when a sample was stored.
+
+The ramp advice (:class:`~steamtwin.rotor.advisor.RampAdvisor`: the fastest constant ramp to a
+target load within the allowable, and what it costs) starts from the rotor state of the live
+twin's last saved state (the ``states`` table: saved every ``snapshot_every_s``, 10 min by
+default, so up to that old) at the load measured then; it needs the rotor model file and
+the allowable (the advisor is fitted once per unit, on first use: a steady FOM run per 5 % of
+load along the operating line).
 """
 
 from __future__ import annotations
 
+import json
 import threading
 from collections import OrderedDict
 from dataclasses import dataclass
 from functools import cached_property
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -25,9 +34,10 @@ import pandas as pd
 from steamtwin.errors import SteamtwinError
 from steamtwin.live.config import ServiceConfig
 from steamtwin.live.rotor_stream import ROTOR_SIGNALS
+from steamtwin.rotor.advisor import RampAdvisor
 from steamtwin.rotor.geometry import rotor_geometry
 from steamtwin.rotor.life import rotor_life
-from steamtwin.rotor.model import LOCATIONS
+from steamtwin.rotor.model import LOCATIONS, RotorModel, RotorState
 from steamtwin.rotor.steel import TabulatedSteel, steel
 from steamtwin.spec import TurbineSpec, load_spec
 from steamtwin.web.queries import HistorianReader, SeriesQuery
@@ -42,10 +52,16 @@ class NoRotorError(SteamtwinError, LookupError):
     """The unit has no rotor model configured (the message says where to add it)."""
 
 
+class NoAdviceError(SteamtwinError, LookupError):
+    """The unit's configuration or stored state cannot give ramp advice (the message says why
+    and what to add)."""
+
+
 @dataclass(frozen=True)
 class _RotorUnit:
     turbine: str
     allowable: float | None
+    model: Path | None
 
     @cached_property
     def spec(self) -> TurbineSpec:
@@ -79,10 +95,13 @@ class RotorViews:
 
     def __init__(self, config: ServiceConfig | None) -> None:
         self._units = {} if config is None else {
-            unit.name: _RotorUnit(unit.turbine, unit.rotor_allowable)
+            unit.name: _RotorUnit(unit.turbine, unit.rotor_allowable,
+                                  None if unit.rotor == "fit" else unit.rotor)
             for unit in config.units if unit.rotor is not None}
         self._cache: OrderedDict[tuple, dict[str, object]] = OrderedDict()
         self._lock = threading.Lock()
+        self._advisors: dict[str, RampAdvisor] = {}
+        self._advisor_lock = threading.Lock()
 
     def _unit(self, unit: str) -> _RotorUnit:
         found = self._units.get(unit)
@@ -162,3 +181,41 @@ class RotorViews:
                 "per_ramp": _json_table(life.per_ramp, ["start", "end", "from_load", "to_load",
                                                         "rate_per_min", "damage"])}
         return answer
+
+    def _advisor(self, unit: str, entry: _RotorUnit) -> RampAdvisor:
+        if entry.model is None or entry.allowable is None:
+            raise NoAdviceError(
+                f"unit {unit!r}: ramp advice needs the rotor model file and the allowable: set "
+                "rotor = \"rotor.npz\" (RotorModel.save; a model fitted at start is not "
+                "shared with the HTTP service) and rotor_allowable_mpa in its [[units]] table")
+        with self._advisor_lock:  # one fit per unit, however many requests arrive at once
+            if unit not in self._advisors:
+                model = RotorModel.load(entry.model, entry.spec)
+                self._advisors[unit] = RampAdvisor(model, entry.allowable).fit()
+            return self._advisors[unit]
+
+    def advice(self, reader: HistorianReader, unit: str, to_load: float,
+               hold_after_s: float) -> dict[str, object]:
+        """The fastest ramp from the last saved rotor state to ``to_load`` (fraction of rated
+        load) within the allowable, with a hold of ``hold_after_s`` (s) after it
+        (:meth:`RampAdvisor.advise`; rates in %/min, stresses in Pa, damages dimensionless).
+        Raises :class:`~steamtwin.errors.RotorAreaError` for a load the advisor refuses."""
+        entry = self._unit(unit)
+        advisor = self._advisor(unit, entry)
+        with reader.connection() as connection:
+            row = connection.execute("SELECT time, state FROM states WHERE unit = ? ORDER BY "
+                                     "time DESC LIMIT 1", [unit]).fetchone()
+        document = None if row is None else json.loads(row[1]).get("rotor")
+        if document is None:
+            raise NoAdviceError(f"unit {unit!r} has no saved rotor state yet (the live twin "
+                                "saves one every 10 min of data)")
+        saved = pd.Timestamp(row[0]).tz_convert("UTC")
+        state = RotorState.from_dict(document["state"])
+        found = reader.sample_at(unit, saved)
+        load = None if found is None else found[1].get("load")
+        if load is None:
+            raise NoAdviceError(f"unit {unit!r}: no measured load at the saved rotor state's "
+                                f"time {saved.isoformat()}")
+        from_load = float(load) / entry.spec.design.generator_power
+        advice = advisor.advise(state, from_load, to_load, hold_after_s=hold_after_s)
+        return {"unit": unit, "state_time": saved.isoformat(), **advice.summary()}

@@ -1,7 +1,8 @@
 // Rotor page: the rotor model's equivalent stress (signed von Mises) at the groove root and
 // the bore against the allowable (± the configured value), their metal temperatures, and the
 // fatigue and creep damage consumed over the chosen range (GET /api/units/{unit}/rotor:
-// rotor_life on the stored series). Refreshed every 30 s.
+// rotor_life on the stored series), refreshed every 30 s; on request, the ramp advisor's
+// fastest ramp to a chosen load.
 "use strict";
 
 (() => {
@@ -97,6 +98,35 @@
     document.body.dataset.ready = "yes";
   }
 
+  // The advisor's fastest ramp from the last saved rotor state to the chosen load
+  // (GET …/rotor/advice); its refusal (no model file, no allowable, a load off the line) is
+  // shown beside the form.
+  async function advise() {
+    const note = document.getElementById("advice-note");
+    const to = Number(document.getElementById("advice-to").value) / 100;
+    const hold = Number(document.getElementById("advice-hold").value) * 60;
+    note.textContent = "computing …";
+    try {
+      const a = await api(`${base}/rotor/advice?${query({ to, hold_s: hold })}`);
+      note.textContent = `from ${(100 * a.from_load).toFixed(1)} % (rotor state of ${
+        utc(a.state_time)} UTC) to ${(100 * a.to_load).toFixed(1)} %: at most ${
+        a.rate_percent_per_min.toFixed(2)} %/min (${a.limited_by === "allowable"
+        ? "limited by the allowable" : "the rate cap"}), ${(a.ramp_s / 60).toFixed(1)} min`;
+      table(document.getElementById("advice"),
+            ["location", "peak stress", "allowable", "fatigue damage", "creep damage"],
+            LOCATIONS.map(([key, label]) => [label, display(a.peak_pa[key], "Pa", 1),
+              a.allowable_pa[key].map((v) => display(v, "Pa", 0)).join(" … "),
+              damage(a.fatigue_damage[key]), damage(a.creep_damage[key])]));
+    } catch (error) {
+      note.textContent = error.message;
+      document.getElementById("advice").replaceChildren();
+    }
+  }
+
+  document.getElementById("advise").addEventListener("submit", (event) => {
+    event.preventDefault();
+    advise();
+  });
   const run = () => show().catch((error) => status(error.message, true));
   document.getElementById("query").addEventListener("submit", (event) => {
     event.preventDefault();
