@@ -87,7 +87,7 @@ ramp, a hold, the ramp back and a hold (:data:`TRAINING_HOLD_S`). 2 and 8 %/min 
 MAX_STRAIN_SNAPSHOTS = 2000
 """Evenly spaced training fields the thermal-strain POD reads at most."""
 
-STRAIN_ENERGY = 1.0 - 1e-12
+STRAIN_ENERGY = 1.0 - 1e-10
 """Fraction of the thermal-strain snapshots' energy the interpolation basis keeps."""
 
 TRAINING_HOLD_S = 3600.0
@@ -394,15 +394,18 @@ class RotorModel:
             final = run.final
         return RotorRun(self._frame(observed, steam.index), RotorState(final))
 
-    def _frame(self, observed: np.ndarray, index: pd.Index) -> pd.DataFrame:
-        """The run frame of ROM observations: (samples, [location temperatures, strain-node
-        temperatures, mean temperature]) in K."""
+    def _columns(self, observed: np.ndarray) -> dict[str, np.ndarray]:
+        """Run-frame columns of ROM observations: (samples, [location temperatures,
+        strain-node temperatures, mean temperature]) in K."""
         k = len(LOCATIONS)
         components = self._stress(observed[:, k:-1], observed[:, -1])
         columns = {f"{name}_temperature": observed[:, p] for p, name in enumerate(LOCATIONS)}
         columns.update(_stress_columns(components))
         columns["mean_temperature"] = observed[:, -1]
-        return pd.DataFrame(columns, index=index)
+        return columns
+
+    def _frame(self, observed: np.ndarray, index: pd.Index) -> pd.DataFrame:
+        return pd.DataFrame(self._columns(observed), index=index)
 
     def step(self, state: RotorState, steam_row: Mapping[str, float], dt_s: float
              ) -> tuple[RotorState, dict[str, float]]:
@@ -416,9 +419,10 @@ class RotorModel:
 
     def observe(self, state: RotorState) -> dict[str, float]:
         """The frame row (SI) of ``state``."""
+        self._check_fitted()
         temperature, outputs = self.rom_.observe(state.rom)
-        row = self._frame(np.concatenate([temperature, outputs])[None, :], pd.RangeIndex(1))
-        return {name: float(values[0]) for name, values in row.items()}
+        columns = self._columns(np.concatenate([temperature, outputs])[None, :])
+        return {name: float(values[0]) for name, values in columns.items()}
 
     # --- full order ------------------------------------------------------------------------
     def _full_order(self, steam: pd.DataFrame, state: RotorState | None,
