@@ -117,6 +117,11 @@ def test_design_range_has_the_design_life_asked_for():
         1e4, 50e6, 780.0, crmov, -1)
     window = cycle_limit("groove", 1e4, (40e6, 60e6), 780.0, crmov)
     assert window.upper_pa == pytest.approx(40e6 + design_stress_range(1e4, 40e6, 780.0, crmov, 1))
+    # few cycles: the range is capped at the shakedown limit 3 S_m (taken as R_m at 507 °C)
+    few = cycle_limit("groove", 1e3, (40e6, 60e6), 780.0, crmov)
+    strength = float(crmov.tensile_strength(780.0))
+    assert design_stress_range(1e3, 40e6, 780.0, crmov, 1) > strength
+    assert (few.lower_pa, few.upper_pa) == pytest.approx((60e6 - strength, 40e6 + strength))
 
 
 def test_cycle_allowable_in_the_advisor_is_wider_than_the_standing_stress(model):

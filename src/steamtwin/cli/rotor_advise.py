@@ -57,6 +57,9 @@ def rotor_advise(
         lower, upper = summary["allowable_pa"][location]
         typer.echo(f"  {location}: peak {peak / 1e6:.1f} MPa, allowable {lower / 1e6:.1f} … "
                    f"{upper / 1e6:.1f} MPa")
+    if not summary["monotone"]:
+        typer.echo("  note: the peak stress did not grow monotonically with the rate; a faster "
+                   "window may exist that is not offered (docs/rotor.md)")
     for location in result.advice.peak_pa:
         typer.echo(f"  life cost at the {location}: fatigue "
                    f"{summary['fatigue_damage'][location]:.3g}, creep "

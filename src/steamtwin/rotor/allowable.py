@@ -20,7 +20,11 @@ The advisor keeps the signed equivalent stress σ (Pa; the scalar fatigue uses, 
   implemented here (their text was not at hand), only the ASME factors on the steel's
   strain-life curve named above. The upper and lower widths are solved separately, since the
   mean-stress correction treats a tensile and a compressive excursion differently; the cycle is
-  taken at the hotter end of the ramp (strength falls with temperature).
+  taken at the hotter end of the ramp (strength falls with temperature). Each range is also
+  capped at the primary-plus-secondary stress range limit 3·S_m of ASME BPVC III NB-3222.2
+  (the shakedown limit, beyond which the elastic stress analysis behind the fatigue check no
+  longer holds), with 3·S_m taken as the tensile strength R_m(T) (S_m ≤ R_m/3; no yield table
+  of the steel is at hand) — the same bound ``steamtwin rotor stress`` reports against.
 
 An allowable whose window does not contain the standing stress at both end loads is refused
 (:class:`~steamtwin.errors.RotorAreaError`): not even a steady unit would meet it.
@@ -124,11 +128,16 @@ def cycle_limit(location: str, cycles: float, standing_pa: tuple[float, float],
                 temperature_k: float, steel: TabulatedSteel, *,
                 design: DesignFactors = ASME_DESIGN_FACTORS) -> StressLimit:
     """The window for ``cycles`` ramp cycles of design fatigue life at ``temperature_k`` (K):
-    [max standing − compressive range, min standing + tensile range] (Pa)."""
+    [max standing − compressive range, min standing + tensile range] (Pa), each range at most
+    the shakedown limit (module docstring)."""
     low, high = min(standing_pa), max(standing_pa)
-    upper = low + design_stress_range(cycles, low, temperature_k, steel, 1, design=design)
-    lower = high - design_stress_range(cycles, high, temperature_k, steel, -1, design=design)
+    shakedown = float(steel.tensile_strength(temperature_k))
+    upper = low + min(design_stress_range(cycles, low, temperature_k, steel, 1, design=design),
+                      shakedown)
+    lower = high - min(design_stress_range(cycles, high, temperature_k, steel, -1,
+                                           design=design), shakedown)
     basis = (f"{cycles:g} cycles of design fatigue life (ASME III factors 2 on strain, 20 on "
-             f"cycles, on the {steel.name} strain-life curve at {temperature_k - 273.15:.0f} °C)")
+             f"cycles, on the {steel.name} strain-life curve at {temperature_k - 273.15:.0f} °C), "
+             f"range at most 3 S_m = {shakedown / 1e6:.0f} MPa")
     return _check_standing(StressLimit(location, float(lower), float(upper),
                                        (float(standing_pa[0]), float(standing_pa[1])), basis))
