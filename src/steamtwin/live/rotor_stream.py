@@ -63,7 +63,7 @@ class LiveRotor:
         One step per sample; the samples go to :meth:`RotorModel.simulate_steam` in runs of
         equal spacing (its compiled kernel steps exactly as :meth:`RotorModel.step` does, and
         its states are bit-identical — tested in tests/rotor; stepping one sample at a time
-        cost 1 ms a sample, most of it building the one-row frame)."""
+        through :meth:`RotorModel.step` cost 2.4 times as much: docs/benchmarks.md)."""
         steam = steam_side(fom, inputs, params, groups=list(self.model.groups_), run=run)
         columns = list(ROTOR_SIGNALS.values())
         values = np.empty((len(steam), len(columns)))

@@ -63,7 +63,7 @@ def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, So
         recalibration = LiveRecalibration(tracker, every_s=unit.recalibration.every_s,
                                           settle_steps=unit.recalibration.settle_steps)
     rotor = None
-    if unit.rotor == "fit":  # the FEM training runs: ~1–2 min of CPU at the default mesh
+    if unit.rotor == "fit":  # the FEM training runs: 24–38 s of CPU at the default mesh
         LOG.info("%s: fitting the rotor model from the spec (rotor = \"fit\")", unit.name)
         rotor = LiveRotor(RotorModel(setup.spec).fit(params))
     elif unit.rotor is not None:
