@@ -18,6 +18,7 @@ from steamtwin.live.config import ConfigError, load_config
 from steamtwin.live.gate import StreamGate, gate_options
 from steamtwin.live.historian import LiveHistorian
 from steamtwin.live.rotor_stream import ROTOR_SIGNALS, LiveRotor
+from steamtwin.live.runner import build_unit
 from steamtwin.live.service import LiveTwin
 from steamtwin.live.sources import ReplaySource
 from steamtwin.model.parameters import ModelParameters
@@ -138,3 +139,18 @@ def test_the_service_configuration_names_the_rotor(tmp_path):
     path.write_text(head + 'rotor = "missing.npz"\n[units.source]' + source)
     with pytest.raises(ConfigError, match=r"units\[0\]\.rotor = 'missing.npz': no such file"):
         load_config(path)
+
+
+@pytest.mark.slow  # with the plant record's fixture
+def test_the_service_builds_a_unit_with_its_rotor_file(tmp_path, plant, rotor_model):
+    _, paths = plant
+    rotor_model.save(tmp_path / "rotor.npz")
+    config = tmp_path / "unit.toml"
+    config.write_text(f'database = "twin.duckdb"\n[[units]]\nname = "u"\n'
+                      f'tags = "{paths["tag_map"]}"\nrotor = "rotor.npz"\n[units.source]\n'
+                      f'kind = "replay"\npath = "{paths["historian"]}"\n')
+    with LiveHistorian(tmp_path / "twin.duckdb") as historian:
+        twin, _ = build_unit(load_config(config).units[0], historian)
+    assert isinstance(twin.rotor, LiveRotor)
+    assert twin.rotor.model.groups_ == rotor_model.groups_
+    assert twin.rotor.model.critical_points == rotor_model.critical_points
