@@ -17,11 +17,13 @@ from rotor_fixtures import (
 )
 
 import steamtwin.web.rotor as web_rotor
+from steamtwin.live.rotor_stream import ROTOR_SIGNALS
 from steamtwin.rotor.geometry import rotor_geometry
 from steamtwin.rotor.life import rotor_life
 from steamtwin.rotor.steel import steel
 from steamtwin.spec import load_spec
 from steamtwin.web.app import create_app
+from steamtwin.web.catalog import ROTOR_MEANINGS
 
 pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
 WHOLE = {"start": START.isoformat(),
@@ -93,6 +95,7 @@ def test_a_unit_without_a_rotor_and_bad_ranges_are_refused(client):
 
 
 def test_rotor_signals_carry_si_units_and_the_page_is_linked(client):
+    assert set(ROTOR_MEANINGS) == set(ROTOR_SIGNALS)  # every stored rotor signal described
     signals = {s["signal"]: s for s in client.get("/api/units/unit1/signals").json()
                if s["source"] == "twin"}
     assert signals["rotor_groove_stress"]["si_unit"] == "Pa"
