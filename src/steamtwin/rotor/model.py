@@ -1,6 +1,9 @@
 """The HP rotor model of a turbine spec: conduction FEM, thermo-elastic stress and their
 transient ROM glued into one estimator (issue 23, items 3–4).
 
+(Just over 500 lines: the estimator, its file format and its full-order reference share the
+layout of the critical points' outputs, so they stay together.)
+
 :class:`RotorModel` follows scikit-learn's habit: the constructor stores hyper-parameters, and
 :meth:`RotorModel.fit` builds the mesh of the spec's ``[rotor]`` section
 (:func:`~steamtwin.rotor.geometry.rotor_mesh`), the rotor steel
