@@ -11,6 +11,8 @@
     params = "params.json"                # optional: calibrated coefficients + sensor offsets
     rom = "rom.npz"                       # optional: blade ROM (probe temperatures)
     monitor = "monitor.json"              # optional: residual alarms (steamtwin monitor fit)
+    rotor = "rotor.npz"                   # optional: HP rotor model (RotorModel.save), or "fit"
+    rotor_allowable_mpa = 450             # optional: allowable rotor stress (Rotor page, API)
     block_samples = 60                    # samples per processing block
 
     [units.recalibration]                 # optional: online recalibration
@@ -37,7 +39,7 @@ from __future__ import annotations
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from steamtwin.errors import DataError
 from steamtwin.textfile import read_utf8_text
@@ -81,7 +83,9 @@ class RecalibrationConfig:
 class UnitConfig:
     """One unit: ``name``, ``turbine`` ("reference" or a spec path), ``tags``, optional
     ``params``, ``rom``, ``monitor`` (a fitted monitor file) and ``recalibration``,
-    ``block_samples`` and its ``source``."""
+    ``block_samples`` and its ``source``; ``rotor``: a rotor model file, ``"fit"`` (fitted
+    from the spec at start) or None; ``rotor_allowable``: allowable rotor stress (Pa) or
+    None."""
 
     name: str
     turbine: str
@@ -92,6 +96,8 @@ class UnitConfig:
     block_samples: int = 60
     monitor: Path | None = None
     recalibration: RecalibrationConfig | None = None
+    rotor: Path | Literal["fit"] | None = None
+    rotor_allowable: float | None = None
 
 
 @dataclass(frozen=True)
@@ -188,6 +194,20 @@ def _recalibration(table: Any, where: str) -> RecalibrationConfig | None:
                                settle_steps=settle)
 
 
+def _allowable(table: dict[str, Any], where: str) -> float | None:
+    """``rotor_allowable_mpa`` in Pa (None when not given)."""
+    value = table.get("rotor_allowable_mpa")
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | float) or not value > 0:
+        raise ConfigError(f"{where}.rotor_allowable_mpa = {value!r}: expected a positive "
+                          "stress in MPa")
+    if table.get("rotor") is None:
+        raise ConfigError(f"{where}.rotor_allowable_mpa needs a rotor model: add rotor = "
+                          "\"rotor.npz\" (or \"fit\")")
+    return float(value) * 1e6
+
+
 def load_config(path: str | Path) -> ServiceConfig:
     """Read and check a service configuration (see the module docstring)."""
     path = Path(path).resolve()
@@ -208,7 +228,7 @@ def load_config(path: str | Path) -> ServiceConfig:
         if not isinstance(table, dict):
             raise ConfigError(f"{where} is not a table")
         _keys(table, {"name", "turbine", "tags", "params", "rom", "block_samples", "source",
-                      "monitor", "recalibration"}, where)
+                      "monitor", "recalibration", "rotor", "rotor_allowable_mpa"}, where)
         name = _text(table, "name", where)
         if name in names:
             raise ConfigError(f"{where}.name = {name!r} is used twice; names must be unique")
@@ -225,6 +245,9 @@ def load_config(path: str | Path) -> ServiceConfig:
             params=_path(base, table, "params", where, required=False),
             rom=_path(base, table, "rom", where, required=False), block_samples=block,
             monitor=_path(base, table, "monitor", where, required=False),
-            recalibration=_recalibration(table.get("recalibration"), f"{where}.recalibration")))
+            recalibration=_recalibration(table.get("recalibration"), f"{where}.recalibration"),
+            rotor="fit" if table.get("rotor") == "fit" else _path(base, table, "rotor", where,
+                                                                   required=False),
+            rotor_allowable=_allowable(table, where)))
     return ServiceConfig(database=(base / database_text).resolve(), units=tuple(units),
                          source=path)

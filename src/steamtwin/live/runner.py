@@ -35,11 +35,13 @@ from steamtwin.live.gate import StreamGate, gate_options
 from steamtwin.live.historian import LiveHistorian, ProvisionalRows
 from steamtwin.live.monitor_file import load_monitor
 from steamtwin.live.recalibration import LiveRecalibration, centred_priors
+from steamtwin.live.rotor_stream import LiveRotor
 from steamtwin.live.sensitivity import SensitivityCache
 from steamtwin.live.service import MONITORED, LiveSummary, LiveTwin
 from steamtwin.live.sources import OpcUaSecurity, OpcUaSource, ReplaySource, Source
 from steamtwin.live.unit_model import unit_model
 from steamtwin.rom.romfile import load_rom
+from steamtwin.rotor.model import RotorModel
 
 __all__ = ["Companion", "ProvisionalGroup", "build_unit", "run_service", "stop_on_signals"]
 
@@ -60,6 +62,12 @@ def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, So
                                    trajectory_rows=round(86_400.0 / unit.recalibration.step_s))
         recalibration = LiveRecalibration(tracker, every_s=unit.recalibration.every_s,
                                           settle_steps=unit.recalibration.settle_steps)
+    rotor = None
+    if unit.rotor == "fit":  # the FEM training runs: 24–38 s of CPU at the default mesh
+        LOG.info("%s: fitting the rotor model from the spec (rotor = \"fit\")", unit.name)
+        rotor = LiveRotor(RotorModel(setup.spec).fit(params))
+    elif unit.rotor is not None:
+        rotor = LiveRotor(RotorModel.load(unit.rotor, setup.spec))
     source_config = unit.source
     # a live or paced source gets provisional values (latency); a replay at full speed not
     provisional = source_config.kind != "replay" or source_config.speed is not None
@@ -68,7 +76,7 @@ def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, So
                     monitored=MONITORED if monitor is None else monitor.sensors,
                     sensitivity=None if monitor is None else SensitivityCache(model,
                                                                               monitor.sensors),
-                    recalibration=recalibration, provisional=provisional)
+                    recalibration=recalibration, provisional=provisional, rotor=rotor)
     twin.start()
     resume = twin.resume_after()
     if source_config.kind == "replay":

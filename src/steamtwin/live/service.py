@@ -8,7 +8,9 @@
    (:meth:`~steamtwin.model.fom.FullOrderModel.simulate_stream`, read through the unit's
    sensors: lags and the calibration's offsets); samples with a missing input get no twin
    value (NaN, counted) and the model steps over them;
-3. the ROM, when given, adds the blade probe temperatures for those samples;
+3. the ROM, when given, adds the blade probe temperatures for those samples, and the rotor
+   model, when given (:class:`~steamtwin.live.rotor_stream.LiveRotor`), steps once per such
+   sample on the FOM's stage states and adds the rotor's groove/bore temperature and stress;
 4. residuals (measured − twin) of every monitored sensor the model predicts, and, when a
    :class:`~steamtwin.live.residuals.ResidualMonitor` is given, its alarms on clock-aligned
    60-s blocks (:class:`~steamtwin.live.blocks.BlockAccumulator`), with the load and, given a
@@ -69,6 +71,7 @@ from steamtwin.live.historian import (
 from steamtwin.live.recalibration import LiveRecalibration, ParameterSwap, swap_values
 from steamtwin.live.residuals import AlarmEvent, ResidualMonitor
 from steamtwin.live.rewind import RewindBuffer
+from steamtwin.live.rotor_stream import ROTOR_SIGNALS, LiveRotor
 from steamtwin.live.sensitivity import SensitivityCache
 from steamtwin.live.sources import Source, SourceBlock
 from steamtwin.model.fom import FullOrderModel
@@ -116,7 +119,9 @@ class LiveTwin:
     tells sensor faults only); ``recalibration``: optional online recalibration;
     ``snapshot_every_s``: data seconds between saved states (0: every block);
     ``provisional``: also store a provisional twin value of each sample as soon as it arrives
-    (the ``provisional`` table), replaced by the final row once the gate has judged it.
+    (the ``provisional`` table), replaced by the final row once the gate has judged it;
+    ``rotor``: optional rotor model stepped on every accepted sample (final rows only: the
+    provisional rows carry no rotor values).
     """
 
     def __init__(self, name: str, model: FullOrderModel, params: ModelParameters,
@@ -125,7 +130,8 @@ class LiveTwin:
                  monitored: Sequence[str] = MONITORED,
                  sensitivity: SensitivityCache | None = None,
                  recalibration: LiveRecalibration | None = None,
-                 snapshot_every_s: float = 600.0, provisional: bool = False) -> None:
+                 snapshot_every_s: float = 600.0, provisional: bool = False,
+                 rotor: LiveRotor | None = None) -> None:
         self.name = name
         self.model = model
         self.params = params
@@ -136,6 +142,7 @@ class LiveTwin:
         self.monitored = tuple(monitored)
         self.sensitivity = sensitivity
         self.recalibration = recalibration
+        self.rotor = rotor
         self._state: StreamState | None = None
         self._blocks: BlockAccumulator | None = None
         self._rewind = RewindBuffer()
@@ -171,7 +178,8 @@ class LiveTwin:
         if document.get("params") is not None:
             self.params = ModelParameters(**document["params"])
         parts = ((self.monitor, "monitor"), (self._blocks, "blocks"), (self._rewind, "rewind"),
-                 (self.sensitivity, "sensitivity"), (self.recalibration, "recalibration"))
+                 (self.sensitivity, "sensitivity"), (self.recalibration, "recalibration"),
+                 (self.rotor, "rotor"))
         for part, key in parts:
             if part is not None and document.get(key) is not None:
                 part.set_state(document[key])
@@ -314,7 +322,8 @@ class LiveTwin:
         if complete.any() and self.recalibration is not None:
             self._rewind.keep(self._state, data[list(INPUT_SIGNALS)][complete],
                               2.0 * self.recalibration.tracker.step_s)
-        twin, self._state, extrapolated = self._predict(data, complete, self._state)
+        twin, self._state, extrapolated = self._predict(data, complete, self._state,
+                                                        rotor=self.rotor)
         summary.rom_extrapolated += extrapolated
         residual = self._residual(data, twin)
         alarms = [] if self.monitor is None else self._alarms(data, residual, final)
@@ -347,21 +356,31 @@ class LiveTwin:
         summary.samples += len(data)
         summary.without_twin += int((~complete).sum())
 
-    def _predict(self, data: pd.DataFrame, complete: np.ndarray, state: StreamState | None
+    def _predict(self, data: pd.DataFrame, complete: np.ndarray, state: StreamState | None,
+                 rotor: LiveRotor | None = None
                  ) -> tuple[pd.DataFrame, StreamState | None, int]:
         """Twin values of ``data`` (SI): the model's sensor readings, and the ROM's probe
         temperatures, where ``complete`` (all inputs good), NaN elsewhere; the model state
         after these samples (``state`` continued; unchanged without a complete sample); and the
-        samples whose ROM probes were extrapolated. Built as one array (pandas ``.loc``
-        assignments per column cost more than the model on a 60-sample block)."""
+        samples whose ROM probes were extrapolated; given ``rotor``, its signals
+        (:data:`~steamtwin.live.rotor_stream.ROTOR_SIGNALS`) too. Built as one array (pandas
+        ``.loc`` assignments per column cost more than the model on a 60-sample block)."""
         columns = list(self.model.output_signals)
+        extra = [] if rotor is None else list(ROTOR_SIGNALS)
         if not complete.any():
-            return (pd.DataFrame(np.nan, index=data.index, columns=columns), state, 0)
-        outputs, state = self.model.simulate_stream(data[list(INPUT_SIGNALS)][complete],
-                                                    self.params, state)
+            return (pd.DataFrame(np.nan, index=data.index, columns=columns + extra), state, 0)
+        inputs = data[list(INPUT_SIGNALS)][complete]
+        if rotor is None:
+            outputs, state = self.model.simulate_stream(inputs, self.params, state)
+        else:
+            run, state = self.model.simulate_stream_detailed(inputs, self.params, state)
+            outputs = run.outputs
         probes = [] if self.rom is None else [n for n in self.rom.probes if n not in columns]
-        values = np.full((len(data), len(columns) + len(probes)), np.nan)
+        values = np.full((len(data), len(columns) + len(probes) + len(extra)), np.nan)
         values[complete, :len(columns)] = outputs.to_numpy(dtype=float)
+        if rotor is not None:
+            values[complete, values.shape[1] - len(extra):] = rotor.advance(
+                self.model, inputs, run, self.params)
         extrapolated = 0
         if self.rom is not None:
             with _WARNING_FILTERS, warnings.catch_warnings():  # counted by the caller
@@ -373,7 +392,8 @@ class LiveTwin:
             position = {name: j for j, name in enumerate(columns + probes)}
             for name in self.rom.probes:
                 values[rows, position[name]] = predicted[name].to_numpy(dtype=float)[valid]
-        return pd.DataFrame(values, index=data.index, columns=columns + probes), state, extrapolated
+        return (pd.DataFrame(values, index=data.index, columns=columns + probes + extra), state,
+                extrapolated)
 
     def _residual(self, data: pd.DataFrame, twin: pd.DataFrame) -> pd.DataFrame:
         """measured − twin (SI) of the monitored sensors both have."""
@@ -405,7 +425,8 @@ class LiveTwin:
     def _snapshot(self) -> dict:
         parts = {"model": self._state, "monitor": self.monitor, "blocks": self._blocks,
                  "rewind": self._rewind if self.recalibration is not None else None,
-                 "sensitivity": self.sensitivity, "recalibration": self.recalibration}
+                 "sensitivity": self.sensitivity, "recalibration": self.recalibration,
+                 "rotor": self.rotor}
         state = {key: None if part is None else (part.to_dict() if key == "model"
                                                  else part.get_state())
                  for key, part in parts.items()}

@@ -349,6 +349,21 @@ class FullOrderModel:
         :meth:`simulate` over all blocks together (to round-off; tested). ``inputs`` must start
         after ``state.time``. Raises :class:`InputError` as :meth:`simulate` does.
         """
+        run, after = self._stream(inputs, params, state, False)
+        return run.outputs, after
+
+    def simulate_stream_detailed(self, inputs: pd.DataFrame,
+                                 params: ModelParameters | None = None,
+                                 state: StreamState | None = None
+                                 ) -> tuple[SimulationResult, StreamState]:
+        """Like :meth:`simulate_stream`, with the kernel's diagnostics and the per-stage
+        states (Pa, K) of :meth:`simulate_detailed` — what the live rotor's steam side needs
+        (:mod:`steamtwin.rotor.steam_side`)."""
+        return self._stream(inputs, params, state, True)
+
+    def _stream(self, inputs: pd.DataFrame, params: ModelParameters | None,
+                state: StreamState | None, detail: bool
+                ) -> tuple[SimulationResult, StreamState]:
         params = params or ModelParameters()
         checked = self.check_inputs(inputs)
         constants = self.design_.kernel
@@ -364,8 +379,8 @@ class FullOrderModel:
             time_step[0] = gap
             checked = CheckedInputs(index=checked.index, columns=checked.columns,
                                     time_step=time_step)
-        results, _, _ = self._solve(constants, checked, params, False, carry,
-                                    resume=state is not None)
+        results, stage_p, stage_t = self._solve(constants, checked, params, detail, carry,
+                                                resume=state is not None)
         lags = check_time_constants(self.sensor_time_constants, self.output_signals)
         offsets = dict(self.sensor_offsets or {})
         readings = np.empty((results.shape[0], len(self.output_signals)))
@@ -381,7 +396,13 @@ class FullOrderModel:
             readings[:, j] = read + offsets.get(name, 0.0)
         outputs = pd.DataFrame(readings, index=inputs.index, columns=list(self.output_signals))
         after = StreamState(pd.Timestamp(checked.index[-1]), carry, sensors).copy()
-        return outputs, after
+        if not detail:
+            return SimulationResult(outputs, None, None, None), after
+        stage_names = ["control_stage"] + [f"stage_{i}" for i in range(1, stage_p.shape[1])]
+        return SimulationResult(
+            outputs, pd.DataFrame(results, index=inputs.index, columns=kernel.RESULT_COLUMNS),
+            pd.DataFrame(stage_p, index=inputs.index, columns=stage_names),
+            pd.DataFrame(stage_t, index=inputs.index, columns=stage_names)), after
 
     def _carry(self, constants: kernel.KernelConstants, checked: CheckedInputs,
                state: StreamState | None) -> dict[str, np.ndarray]:

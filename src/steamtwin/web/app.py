@@ -14,6 +14,9 @@ values SI):
   flags), ``GET /api/provenance`` (model files, hashes, versions);
 * ``GET /api/units/{unit}/blade/surface`` (the ROM's blade surface, once) and ``…/blade``
   (its temperatures for the sample at a time: :mod:`steamtwin.web.blade`);
+* ``GET /api/units/{unit}/rotor`` (the rotor's latest stresses and temperatures, the
+  allowable, the life consumed over a range: :mod:`steamtwin.web.rotor`) and
+  ``…/rotor/advice?to=0.3`` (the fastest ramp to a load within the allowable);
 * ``GET /api/events`` — server-sent events (:mod:`steamtwin.web.events`);
 * ``GET /health`` (liveness, and whether each unit keeps up: its last stored sample's age),
   ``GET /metrics`` (Prometheus text), ``GET /docs`` (API reference), ``GET /openapi.json``.
@@ -58,6 +61,7 @@ from steamtwin.web.metrics import CONTENT_TYPE, RequestMetrics, RequestStats, ex
 from steamtwin.web.pages import STATIC_DIR
 from steamtwin.web.pages import router as pages_router
 from steamtwin.web.queries import HistorianReader, SeriesQuery
+from steamtwin.web.rotor import NoAdviceError, NoRotorError, RotorViews
 
 __all__ = ["ApiError", "WebSettings", "create_app"]
 
@@ -180,6 +184,7 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
     catalog = Catalog(config)
     feed = LiveFeed(reader, poll_s=settings.poll_s)
     blades = BladeFields(config)
+    rotors = RotorViews(config)
 
     @contextlib.asynccontextmanager
     async def lifespan(_app: FastAPI):
@@ -412,6 +417,42 @@ def create_app(historian: str | Path | HistorianReader | Callable[[], duckdb.Duc
         inputs = {name: values[name] for name in names}
         return {"unit": unit, "time": stamp.isoformat(), "inputs": inputs,
                 **blades.field(unit, inputs)}
+
+    @app.get("/api/units/{unit}/rotor", summary="The rotor's stresses and life consumed")
+    def rotor(unit: str, start: Start = None, end: End = None, span_s: Span = None) -> dict:
+        """The rotor's last stored values at or before ``end`` (SI: K, Pa; ``*_stress`` the
+        signed equivalent stress), the allowable stress (Pa, None if not configured) and the
+        fatigue and creep damage at the groove root and the bore over the range (at most
+        ``max_download_s``; dimensionless, 1 = crack initiation or rupture)."""
+        check_unit(unit)
+        try:
+            allowable = rotors.allowable(unit)
+        except NoRotorError as error:
+            raise ApiError(404, str(error)) from None
+        begin, stop = time_range(unit, start, end, settings.max_download_s, span_s)
+        try:
+            life = rotors.life(reader, unit, begin, stop, reader.last_times(fresh_s).get(unit))
+        except SteamtwinError as error:  # the spec's rotor steel or section unusable
+            raise ApiError(503, f"the rotor life cannot be computed: {error}") from None
+        return {"unit": unit, "allowable_pa": allowable,
+                "latest": rotors.latest(reader, unit, stop), "life": life}
+
+    @app.get("/api/units/{unit}/rotor/advice", summary="The fastest ramp within the allowable")
+    def rotor_advice(unit: str, to: Annotated[float, Query(
+            gt=0.0, le=1.1, description="target load, fraction of rated load, e.g. 0.3")],
+            hold_s: Annotated[float, Query(ge=0.0, le=86_400.0, description="hold after the "
+                                           "ramp checked too (s)")] = 3600.0) -> dict:
+        """From the last saved rotor state and the load measured then: the fastest constant
+        ramp to ``to`` whose groove and bore equivalent stress stay within the allowable over
+        the ramp and the hold (rate in %/min, peak and allowable in Pa, the ramp's fatigue and
+        creep damage)."""
+        check_unit(unit)
+        try:
+            return rotors.advice(reader, unit, to, hold_s)
+        except (NoRotorError, NoAdviceError) as error:
+            raise ApiError(404, str(error)) from None
+        except SteamtwinError as error:  # a load off the operating line, no feasible ramp
+            raise ApiError(422, str(error)) from None
 
     @app.get("/api/events", summary="Live samples and alarms (server-sent events)",
              response_class=StreamingResponse)

@@ -20,6 +20,20 @@ __all__ = ["Catalog", "UnitEntry", "signal_info", "software_versions"]
 VERSIONED = ("steamtwin", "numpy", "pandas", "duckdb", "asyncua", "fastapi", "uvicorn")
 
 
+ROTOR_MEANINGS: dict[str, tuple[str, str]] = {
+    "rotor_groove_temperature": ("K", "rotor metal temperature at the groove root (rotor model)"),
+    "rotor_bore_temperature": ("K", "rotor metal temperature at the bore (rotor model)"),
+    "rotor_mean_temperature": ("K", "rotor volume-mean temperature (rotor model)"),
+    "rotor_groove_stress": ("Pa", "rotor equivalent stress at the groove root: von Mises "
+                                  "signed by the dominant principal stress (rotor model)"),
+    "rotor_bore_stress": ("Pa", "rotor equivalent stress at the bore: von Mises signed by the "
+                                "dominant principal stress (rotor model)"),
+    "rotor_groove_von_mises": ("Pa", "rotor von Mises stress at the groove root (rotor model)"),
+    "rotor_bore_von_mises": ("Pa", "rotor von Mises stress at the bore (rotor model)"),
+}
+"""SI unit and meaning of the rotor's twin signals (:mod:`steamtwin.live.rotor_stream`)."""
+
+
 def software_versions() -> dict[str, str | None]:
     """Installed versions of steamtwin and the libraries the live twin rests on."""
     versions: dict[str, str | None] = {"python": platform.python_version()}
@@ -63,6 +77,8 @@ def signal_info(signal: str, tag_map: TagMap | None) -> dict[str, object]:
     si_unit = known.si_unit if known else ("K" if signal.startswith("blade_") else None)
     meaning = known.meaning if known else (
         "blade probe temperature (ROM)" if signal.startswith("blade_") else None)
+    if signal in ROTOR_MEANINGS:
+        si_unit, meaning = ROTOR_MEANINGS[signal]
     return {"si_unit": si_unit, "meaning": meaning,
             "tag": None if spec is None else spec.column,
             "instrument_sigma": None if spec is None else spec.noise_si,
@@ -86,6 +102,7 @@ class Catalog:
             self.units[unit.name] = UnitEntry(unit.name, tag_map, {
                 "turbine": turbine, "tags": _file(unit.tags), "params": _file(unit.params),
                 "rom": _file(unit.rom), "monitor": _file(unit.monitor),
+                "rotor": unit.rotor if unit.rotor == "fit" else _file(unit.rotor),
                 "source": unit.source.kind,
                 "recalibration": None if unit.recalibration is None else {
                     "every_s": unit.recalibration.every_s,

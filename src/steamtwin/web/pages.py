@@ -22,7 +22,8 @@ Pages: ``/`` (fleet: one card per unit; a single unit goes straight to its page)
 residuals, parameters, active alarms; live), ``…/history`` (any range, zoom re-queries the
 downsampled API, CSV/Parquet downloads), ``…/alarms`` (list, evidence plot, acknowledge),
 ``…/calibration`` (parameter trajectory), ``…/blade`` (the ROM's blade field, 3-D, at a
-sample or replayed over a range).
+sample or replayed over a range), ``…/rotor`` (the rotor's stresses against the allowable,
+its temperatures, the fatigue and creep damage so far).
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ PLOTLY_JS = Path(str(resources.files("plotly") / "package_data" / "plotly.min.js
 """plotly.js as the plotly wheel ships it (MIT licence, © Plotly, Inc.)."""
 
 PAGES = (("", "Unit"), ("history", "History"), ("alarms", "Alarms"),
-         ("calibration", "Calibration"), ("blade", "Blade"))
+         ("calibration", "Calibration"), ("blade", "Blade"), ("rotor", "Rotor"))
 """(path under /units/{unit}/, title) of each unit page."""
 
 router = APIRouter(include_in_schema=False)
@@ -176,3 +177,28 @@ def blade_page(unit: str) -> HTMLResponse:
         '<div class="columns"><div id="blade" class="chart tall"></div>'
         '<section><h2>Probes</h2><table id="probes"></table></section></div>'),
         unit, "blade", charts="plotly")
+
+
+@router.get("/units/{unit}/rotor", response_class=HTMLResponse)
+def rotor_page(unit: str) -> HTMLResponse:
+    """The rotor's equivalent stress at the groove root and the bore against the allowable,
+    their temperatures, and the fatigue and creep damage consumed over the range."""
+    return _layout("rotor", "rotor", (
+        '<form id="query" class="controls"><label>last <select id="span">'
+        '<option value="3600">hour</option><option value="21600">6 hours</option>'
+        '<option value="86400" selected>day</option><option value="604800">week</option>'
+        '</select></label><button type="submit">show</button></form>'
+        '<div id="tiles" class="tiles"></div>'
+        '<h2>Equivalent stress (signed von Mises) and the allowable</h2>'
+        '<div id="stress" class="chart"></div>'
+        '<h2>Metal temperature</h2><div id="temperature" class="chart"></div>'
+        '<h2>Life consumed in the range</h2>'
+        '<p class="note">Fatigue: rainflow, Neuber, Manson–Coffin–Basquin with Morrow\'s '
+        'mean stress and the ASME design factors; creep: Larson–Miller time fraction '
+        '(docs/rotor.md).</p><table id="life" class="wide"></table>'
+        '<h2>Per day</h2><table id="days" class="wide"></table>'
+        '<h2>Ramp advice</h2><form id="advise" class="controls"><label>to load <input '
+        'id="advice-to" size="4" value="30"> % of rated</label><label>hold after <input '
+        'id="advice-hold" size="5" value="60"> min</label><button type="submit">advise'
+        '</button></form><p id="advice-note" class="note"></p>'
+        '<table id="advice" class="wide"></table>'), unit, "rotor")
