@@ -20,6 +20,7 @@ from steamtwin.dcs.tagmap import load_tag_map
 from steamtwin.live.plant_server import PlantServer, PlantServerSettings, plant_node_ids
 from steamtwin.live.sources import (
     PUBLISHING_INTERVAL_MS,
+    QUEUE_SIZE,
     OpcUaSecurity,
     OpcUaSource,
     ReplaySource,
@@ -56,6 +57,9 @@ async def _tag_server(endpoint: str, urn: str, initial: dict[str, ua.Variant]):
     per tag of ``initial`` in namespace ``urn``, each still waiting for its first value."""
     server = Server()
     await server.init()
+    # the queue the source asks for per monitored item (asyncua's own cap is 10 000: with the
+    # burst test's 10 000 values plus those before it, a loaded machine lost 4 in the server)
+    server.iserver.max_monitored_item_queue_size = QUEUE_SIZE
     server.set_endpoint(endpoint)
     server.set_security_policy([ua.SecurityPolicyType.NoSecurity])
     index = await server.register_namespace(urn)
