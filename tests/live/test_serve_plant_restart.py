@@ -21,7 +21,8 @@ from steamtwin.live.plant_server import PlantServer, PlantServerSettings, plant_
 from steamtwin.live.runner import run_service
 
 # two asyncua server starts (each builds the standard address space: 5–11 s at load 10 on the
-# shared 2 cores, 2026-11-27) and the service's start: 40–47 s there, not the quick loop
+# shared 2 cores, 2026-11-27) and the service's start: 40–47 s there, 8.6 s at load 3: not the
+# quick loop
 pytestmark = pytest.mark.slow
 
 LOST = slice(60, 70)  # published by neither server: the gap
