@@ -27,6 +27,7 @@ __all__ = [
     "Evaluator",
     "ProcessPoolEvaluator",
     "SerialEvaluator",
+    "dask_client",
     "make_evaluator",
 ]
 
@@ -136,20 +137,7 @@ class DaskEvaluator:
 
     def start(self, objective: Objective) -> None:
         """Connect and broadcast ``objective`` to the workers."""
-        from distributed import Client
-
-        if isinstance(self.scheduler, Client):
-            self._client, self._own_client = self.scheduler, False
-        elif isinstance(self.scheduler, str) and self.scheduler:
-            try:
-                self._client = Client(self.scheduler, timeout=self.connect_timeout_s)
-            except OSError as error:
-                raise ValueError(f"cannot reach the Dask scheduler at {self.scheduler!r}: "
-                                 f"{error}") from None
-            self._own_client = True
-        else:
-            raise ValueError(f"scheduler must be an address or a distributed.Client "
-                             f"(got {self.scheduler!r})")
+        self._client, self._own_client = dask_client(self.scheduler, self.connect_timeout_s)
         self._workers = max(1, len(self._client.scheduler_info()["workers"]))
         [self._objective] = self._client.scatter([objective], broadcast=True, hash=False)
 
@@ -169,6 +157,24 @@ class DaskEvaluator:
         if self._own_client:
             client.close()
         self._client = None
+
+
+def dask_client(scheduler: Any, connect_timeout_s: float = 30.0) -> tuple[Any, bool]:
+    """``(client, own)`` for ``scheduler``: a ``distributed.Client`` as given (``own`` False:
+    the caller's to close), or a new one connected to an address (``tcp://host:8786``; ``own``
+    True). ValueError naming the address when it cannot be reached within
+    ``connect_timeout_s`` (s), or when ``scheduler`` is neither."""
+    from distributed import Client
+
+    if isinstance(scheduler, Client):
+        return scheduler, False
+    if isinstance(scheduler, str) and scheduler:
+        try:
+            return Client(scheduler, timeout=connect_timeout_s), True
+        except OSError as error:
+            raise ValueError(f"cannot reach the Dask scheduler at {scheduler!r}: "
+                             f"{error}") from None
+    raise ValueError(f"scheduler must be an address or a distributed.Client (got {scheduler!r})")
 
 
 def make_evaluator(workers: int | None = None, scheduler: Any = None) -> Evaluator:

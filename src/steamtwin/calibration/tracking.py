@@ -24,6 +24,17 @@ group's swallowing capacity sets it at a given flow), so the tracker uses it bes
 temperatures whenever the model computes it and the data measure it. A step whose data cannot
 be used (too few samples, the model rejects the inputs) keeps the predicted state and logs why:
 the variance keeps growing, so the next good step weighs its data more.
+
+With ``scheduler`` (a Dask scheduler address or ``distributed.Client``) each step's fit — the
+Gauss–Newton MAP and its Laplace covariance, all of a step's model runs — is one task on that
+cluster: the model is broadcast to the workers once, each step ships only its data, priors and
+start, and the filter's update uses the task's answer exactly as it would the local one (the
+same function on the same inputs: the trajectory equals the local run's, tested). The caller
+waits for the answer, so a step's estimate applies at the same sample wherever it ran and a
+restarted service still reproduces an uninterrupted one; what moves off the service's machine
+is the step's CPU (a fraction of a second of model runs per 10-min step and unit). A single
+step is one serial Gauss–Newton run, so without a scheduler it runs in the calling process: a
+local pool would only add the hand-over.
 """
 
 from __future__ import annotations
@@ -31,10 +42,12 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import asdict
+from typing import Any
 
 import numpy as np
 import pandas as pd
 
+from steamtwin.calibration.evaluation import dask_client
 from steamtwin.calibration.objective import CalibrationProblem
 from steamtwin.calibration.online import ParameterStore, append_chunk, replay_chunks
 from steamtwin.calibration.posterior import (
@@ -120,7 +133,9 @@ class ParameterTracker:
     trajectory keeps (None: all; a live service keeps a day's). After :meth:`run`/:meth:`update`:
     ``trajectory_`` (one row per step, indexed by the step's end: each coefficient, its
     ``<name>_std`` (the filter's, normal coordinate) and 95 % ``<name>_low`` / ``_high``,
-    ``samples``, ``error``) and ``params_`` (current).
+    ``samples``, ``error``) and ``params_`` (current). ``scheduler``: a Dask scheduler address
+    or ``distributed.Client`` on which each step's fit runs (module docstring; None: in this
+    process); a client made here from an address is closed by :meth:`close`.
     """
 
     def __init__(self, simulator: Simulator, *, sigma: Mapping[str, float],
@@ -131,7 +146,7 @@ class ParameterTracker:
                  flow_uncertainty: float = FLOW_MEASUREMENT_UNCERTAINTY,
                  store: ParameterStore | None = None,
                  max_input_gap_s: float = MAX_INPUT_GAP_S,
-                 trajectory_rows: int | None = None) -> None:
+                 trajectory_rows: int | None = None, scheduler: Any = None) -> None:
         self.simulator = simulator
         self.sigma = sigma
         self.priors = priors
@@ -143,6 +158,8 @@ class ParameterTracker:
         self.store = store
         self.max_input_gap_s = max_input_gap_s
         self.trajectory_rows = trajectory_rows
+        self.scheduler = scheduler
+        self._cluster: tuple[Any, bool, Any] | None = None  # client, own, broadcast model
 
     def _start(self) -> None:
         rows = self.trajectory_rows
@@ -286,22 +303,41 @@ class ParameterTracker:
             return self._row(row, f"{len(data)} samples, fewer than {MIN_STEP_SAMPLES}")
         priors = {name: self._prior(i, _HELD_SPREAD**2 if self._held[i] else self._variance[i])
                   for i, name in enumerate(PARAMETER_NAMES)}
-        try:
-            settings = ObjectiveSettings(sensors=self._sensors, sigma=self.sigma,
-                                         priors=priors, max_input_gap_s=self.max_input_gap_s,
-                                         min_samples=MIN_STEP_SAMPLES)
-            problem = CalibrationProblem(self.simulator, [data], settings)
-            objective = problem.objective
-            estimate = fit_map(objective, self._params(), priors)
-            posterior = laplace_posterior(objective, estimate, priors)
-        except ValueError as error:
-            return self._row(row, str(error))
+        settings = {"sensors": self._sensors, "sigma": dict(self.sigma), "priors": priors,
+                    "max_input_gap_s": self.max_input_gap_s, "min_samples": MIN_STEP_SAMPLES}
+        if self.scheduler is None:
+            fitted = _fit_step(self.simulator, data, settings, self._params())
+        else:
+            client, _, model = self._connect()
+            fitted = client.submit(_fit_step, model, data, settings, self._params(),
+                                   pure=False).result()
+        if isinstance(fitted, str):
+            return self._row(row, fitted)
+        theta, covariance = fitted
         tracked = ~self._held
-        self._theta[tracked] = np.asarray(posterior.theta, dtype=float)[tracked]
-        self._variance[tracked] = np.diag(posterior.covariance)[tracked]
+        self._theta[tracked] = theta[tracked]
+        self._variance[tracked] = np.diag(covariance)[tracked]
         self.params_ = self._params()
         self.store_.swap(self.params_)
         return self._row(row, "")
+
+    def _connect(self) -> tuple[Any, bool, Any]:
+        """The Dask client, whether it is this tracker's own, and the model broadcast to every
+        worker (once: steps then ship only their data)."""
+        if self._cluster is None:
+            client, own = dask_client(self.scheduler)
+            [model] = client.scatter([self.simulator], broadcast=True, hash=False)
+            self._cluster = (client, own, model)
+        return self._cluster
+
+    def close(self) -> None:
+        """Release the model broadcast to the Dask workers and close a client made from an
+        address (idempotent; a later step connects again)."""
+        if self._cluster is not None:
+            client, own, _ = self._cluster
+            self._cluster = None
+            if own:
+                client.close()
 
     def _row(self, row: dict[str, object], error: str) -> dict[str, object]:
         row["error"] = error
@@ -314,3 +350,18 @@ class ParameterTracker:
                 variance += (scale * self.flow_uncertainty) ** 2
             row[f"{name}_low"], row[f"{name}_high"] = self._prior(i, variance).interval(0.95)
         return row
+
+
+def _fit_step(simulator: Simulator, data: pd.DataFrame, settings: Mapping[str, Any],
+              start: ModelParameters) -> tuple[np.ndarray, np.ndarray] | str:
+    """One step's fit (module docstring): the MAP from ``start`` under the objective
+    ``settings`` (:class:`ObjectiveSettings`' arguments) and its Laplace posterior, as
+    (θ, covariance) in the priors' normal coordinates, or why the step's data cannot be used.
+    Module-level: a Dask worker runs it by reference."""
+    try:
+        objective = CalibrationProblem(simulator, [data], ObjectiveSettings(**settings)).objective
+        estimate = fit_map(objective, start, settings["priors"])
+        posterior = laplace_posterior(objective, estimate, settings["priors"])
+    except ValueError as error:
+        return str(error)
+    return np.asarray(posterior.theta, dtype=float), np.asarray(posterior.covariance, dtype=float)

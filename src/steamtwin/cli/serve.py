@@ -28,6 +28,9 @@ def serve(
     token_file: Path | None = typer.Option(
         None, help="Bearer tokens (TOML: [[tokens]] name, role = \"read\" or \"ack\", token): "
         "every HTTP request must then bring one."),
+    scheduler: str | None = typer.Option(
+        None, help="Dask scheduler address (e.g. tcp://10.0.0.5:8786): the units' online "
+        "recalibration steps run on that cluster; not given: in this process."),
 ) -> None:
     """Run the live twin: read each unit's DCS (OPC UA or a replayed historian), gate the
     samples, advance the full-order model and the ROM, store measured, twin and residual series
@@ -50,7 +53,12 @@ def serve(
     elif token_file is not None or bind != "127.0.0.1":
         raise typer.BadParameter("--bind and --token-file apply to the HTTP service: add "
                                  "--http-port", param_hint="--http-port")
-    summaries = asyncio.run(_serve(settings, companions))
+    try:
+        summaries = asyncio.run(_serve(settings, companions, scheduler))
+    except ValueError as error:
+        if scheduler is None or "Dask scheduler" not in str(error):
+            raise
+        raise typer.BadParameter(str(error), param_hint="--scheduler") from None
     for name, summary in summaries.items():
         typer.echo(f"{name}: {summary.samples} samples stored ({summary.without_twin} without a "
                    f"twin value), {summary.alarms} alarm(s), {summary.findings} finding(s)")
@@ -72,6 +80,6 @@ def _http(settings: ServiceConfig, port: int, bind: str, token_file: Path | None
                                  ) from None
 
 
-async def _serve(settings: ServiceConfig, companions: list[Companion]
+async def _serve(settings: ServiceConfig, companions: list[Companion], scheduler: str | None
                  ) -> dict[str, LiveSummary]:
-    return await run_service(settings, stop_on_signals(), companions)
+    return await run_service(settings, stop_on_signals(), companions, scheduler=scheduler)

@@ -83,6 +83,17 @@ window's length sets the error of the new centre, σ/√n (0.18 σ at the defaul
 small against the 2-σ design shift of a sensor hypothesis); a fault present from the swap on
 is taken into the new centre — the price of learning it from the data.
 
+Partial blocks. σ is that of a full block's mean. A block holding fewer samples — the last,
+open bin of a finished stream, the bins around a gap, samples the gate rejected or without a
+twin value — has a noisier mean: :meth:`ResidualMonitor.update` takes each sensor's
+``coverage`` c (its samples over the block's nominal count) and uses σ/√c. That is an upper
+bound of the partial mean's σ whenever the residuals' autocorrelation is non-negative at every
+lag (then n·Var(x̄_n) = γ₀ + 2Σ_{k<n}(1 − k/n)γ_k grows with n, so Var(x̄_n) ≤ (N/n)·Var(x̄_N);
+Box, Jenkins & Reinsel, *Time Series Analysis*, 4th ed., §2.1.5, variance of a sample mean): a
+partial block weighs less in every CUSUM and never raises the false-alarm rate above its
+design. (Seen before the rule: the one-sample last bin of a replayed day, judged with the σ of a
+60-sample mean, raised a control-stage pressure sensor fault at its end, docs/benchmarks.md.)
+
 Design sizes: ``sensor_shift`` (K for temperatures, Pa for pressures; default
 2 × the sensor's σ) and ``parameter_shift`` (per parameter; default 0.01, half a fouling step
 of 2 %), the latter capped where its pattern exceeds 2 σ (‖Δ·J‖_Σ ≤ 2, the sensors' size):
@@ -370,11 +381,15 @@ class ResidualMonitor:
 
     def update(self, time: pd.Timestamp, block: Mapping[str, float],
                sensitivity: pd.DataFrame | None = None,
-               load: float | None = None) -> list[AlarmEvent]:
+               load: float | None = None,
+               coverage: Mapping[str, float] | None = None) -> list[AlarmEvent]:
         """Advance every CUSUM by one block of mean residuals (sensor → SI; NaN: sensor out
         of this block) with the twin's ``sensitivity`` J there (sensors × parameters); return
         the alarms that start or end. ``load`` (the block's mean load fraction) selects the
         operating-point baseline and σ of a monitor fitted with loads (module docstring).
+        ``coverage``: per sensor, the share of the block's nominal samples its mean rests on
+        (0–1, dimensionless; missing or None: a full block); σ of a partial block's mean is
+        σ/√coverage (module docstring, "Partial blocks").
 
         Isolation (Gertler 1998, §6; accommodation): an active sensor fault takes its sensor
         out of the other hypotheses' evidence, an active degradation removes its pattern (the
@@ -394,6 +409,13 @@ class ResidualMonitor:
         growth = getattr(self, "transient_sigma_", {})
         sigma = np.array([self.sigma_[s] + float(np.abs(imbalance) @ growth[s]) if s in growth
                           else self.sigma_[s] for s in self.sensors])
+        if coverage is not None:
+            share = np.array([float(coverage.get(s, 1.0)) for s in self.sensors])
+            if np.any(share < 0.0):
+                raise ValueError(f"coverage must be a share of the block's samples in 0–1 "
+                                 f"(got {dict(coverage)})")
+            with np.errstate(divide="ignore"):  # no sample: σ = ∞, the sensor out of the block
+                sigma = sigma / np.sqrt(np.minimum(share, 1.0))
         shift = getattr(self, "shift_", {})
         r = np.array([float(block.get(s, math.nan))
                       - (float(np.interp(load, *baseline[s]))

@@ -28,7 +28,9 @@ import logging
 import signal
 from collections.abc import Awaitable, Callable, Sequence
 from concurrent.futures import Executor, ThreadPoolExecutor
+from typing import Any
 
+from steamtwin.calibration.evaluation import dask_client
 from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
 from steamtwin.live.config import ServiceConfig, UnitConfig
 from steamtwin.live.gate import StreamGate, gate_options
@@ -48,9 +50,12 @@ __all__ = ["Companion", "ProvisionalGroup", "build_unit", "run_service", "stop_o
 LOG = logging.getLogger("steamtwin.live")
 
 
-def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, Source]:
+def build_unit(unit: UnitConfig, historian: LiveHistorian, scheduler: Any = None
+               ) -> tuple[LiveTwin, Source]:
     """The unit's live twin (its FOM read through the tag map's sensors and the params'
-    offsets) and its source, resuming after the historian's last committed sample."""
+    offsets) and its source, resuming after the historian's last committed sample.
+    ``scheduler``: the Dask scheduler address or ``distributed.Client`` its recalibration's
+    tracker steps run on (None: in this process; :class:`ParameterTracker`)."""
     setup, params = unit_model(unit.turbine, unit.tags, unit.params)
     tag_map, model = setup.tag_map, setup.model
     monitor = None if unit.monitor is None else load_monitor(unit.monitor)
@@ -59,7 +64,8 @@ def build_unit(unit: UnitConfig, historian: LiveHistorian) -> tuple[LiveTwin, So
         tracker = ParameterTracker(model, sigma=tracking_sigma(tag_map),
                                    priors=centred_priors(params),
                                    step_s=unit.recalibration.step_s,
-                                   trajectory_rows=round(86_400.0 / unit.recalibration.step_s))
+                                   trajectory_rows=round(86_400.0 / unit.recalibration.step_s),
+                                   scheduler=scheduler)
         recalibration = LiveRecalibration(tracker, every_s=unit.recalibration.every_s,
                                           settle_steps=unit.recalibration.settle_steps)
     rotor = None
@@ -188,20 +194,27 @@ soon after the event (set when every unit has stopped) is set."""
 
 async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
                       companions: Sequence[Companion] = (),
-                      historian: LiveHistorian | None = None) -> dict[str, LiveSummary]:
+                      historian: LiveHistorian | None = None, scheduler: Any = None
+                      ) -> dict[str, LiveSummary]:
     """Run every unit of ``config`` until its source ends or ``stop`` is set; returns each
     unit's summary. What was committed stays; a restart continues from it. ``companions``
     run on the same loop and historian from before the first unit starts until the last one
     stops (a companion that fails stops the service). ``historian``: the database to use
     instead of ``config.database``'s (e.g. one that records when rows are stored, for the
-    latency benchmark)."""
+    latency benchmark). ``scheduler``: a Dask scheduler address (``tcp://host:8786``) or
+    ``distributed.Client``: every unit's recalibration steps run on that cluster, through one
+    client for the service (None: in this process); an unreachable address is a ValueError
+    before any unit starts."""
     stop = stop if stop is not None else asyncio.Event()
     historian = historian if historian is not None else LiveHistorian(config.database)
     historian.open()
     done = asyncio.Event()
     beside: list[asyncio.Task] = []
     final_work = ThreadPoolExecutor(max_workers=1, thread_name_prefix="steamtwin-final")
+    client, own_client = None, False
     try:
+        if scheduler is not None:
+            client, own_client = dask_client(scheduler)
         beside = [asyncio.create_task(companion(historian, done)) for companion in companions]
 
         def stop_if_failed(task: asyncio.Task) -> None:
@@ -210,7 +223,7 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
 
         for task in beside:
             task.add_done_callback(stop_if_failed)
-        built = [build_unit(unit, historian) for unit in config.units]
+        built = [build_unit(unit, historian, client) for unit in config.units]
         group = ProvisionalGroup(historian)
         for twin, _ in built:
             resume = twin.resume_after()
@@ -244,6 +257,8 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
         done.set()
         outcomes = await asyncio.gather(*beside, return_exceptions=True)
         historian.close()
+        if own_client:
+            client.close()
         failed = [o for o in outcomes if isinstance(o, Exception)]
         if failed:
             raise failed[0]

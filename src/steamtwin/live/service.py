@@ -460,8 +460,11 @@ class LiveTwin:
         load = float(block.means["load"])
         sensitivity = (None if self.sensitivity is None
                        else self.sensitivity.get(load, block.rows, self.params))
+        # a partial block (a gap, rejected samples, a stream's last bin) weighs less
+        nominal = self.monitor.settings.block_s / self.gate.nominal_step_s
         return self.monitor.update(block.end, block.means[sensors], sensitivity,
-                                   load=load if np.isfinite(load) else None)
+                                   load=load if np.isfinite(load) else None,
+                                   coverage=(block.counts[sensors] / nominal).to_dict())
 
 
 def _inputs(data: pd.DataFrame) -> np.ndarray:
