@@ -4,10 +4,10 @@ in a shaft in tension against Peterson's chart."""
 
 import numpy as np
 import pytest
-from skfem import MeshTri
 
 from steamtwin.geometry.volume_mesh import gmsh_session
 from steamtwin.rotor.elasticity import AxisymmetricElasticity
+from steamtwin.rotor.geometry import generated_triangles
 from steamtwin.rotor.material import REFERENCE_TEMPERATURE, ConstantMaterial
 
 NU = 0.3
@@ -41,17 +41,7 @@ def notched_mesh(corners, arc, notch_radius, fine):
         for option in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints",
                        "MeshSizeFromCurvature"):
             gmsh.option.setNumber(f"Mesh.{option}", 0)
-        gmsh.model.mesh.generate(2)
-        tags, coordinates, _ = gmsh.model.mesh.getNodes()
-        _, element_nodes = gmsh.model.mesh.getElementsByType(2)
-    position = np.full(int(tags.max()) + 1, -1)
-    position[tags.astype(int)] = np.arange(tags.size)
-    triangles = position[element_nodes.astype(int).reshape(-1, 3)].T
-    used = np.unique(triangles)
-    renumber = np.full(tags.size, -1)
-    renumber[used] = np.arange(used.size)
-    return MeshTri(np.ascontiguousarray(coordinates.reshape(-1, 3)[used, :2].T),
-                   np.ascontiguousarray(renumber[triangles]))
+        return generated_triangles(gmsh)
 
 
 def tension_concentration(mesh, root):

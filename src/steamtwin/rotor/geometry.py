@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from skfem import MeshTri
@@ -153,9 +154,16 @@ def rotor_mesh(geometry: RotorGeometry, size: float, groove_size: float | None =
                        "MeshSizeFromCurvature"):
             gmsh.option.setNumber(f"Mesh.{option}", 0)
         gmsh.option.setNumber("Mesh.Algorithm", 6)
-        gmsh.model.mesh.generate(2)
-        tags, coordinates, _ = gmsh.model.mesh.getNodes()
-        _, element_nodes = gmsh.model.mesh.getElementsByType(2)
+        mesh = generated_triangles(gmsh)
+    return mesh.with_boundaries(_boundaries(mesh, geometry))
+
+
+def generated_triangles(gmsh: Any) -> MeshTri:
+    """Mesh the open gmsh session's plane model in 2-D and return its triangles as a skfem
+    ``MeshTri`` in (x, y) = (r, z), m; nodes no triangle uses (the arcs' centres) dropped."""
+    gmsh.model.mesh.generate(2)
+    tags, coordinates, _ = gmsh.model.mesh.getNodes()
+    _, element_nodes = gmsh.model.mesh.getElementsByType(2)
     position = np.full(int(tags.max()) + 1, -1)
     position[tags.astype(int)] = np.arange(tags.size)
     triangles = position[element_nodes.astype(int).reshape(-1, 3)].T
@@ -163,8 +171,7 @@ def rotor_mesh(geometry: RotorGeometry, size: float, groove_size: float | None =
     renumber = np.full(tags.size, -1)
     renumber[used] = np.arange(used.size)
     nodes = coordinates.reshape(-1, 3)[used, :2].T
-    mesh = MeshTri(np.ascontiguousarray(nodes), np.ascontiguousarray(renumber[triangles]))
-    return mesh.with_boundaries(_boundaries(mesh, geometry))
+    return MeshTri(np.ascontiguousarray(nodes), np.ascontiguousarray(renumber[triangles]))
 
 
 def _boundaries(mesh: MeshTri, geometry: RotorGeometry) -> dict[str, np.ndarray]:
