@@ -28,9 +28,13 @@ report is computed in the run):
    the calibration nor the ROM saw): Table 5, Table 8, Figure 10.
 7. **Rotor life** (:func:`steamtwin.rotor.report.rotor_stress`): the HP rotor's thermal stress
    and the life it consumed over the day run, with the twin's (calibrated) parameters; its own
-   report in ``rotor/``, the life table and two figures in the demo's.
+   report in ``rotor/`` (with the fitted model, ``rotor-model.npz``), the life table and two
+   figures in the demo's.
 8. **Sensitivity**: Sobol' indices of the three parameters on the 50 % run's ramp, and the
    propagation of main-steam temperature noise (σ = 0.5 and 1.0 K) on the 50 % hold.
+9. **Live twin**: a deep-peak-50 run published over OPC UA on loopback and read by the live
+   service (gate, streamed FOM, blade ROM probes, the rotor model of stage 7, residuals, DuckDB)
+   with the dashboard served beside it; a screenshot of each page in the report.
 
 :func:`run_demo` writes everything into one folder: the twin (:meth:`Twin.save`: ``spec.toml``,
 ``params.json``, ``rom.npz``, ``twin.json``) and ``report.html``/``report.json``; the library
@@ -43,6 +47,7 @@ chain reads top to bottom in one file; what a stage computes lives in the librar
 from __future__ import annotations
 
 import asyncio
+import json
 import socket
 import time
 import warnings
@@ -76,7 +81,7 @@ from steamtwin.model.operating import load_profile_inputs, ramp_profile
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.progress import ProgressCallback
 from steamtwin.rom.estimator import ExtrapolationWarning
-from steamtwin.rotor.report import life_table, rotor_stress
+from steamtwin.rotor.report import MODEL_FILE, life_table, rotor_stress
 from steamtwin.spec import TurbineSpec, load_spec
 from steamtwin.spec.fingerprint import spec_hash
 from steamtwin.twin import Twin
@@ -376,12 +381,19 @@ def _live_stage(twin: Twin, settings: DemoSettings, out: Path,
     database = out / "live.duckdb"
     database.unlink(missing_ok=True)
     rom_path = None if twin.blade_rom is None else save_rom(twin.blade_rom, out / "live-rom.npz")
+    # the rotor model the rotor stage fitted (and its allowable), when that stage ran
+    rotor_path, rotor_allowable = out / "rotor" / MODEL_FILE, None
+    if rotor_path.is_file():
+        life = json.loads((out / "rotor" / "rotor_life.json").read_text(encoding="utf-8"))
+        rotor_allowable = float(life["allowable_pa"])
     config = ServiceConfig(database=database, source=out / "live (demo)", units=(UnitConfig(
         name="unit1", turbine=str(settings.spec), tags=tags, params=params_path, rom=rom_path,
         block_samples=60, source=SourceConfig("opcua", endpoint=server_settings.endpoint,
-                                              allow_insecure=True)),))
+                                              allow_insecure=True),
+        rotor=rotor_path if rotor_path.is_file() else None, rotor_allowable=rotor_allowable),))
     bound: dict[str, int] = {}
-    unit_pages = [page for page in DASHBOARD_PAGES if page.name != "Fleet"]  # one unit
+    unit_pages = [page for page in DASHBOARD_PAGES if page.name != "Fleet"  # one unit
+                  and (page.name != "Rotor" or rotor_allowable is not None)]
     dashboard = http_companion(HttpSettings(port=0), config,
                                on_bound=lambda _host, http_port: bound.update(port=http_port))
 
@@ -423,7 +435,8 @@ def _live_stage(twin: Twin, settings: DemoSettings, out: Path,
                   sum(shot.seconds for shot in shots)]})
     report(1.0)
     note = ("The live service's dashboard (`steamtwin serve --http-port`) at 1366 × 768, "
-            "taken while the service still ran, after the plant's run was stored. The Fleet "
+            "taken while the service still ran, after the plant's run was stored; the unit "
+            "steps the rotor model of the rotor stage (Rotor page). The Fleet "
             "page is not shown: with one unit it forwards to that unit's page. The Calibration "
             "page's trajectory stays empty here: the service stores parameter swaps, and this "
             "unit runs without recalibration.")

@@ -116,8 +116,9 @@ def test_the_live_stage_stored_what_the_plant_published(demo):
 
 def test_the_report_shows_each_dashboard_page_or_what_to_install(demo):
     """Issue 22, item 4: the live stage's dashboard, a 1366 × 768 screenshot of each unit page
-    in the report (the Unit, History and Blade pages drew the run's data); without chromium,
-    the section says what to install."""
+    in the report (the Unit, History, Blade and Rotor pages drew the run's data: the live unit
+    steps the rotor model the rotor stage fitted); without chromium, the section says what to
+    install."""
     result, _ = demo
     document = json.loads((result.out / "report.json").read_text(encoding="utf-8"))
     html = (result.out / "report.html").read_text(encoding="utf-8")
@@ -127,10 +128,10 @@ def test_the_report_shows_each_dashboard_page_or_what_to_install(demo):
     if find_chromium() is None:
         assert not shots and "apt-get install chromium" in html
         return
-    names = ("unit", "history", "alarms", "calibration", "blade")
+    names = ("unit", "history", "alarms", "calibration", "blade", "rotor")
     assert sorted(shots) == sorted(f"dashboard/dashboard-{name}.png" for name in names)
     for file in shots:
         assert png_size(result.out / file) == (1366, 768)
-    for name in ("unit", "history", "blade"):
+    for name in ("unit", "history", "blade", "rotor"):
         caption = shots[f"dashboard/dashboard-{name}.png"]
         assert "did not render" not in caption and " points" in caption, caption

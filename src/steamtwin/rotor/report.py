@@ -89,6 +89,10 @@ def checked_allowable(allowable_pa: float, where: str = "--allowable") -> float:
     return value
 
 
+MODEL_FILE = "rotor-model.npz"
+"""The fitted :class:`RotorModel` :func:`rotor_stress` saves beside its report."""
+
+
 @dataclass
 class RotorLifeResult:
     """What :func:`write_rotor_report` wrote: the run ``frame`` (SI), the ``life``
@@ -399,6 +403,9 @@ def rotor_stress(histories: Sequence[History], spec: TurbineSpec, directory: str
         steam_temperature=pd.concat(steam), steam_label=f"steam, {group}",
         title=f"Rotor thermal stress and life: {spec.name}", settings=settings,
         timings=timings)
+    # the fitted model beside its report: `serve` (`rotor = ".../rotor-model.npz"`) and
+    # `rotor advise --model` take it without fitting again
+    result.files["rotor-model.npz"] = model.save(Path(directory) / MODEL_FILE)
     if progress is not None:
         progress(1.0, "report written")
     return result

@@ -68,6 +68,7 @@ DASHBOARD_PAGES = (
     DashboardPage("Alarms", "/units/{unit}/alarms", False),  # a chart only for an alarm
     DashboardPage("Calibration", "/units/{unit}/calibration", True),
     DashboardPage("Blade", "/units/{unit}/blade", True),
+    DashboardPage("Rotor", "/units/{unit}/rotor", True),
     DashboardPage("Fleet", "/", False),
 )
 """The dashboard's pages (:mod:`steamtwin.web.pages`), in the navigation's order."""
