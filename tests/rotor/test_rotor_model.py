@@ -81,6 +81,7 @@ def test_save_load_round_trip_is_exact(model, unseen, spec, tmp_path):
     pd.testing.assert_frame_equal(loaded.simulate_steam(unseen).frame,
                                   model.simulate_steam(unseen).frame, check_exact=True)
     assert loaded.critical_points == model.critical_points
+    assert loaded.fingerprint == model.fingerprint  # states carry over a save/load
 
 
 def test_equivalent_stress_is_von_mises_signed_by_the_dominant_principal():

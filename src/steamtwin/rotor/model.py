@@ -50,6 +50,7 @@ ROM-vs-FEM error includes its effect.
 
 from __future__ import annotations
 
+import hashlib
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
@@ -112,13 +113,17 @@ def equivalent_stress(state: StressState) -> np.ndarray:
 
 @dataclass(frozen=True)
 class RotorState:
-    """The rotor's carried state: the ROM's reduced coordinates and time (s)."""
+    """The rotor's carried state: the ROM's reduced coordinates and time (s), and the
+    fingerprint of the model they belong to (:attr:`RotorModel.fingerprint`): reduced
+    coordinates mean nothing in another model's basis, so every model refuses a state whose
+    fingerprint is not its own."""
 
     rom: RomState
+    model: str
 
     def to_dict(self) -> dict[str, object]:
         """A JSON-ready dict; floats round-trip exactly through ``json``."""
-        return {"format": FORMAT + "-state", **self.rom.to_dict()}
+        return {"format": FORMAT + "-state", "model": self.model, **self.rom.to_dict()}
 
     @classmethod
     def from_dict(cls, data: Mapping[str, object]) -> RotorState:
@@ -126,7 +131,12 @@ class RotorState:
         if data.get("format") != FORMAT + "-state":
             raise RotorAreaError(f"rotor state: expected format {FORMAT + '-state'!r}, got "
                                  f"{data.get('format')!r}")
-        return cls(RomState.from_dict(dict(data)))
+        fingerprint = data.get("model")
+        if not isinstance(fingerprint, str):
+            raise RotorAreaError("rotor state has no 'model' fingerprint (a string; states "
+                                 "saved before it was added lack it): start the rotor afresh "
+                                 "from equilibrium with its steam instead")
+        return cls(RomState.from_dict(dict(data)), fingerprint)
 
 
 @dataclass(frozen=True)
@@ -266,7 +276,40 @@ class RotorModel:
         self.rom_ = rom
         self.reference_temperatures_ = refs
         self.params_ = params or ModelParameters()
+        self.fingerprint_ = self._fingerprint()
         return self
+
+    def _fingerprint(self) -> str:
+        """SHA-256 (first 16 hex digits) of the spec's ``[rotor]`` section, the mesh's node
+        count and the ROM basis's shape and first values — all a saved and reloaded model
+        reproduces bit for bit."""
+        section = self.spec.rotor
+        modes = self.rom_.modes_
+        document = {"rotor": None if section is None else asdict(section),
+                    "nodes": int(modes.shape[0]), "basis_shape": list(modes.shape),
+                    "basis_start": modes[:4, :4].ravel().tolist()}
+        digest = hashlib.sha256(json.dumps(document, sort_keys=True).encode("utf-8"))
+        return digest.hexdigest()[:16]
+
+    @property
+    def fingerprint(self) -> str:
+        """Identifies this fitted model (:meth:`_fingerprint`); carried by its states."""
+        self._check_fitted()
+        return self.fingerprint_
+
+    def check_state(self, state: RotorState) -> RotorState:
+        """``state`` if this model produced it (same :attr:`fingerprint`), else
+        :class:`~steamtwin.errors.RotorAreaError`."""
+        self._check_fitted()
+        if not isinstance(state, RotorState):
+            raise RotorAreaError(f"expected a RotorState, got {type(state).__name__}")
+        if state.model != self.fingerprint_:
+            raise RotorAreaError(
+                f"rotor state belongs to another rotor model (fingerprint {state.model!r}; "
+                f"this model of spec {self.spec.name!r}, {self.rom_.modes_.shape[0]} nodes, "
+                f"{self.rom_.n_modes_} modes, is {self.fingerprint_!r}): use a state this "
+                "model produced, or none (equilibrium with the first sample)")
+        return state
 
     def _fit_strain_interpolation(self, fields: np.ndarray) -> None:
         """Empirical interpolation of the nodal thermal-strain field (module docstring): POD
@@ -351,7 +394,7 @@ class RotorModel:
         self._check_fitted()
         row = steam.iloc[0] if isinstance(steam, pd.DataFrame) else steam
         htc, temperature = self._row(row)
-        return RotorState(self.rom_.initial_state(htc, temperature))
+        return RotorState(self.rom_.initial_state(htc, temperature), self.fingerprint_)
 
     def _row(self, row: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
         try:
@@ -385,7 +428,7 @@ class RotorModel:
         rows = self._history(steam)
         if full_order:
             return RotorRun(self._full_order(steam, state, stress_every), None)
-        start = self.initial_state(steam) if state is None else state
+        start = self.initial_state(steam) if state is None else self.check_state(state)
         temperature, outputs = self.rom_.observe(start.rom)
         observed = np.empty((len(steam), outputs.size + temperature.size))
         observed[0] = np.concatenate([temperature, outputs])
@@ -395,7 +438,7 @@ class RotorModel:
                                      start.rom)
             observed[1:] = np.hstack([run.temperature, run.output])
             final = run.final
-        return RotorRun(self._frame(observed, steam.index), RotorState(final))
+        return RotorRun(self._frame(observed, steam.index), RotorState(final, self.fingerprint_))
 
     def _columns(self, observed: np.ndarray) -> dict[str, np.ndarray]:
         """Run-frame columns of ROM observations: (samples, [location temperatures,
@@ -415,15 +458,14 @@ class RotorModel:
         """Advance ``state`` by ``dt_s`` (s) under one steam-side row (:meth:`steam_side`'s
         columns); the new state and its frame row (the batch run's columns) — the same
         compiled kernel as :meth:`simulate`, so a streamed record equals the batch run."""
-        self._check_fitted()
+        rom = self.check_state(state).rom
         htc, temperature = self._row(steam_row)
-        new = self.rom_.step(state.rom, htc, temperature, dt_s)
-        return RotorState(new), self.observe(RotorState(new))
+        new = RotorState(self.rom_.step(rom, htc, temperature, dt_s), self.fingerprint_)
+        return new, self.observe(new)
 
     def observe(self, state: RotorState) -> dict[str, float]:
         """The frame row (SI) of ``state``."""
-        self._check_fitted()
-        temperature, outputs = self.rom_.observe(state.rom)
+        temperature, outputs = self.rom_.observe(self.check_state(state).rom)
         columns = self._columns(np.concatenate([temperature, outputs])[None, :])
         return {name: float(values[0]) for name, values in columns.items()}
 
@@ -436,7 +478,7 @@ class RotorModel:
             htc, temperature = self._row(steam.iloc[0])
             initial = self.conduction_.steady(htc, temperature)
         else:
-            initial = self.rom_.field(state.rom)
+            initial = self.rom_.field(self.check_state(state).rom)
         run = self.conduction_.transient_frame(initial, steam, probes=self.critical_nodes_,
                                                snapshot_every=stress_every)
         sampled = np.arange(0, len(steam), stress_every)
@@ -504,6 +546,7 @@ class RotorModel:
         model.strain_nodes_ = np.array(metadata["strain_nodes"], dtype=np.int64)
         model.strain_response_ = np.array(metadata["strain_response_pa"], dtype=float)
         model.centrifugal_ = np.array(metadata["centrifugal_pa"], dtype=float)
+        model.fingerprint_ = model._fingerprint()
         return model
 
 
