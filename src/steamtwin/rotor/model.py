@@ -1,8 +1,8 @@
 """The HP rotor model of a turbine spec: conduction FEM, thermo-elastic stress and their
 transient ROM glued into one estimator (issue 23, items 3–4).
 
-(Just over 500 lines: the estimator, its file format and its full-order reference share the
-layout of the critical points' outputs, so they stay together.)
+(Over 500 lines: the estimator, its file format, its states' fingerprint and its full-order
+reference share the layout of the critical points' outputs, so they stay together.)
 
 :class:`RotorModel` follows scikit-learn's habit: the constructor stores hyper-parameters, and
 :meth:`RotorModel.fit` builds the mesh of the spec's ``[rotor]`` section
@@ -30,17 +30,21 @@ nodes and T̄ (rows of its modes), the model evaluates ε_th and E/(1−ν) of t
 remaining difference to a full thermo-elastic solve with E(T), ν(T) at every quadrature point is
 the operator's "E/(1−ν) at the mean" (0.6 % of the range on that ramp).
 
-**The fatigue scalar ("equivalent").** Per sample: the von Mises stress signed by the
-principal stress of largest magnitude. The rotor surface at the groove root is in a nearly
-proportional multiaxial state (σ_θ and σ_z of one sign, driven by one temperature difference),
-for which the range of this signed scalar equals the von Mises equivalent of the range of the
-stress components between two instants — the equivalent stress range of ASME BPVC VIII-2
-(2019) §5.5.3.2 (eq. 5.30) — while the sign keeps compressive (heating) and tensile (cooling)
-peaks apart for rainflow counting and the mean-stress correction. EN 13445-3 cl. 18.6 would use
-Tresca on the principal-stress ranges (≤ 15 % above von Mises); EN 12952-3 cl. 13.4 uses the
-surface principal stress differences at a bore — equivalent in this state; the von Mises form
-was chosen for the ASME design-curve factors (:data:`~steamtwin.rotor.fatigue.ASME_DESIGN_FACTORS`)
-the life module applies.
+**The fatigue scalar ("equivalent").** Per sample and location: the stress projected in the
+von Mises metric on the location's direction of largest variance over the training runs
+(:func:`~steamtwin.rotor.stress_points.equivalent_stress`, fitted by
+:func:`~steamtwin.rotor.stress_points.equivalent_direction`), tensile excursions positive. It is
+linear in the components, so continuous (the von Mises stress signed by the largest-magnitude
+principal, used before, jumped by 2·σ_vM where |σ₁| = |σ₃|). The rotor surface at the groove
+root is in a nearly proportional multiaxial state (σ_θ and σ_z driven by one temperature
+difference; on the reference rotor the direction holds 99.97 % of the training variance), for
+which its range between two instants equals the von Mises equivalent of the component ranges —
+the equivalent stress range of ASME BPVC VIII-2 (2019) §5.5.3.2 (eq. 5.30) — while the sign keeps
+compressive (heating) and tensile (cooling) peaks apart for rainflow counting and the
+mean-stress correction. EN 13445-3 cl. 18.6 would use Tresca on the principal-stress ranges
+(≤ 15 % above von Mises); EN 12952-3 cl. 13.4 uses the surface principal stress differences at a
+bore — equivalent in this state; the von Mises form was chosen for the ASME design-curve factors
+(:data:`~steamtwin.rotor.fatigue.ASME_DESIGN_FACTORS`) the life module applies.
 
 The Dittus–Boelter cooling factor Pr^0.1 (steam_side.py) is not applied by the ROM: on the
 reference unit it is ≤ 1.002 (superheated steam at the control stage), below the htc's own
@@ -70,12 +74,16 @@ from steamtwin.rotor.elasticity import AxisymmetricElasticity
 from steamtwin.rotor.geometry import critical_nodes, rotor_geometry, rotor_mesh
 from steamtwin.rotor.steam_side import steam_side
 from steamtwin.rotor.steel import TabulatedSteel, steel
-from steamtwin.rotor.stress_points import COMPONENTS, StressState
+from steamtwin.rotor.stress_points import (
+    COMPONENTS,
+    StressState,
+    equivalent_direction,
+    equivalent_stress,
+)
 from steamtwin.rotor.transient_rom import ConductionRom, RomState, SteamHistory, full_order_run
 from steamtwin.spec.turbine import TurbineSpec
 
-__all__ = ["DEFAULT_FIT_RAMPS", "LOCATIONS", "RotorModel", "RotorRun", "RotorState",
-           "equivalent_stress"]
+__all__ = ["DEFAULT_FIT_RAMPS", "LOCATIONS", "RotorModel", "RotorRun", "RotorState"]
 
 LOCATIONS = ("groove", "bore")
 """The critical points, in the order of every per-location array."""
@@ -99,16 +107,9 @@ TRAINING_HOLD_S = 3600.0
 (R²/(π²a) ≈ 0.36²/(π²·8e-6 m²/s) ≈ 27 min for the reference drum; Carslaw & Jaeger §7.4)."""
 
 FORMAT = "steamtwin-rotor-model"
-FORMAT_VERSION = 1
-
-
-def equivalent_stress(state: StressState) -> np.ndarray:
-    """Von Mises stress (Pa) signed by the principal stress of largest magnitude (module
-    docstring: the scalar rainflow counts)."""
-    principal = state.principal
-    largest = np.take_along_axis(principal, np.argmax(np.abs(principal), axis=-1)[..., None],
-                                 axis=-1)[..., 0]
-    return np.where(largest < 0.0, -1.0, 1.0) * state.von_mises
+FORMAT_VERSION = 2
+"""2: the equivalent stress's directions (version 1 signed von Mises by the dominant
+principal)."""
 
 
 @dataclass(frozen=True)
@@ -150,8 +151,9 @@ class RotorRun:
     state: RotorState | None
 
 
-def _stress_columns(components: np.ndarray) -> dict[str, np.ndarray]:
-    """Frame columns of stress ``components`` (samples, locations, 4) in Pa."""
+def _stress_columns(components: np.ndarray, directions: np.ndarray) -> dict[str, np.ndarray]:
+    """Frame columns of stress ``components`` (samples, locations, 4) in Pa, the equivalent
+    stress along ``directions`` (locations, 4)."""
     columns: dict[str, np.ndarray] = {}
     for p, location in enumerate(LOCATIONS):
         state = StressState.from_components(np.moveaxis(components[:, p, :], -1, 0))
@@ -159,7 +161,7 @@ def _stress_columns(components: np.ndarray) -> dict[str, np.ndarray]:
                                 strict=True):
             columns[f"{location}_{name}"] = values
         columns[f"{location}_von_mises"] = state.von_mises
-        columns[f"{location}_equivalent"] = equivalent_stress(state)
+        columns[f"{location}_equivalent"] = equivalent_stress(state, directions[p])
     return columns
 
 
@@ -266,7 +268,12 @@ class RotorModel:
             fields.append(full_order_run(operators, history, reference_temperatures=refs))
         self.stress_operator_ = self.elasticity_.stress_operator(
             [self.critical_points[name] for name in LOCATIONS], float(np.median(refs)))
-        self._fit_strain_interpolation(np.vstack(fields))
+        training = np.vstack(fields)
+        self._fit_strain_interpolation(training)
+        path = self._stress(training[:, self.strain_nodes_],
+                            training @ self.stress_operator_.volume_weights)
+        self.equivalent_directions_ = np.stack([equivalent_direction(path[:, p, :])
+                                                for p in range(len(LOCATIONS))])
         nodes = [self.critical_nodes_[name] for name in LOCATIONS] + list(self.strain_nodes_)
         rom = ConductionRom(energy=self.rom_energy, max_modes=self.max_modes)
         rom.fit(operators, (), reference_temperatures=refs, temperature_nodes=nodes,
@@ -446,7 +453,7 @@ class RotorModel:
         k = len(LOCATIONS)
         components = self._stress(observed[:, k:-1], observed[:, -1])
         columns = {f"{name}_temperature": observed[:, p] for p, name in enumerate(LOCATIONS)}
-        columns.update(_stress_columns(components))
+        columns.update(_stress_columns(components, self.equivalent_directions_))
         columns["mean_temperature"] = observed[:, -1]
         return columns
 
@@ -490,7 +497,7 @@ class RotorModel:
             components[index] = np.stack([getattr(stress, name) for name in COMPONENTS], -1)
             mean[index] = field @ self.stress_operator_.volume_weights
         columns = {f"{name}_temperature": run.probes[name].to_numpy() for name in LOCATIONS}
-        columns.update(_stress_columns(components))
+        columns.update(_stress_columns(components, self.equivalent_directions_))
         columns["mean_temperature"] = mean
         return pd.DataFrame(columns, index=steam.index)
 
@@ -512,7 +519,8 @@ class RotorModel:
                     "frozen_temperature_k": self.frozen_temperature_,
                     "strain_nodes": self.strain_nodes_.tolist(),
                     "strain_response_pa": self.strain_response_.tolist(),
-                    "centrifugal_pa": self.centrifugal_.tolist()}
+                    "centrifugal_pa": self.centrifugal_.tolist(),
+                    "equivalent_directions": self.equivalent_directions_.tolist()}
         _metadata_path(path).write_text(json.dumps(metadata, indent=1))
         return path
 
@@ -546,6 +554,7 @@ class RotorModel:
         model.strain_nodes_ = np.array(metadata["strain_nodes"], dtype=np.int64)
         model.strain_response_ = np.array(metadata["strain_response_pa"], dtype=float)
         model.centrifugal_ = np.array(metadata["centrifugal_pa"], dtype=float)
+        model.equivalent_directions_ = np.array(metadata["equivalent_directions"], dtype=float)
         model.fingerprint_ = model._fingerprint()
         return model
 
