@@ -34,8 +34,8 @@ import pandas as pd
 from steamtwin.dcs.plant import run_plant
 from steamtwin.model.operating import load_profile_inputs, ramp_profile
 from steamtwin.rotor.conduction import htc_column, steam_temperature_column
-from steamtwin.rotor.model import LOCATIONS, RotorModel, equivalent_stress
-from steamtwin.rotor.stress_points import COMPONENTS, StressState
+from steamtwin.rotor.model import LOCATIONS, RotorModel
+from steamtwin.rotor.stress_points import COMPONENTS, StressState, equivalent_stress
 from steamtwin.spec import load_spec
 
 FOM_INPUTS = ("main_steam_pressure", "main_steam_temperature", "main_steam_flow",
@@ -55,10 +55,14 @@ class Clock:
         self.cpu = time.process_time() - self.cpu
 
 
-def stress_table(state: StressState) -> dict[str, np.ndarray]:
-    """(samples, locations) arrays of the compared quantities."""
+def stress_table(state: StressState, directions: np.ndarray) -> dict[str, np.ndarray]:
+    """(samples, locations) arrays of the compared quantities; the equivalent stress along
+    each location's direction (``RotorModel.equivalent_directions_``)."""
+    equivalent = np.column_stack([
+        equivalent_stress(StressState(*(getattr(state, c)[:, p] for c in COMPONENTS)),
+                          directions[p]) for p in range(len(directions))])
     return {"axial": state.axial, "hoop": state.hoop, "von_mises": state.von_mises,
-            "equivalent": equivalent_stress(state)}
+            "equivalent": equivalent}
 
 
 def compare(model: RotorModel, steam: pd.DataFrame, every: int, label: str) -> dict:
@@ -89,7 +93,7 @@ def compare(model: RotorModel, steam: pd.DataFrame, every: int, label: str) -> d
         result[f"{name}_temperature_error_k"] = float(error.max())
         result[f"{name}_temperature_range_k"] = float(np.ptp(fem.probes[name].to_numpy()))
     for reference_name, reference in (("full", full), ("operator", operator)):
-        table = stress_table(reference)
+        table = stress_table(reference, model.equivalent_directions_)
         for p, name in enumerate(LOCATIONS):
             for quantity in COMPARED:
                 values = table[quantity][:, p]
@@ -99,12 +103,21 @@ def compare(model: RotorModel, steam: pd.DataFrame, every: int, label: str) -> d
                 result[key + "_error_mpa"] = error / 1e6
                 result[key + "_range_mpa"] = span / 1e6
                 result[key + "_error_of_range"] = error / span if span > 0 else float("nan")
-    full_table = stress_table(full)
-    operator_table = stress_table(operator)
+    full_table = stress_table(full, model.equivalent_directions_)
+    operator_table = stress_table(operator, model.equivalent_directions_)
     span = float(np.ptp(full_table["equivalent"][:, 0]))
     result["groove_operator_vs_full_equivalent_of_range"] = float(
         np.max(np.abs(operator_table["equivalent"][:, 0] - full_table["equivalent"][:, 0]))
         / span)
+    # the equivalent's range vs ASME VIII-2 §5.5.3.2's: von Mises of the component differences
+    # between the instants of its largest and smallest value (the FEM's full solves)
+    for p, name in enumerate(LOCATIONS):
+        values = full_table["equivalent"][:, p]
+        high, low = int(np.argmax(values)), int(np.argmin(values))
+        difference = StressState(*(getattr(full, c)[high, p] - getattr(full, c)[low, p]
+                                   for c in COMPONENTS))
+        result[f"{name}_equivalent_range_over_asme_range"] = float(
+            (values[high] - values[low]) / difference.von_mises)
     return result
 
 

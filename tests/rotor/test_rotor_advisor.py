@@ -4,6 +4,10 @@ input."""
 
 from __future__ import annotations
 
+import copy
+import json
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -151,12 +155,42 @@ def test_an_allowable_below_the_standing_stress_is_refused(model):
 
 def test_a_state_of_another_rotor_is_refused(model, advisor):
     state = model.initial_state(advisor.steam_frame(0.6, 0.4, 0.01, 0.0))
-    wrong_size = RotorState(RomState(np.append(state.rom.coordinates, 0.0)))
+    wrong_size = RotorState(RomState(np.append(state.rom.coordinates, 0.0)), state.model)
     with pytest.raises(RotorAreaError, match="another rotor"):
         advisor.advise(wrong_size, 0.6, 0.4)
-    hotter = RotorState(RomState(state.rom.coordinates * 1.5))  # same modes, metal far too hot
+    hotter = RotorState(RomState(state.rom.coordinates * 1.5), state.model)  # metal far too hot
     with pytest.raises(RotorAreaError, match=r"temperature .* another rotor"):
         advisor.advise(hotter, 0.6, 0.4)
+
+
+def test_a_same_size_state_of_another_rotor_model_is_refused_by_its_fingerprint(model,
+                                                                                  advisor):
+    # another fit of the same spec (another training rate): another basis, so another model
+    other = RotorModel(model.spec, mesh_size=0.08, groove_mesh_size=0.006,
+                       fit_ramps=[(1.0, 0.75, 0.04)], training_hold_s=900.0,
+                       training_step_s=STEP_S).fit()
+    assert other.fingerprint != model.fingerprint
+    own = model.initial_state(advisor.steam_frame(0.6, 0.4, 0.01, 0.0))
+    coordinates = np.resize(other.initial_state(advisor.steam_frame(0.6, 0.4, 0.01, 0.0))
+                            .rom.coordinates, own.rom.coordinates.shape)
+    foreign = RotorState(RomState(coordinates), other.fingerprint)  # same size as model's
+    steam = advisor.steam_frame(0.6, 0.4, 0.01, 0.0)
+    for use in (lambda: advisor.advise(foreign, 0.6, 0.4),
+                lambda: model.simulate_steam(steam, foreign),
+                lambda: model.step(foreign, steam.iloc[1], STEP_S),
+                lambda: model.observe(foreign)):
+        with pytest.raises(RotorAreaError, match=f"another rotor model.*{other.fingerprint}"):
+            use()
+    # the fingerprint survives JSON; a state without one (an older file) is refused clearly
+    restored = RotorState.from_dict(json.loads(json.dumps(own.to_dict())))
+    assert model.check_state(restored) == restored
+    legacy = {key: value for key, value in own.to_dict().items() if key != "model"}
+    with pytest.raises(RotorAreaError, match="no 'model' fingerprint"):
+        RotorState.from_dict(legacy)
+    # it covers the spec's [rotor] section: the same basis under a moved groove differs
+    moved = copy.copy(model)
+    moved.spec = replace(model.spec, rotor=replace(model.spec.rotor, groove_position=0.11))
+    assert moved._fingerprint() != model.fingerprint
 
 
 def test_bad_settings_are_refused(model):

@@ -11,8 +11,8 @@ import pytest
 
 from steamtwin.errors import RotorAreaError
 from steamtwin.model.operating import load_profile_inputs, ramp_profile
-from steamtwin.rotor.model import RotorModel, RotorState, equivalent_stress
-from steamtwin.rotor.stress_points import StressState
+from steamtwin.rotor.model import RotorModel, RotorState
+from steamtwin.rotor.stress_points import COMPONENTS, StressState
 from steamtwin.spec import load_spec
 
 STEP_S = 30.0
@@ -45,7 +45,7 @@ def test_rom_follows_the_fem_on_an_unseen_ramp(model, unseen):
         error = (rom[f"{location}_temperature"] - fem[f"{location}_temperature"]).abs().max()
         assert error < 0.3, (location, error)
     sampled = fem["groove_axial"].notna()
-    for column in ("groove_axial", "groove_hoop", "groove_von_mises"):
+    for column in ("groove_axial", "groove_hoop", "groove_von_mises", "groove_equivalent"):
         reference = fem.loc[sampled, column]
         span = reference.max() - reference.min()
         assert span > 1e8  # a real thermal transient: hundreds of MPa at the groove root
@@ -81,15 +81,21 @@ def test_save_load_round_trip_is_exact(model, unseen, spec, tmp_path):
     pd.testing.assert_frame_equal(loaded.simulate_steam(unseen).frame,
                                   model.simulate_steam(unseen).frame, check_exact=True)
     assert loaded.critical_points == model.critical_points
+    assert loaded.fingerprint == model.fingerprint  # states carry over a save/load
 
 
-def test_equivalent_stress_is_von_mises_signed_by_the_dominant_principal():
-    # uniaxial compression and tension, and a state whose largest-magnitude principal is σ_θ
-    state = StressState(radial=np.array([0.0, 0.0, 10e6]), hoop=np.array([0.0, 0.0, -300e6]),
-                        axial=np.array([-200e6, 150e6, 50e6]), shear=np.zeros(3))
-    signed = equivalent_stress(state)
-    assert signed[0] == pytest.approx(-200e6) and signed[1] == pytest.approx(150e6)
-    assert signed[2] == pytest.approx(-state.von_mises[2])
+def test_the_groove_equivalent_range_is_the_asme_range_and_cooling_is_tensile(model, unseen):
+    # ASME VIII-2 §5.5.3.2: von Mises of the component differences between the two instants
+    frame = model.simulate_steam(unseen).frame
+    equivalent = frame["groove_equivalent"].to_numpy()
+    high, low = int(np.argmax(equivalent)), int(np.argmin(equivalent))
+    components = frame[[f"groove_{name}" for name in COMPONENTS]].to_numpy()
+    difference = StressState.from_components(components[high] - components[low])
+    assert equivalent[high] - equivalent[low] == pytest.approx(float(difference.von_mises),
+                                                               rel=5e-3)
+    # the surface is hottest relative to the core on the way up (compressive), coolest on the
+    # way down (tensile): the cooling ramp holds the maximum, the heating ramp the minimum
+    assert high < len(unseen) // 2 < low
 
 
 def test_unfitted_model_and_bad_steam_frames_are_refused(model, spec, unseen):

@@ -128,6 +128,21 @@ def test_streaming_steps_with_a_saved_state_equal_the_batch_run(rom):
     assert state.time_s == batch.final.time_s == pytest.approx(history.steps * DT)
 
 
+def test_a_step_takes_strided_rows_of_a_frame_like_contiguous_ones(rom):
+    history = steam_history(ramp(5.0, DT), DT)
+    g = history.htc.shape[1]
+    # DataFrame.to_numpy() of float columns is column-major: its rows are strided views
+    table = np.asfortranarray(np.hstack([history.htc, history.steam_temperature]))
+    state = rom.initial_state(history.htc[0], history.steam_temperature[0])
+    strided_state = RomState(np.asfortranarray(np.vstack([state.coordinates] * 2))[0])
+    assert not table[1, :g].flags.c_contiguous
+    assert not strided_state.coordinates.flags.c_contiguous
+    expected = rom.step(state, history.htc[1], history.steam_temperature[1], DT)
+    stepped = rom.step(strided_state, table[1, :g], table[1, g:], DT)
+    np.testing.assert_array_equal(stepped.coordinates, expected.coordinates)
+    np.testing.assert_array_equal(rom.observe(strided_state)[1], rom.observe(state)[1])
+
+
 def test_a_truncated_rom_keeps_the_energy_balance_and_uniform_equilibrium(section, training):
     operators = section.operators(OPERATING_K)
     coarse = ConductionRom(max_modes=3).fit(operators, training[1:])

@@ -332,7 +332,8 @@ class RampAdvisor:
     def _start_state(self, state: RotorState | None, load: float) -> RotorState:
         """``state`` checked to be this rotor's, or the steady state at ``load``.
 
-        A state of another ROM (another number of modes) is refused; so is one whose metal at
+        A state of another model (:meth:`RotorModel.check_state`: another fingerprint) or of
+        another number of modes is refused; so is one whose metal at
         the ROM's observed nodes (groove, bore, strain-interpolation nodes) is hotter than the
         hottest steam of the operating line (+ :data:`STATE_SLACK_K`) or below 0 °C: by the
         maximum principle of the heat equation with convective boundaries
@@ -340,6 +341,7 @@ class RampAdvisor:
         state belongs to another rotor or unit."""
         if state is None:
             return self.model.initial_state(self._steam_at(load).iloc[0])
+        self.model.check_state(state)
         modes = self.model.rom_.n_modes_
         coordinates = np.asarray(getattr(getattr(state, "rom", None), "coordinates", None))
         if coordinates.shape != (modes,):

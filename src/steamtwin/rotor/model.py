@@ -1,8 +1,8 @@
 """The HP rotor model of a turbine spec: conduction FEM, thermo-elastic stress and their
 transient ROM glued into one estimator (issue 23, items 3–4).
 
-(Just over 500 lines: the estimator, its file format and its full-order reference share the
-layout of the critical points' outputs, so they stay together.)
+(Over 500 lines: the estimator, its file format, its states' fingerprint and its full-order
+reference share the layout of the critical points' outputs, so they stay together.)
 
 :class:`RotorModel` follows scikit-learn's habit: the constructor stores hyper-parameters, and
 :meth:`RotorModel.fit` builds the mesh of the spec's ``[rotor]`` section
@@ -30,17 +30,21 @@ nodes and T̄ (rows of its modes), the model evaluates ε_th and E/(1−ν) of t
 remaining difference to a full thermo-elastic solve with E(T), ν(T) at every quadrature point is
 the operator's "E/(1−ν) at the mean" (0.6 % of the range on that ramp).
 
-**The fatigue scalar ("equivalent").** Per sample: the von Mises stress signed by the
-principal stress of largest magnitude. The rotor surface at the groove root is in a nearly
-proportional multiaxial state (σ_θ and σ_z of one sign, driven by one temperature difference),
-for which the range of this signed scalar equals the von Mises equivalent of the range of the
-stress components between two instants — the equivalent stress range of ASME BPVC VIII-2
-(2019) §5.5.3.2 (eq. 5.30) — while the sign keeps compressive (heating) and tensile (cooling)
-peaks apart for rainflow counting and the mean-stress correction. EN 13445-3 cl. 18.6 would use
-Tresca on the principal-stress ranges (≤ 15 % above von Mises); EN 12952-3 cl. 13.4 uses the
-surface principal stress differences at a bore — equivalent in this state; the von Mises form
-was chosen for the ASME design-curve factors (:data:`~steamtwin.rotor.fatigue.ASME_DESIGN_FACTORS`)
-the life module applies.
+**The fatigue scalar ("equivalent").** Per sample and location: the stress projected in the
+von Mises metric on the location's direction of largest variance over the training runs
+(:func:`~steamtwin.rotor.stress_points.equivalent_stress`, fitted by
+:func:`~steamtwin.rotor.stress_points.equivalent_direction`), tensile excursions positive. It is
+linear in the components, so continuous (the von Mises stress signed by the largest-magnitude
+principal, used before, jumped by 2·σ_vM where |σ₁| = |σ₃|). The rotor surface at the groove
+root is in a nearly proportional multiaxial state (σ_θ and σ_z driven by one temperature
+difference; on the reference rotor the direction holds 99.97 % of the training variance), for
+which its range between two instants equals the von Mises equivalent of the component ranges —
+the equivalent stress range of ASME BPVC VIII-2 (2019) §5.5.3.2 (eq. 5.30) — while the sign keeps
+compressive (heating) and tensile (cooling) peaks apart for rainflow counting and the
+mean-stress correction. EN 13445-3 cl. 18.6 would use Tresca on the principal-stress ranges
+(≤ 15 % above von Mises); EN 12952-3 cl. 13.4 uses the surface principal stress differences at a
+bore — equivalent in this state; the von Mises form was chosen for the ASME design-curve factors
+(:data:`~steamtwin.rotor.fatigue.ASME_DESIGN_FACTORS`) the life module applies.
 
 The Dittus–Boelter cooling factor Pr^0.1 (steam_side.py) is not applied by the ROM: on the
 reference unit it is ≤ 1.002 (superheated steam at the control stage), below the htc's own
@@ -50,6 +54,7 @@ ROM-vs-FEM error includes its effect.
 
 from __future__ import annotations
 
+import hashlib
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass
@@ -69,12 +74,16 @@ from steamtwin.rotor.elasticity import AxisymmetricElasticity
 from steamtwin.rotor.geometry import critical_nodes, rotor_geometry, rotor_mesh
 from steamtwin.rotor.steam_side import steam_side
 from steamtwin.rotor.steel import TabulatedSteel, steel
-from steamtwin.rotor.stress_points import COMPONENTS, StressState
+from steamtwin.rotor.stress_points import (
+    COMPONENTS,
+    StressState,
+    equivalent_direction,
+    equivalent_stress,
+)
 from steamtwin.rotor.transient_rom import ConductionRom, RomState, SteamHistory, full_order_run
 from steamtwin.spec.turbine import TurbineSpec
 
-__all__ = ["DEFAULT_FIT_RAMPS", "LOCATIONS", "RotorModel", "RotorRun", "RotorState",
-           "equivalent_stress"]
+__all__ = ["DEFAULT_FIT_RAMPS", "LOCATIONS", "RotorModel", "RotorRun", "RotorState"]
 
 LOCATIONS = ("groove", "bore")
 """The critical points, in the order of every per-location array."""
@@ -98,27 +107,24 @@ TRAINING_HOLD_S = 3600.0
 (R²/(π²a) ≈ 0.36²/(π²·8e-6 m²/s) ≈ 27 min for the reference drum; Carslaw & Jaeger §7.4)."""
 
 FORMAT = "steamtwin-rotor-model"
-FORMAT_VERSION = 1
-
-
-def equivalent_stress(state: StressState) -> np.ndarray:
-    """Von Mises stress (Pa) signed by the principal stress of largest magnitude (module
-    docstring: the scalar rainflow counts)."""
-    principal = state.principal
-    largest = np.take_along_axis(principal, np.argmax(np.abs(principal), axis=-1)[..., None],
-                                 axis=-1)[..., 0]
-    return np.where(largest < 0.0, -1.0, 1.0) * state.von_mises
+FORMAT_VERSION = 2
+"""2: the equivalent stress's directions (version 1 signed von Mises by the dominant
+principal)."""
 
 
 @dataclass(frozen=True)
 class RotorState:
-    """The rotor's carried state: the ROM's reduced coordinates and time (s)."""
+    """The rotor's carried state: the ROM's reduced coordinates and time (s), and the
+    fingerprint of the model they belong to (:attr:`RotorModel.fingerprint`): reduced
+    coordinates mean nothing in another model's basis, so every model refuses a state whose
+    fingerprint is not its own."""
 
     rom: RomState
+    model: str
 
     def to_dict(self) -> dict[str, object]:
         """A JSON-ready dict; floats round-trip exactly through ``json``."""
-        return {"format": FORMAT + "-state", **self.rom.to_dict()}
+        return {"format": FORMAT + "-state", "model": self.model, **self.rom.to_dict()}
 
     @classmethod
     def from_dict(cls, data: Mapping[str, object]) -> RotorState:
@@ -126,7 +132,12 @@ class RotorState:
         if data.get("format") != FORMAT + "-state":
             raise RotorAreaError(f"rotor state: expected format {FORMAT + '-state'!r}, got "
                                  f"{data.get('format')!r}")
-        return cls(RomState.from_dict(dict(data)))
+        fingerprint = data.get("model")
+        if not isinstance(fingerprint, str):
+            raise RotorAreaError("rotor state has no 'model' fingerprint (a string; states "
+                                 "saved before it was added lack it): start the rotor afresh "
+                                 "from equilibrium with its steam instead")
+        return cls(RomState.from_dict(dict(data)), fingerprint)
 
 
 @dataclass(frozen=True)
@@ -140,8 +151,9 @@ class RotorRun:
     state: RotorState | None
 
 
-def _stress_columns(components: np.ndarray) -> dict[str, np.ndarray]:
-    """Frame columns of stress ``components`` (samples, locations, 4) in Pa."""
+def _stress_columns(components: np.ndarray, directions: np.ndarray) -> dict[str, np.ndarray]:
+    """Frame columns of stress ``components`` (samples, locations, 4) in Pa, the equivalent
+    stress along ``directions`` (locations, 4)."""
     columns: dict[str, np.ndarray] = {}
     for p, location in enumerate(LOCATIONS):
         state = StressState.from_components(np.moveaxis(components[:, p, :], -1, 0))
@@ -149,7 +161,7 @@ def _stress_columns(components: np.ndarray) -> dict[str, np.ndarray]:
                                 strict=True):
             columns[f"{location}_{name}"] = values
         columns[f"{location}_von_mises"] = state.von_mises
-        columns[f"{location}_equivalent"] = equivalent_stress(state)
+        columns[f"{location}_equivalent"] = equivalent_stress(state, directions[p])
     return columns
 
 
@@ -256,7 +268,12 @@ class RotorModel:
             fields.append(full_order_run(operators, history, reference_temperatures=refs))
         self.stress_operator_ = self.elasticity_.stress_operator(
             [self.critical_points[name] for name in LOCATIONS], float(np.median(refs)))
-        self._fit_strain_interpolation(np.vstack(fields))
+        training = np.vstack(fields)
+        self._fit_strain_interpolation(training)
+        path = self._stress(training[:, self.strain_nodes_],
+                            training @ self.stress_operator_.volume_weights)
+        self.equivalent_directions_ = np.stack([equivalent_direction(path[:, p, :])
+                                                for p in range(len(LOCATIONS))])
         nodes = [self.critical_nodes_[name] for name in LOCATIONS] + list(self.strain_nodes_)
         rom = ConductionRom(energy=self.rom_energy, max_modes=self.max_modes)
         rom.fit(operators, (), reference_temperatures=refs, temperature_nodes=nodes,
@@ -266,7 +283,40 @@ class RotorModel:
         self.rom_ = rom
         self.reference_temperatures_ = refs
         self.params_ = params or ModelParameters()
+        self.fingerprint_ = self._fingerprint()
         return self
+
+    def _fingerprint(self) -> str:
+        """SHA-256 (first 16 hex digits) of the spec's ``[rotor]`` section, the mesh's node
+        count and the ROM basis's shape and first values — all a saved and reloaded model
+        reproduces bit for bit."""
+        section = self.spec.rotor
+        modes = self.rom_.modes_
+        document = {"rotor": None if section is None else asdict(section),
+                    "nodes": int(modes.shape[0]), "basis_shape": list(modes.shape),
+                    "basis_start": modes[:4, :4].ravel().tolist()}
+        digest = hashlib.sha256(json.dumps(document, sort_keys=True).encode("utf-8"))
+        return digest.hexdigest()[:16]
+
+    @property
+    def fingerprint(self) -> str:
+        """Identifies this fitted model (:meth:`_fingerprint`); carried by its states."""
+        self._check_fitted()
+        return self.fingerprint_
+
+    def check_state(self, state: RotorState) -> RotorState:
+        """``state`` if this model produced it (same :attr:`fingerprint`), else
+        :class:`~steamtwin.errors.RotorAreaError`."""
+        self._check_fitted()
+        if not isinstance(state, RotorState):
+            raise RotorAreaError(f"expected a RotorState, got {type(state).__name__}")
+        if state.model != self.fingerprint_:
+            raise RotorAreaError(
+                f"rotor state belongs to another rotor model (fingerprint {state.model!r}; "
+                f"this model of spec {self.spec.name!r}, {self.rom_.modes_.shape[0]} nodes, "
+                f"{self.rom_.n_modes_} modes, is {self.fingerprint_!r}): use a state this "
+                "model produced, or none (equilibrium with the first sample)")
+        return state
 
     def _fit_strain_interpolation(self, fields: np.ndarray) -> None:
         """Empirical interpolation of the nodal thermal-strain field (module docstring): POD
@@ -351,7 +401,7 @@ class RotorModel:
         self._check_fitted()
         row = steam.iloc[0] if isinstance(steam, pd.DataFrame) else steam
         htc, temperature = self._row(row)
-        return RotorState(self.rom_.initial_state(htc, temperature))
+        return RotorState(self.rom_.initial_state(htc, temperature), self.fingerprint_)
 
     def _row(self, row: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray]:
         try:
@@ -385,7 +435,7 @@ class RotorModel:
         rows = self._history(steam)
         if full_order:
             return RotorRun(self._full_order(steam, state, stress_every), None)
-        start = self.initial_state(steam) if state is None else state
+        start = self.initial_state(steam) if state is None else self.check_state(state)
         temperature, outputs = self.rom_.observe(start.rom)
         observed = np.empty((len(steam), outputs.size + temperature.size))
         observed[0] = np.concatenate([temperature, outputs])
@@ -395,7 +445,7 @@ class RotorModel:
                                      start.rom)
             observed[1:] = np.hstack([run.temperature, run.output])
             final = run.final
-        return RotorRun(self._frame(observed, steam.index), RotorState(final))
+        return RotorRun(self._frame(observed, steam.index), RotorState(final, self.fingerprint_))
 
     def _columns(self, observed: np.ndarray) -> dict[str, np.ndarray]:
         """Run-frame columns of ROM observations: (samples, [location temperatures,
@@ -403,7 +453,7 @@ class RotorModel:
         k = len(LOCATIONS)
         components = self._stress(observed[:, k:-1], observed[:, -1])
         columns = {f"{name}_temperature": observed[:, p] for p, name in enumerate(LOCATIONS)}
-        columns.update(_stress_columns(components))
+        columns.update(_stress_columns(components, self.equivalent_directions_))
         columns["mean_temperature"] = observed[:, -1]
         return columns
 
@@ -415,15 +465,14 @@ class RotorModel:
         """Advance ``state`` by ``dt_s`` (s) under one steam-side row (:meth:`steam_side`'s
         columns); the new state and its frame row (the batch run's columns) — the same
         compiled kernel as :meth:`simulate`, so a streamed record equals the batch run."""
-        self._check_fitted()
+        rom = self.check_state(state).rom
         htc, temperature = self._row(steam_row)
-        new = self.rom_.step(state.rom, htc, temperature, dt_s)
-        return RotorState(new), self.observe(RotorState(new))
+        new = RotorState(self.rom_.step(rom, htc, temperature, dt_s), self.fingerprint_)
+        return new, self.observe(new)
 
     def observe(self, state: RotorState) -> dict[str, float]:
         """The frame row (SI) of ``state``."""
-        self._check_fitted()
-        temperature, outputs = self.rom_.observe(state.rom)
+        temperature, outputs = self.rom_.observe(self.check_state(state).rom)
         columns = self._columns(np.concatenate([temperature, outputs])[None, :])
         return {name: float(values[0]) for name, values in columns.items()}
 
@@ -436,7 +485,7 @@ class RotorModel:
             htc, temperature = self._row(steam.iloc[0])
             initial = self.conduction_.steady(htc, temperature)
         else:
-            initial = self.rom_.field(state.rom)
+            initial = self.rom_.field(self.check_state(state).rom)
         run = self.conduction_.transient_frame(initial, steam, probes=self.critical_nodes_,
                                                snapshot_every=stress_every)
         sampled = np.arange(0, len(steam), stress_every)
@@ -448,7 +497,7 @@ class RotorModel:
             components[index] = np.stack([getattr(stress, name) for name in COMPONENTS], -1)
             mean[index] = field @ self.stress_operator_.volume_weights
         columns = {f"{name}_temperature": run.probes[name].to_numpy() for name in LOCATIONS}
-        columns.update(_stress_columns(components))
+        columns.update(_stress_columns(components, self.equivalent_directions_))
         columns["mean_temperature"] = mean
         return pd.DataFrame(columns, index=steam.index)
 
@@ -470,7 +519,8 @@ class RotorModel:
                     "frozen_temperature_k": self.frozen_temperature_,
                     "strain_nodes": self.strain_nodes_.tolist(),
                     "strain_response_pa": self.strain_response_.tolist(),
-                    "centrifugal_pa": self.centrifugal_.tolist()}
+                    "centrifugal_pa": self.centrifugal_.tolist(),
+                    "equivalent_directions": self.equivalent_directions_.tolist()}
         _metadata_path(path).write_text(json.dumps(metadata, indent=1))
         return path
 
@@ -504,6 +554,8 @@ class RotorModel:
         model.strain_nodes_ = np.array(metadata["strain_nodes"], dtype=np.int64)
         model.strain_response_ = np.array(metadata["strain_response_pa"], dtype=float)
         model.centrifugal_ = np.array(metadata["centrifugal_pa"], dtype=float)
+        model.equivalent_directions_ = np.array(metadata["equivalent_directions"], dtype=float)
+        model.fingerprint_ = model._fingerprint()
         return model
 
 

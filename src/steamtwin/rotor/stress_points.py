@@ -17,6 +17,21 @@ error, while a point farther out is refused.
 Invariants (Timoshenko & Goodier, *Theory of Elasticity*, 3rd ed., 1970, §77): in axisymmetry
 σ_θ is a principal stress; the other two are those of the (r, z) block; von Mises
 σ_vM = √(½[(σ_r−σ_θ)² + (σ_θ−σ_z)² + (σ_z−σ_r)²] + 3τ_rz²).
+
+Fatigue scalar (:func:`equivalent_stress`). Rainflow counting needs one signed scalar per
+instant, and the von Mises stress has no sign. Signing it by the principal stress of largest
+magnitude (or by the hydrostatic stress: at a free surface, σ_r = τ_rz = 0, the two rules flip
+at the same place, σ_θ = −σ_z) jumps from +σ_vM to −σ_vM where that sign changes, so two
+solutions whose components agree within a fraction of a per cent can differ by 2·σ_vM there.
+Instead the scalar is the stress projected, in the von Mises metric, on one fixed deviatoric
+direction N per location (vM(N) = 1, tr N = 0): σ_eq = (3/2)·σ:N, linear in the components
+and so continuous, with |Δσ_eq| ≤ vM(Δσ) (Cauchy–Schwarz). N is the direction of largest
+variance of the stress path (:func:`equivalent_direction`: the first principal component of the
+deviatoric stresses), the idea of Susmel's Maximum Variance Method for the critical plane
+(Int. J. Fatigue 32 (2010) 1875), here in the deviatoric space. For a proportional path
+(σ(t) − σ̄ ∥ N) the range between two instants is exactly the von Mises equivalent of the
+component differences — the equivalent stress range of ASME BPVC VIII-2 (2019) §5.5.3.2
+(eq. 5.30) — and for a non-proportional one it is the part along N, never more.
 """
 
 from __future__ import annotations
@@ -65,6 +80,51 @@ class StressState:
         radius = np.hypot(0.5 * (self.radial - self.axial), self.shear)
         return -np.sort(-np.stack([centre + radius, centre - radius, self.hoop], axis=-1),
                         axis=-1)
+
+
+def _von_mises_vectors(components: np.ndarray) -> np.ndarray:
+    """Vectors (…, 4) whose Euclidean norm is the von Mises stress of ``components`` (…, 4) in
+    the order of :data:`COMPONENTS`: √(3/2)·(s_r, s_θ, s_z, √2·τ_rz), s the deviator."""
+    normal = components[..., :3] - components[..., :3].mean(axis=-1, keepdims=True)
+    return np.sqrt(1.5) * np.concatenate([normal, np.sqrt(2.0) * components[..., 3:]], axis=-1)
+
+
+def equivalent_direction(components: ArrayLike) -> np.ndarray:
+    """The unit deviatoric direction N (4,: σ_r, σ_θ, σ_z, τ_rz with vM(N) = 1, tr N = 0) of
+    largest variance of a stress path ``components`` (samples, 4) in Pa (module docstring),
+    signed so that σ_eq grows with the hydrostatic stress along the path (tensile excursions
+    positive)."""
+    path = np.asarray(components, dtype=float)
+    if path.ndim != 2 or path.shape[1] != 4 or path.shape[0] < 2 or not np.all(
+            np.isfinite(path)):
+        raise RotorAreaError(f"stress path: expected finite (samples ≥ 2, 4) components in Pa "
+                             f"({', '.join(COMPONENTS)}), got shape {path.shape}")
+    vectors = _von_mises_vectors(path)
+    centred = vectors - vectors.mean(axis=0)
+    _, singular, rows = np.linalg.svd(centred, full_matrices=False)
+    if singular[0] <= 0.0:
+        raise RotorAreaError("stress path: the deviatoric stress does not vary, so it has no "
+                             "direction of largest variance")
+    e = rows[0]  # unit in the von Mises metric; back to components: s = e/√(3/2), τ = e₃/√3
+    direction = np.concatenate([e[:3] / np.sqrt(1.5), e[3:] / np.sqrt(3.0)])
+    hydrostatic = path[:, :3].sum(axis=1)
+    projected = equivalent_stress(StressState.from_components(path.T), direction)
+    if np.dot(projected - projected.mean(), hydrostatic - hydrostatic.mean()) < 0.0:
+        direction = -direction
+    return direction
+
+
+def equivalent_stress(state: StressState, direction: ArrayLike) -> np.ndarray:
+    """The signed equivalent stress (Pa) of ``state`` along the unit deviatoric ``direction``
+    (:func:`equivalent_direction`): σ_eq = (3/2)·σ:N = (3/2)·(σ_r N_r + σ_θ N_θ + σ_z N_z +
+    2 τ_rz N_rz) (module docstring)."""
+    n = np.asarray(direction, dtype=float)
+    if n.shape != (4,) or abs(float(n[:3].sum())) > 1e-9 or abs(
+            float(np.linalg.norm(_von_mises_vectors(n))) - 1.0) > 1e-9:
+        raise RotorAreaError(f"equivalent-stress direction must be a deviator (trace 0) of von "
+                             f"Mises norm 1 in the order {COMPONENTS}, got {n.tolist()}")
+    return 1.5 * (state.radial * n[0] + state.hoop * n[1] + state.axial * n[2]
+                  + 2.0 * state.shear * n[3])
 
 
 def checked_points(points: ArrayLike) -> np.ndarray:

@@ -435,7 +435,7 @@ class ConductionRom:
         return history
 
     def _coordinates(self, state: RomState) -> np.ndarray:
-        coordinates = state.coordinates
+        coordinates = np.ascontiguousarray(state.coordinates, dtype=float)
         if coordinates.shape != (self.n_modes_,):
             raise RotorAreaError(f"state has {coordinates.shape} coordinates, this ROM "
                                  f"{self.n_modes_} modes")
@@ -458,10 +458,12 @@ class ConductionRom:
     def step(self, state: RomState, htc: np.ndarray, steam_temperature: np.ndarray,
              dt: float) -> RomState:
         """One streaming step of ``dt`` (s) under ``htc`` (W/(m²·K)) and ``steam_temperature``
-        (K) per group; the same kernel as :meth:`simulate`, so the results agree bit for bit."""
+        (K) per group; the same kernel as :meth:`simulate`, so the results agree bit for bit.
+        Any array-like is accepted (e.g. a strided row of ``DataFrame.to_numpy()``): the
+        compiled kernel reshapes, which numba allows on contiguous arrays only."""
         self._check_fitted()
-        htc = np.asarray(htc, dtype=float)
-        steam_temperature = np.asarray(steam_temperature, dtype=float)
+        htc = np.ascontiguousarray(htc, dtype=float)
+        steam_temperature = np.ascontiguousarray(steam_temperature, dtype=float)
         final = np.empty(0)
         if htc.shape == steam_temperature.shape == (len(self.groups_),):
             final = _checked_step(self._coordinates(state), htc, steam_temperature, float(dt),
