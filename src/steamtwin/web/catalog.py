@@ -24,10 +24,12 @@ ROTOR_MEANINGS: dict[str, tuple[str, str]] = {
     "rotor_groove_temperature": ("K", "rotor metal temperature at the groove root (rotor model)"),
     "rotor_bore_temperature": ("K", "rotor metal temperature at the bore (rotor model)"),
     "rotor_mean_temperature": ("K", "rotor volume-mean temperature (rotor model)"),
-    "rotor_groove_stress": ("Pa", "rotor equivalent stress at the groove root: von Mises "
-                                  "signed by the dominant principal stress (rotor model)"),
-    "rotor_bore_stress": ("Pa", "rotor equivalent stress at the bore: von Mises signed by the "
-                                "dominant principal stress (rotor model)"),
+    "rotor_groove_stress": ("Pa", "rotor equivalent stress at the groove root: the stress in "
+                                  "the von Mises metric along the location's direction of "
+                                  "largest variance, tensile positive (rotor model)"),
+    "rotor_bore_stress": ("Pa", "rotor equivalent stress at the bore: the stress in the von "
+                                "Mises metric along the location's direction of largest "
+                                "variance, tensile positive (rotor model)"),
     "rotor_groove_von_mises": ("Pa", "rotor von Mises stress at the groove root (rotor model)"),
     "rotor_bore_von_mises": ("Pa", "rotor von Mises stress at the bore (rotor model)"),
 }

@@ -189,7 +189,7 @@ def rotor_page(unit: str) -> HTMLResponse:
         '<option value="86400" selected>day</option><option value="604800">week</option>'
         '</select></label><button type="submit">show</button></form>'
         '<div id="tiles" class="tiles"></div>'
-        '<h2>Equivalent stress (signed von Mises) and the allowable</h2>'
+        '<h2>Equivalent stress (tensile positive) and the allowable</h2>'
         '<div id="stress" class="chart"></div>'
         '<h2>Metal temperature</h2><div id="temperature" class="chart"></div>'
         '<h2>Life consumed in the range</h2>'

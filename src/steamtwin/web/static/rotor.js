@@ -1,5 +1,5 @@
-// Rotor page: the rotor model's equivalent stress (signed von Mises) at the groove root and
-// the bore against the allowable (± the configured value), their metal temperatures, and the
+// Rotor page: the rotor model's equivalent stress (tensile positive; docs/rotor.md) at the
+// groove root and the bore against the allowable (± the configured value), their metal temperatures, and the
 // fatigue and creep damage consumed over the chosen range (GET /api/units/{unit}/rotor:
 // rotor_life on the stored series), refreshed every 30 s; on request, the ramp advisor's
 // fastest ramp to a chosen load.
@@ -57,7 +57,7 @@
       data.push(data[0].map(() => limit), data[0].map(() => -limit));
     }
     chart(document.getElementById("stress"), {
-      title: "equivalent stress (signed von Mises)", yLabel: "MPa", series: lines, data });
+      title: "equivalent stress (tensile positive)", yLabel: "MPa", series: lines, data });
     const temperature = uPlot.join([points(grooveT), points(boreT)]);
     chart(document.getElementById("temperature"), {
       title: "rotor metal temperature", yLabel: "°C",
