@@ -3,6 +3,7 @@ bit for bit (issue 21: throughput without changing a flag), and its provisional 
 
 from __future__ import annotations
 
+import itertools
 import warnings
 
 import numpy as np
@@ -15,36 +16,29 @@ from steamtwin.dcs.quality import Flag, QualityOptions, clean
 from steamtwin.dcs.quality.detectors import row_nanmedian
 from steamtwin.live.gate import StreamGate
 
-GATE = {"context_samples": 90, "spike_window": 11, "stuck_min_duration_s": 8.0}
+GATE = {"context_samples": 90, "spike_window": 11, "stuck_min_duration_s": 8.0,
+        "release_s": 10.0}
 
 
-def _reference(frame: pd.DataFrame, bad: pd.DataFrame, options: dict, sizes: list[int]):
-    """The gate as first written: ``clean`` over context + pending at every push, the
-    samples older than the look-ahead passed, ``context_samples`` of them kept."""
+def _reference(frame: pd.DataFrame, bad: pd.DataFrame, options: dict):
+    """The gate's definition: each clock bin of ``release_s`` judged by ``clean`` over the
+    ``context_samples`` before it, the bin and the ``lookahead_samples`` after it (fewer at
+    the ends) — a function of the stream alone, whatever the blocks."""
     lookahead = StreamGate(options, **GATE).lookahead_samples
-    values = flags_bad = None
-    passed, outputs, start = 0, [], 0
-
-    def release(stop: int) -> None:
-        nonlocal values, flags_bad, passed
-        if stop <= passed:
-            return
+    seconds = (frame.index - frame.index[0]).total_seconds().to_numpy()
+    bins = np.floor(seconds / GATE["release_s"])
+    edges = [0, *(np.flatnonzero(np.diff(bins)) + 1).tolist(), len(frame)]
+    outputs = []
+    for a, b in itertools.pairwise(edges):
+        first, last = max(0, a - GATE["context_samples"]), min(len(frame), b + lookahead)
+        values, flags_bad = frame.iloc[first:last], bad.iloc[first:last]
         cleaned = clean(values, QualityOptions(
             nominal_step_s=1.0, spike_window=GATE["spike_window"],
             stuck_min_duration_s=GATE["stuck_min_duration_s"],
             bad_quality={c: flags_bad[c].to_numpy(dtype=bool) for c in values.columns},
             out_of_range_error_fraction=1.0, **options))
-        outputs.append((cleaned.data.iloc[passed:stop], cleaned.flags.iloc[passed:stop]))
-        keep = max(0, stop - GATE["context_samples"])
-        values, flags_bad, passed = values.iloc[keep:], flags_bad.iloc[keep:], stop - keep
-
-    for size in sizes:
-        part, part_bad = frame.iloc[start:start + size], bad.iloc[start:start + size]
-        start += size
-        values = part if values is None else pd.concat([values, part])
-        flags_bad = part_bad if flags_bad is None else pd.concat([flags_bad, part_bad])
-        release(len(values) - lookahead)
-    release(len(values))
+        outputs.append((cleaned.data.iloc[a - first:b - first],
+                        cleaned.flags.iloc[a - first:b - first]))
     return pd.concat([d for d, _ in outputs]), pd.concat([f for _, f in outputs])
 
 
@@ -91,7 +85,7 @@ def test_the_gate_equals_the_batch_clean_over_its_window(stream):
     outputs.append(gate.flush())
     data = pd.concat([o.data for o in outputs if len(o.data)])
     flags = pd.concat([o.flags for o in outputs if len(o.flags)])
-    expected_data, expected_flags = _reference(frame, bad, options, sizes)
+    expected_data, expected_flags = _reference(frame, bad, options)
     assert np.array_equal(data.to_numpy(), expected_data.to_numpy(), equal_nan=True)
     assert np.array_equal(flags.to_numpy(dtype=np.uint16),
                           expected_flags.to_numpy(dtype=np.uint16))
@@ -117,11 +111,11 @@ def test_pending_samples_carry_the_verdicts_that_need_no_look_ahead():
     bad.iloc[37, 1] = True
     gate = StreamGate({"ranges": {"a": (0.0, 2000.0)}}, **GATE)
     gate.add(frame, bad)
-    ready = 40 - gate.lookahead_samples
+    ready = 20  # the 10-s bins whose look-ahead (16 samples) is in: 0–9 s and 10–19 s
     assert gate.release(min_samples=ready + 1).data.empty  # not enough judged yet: wait
     assert len(gate.release(min_samples=ready).data) == ready
     values, flags = gate.pending()
-    assert values.index.equals(index[40 - gate.lookahead_samples:])
+    assert values.index.equals(index[ready:])
     codes = flags.to_numpy(dtype=np.uint16)
     row = {t: i for i, t in enumerate(values.index)}
     assert codes[row[index[35]], 0] == Flag.OUT_OF_RANGE | Flag.REMOVED
