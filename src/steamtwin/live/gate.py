@@ -118,6 +118,9 @@ class StreamGate:
         :meth:`pending` until :meth:`release`."""
         if len(data) == 0:
             return
+        if self._values is not None and not data.columns.equals(self._values.columns) and \
+                set(data.columns) == set(self._values.columns):
+            data = data[self._values.columns]  # the gate's order: its status bits are positional
         if bad is None:
             bad_values = np.zeros(data.shape, dtype=bool)
         elif bad.index.equals(data.index) and bad.columns.equals(data.columns):
