@@ -23,7 +23,9 @@
    only one recorded: the earlier ones never applied to a sample;
 6. the DuckDB historian stores measured, twin and residual series with the gate's flags, the
    alarms started and ended, the parameter swaps, and the state (model, gate context, monitor,
-   open block, J cache, filter, live parameters) — all in one transaction per block.
+   open block, J cache, filter, live parameters) — all in one transaction per block; the
+   unit's first block also records the parameters it starts with (reason ``"start"``, at its
+   first sample), so the parameter history is complete from the first stored sample on.
 
 Latency: the gate's final verdict waits for its look-ahead (60 s at 1 Hz; why, in
 :mod:`steamtwin.live.gate`). With ``provisional=True`` (the service's choice for an OPC UA or
@@ -328,6 +330,7 @@ class LiveTwin:
         if data.empty:
             return
         summary.findings += len(passed.findings)
+        starting = self.params  # before any swap this block makes
         complete = _complete(data)
         if self.provisional:
             self._check_provisional(data, complete)
@@ -356,11 +359,14 @@ class LiveTwin:
             swaps = [s for s in swaps if s.time > committed]
             if data.empty:
                 return
+        parameters = [(s.time, swap_values(s), s.reason) for s in swaps]
+        if self.historian.resume_time(self.name) is None:  # the unit's first block
+            parameters.insert(0, (data.index[0], {k: float(v) for k, v in
+                                                  vars(starting).items()}, "start"))
         summary.rows += self.historian.commit_block(
             self.name, {"measured": data, "twin": twin, "residual": residual}, flags,
             state=self._snapshot() if snapshot else None,
-            events=BlockEvents(tuple(alarms),
-                               tuple((s.time, swap_values(s), s.reason) for s in swaps)))
+            events=BlockEvents(tuple(alarms), tuple(parameters)))
         if snapshot:
             self._last_snapshot = end
         summary.alarms += sum(isinstance(alarm, Alarm) for alarm in alarms)
