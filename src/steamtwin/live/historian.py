@@ -1,5 +1,8 @@
 """The live twin's embedded historian: one DuckDB file per service (issue 21, item 7).
 
+Kept as one module because it is one class, :class:`LiveHistorian`, over one connection whose
+transactions the writes share, with the row types it takes.
+
 Everything the live twin sees and says is kept in SI with the canonical names, one database
 file per service, several units side by side:
 

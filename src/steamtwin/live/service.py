@@ -1,5 +1,8 @@
 """One unit's live twin: source → gate → streamed model → residuals → historian (issue 21).
 
+Kept as one module because it is one class, :class:`LiveTwin`, whose final and provisional
+chains share its model state, gate and historian.
+
 :class:`LiveTwin` takes the blocks a :class:`~steamtwin.live.sources.Source` yields and, for each:
 
 1. the data-quality gate (:class:`~steamtwin.live.gate.StreamGate`) passes the samples whose
@@ -157,9 +160,9 @@ class LiveTwin:
         self.provisional = provisional
         self._provisional_state: StreamState | None = None
         self._provisional_until: pd.Timestamp | None = None
-        # what the provisional chain fed the model, chunk by chunk (times in ns, inputs with
-        # NaN rows where it had no twin value): one small array per sample, joined only when a
-        # final block is checked against it
+        # what the provisional chain fed the model, chunk by chunk (times in ns since the epoch,
+        # inputs with NaN rows where it had no twin value): one small array per sample, joined
+        # only when a final block is checked against it
         self._provisional_times: list[np.ndarray] = []
         self._provisional_fed: list[np.ndarray] = []
 
@@ -291,7 +294,7 @@ class LiveTwin:
         first = self._provisional_state if self._provisional_until is not None else self._state
         twin, state, _ = self._predict(measured, complete, first, inputs=inputs)
         inputs[~complete] = np.nan
-        self._provisional_times.append(index.asi8)
+        self._provisional_times.append(index.as_unit("ns").asi8)
         self._provisional_fed.append(inputs)
         self._provisional_state, self._provisional_until = state, index[-1]
         return ProvisionalRows(self.name, {"measured": measured, "twin": twin,
@@ -307,8 +310,9 @@ class LiveTwin:
         seen = np.concatenate(self._provisional_fed)
         final = _inputs(data)
         final[~complete] = np.nan
-        done = times <= data.index[-1].value
-        if np.array_equal(times[done], data.index.asi8) and np.array_equal(
+        final_times = data.index.as_unit("ns").asi8
+        done = times <= final_times[-1]
+        if np.array_equal(times[done], final_times) and np.array_equal(
                 seen[done], final, equal_nan=True):
             self._provisional_times, self._provisional_fed = [times[~done]], [seen[~done]]
         else:
