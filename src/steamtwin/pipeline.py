@@ -438,8 +438,8 @@ def _live_stage(twin: Twin, settings: DemoSettings, out: Path,
             "taken while the service still ran, after the plant's run was stored; the unit "
             "steps the rotor model of the rotor stage (Rotor page). The Fleet "
             "page is not shown: with one unit it forwards to that unit's page. The Calibration "
-            "page's trajectory stays empty here: the service stores parameter swaps, and this "
-            "unit runs without recalibration.")
+            "page shows the parameters the unit started with (reason \"start\"); no swap "
+            "follows: this unit runs without recalibration.")
     return [TableSection("live_twin", table, "Live twin: the virtual plant's deep-peak-50 run "
                          "published over OPC UA on 127.0.0.1 (asyncua, no security: a test plant) "
                          "and read by `steamtwin serve`'s runner with the calibrated parameters — "

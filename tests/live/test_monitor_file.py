@@ -108,7 +108,8 @@ def test_serve_runs_the_monitor_and_the_recalibration_filter(tmp_path, healthy):
             "SELECT DISTINCT time, reason FROM parameters ORDER BY time").df()
         _, state = historian.latest_state("unit1")
     assert len(alarms) == 0  # the healthy stretch the monitor was fitted on
-    assert len(swaps) == 0  # no degradation, and the schedule (24 h) not yet due
+    # no swap (no degradation, and the schedule, 24 h, not yet due): the starting set only
+    assert list(swaps["reason"]) == ["start"]
     assert state["recalibration"]["tracker"]["variance"][0] < 0.05**2  # the filter ran
     config.write_text(text.replace("every_h = 24", "every_h = -1"))
     with pytest.raises(ConfigError, match=r"recalibration.every_h = -1: expected a positive"):

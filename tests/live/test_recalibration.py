@@ -171,7 +171,11 @@ def test_a_flow_step_is_flagged_as_degradation_and_followed_by_the_live_paramete
     # casing thermocouple while the metal lags the step is the known limit of a static J)
     assert alarms["end"].notna().all()
     assert (pd.to_datetime(alarms["start"]) <= pd.Timestamp(first["end"])).all()
-    # swaps: from the first step after the alarm, then while the estimate settles; none before
+    # the starting set at the first sample, then the swaps: from the first step after the
+    # alarm, then while the estimate settles; none before
+    start, swaps = swaps.iloc[:1], swaps.iloc[1:]
+    assert start["reason"].tolist() == ["start"]
+    assert pd.Timestamp(start["time"].iloc[0]) == data.index[0]
     times = pd.to_datetime(swaps["time"], utc=True)
     assert (swaps["reason"] == "degradation:flow_coefficient").all() and len(swaps) >= 3
     assert (times > step_time).all()
@@ -223,7 +227,7 @@ def test_a_block_with_several_swaps_records_only_the_one_that_applied(
                     monitored=SENSORS,
                     recalibration=LiveRecalibration(tracker, every_s=86_400.0)).start()
     twin.recalibration.on_alarm("degradation", "flow_coefficient", data.index[0], False)
-    recorded = []
+    recorded = [0.99]  # the set it starts with, recorded with the first block (reason "start")
     for first in (0, 300, None):
         if first is None:
             summary = twin.finish()
@@ -234,6 +238,7 @@ def test_a_block_with_several_swaps_records_only_the_one_that_applied(
         stored = twin.historian.connection.execute(
             "SELECT value FROM parameters WHERE name = 'flow_coefficient' ORDER BY time"
         ).df()["value"].tolist()
+        assert stored[0] == 0.99
         assert len(stored) - len(recorded) == summary.swaps <= 1
         if summary.swaps:  # the stored set is the one the twin runs with
             assert stored[-1] == twin.params.flow_coefficient

@@ -24,6 +24,7 @@ from steamtwin.model.parameters import ModelParameters
 pytestmark = pytest.mark.slow  # 5 s of the full suite (2026-11-27): not in the quick loop
 
 QUERY = "SELECT unit, time, source, signal, value, flag FROM series ORDER BY ALL"
+PARAMETERS = "SELECT * FROM parameters ORDER BY ALL"
 
 
 @pytest.fixture(scope="module")
@@ -72,7 +73,13 @@ def test_a_restart_after_a_crash_gives_the_uninterrupted_database(tmp_path, plan
     reference = _twin(tmp_path / "reference.duckdb", model, run).start()
     asyncio.run(reference.run(ReplaySource(paths["historian"], tag_map, block_samples=100)))
     expected = reference.historian.connection.execute(QUERY).df()
+    expected_parameters = reference.historian.connection.execute(PARAMETERS).df()
     reference.close()
+    # the starting set, recorded once with the first block at its first sample
+    assert set(expected_parameters["reason"]) == {"start"}
+    assert (pd.to_datetime(expected_parameters["time"], utc=True) == expected["time"].min()).all()
+    assert dict(zip(expected_parameters["name"], expected_parameters["value"], strict=True)) == {
+        name: float(value) for name, value in vars(ModelParameters()).items()}
 
     crashed = _twin(tmp_path / "crashed.duckdb", model, run).start()
 
@@ -96,5 +103,7 @@ def test_a_restart_after_a_crash_gives_the_uninterrupted_database(tmp_path, plan
                           start_after=restarted.resume_after())
     asyncio.run(restarted.run(source))
     got = restarted.historian.connection.execute(QUERY).df()
+    got_parameters = restarted.historian.connection.execute(PARAMETERS).df()
     restarted.close()
     pd.testing.assert_frame_equal(got, expected)
+    pd.testing.assert_frame_equal(got_parameters, expected_parameters)  # not twice

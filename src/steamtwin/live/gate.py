@@ -131,15 +131,27 @@ class StreamGate:
         :meth:`pending` until :meth:`release`."""
         if len(data) == 0:
             return
-        bad_values = (np.zeros(data.shape, dtype=bool) if bad is None else
-                      bad.reindex(index=data.index, columns=data.columns, fill_value=False)
-                      .to_numpy(dtype=bool))
+        if self._values is not None and not data.columns.equals(self._values.columns) and \
+                set(data.columns) == set(self._values.columns):
+            data = data[self._values.columns]  # the gate's order: its status bits are positional
+        if bad is None:
+            bad_values = np.zeros(data.shape, dtype=bool)
+        elif bad.index.equals(data.index) and bad.columns.equals(data.columns):
+            bad_values = bad.to_numpy(dtype=bool)  # a source's usual block: no reindex
+        else:
+            bad_values = bad.reindex(index=data.index, columns=data.columns,
+                                     fill_value=False).to_numpy(dtype=bool)
         if self._values is not None and len(self._values) and not (
                 data.index[0] > self._values.index[-1]):
             raise ValueError(f"samples from {data.index[0]} do not come after the gate's last "
                              f"({self._values.index[-1]}); the source must pass them in order")
         if self._values is None or self._bad is None:
             self._values, self._bad = data.copy(), bad_values
+        elif data.columns.equals(self._values.columns):  # one array, not pandas' concat
+            self._values = pd.DataFrame(
+                np.concatenate([self._values.to_numpy(dtype=float), data.to_numpy(dtype=float)]),
+                index=self._values.index.append(data.index), columns=self._values.columns)
+            self._bad = np.concatenate([self._bad, bad_values])
         else:
             self._values = pd.concat([self._values, data])
             self._bad = np.concatenate([self._bad, bad_values])
@@ -155,6 +167,14 @@ class StreamGate:
         if stop - self._passed < min_samples:
             return self._empty(self._values.columns)
         return self._release(stop)
+
+    def ready(self) -> int:
+        """How many samples :meth:`release` would judge now (their look-ahead is in): a
+        caller that releases a minute at a time asks this every second instead of building an
+        empty output."""
+        if self._values is None:
+            return 0
+        return max(0, len(self._values) - self.lookahead_samples - self._passed)
 
     def flush(self) -> GateOutput:
         """Everything still pending (the end of a stream: no more look-ahead)."""

@@ -1,5 +1,8 @@
 """The live twin's embedded historian: one DuckDB file per service (issue 21, item 7).
 
+Kept as one module because it is one class, :class:`LiveHistorian`, over one connection whose
+transactions the writes share, with the row types it takes.
+
 Everything the live twin sees and says is kept in SI with the canonical names, one database
 file per service, several units side by side:
 
@@ -148,6 +151,8 @@ class LiveHistorian:
         self._connection: duckdb.DuckDBPyConnection | None = None
         self._last_times: dict[str, pd.Timestamp | None] = {}  # what progress holds
         self._provisional: dict[str, bool] = {}  # unit → it may have provisional rows
+        # unit → the newest provisional row this writer stored: rows after it replace none
+        self._provisional_end: dict[str, pd.Timestamp] = {}
         self._lock = threading.RLock()
 
     def __enter__(self) -> LiveHistorian:
@@ -176,6 +181,7 @@ class LiveHistorian:
             self._connection = None
         self._last_times.clear()
         self._provisional.clear()
+        self._provisional_end.clear()
 
     @property
     def connection(self) -> duckdb.DuckDBPyConnection:
@@ -224,9 +230,7 @@ class LiveHistorian:
             raise ValueError(f"unit {unit!r}: block starts at {first.isoformat()}, not after "
                              f"the last committed sample {resume.isoformat()} (a sample would "
                              "be stored twice)")
-        rows = pa.concat_tables([
-            self._long(unit, source, frame, flags if source == "measured" else None)
-            for source, frame in frames.items() if len(frame)])
+        rows = self._long(unit, frames, flags)
         connection = self.connection
         connection.execute("BEGIN TRANSACTION")
         try:
@@ -268,11 +272,14 @@ class LiveHistorian:
         stores every unit's provisional rows of a moment together (group commit: DeWitt et
         al., "Implementation techniques for main memory database systems", SIGMOD 1984;
         measured 7 → 2 ms of CPU per unit and sample for ten units, docs/benchmarks.md).
-        Nothing is stored if any entry is refused. Returns the rows written."""
+        Nothing is stored if any entry is refused; the DELETE runs only for the units whose
+        rows start at or before the newest provisional row stored (a restarted chain), not
+        for the usual next sample (1.5 ms of CPU saved per sample). Returns the rows
+        written."""
         units = [entry.unit for entry in batch]
         if len(set(units)) < len(units):
             raise ValueError(f"provisional rows of one unit twice in one batch: {units}")
-        tables, firsts = [], {}
+        tables, firsts, lasts = [], {}, {}
         for entry in batch:
             times = [_utc(frame.index) for frame in entry.frames.values() if len(frame)]
             if not times:
@@ -283,14 +290,14 @@ class LiveHistorian:
                 raise ValueError(f"unit {entry.unit!r}: provisional rows from "
                                  f"{first.isoformat()}, not after the last committed sample "
                                  f"{resume.isoformat()}")
-            tables += [self._long(entry.unit, source, frame,
-                                  entry.flags if source == "measured" else None)
-                       for source, frame in entry.frames.items() if len(frame)]
+            tables.append(self._long(entry.unit, entry.frames, entry.flags))
             firsts[entry.unit] = first
+            lasts[entry.unit] = max(index[-1] for index in times)
         if not tables:
             return 0
         rows = pa.concat_tables(tables)
-        replaced = [unit for unit in firsts if self._may_have_provisional(unit)]
+        replaced = [unit for unit in firsts if self._may_have_provisional(unit)
+                    and not firsts[unit] > self._provisional_end.get(unit, firsts[unit])]
         connection = self.connection
         connection.execute("BEGIN TRANSACTION")
         try:
@@ -313,6 +320,8 @@ class LiveHistorian:
             raise
         for unit in firsts:
             self._provisional[unit] = True
+            self._provisional_end[unit] = max(lasts[unit],
+                                              self._provisional_end.get(unit, lasts[unit]))
         return rows.num_rows
 
     def _may_have_provisional(self, unit: str) -> bool:
@@ -323,16 +332,11 @@ class LiveHistorian:
         return self._provisional[unit]
 
     def _insert_series(self, rows: pa.Table, table: str = "series") -> None:
-        """Append ``rows`` (the series columns, Arrow) to ``table``: one ``INSERT … SELECT``
-        over the registered Arrow table, scanned without copying (DuckDB docs, "Data
-        Ingestion": bulk insert from Arrow/pandas rather than row by row)."""
-        connection = self.connection
-        connection.register("block_rows", rows)
-        try:
-            connection.execute(f"INSERT INTO {table} SELECT unit, time, source, signal, value, "
-                               "flag FROM block_rows")
-        finally:
-            connection.unregister("block_rows")
+        """Append ``rows`` (the series columns in the table's order, Arrow) to ``table``: one
+        bulk insert of a relation over the Arrow table, scanned without copying (DuckDB docs,
+        "Data Ingestion": bulk insert from Arrow/pandas rather than row by row; a relation's
+        ``insert_into`` spares the register/unregister round of a named view)."""
+        self.connection.from_arrow(rows).insert_into(table)
 
     def _set_progress(self, unit: str, last: pd.Timestamp, known: bool) -> None:
         """The unit's last committed sample: an UPDATE of its row once it has one (cheaper in
@@ -359,32 +363,48 @@ class LiveHistorian:
             self.record_parameters(unit, time, values, reason)
 
     @staticmethod
-    def _long(unit: str, source: str, frame: pd.DataFrame, flags: pd.DataFrame | None
+    def _long(unit: str, frames: Mapping[str, pd.DataFrame], flags: pd.DataFrame | None
               ) -> pa.Table:
-        """The series rows of one wide ``frame`` (time-major, one row per time and signal) as
-        an Arrow table: unit, source and signal dictionary-encoded (no string per row),
-        NaN values stored as NULL."""
-        times = _utc(frame.index)
-        signals = [str(name) for name in frame.columns]
-        values = frame.to_numpy(dtype=float).reshape(-1)
-        flag_values = np.full(values.shape, None, dtype=object)
-        if flags is not None:
-            aligned = flags.reindex(index=frame.index, columns=frame.columns)
-            raw = aligned.to_numpy(dtype=object).reshape(-1)
-            present = pd.notna(raw)
-            flag_values[present] = raw[present].astype(str)
-        n = values.size
-        constant = np.zeros(n, dtype=np.int32)
+        """The series rows of the wide ``frames`` (source → frame; ``flags`` belong to the
+        ``measured`` one), frame after frame, each time-major (one row per time and signal),
+        as ONE Arrow table: unit, source and signal dictionary-encoded (no string per row),
+        NaN values stored as NULL. One table per unit rather than per source: its fixed cost
+        is most of a one-sample block's (docs/benchmarks.md, "Latency, fourth pass")."""
+        where: dict[str, int] = {}  # signal → its code in the dictionary
+        sources: list[str] = []
+        times, source_codes, signal_codes, values, flag_values = [], [], [], [], []
+        for source, frame in frames.items():
+            if not len(frame):
+                continue
+            codes = np.array([where.setdefault(str(name), len(where))
+                              for name in frame.columns.tolist()], dtype=np.int32)
+            index = _utc(frame.index)
+            block = frame.to_numpy(dtype=float).reshape(-1)
+            flagged = np.full(block.shape, None, dtype=object)
+            if flags is not None and source == "measured":
+                aligned = (flags if flags.index.equals(frame.index)
+                           and flags.columns.equals(frame.columns)
+                           else flags.reindex(index=frame.index, columns=frame.columns))
+                raw = aligned.to_numpy(dtype=object).reshape(-1)
+                present = pd.notna(raw)
+                flagged[present] = raw[present].astype(str)
+            times.append(np.repeat(index.as_unit("us").asi8, codes.size))
+            source_codes.append(np.full(block.size, len(sources), dtype=np.int32))
+            signal_codes.append(np.tile(codes, len(index)))
+            values.append(block)
+            flag_values.append(flagged)
+            sources.append(source)
+        value = np.concatenate(values)
         return pa.table({
-            "unit": pa.DictionaryArray.from_arrays(constant, pa.array([unit])),
-            "time": pa.array(np.repeat(times.as_unit("us").asi8, len(signals)),
-                             type=pa.timestamp("us", tz="UTC")),
-            "source": pa.DictionaryArray.from_arrays(constant, pa.array([source])),
-            "signal": pa.DictionaryArray.from_arrays(
-                np.tile(np.arange(len(signals), dtype=np.int32), len(times)),
-                pa.array(signals, type=pa.string())),
-            "value": pa.array(values, mask=np.isnan(values)),
-            "flag": pa.array(flag_values, type=pa.string()),
+            "unit": pa.DictionaryArray.from_arrays(np.zeros(value.size, dtype=np.int32),
+                                                   pa.array([unit])),
+            "time": pa.array(np.concatenate(times), type=pa.timestamp("us", tz="UTC")),
+            "source": pa.DictionaryArray.from_arrays(np.concatenate(source_codes),
+                                                     pa.array(sources)),
+            "signal": pa.DictionaryArray.from_arrays(np.concatenate(signal_codes),
+                                                     pa.array(list(where), type=pa.string())),
+            "value": pa.array(value, mask=np.isnan(value)),
+            "flag": pa.array(np.concatenate(flag_values), type=pa.string()),
         })
 
     @_serialised

@@ -1,5 +1,8 @@
 """One unit's live twin: source → gate → streamed model → residuals → historian (issue 21).
 
+Kept as one module because it is one class, :class:`LiveTwin`, whose final and provisional
+chains share its model state, gate and historian.
+
 :class:`LiveTwin` takes the blocks a :class:`~steamtwin.live.sources.Source` yields and, for each:
 
 1. the data-quality gate (:class:`~steamtwin.live.gate.StreamGate`) passes the samples whose
@@ -23,7 +26,9 @@
    only one recorded: the earlier ones never applied to a sample;
 6. the DuckDB historian stores measured, twin and residual series with the gate's flags, the
    alarms started and ended, the parameter swaps, and the state (model, gate context, monitor,
-   open block, J cache, filter, live parameters) — all in one transaction per block.
+   open block, J cache, filter, live parameters) — all in one transaction per block; the
+   unit's first block also records the parameters it starts with (reason ``"start"``, at its
+   first sample), so the parameter history is complete from the first stored sample on.
 
 Latency: the gate's final verdict waits for its look-ahead (60 s at 1 Hz; why, in
 :mod:`steamtwin.live.gate`). With ``provisional=True`` (the service's choice for an OPC UA or
@@ -50,6 +55,7 @@ what follows its checkpoint: Gray & Reuter, *Transaction Processing*, 1993, §11
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 import warnings
@@ -154,7 +160,11 @@ class LiveTwin:
         self.provisional = provisional
         self._provisional_state: StreamState | None = None
         self._provisional_until: pd.Timestamp | None = None
-        self._provisional_inputs: pd.DataFrame | None = None  # NaN rows: no twin value
+        # what the provisional chain fed the model, chunk by chunk (times in ns since the epoch,
+        # inputs with NaN rows where it had no twin value): one small array per sample, joined
+        # only when a final block is checked against it
+        self._provisional_times: list[np.ndarray] = []
+        self._provisional_fed: list[np.ndarray] = []
 
     def start(self) -> LiveTwin:
         """Open the historian and continue from its last saved state, if any."""
@@ -256,7 +266,8 @@ class LiveTwin:
         """Judge, model and store the samples whose look-ahead is in, once there are at least
         ``min_samples`` of them (the slow half of :meth:`process`)."""
         summary = summary if summary is not None else LiveSummary()
-        self._store(self.gate.release(min_samples), summary)
+        if self.gate.ready() >= max(min_samples, 1):
+            self._store(self.gate.release(min_samples), summary)
         return summary
 
     def _provisional_rows(self) -> ProvisionalRows | None:
@@ -264,46 +275,53 @@ class LiveTwin:
         status, missing), continuing the provisional model state over the samples not yet
         given a value, or restarting it from the final state when the final verdicts took
         other inputs than the provisional ones (a spike or stuck run found), after a swap or
-        a restart. The model state of the final chain is never touched."""
-        values, flags = self.gate.pending()
-        committed = self.historian.resume_time(self.name)
-        if committed is not None:
-            later = values.index > committed
-            values, flags = values[later], flags[later]
-        if self._provisional_until is not None:
-            new = values.index > self._provisional_until
-            values, flags = values[new], flags[new]
-        if values.empty:
+        a restart. The model state of the final chain is never touched. Positional slices and
+        arrays throughout (a one-sample frame's label look-ups and boolean masks cost more
+        than the model step: docs/benchmarks.md, "Latency, fourth pass")."""
+        pending, flags = self.gate.pending()
+        index = pending.index
+        start = 0
+        for after in (self.historian.resume_time(self.name), self._provisional_until):
+            if after is not None:
+                start = max(start, int(index.searchsorted(after, side="right")))
+        if start >= len(index):
             return None
-        start = self._provisional_state if self._provisional_until is not None else self._state
-        complete = _complete(values)
-        twin, state, _ = self._predict(values, complete, start)
-        used = _fed(values, complete)
-        self._provisional_inputs = (used if self._provisional_inputs is None
-                                    else pd.concat([self._provisional_inputs, used]))
-        self._provisional_state, self._provisional_until = state, values.index[-1]
-        return ProvisionalRows(self.name, {"measured": values, "twin": twin,
-                                           "residual": self._residual(values, twin)},
-                               _flag_objects(flags))
+        index = index[start:]
+        values = pending.to_numpy(dtype=float)[start:]
+        inputs = values[:, _input_positions(pending.columns)]
+        complete = ~np.isnan(inputs).any(axis=1)
+        measured = pd.DataFrame(values, index=index, columns=pending.columns)
+        first = self._provisional_state if self._provisional_until is not None else self._state
+        twin, state, _ = self._predict(measured, complete, first, inputs=inputs)
+        inputs[~complete] = np.nan
+        self._provisional_times.append(index.as_unit("ns").asi8)
+        self._provisional_fed.append(inputs)
+        self._provisional_state, self._provisional_until = state, index[-1]
+        return ProvisionalRows(self.name, {"measured": measured, "twin": twin,
+                                           "residual": self._residual(measured, twin)},
+                               _flag_objects(flags.iloc[start:]))
 
     def _check_provisional(self, data: pd.DataFrame, complete: np.ndarray) -> None:
         """Keep the provisional chain if the final samples ``data`` fed the model what the
         provisional values assumed; else restart it from the final state."""
-        seen = self._provisional_inputs
-        if seen is None:
+        if not self._provisional_times:
             return
-        final = _fed(data, complete)
-        done = seen.index <= data.index[-1]
-        if seen.index[done].equals(final.index) and np.array_equal(
-                seen[done].to_numpy(), final.to_numpy(), equal_nan=True):
-            self._provisional_inputs = seen[~done]
+        times = np.concatenate(self._provisional_times)
+        seen = np.concatenate(self._provisional_fed)
+        final = _inputs(data)
+        final[~complete] = np.nan
+        final_times = data.index.as_unit("ns").asi8
+        done = times <= final_times[-1]
+        if np.array_equal(times[done], final_times) and np.array_equal(
+                seen[done], final, equal_nan=True):
+            self._provisional_times, self._provisional_fed = [times[~done]], [seen[~done]]
         else:
             self._reset_provisional()
 
     def _reset_provisional(self) -> None:
         self._provisional_state = None
         self._provisional_until = None
-        self._provisional_inputs = None
+        self._provisional_times, self._provisional_fed = [], []
 
     def finish(self, summary: LiveSummary | None = None) -> LiveSummary:
         """The end of a stream: what the gate still holds (no more look-ahead)."""
@@ -316,6 +334,7 @@ class LiveTwin:
         if data.empty:
             return
         summary.findings += len(passed.findings)
+        starting = self.params  # before any swap this block makes
         complete = _complete(data)
         if self.provisional:
             self._check_provisional(data, complete)
@@ -344,11 +363,14 @@ class LiveTwin:
             swaps = [s for s in swaps if s.time > committed]
             if data.empty:
                 return
+        parameters = [(s.time, swap_values(s), s.reason) for s in swaps]
+        if self.historian.resume_time(self.name) is None:  # the unit's first block
+            parameters.insert(0, (data.index[0], {k: float(v) for k, v in
+                                                  vars(starting).items()}, "start"))
         summary.rows += self.historian.commit_block(
             self.name, {"measured": data, "twin": twin, "residual": residual}, flags,
             state=self._snapshot() if snapshot else None,
-            events=BlockEvents(tuple(alarms),
-                               tuple((s.time, swap_values(s), s.reason) for s in swaps)))
+            events=BlockEvents(tuple(alarms), tuple(parameters)))
         if snapshot:
             self._last_snapshot = end
         summary.alarms += sum(isinstance(alarm, Alarm) for alarm in alarms)
@@ -357,19 +379,22 @@ class LiveTwin:
         summary.without_twin += int((~complete).sum())
 
     def _predict(self, data: pd.DataFrame, complete: np.ndarray, state: StreamState | None,
-                 rotor: LiveRotor | None = None
+                 rotor: LiveRotor | None = None, inputs: np.ndarray | None = None
                  ) -> tuple[pd.DataFrame, StreamState | None, int]:
         """Twin values of ``data`` (SI): the model's sensor readings, and the ROM's probe
         temperatures, where ``complete`` (all inputs good), NaN elsewhere; the model state
         after these samples (``state`` continued; unchanged without a complete sample); and the
         samples whose ROM probes were extrapolated; given ``rotor``, its signals
-        (:data:`~steamtwin.live.rotor_stream.ROTOR_SIGNALS`) too. Built as one array (pandas
-        ``.loc`` assignments per column cost more than the model on a 60-sample block)."""
+        (:data:`~steamtwin.live.rotor_stream.ROTOR_SIGNALS`) too. ``inputs``: the model inputs of
+        ``data`` as :func:`_inputs` gives them, when the caller has them already. Built as one
+        array (pandas ``.loc`` assignments per column cost more than the model on a 60-sample
+        block)."""
         columns = list(self.model.output_signals)
         extra = [] if rotor is None else list(ROTOR_SIGNALS)
         if not complete.any():
             return (pd.DataFrame(np.nan, index=data.index, columns=columns + extra), state, 0)
-        inputs = data[list(INPUT_SIGNALS)][complete]
+        inputs = pd.DataFrame((_inputs(data) if inputs is None else inputs)[complete],
+                              index=data.index[complete], columns=list(INPUT_SIGNALS))
         if rotor is None:
             outputs, state = self.model.simulate_stream(inputs, self.params, state)
         else:
@@ -397,9 +422,8 @@ class LiveTwin:
 
     def _residual(self, data: pd.DataFrame, twin: pd.DataFrame) -> pd.DataFrame:
         """measured − twin (SI) of the monitored sensors both have."""
-        sensors = [s for s in self.monitored if s in data.columns and s in twin.columns]
-        measured = data.columns.get_indexer(sensors)
-        modelled = twin.columns.get_indexer(sensors)
+        sensors, measured, modelled = _shared(self.monitored, tuple(data.columns),
+                                              tuple(twin.columns))
         return pd.DataFrame(data.to_numpy(dtype=float)[:, measured]
                             - twin.to_numpy(dtype=float)[:, modelled],
                             index=data.index, columns=sensors)
@@ -470,24 +494,38 @@ class LiveTwin:
 def _inputs(data: pd.DataFrame) -> np.ndarray:
     """The model inputs of ``data`` as an array (columns in INPUT_SIGNALS order; positional
     look-ups: pandas' label indexing costs more than a one-sample model step)."""
-    columns = data.columns.get_indexer(list(INPUT_SIGNALS))
-    if (columns < 0).any():
-        missing = [n for n, j in zip(INPUT_SIGNALS, columns, strict=True) if j < 0]
+    return data.to_numpy(dtype=float)[:, _input_positions(data.columns)]
+
+
+def _input_positions(columns: pd.Index) -> list[int]:
+    """Where the model inputs are among ``columns`` (INPUT_SIGNALS order)."""
+    return _positions(tuple(columns))
+
+
+@functools.lru_cache(maxsize=64)
+def _positions(columns: tuple) -> list[int]:
+    """:func:`_input_positions` by the columns' names (a stream's frames all have the same:
+    the look-up is made once)."""
+    where = {name: j for j, name in enumerate(columns)}
+    missing = [name for name in INPUT_SIGNALS if name not in where]
+    if missing:
         raise KeyError(f"the data lack the model input(s) {missing}")
-    return data.to_numpy(dtype=float)[:, columns]
+    return [where[name] for name in INPUT_SIGNALS]
+
+
+@functools.lru_cache(maxsize=64)
+def _shared(sensors: tuple[str, ...], measured: tuple, modelled: tuple
+            ) -> tuple[list[str], list[int], list[int]]:
+    """The ``sensors`` found among both column tuples, and their positions in each (a
+    stream's frames all have the same columns: the look-up is made once)."""
+    found = [name for name in sensors if name in measured and name in modelled]
+    return (found, [measured.index(name) for name in found],
+            [modelled.index(name) for name in found])
 
 
 def _complete(data: pd.DataFrame) -> np.ndarray:
     """True for the samples whose model inputs are all present (not NaN)."""
     return ~np.isnan(_inputs(data)).any(axis=1)
-
-
-def _fed(data: pd.DataFrame, complete: np.ndarray) -> pd.DataFrame:
-    """The model inputs of ``data`` where ``complete``, NaN rows elsewhere (what the model
-    was fed)."""
-    values = _inputs(data)
-    values[~complete] = np.nan
-    return pd.DataFrame(values, index=data.index, columns=list(INPUT_SIGNALS))
 
 
 def _flag_objects(flags: pd.DataFrame) -> pd.DataFrame:

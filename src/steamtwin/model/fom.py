@@ -575,10 +575,15 @@ def _rows(count: int) -> str:
     return f"{count} bad row" if count == 1 else f"{count} bad rows"
 
 
+_TICKS_PER_SECOND = {"s": 1, "ms": 10**3, "us": 10**6, "ns": 10**9}
+"""A DatetimeIndex's integer ticks per second, by its unit."""
+
+
 def _time_steps(index: pd.Index) -> np.ndarray:
     """Seconds since the previous sample (first entry ∞: steady start)."""
-    if isinstance(index, pd.DatetimeIndex):
-        seconds = (index - index[0]).total_seconds().to_numpy(dtype=float)
+    if isinstance(index, pd.DatetimeIndex):  # as TimedeltaIndex.total_seconds, without one
+        ticks = index.asi8
+        seconds = (ticks - ticks[0]) / _TICKS_PER_SECOND[index.unit]
     elif isinstance(index, pd.TimedeltaIndex):
         seconds = index.total_seconds().to_numpy(dtype=float)
     elif pd.api.types.is_numeric_dtype(index) and not pd.api.types.is_bool_dtype(index):
