@@ -174,7 +174,9 @@ class StreamGate:
         empty output."""
         if self._values is None:
             return 0
-        return max(0, len(self._values) - self.lookahead_samples - self._passed)
+        ends = self._group_ends()  # whole clock bins whose look-ahead is in, as release takes
+        done = ends[ends <= len(self._values) - self.lookahead_samples]
+        return int(done[-1]) - self._passed if done.size else 0
 
     def flush(self) -> GateOutput:
         """Everything still pending (the end of a stream: no more look-ahead)."""
