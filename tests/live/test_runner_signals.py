@@ -17,6 +17,9 @@ def test_sigterm_sets_the_stop_event():
     async def main() -> bool:
         stop = stop_on_signals()
         assert not stop.is_set()
+        # never SIGTERM the test process itself unless the loop took the signal over (without
+        # the handler the signal would end the worker instead of failing this test)
+        assert signal.getsignal(signal.SIGTERM) not in (signal.SIG_DFL, signal.SIG_IGN, None)
         os.kill(os.getpid(), signal.SIGTERM)
         await asyncio.wait_for(stop.wait(), timeout=5.0)
         asyncio.get_running_loop().remove_signal_handler(signal.SIGTERM)
