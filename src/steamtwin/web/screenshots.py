@@ -204,8 +204,10 @@ class _DevTools:
         if os.geteuid() == 0:
             arguments.append("--no-sandbox")  # Chromium refuses to start as root with it
         try:
+            # in a session of its own: nothing Chromium signals to its process group can
+            # reach the caller's
             self.pid = os.posix_spawn(str(executable), [*arguments, "about:blank"], os.environ,
-                                      file_actions=[
+                                      setsid=True, file_actions=[
                                           (os.POSIX_SPAWN_OPEN, 1, os.devnull, os.O_WRONLY, 0),
                                           (os.POSIX_SPAWN_OPEN, 2, os.devnull, os.O_WRONLY, 0),
                                           (os.POSIX_SPAWN_DUP2, child[0], 3),
