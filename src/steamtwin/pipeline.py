@@ -344,8 +344,9 @@ LIVE_HOURS = 0.1
 
 LIVE_WAIT_S = 120.0
 """The longest the live stage waits for the service to store what the plant published (s)."""
-LOOK_AHEAD_SAMPLES = 61
-"""Samples the streaming gate still holds when the stage stops (its 60-s look-ahead and one)."""
+LOOK_AHEAD_SAMPLES = 61 + 60
+"""Samples the streaming gate may still hold when the stage stops: its 60-s look-ahead and
+one, and the open 60-s clock bin it judges whole."""
 
 
 def _stored(database: Path) -> int:
