@@ -87,8 +87,10 @@ def _free_ports(count: int) -> list[int]:
     return ports
 
 
-def _serve(signals: pd.DataFrame, ports: list[int], seconds: int, out: str) -> None:
-    """The child: one PlantServer per port, publishing from the next whole second on."""
+def _serve(signals: pd.DataFrame, ports: list[int], seconds: int, out: str, done, release) -> None:
+    """The child: one PlantServer per port, publishing from the next whole second on. Sets
+    ``done`` when every sample is out and waits for ``release`` (the service stopped) before
+    it stops the servers, so no client sees its server vanish."""
     tag_map = plant_node_ids(plant_tag_map())
 
     async def main() -> None:
@@ -115,9 +117,12 @@ def _serve(signals: pd.DataFrame, ports: list[int], seconds: int, out: str) -> N
             server.progress = recorder(port, server)
         await asyncio.gather(*(s.publish() for s in servers))
         await asyncio.sleep(3.0)
+        Path(out).write_text(json.dumps(written), encoding="utf-8")
+        done.set()
+        while not release.is_set():
+            await asyncio.sleep(0.2)
         for server in servers:
             await server.stop()
-        Path(out).write_text(json.dumps(written), encoding="utf-8")
 
     asyncio.run(main())
 
@@ -195,8 +200,10 @@ def main() -> None:
                                            encoding="utf-8")
         config = load_config(base / "service.toml")
         written_file = base / "written.json"
-        child = multiprocessing.get_context("spawn").Process(
-            target=_serve, args=(signals, ports, args.seconds, str(written_file)))
+        context = multiprocessing.get_context("spawn")
+        done, release = context.Event(), context.Event()
+        child = context.Process(
+            target=_serve, args=(signals, ports, args.seconds, str(written_file), done, release))
         child.start()
         historian = _Recording(base / "live.duckdb")
 
@@ -204,11 +211,12 @@ def main() -> None:
             stop = asyncio.Event()
             cpu = time.process_time()
             task = asyncio.create_task(run_service(config, stop, historian=historian))
-            while child.is_alive():
+            while child.is_alive() and not done.is_set():
                 await asyncio.sleep(0.5)
             await asyncio.sleep(2.0)
             stop.set()
             await task
+            release.set()
             return time.process_time() - cpu
 
         cpu = asyncio.run(service())

@@ -12,8 +12,9 @@ recalibration filter (10-min tracker steps; swaps on schedule or alarm), and the
 historian. Run it pinned to one core (``taskset -c 0``) for the one-core figure.
 
 Prints CPU seconds (process time, every thread) and wall seconds for the day and their
-multiples of real time, the resident memory (``/proc/self/statm``, not the peak) at each data
-hour, the growth from hour 1 to hour 24, and what the database holds.
+multiples of real time, the resident memory (``/proc/self/statm``) at every block — per data
+hour its median and maximum, and their growth from hour 1 to the last whole hour — DuckDB's own
+memory at the end, and what the database holds.
 
 Run: taskset -c 0 python benchmarks/bench_live_service.py [--cache DIR] [--hours 24] [--block 60]
 """
@@ -28,6 +29,7 @@ import time
 from collections.abc import AsyncIterator
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 
 from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
@@ -55,11 +57,13 @@ def _rss_mb() -> float:
 
 
 class _Metered:
-    """The replay source, recording the resident memory whenever a data hour is crossed."""
+    """The replay source, recording the resident memory at every block, by data hour (the
+    hour the block ends in; one reading is one instant of an allocator that keeps freed
+    memory for a while, so each hour's median and maximum are reported)."""
 
     def __init__(self, source: ReplaySource) -> None:
         self.source = source
-        self.rss: dict[int, float] = {}
+        self.rss: dict[int, list[float]] = {}
         self.start: pd.Timestamp | None = None
 
     async def blocks(self) -> AsyncIterator[SourceBlock]:
@@ -67,8 +71,7 @@ class _Metered:
             if len(block.frame):
                 self.start = self.start if self.start is not None else block.frame.index[0]
                 hour = int((block.frame.index[-1] - self.start) / pd.Timedelta(hours=1))
-                if hour not in self.rss:
-                    self.rss[hour] = _rss_mb()
+                self.rss.setdefault(hour, []).append(_rss_mb())
             yield block
 
 
@@ -117,6 +120,8 @@ def main() -> None:
         summary = asyncio.run(twin.run(source))
         cpu, wall = time.process_time() - cpu, time.perf_counter() - wall
         size = (Path(folder) / "live.duckdb").stat().st_size / 1e6
+        duckdb_mb = twin.historian.connection.execute(
+            "SELECT sum(memory_usage_bytes) FROM duckdb_memory()").fetchone()[0] / 1e6
         alarms = twin.historian.alarms("unit1")
         twin.close()
     seconds = summary.samples  # 1-s samples
@@ -125,11 +130,16 @@ def main() -> None:
           f"database {size:.0f} MB")
     print(f"CPU {cpu:.1f} s → {seconds / cpu:.0f}× real time; wall {wall:.1f} s → "
           f"{seconds / wall:.0f}× real time")
-    hours = sorted(source.rss)
-    print("RSS by data hour (MB): " + ", ".join(f"{h}: {source.rss[h]:.0f}" for h in hours))
-    if len(hours) > 1 and 1 in source.rss:
-        print(f"growth from hour 1 to hour {hours[-1]}: "
-              f"{source.rss[hours[-1]] - source.rss[1]:+.0f} MB")
+    hours = [h for h in sorted(source.rss) if len(source.rss[h]) > 1]  # whole hours
+    median = {h: float(np.median(source.rss[h])) for h in hours}
+    peak = {h: max(source.rss[h]) for h in hours}
+    print("RSS by data hour, median/max of its blocks (MB): "
+          + ", ".join(f"{h}: {median[h]:.0f}/{peak[h]:.0f}" for h in hours))
+    if len(hours) > 1 and 1 in median:
+        last = hours[-1]
+        print(f"growth from hour 1 to hour {last}: median {median[last] - median[1]:+.0f} MB, "
+              f"max {peak[last] - peak[1]:+.0f} MB; DuckDB's own memory at the end "
+              f"{duckdb_mb:.0f} MB")
     if len(alarms):
         print(alarms[["kind", "signal", "start", "end"]].to_string())
     print(f"block {args.block} samples; load average {os.getloadavg()[0]:.1f}")

@@ -10,6 +10,7 @@ import sys
 import textwrap
 import time
 
+import duckdb
 import numpy as np
 import pandas as pd
 import pytest
@@ -69,13 +70,36 @@ def test_alarms_parameters_and_acknowledgement(tmp_path):
         with pytest.raises(KeyError, match="no alarm 99"):
             historian.acknowledge(99, "operator", start)
         historian.record_parameters("u1", start, {"flow_coefficient": 0.98}, "recalibration")
+        historian.record_parameters("u1", start + pd.Timedelta(minutes=10),
+                                    {"flow_coefficient": 0.97, "friction_coefficient": 1.1},
+                                    "degradation:flow_coefficient",
+                                    {"flow_coefficient": (0.955, 0.985)})
         alarms = historian.alarms("u1")
         parameters = historian.connection.execute("SELECT * FROM parameters").df()
     assert list(alarms["id"]) == [first, second] == [1, 2]
     assert alarms["evidence"].iloc[0] == {"cusum": 5.2, "threshold": 5.0}
     assert pd.Timestamp(alarms["end"].iloc[0]) == start + pd.Timedelta(minutes=5)
     assert pd.isna(alarms["end"].iloc[1]) and alarms["acknowledged_by"].iloc[1] == "operator"
-    assert parameters["value"].tolist() == [0.98]
+    assert parameters["value"].tolist() == [0.98, 0.97, 1.1]
+    # the 95 % interval where the value came from the filter, NULL where it did not
+    assert parameters["low"].tolist()[1] == 0.955 and parameters["high"].tolist()[1] == 0.985
+    assert parameters[["low", "high"]].iloc[[0, 2]].isna().all().all()
+
+
+def test_a_database_from_before_the_parameter_intervals_gains_them(tmp_path):
+    path = tmp_path / "old.duckdb"
+    with duckdb.connect(str(path)) as old:  # the parameters table as it was first written
+        old.execute("CREATE TABLE parameters (unit VARCHAR NOT NULL, time TIMESTAMPTZ NOT NULL, "
+                    "name VARCHAR NOT NULL, value DOUBLE NOT NULL, reason VARCHAR)")
+        old.execute("INSERT INTO parameters VALUES ('u1', '2026-03-01 12:00:00+00', "
+                    "'flow_coefficient', 0.99, 'start')")
+    start = pd.Timestamp("2026-03-01T13:00:00Z")
+    with LiveHistorian(path) as historian:
+        historian.record_parameters("u1", start, {"flow_coefficient": 0.98}, "schedule",
+                                    {"flow_coefficient": (0.97, 0.99)})
+        rows = historian.connection.execute(
+            "SELECT value, low, high FROM parameters ORDER BY time").fetchall()
+    assert rows == [(0.99, None, None), (0.98, 0.97, 0.99)]
 
 
 _WRITER = textwrap.dedent("""

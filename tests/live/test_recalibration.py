@@ -156,7 +156,7 @@ def test_a_flow_step_is_flagged_as_degradation_and_followed_by_the_live_paramete
         twin.acknowledge(999, "operator A")
     alarms = twin.historian.alarms("unit1")
     swaps = twin.historian.connection.execute(
-        "SELECT time, value, reason FROM parameters WHERE name = 'flow_coefficient' "
+        "SELECT time, value, reason, low, high FROM parameters WHERE name = 'flow_coefficient' "
         "ORDER BY time").df()
     twin.close()
     step_time = data.index[step_at]
@@ -181,6 +181,12 @@ def test_a_flow_step_is_flagged_as_degradation_and_followed_by_the_live_paramete
     assert (times > step_time).all()
     late = swaps[times >= step_time + pd.Timedelta(minutes=30)]
     assert len(late) and np.abs(late["value"] - 0.99 * 0.98).max() < 0.002
+    # every swapped value carries the filter's 95 % interval, around it and holding the truth
+    # (widened by the flow meter's ±1.5 %); the starting set has none
+    assert start["low"].isna().all() and swaps[["low", "high"]].notna().all().all()
+    assert (swaps["low"] < swaps["value"]).all() and (swaps["value"] < swaps["high"]).all()
+    assert ((late["low"] <= 0.99 * 0.98) & (late["high"] >= 0.99 * 0.98)).all()
+    assert (late["high"] - late["low"]).max() < 0.05
     assert twin.params.flow_coefficient == pytest.approx(swaps["value"].iloc[-1])
 
 
@@ -197,6 +203,10 @@ def test_without_an_alarm_the_parameters_change_only_on_schedule(reference_spec,
     assert [swap.reason for swap in swaps] == ["schedule"]
     assert swaps[0].time - data.index[0] >= pd.Timedelta(seconds=1200)
     assert abs(swaps[0].params.flow_coefficient - 0.985) < 0.005
+    # the scheduled swap carries the last step's 95 % intervals of the tracked coefficients
+    low, high = swaps[0].intervals["flow_coefficient"]
+    assert low < swaps[0].params.flow_coefficient < high and low <= 0.985 <= high
+    assert set(swaps[0].intervals) == set(tracker.tracked)
     # a sensor fault does not touch the filter; a degradation of an untracked one neither
     before = tracker.get_state()
     recalibration.on_alarm("sensor_fault", "hp_exhaust_temperature", data.index[-1], False)

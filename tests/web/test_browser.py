@@ -188,6 +188,11 @@ def test_calibration_and_fleet_pages_draw_the_stored_swaps_and_units(page, site)
         return plot.data[k].filter((v) => v !== undefined); }""")
     assert flow == [0.99, 0.98]
     assert page.locator("#swaps tr").count() == 3  # header and two swap times
+    # the degradation swap's value with the filter's 95 % interval; the scheduled one without
+    values = [page.locator("#swaps tr").nth(k).locator("td").nth(1).text_content()
+              for k in (1, 2)]
+    assert values[1] == "flow_coefficient = 0.98 [0.9650, 0.9950]"
+    assert "[" not in values[0]
     before, after = (page.locator("#swaps tr").nth(1).locator("td").nth(k).text_content()
                      for k in (3, 4))  # the first swap, 00:30:00: 10 min either side
     residual = "residual", "hp_exhaust_temperature"

@@ -120,6 +120,11 @@ def test_alarms_parameters_quality_and_provenance(client):
     parameters = client.get("/api/units/unit1/parameters").json()
     assert parameters["current"]["flow_coefficient"]["value"] == 0.98
     assert parameters["current"]["flow_coefficient"]["reason"] == "degradation"
+    # the filter's 95 % interval where the value came from it, None where it did not
+    flow, friction = (parameters["current"][n] for n in ("flow_coefficient",
+                                                         "friction_coefficient"))
+    assert (flow["low"], flow["high"]) == (0.965, 0.995)
+    assert friction["low"] is None and friction["high"] is None
     assert [(p["name"], p["value"]) for p in parameters["trajectory"]] == [
         ("flow_coefficient", 0.99), ("friction_coefficient", 1.0), ("flow_coefficient", 0.98)]
     quality = client.get("/api/units/unit1/quality?start=2026-03-01T00:00:00Z").json()

@@ -72,7 +72,8 @@ def fill(path) -> None:
                                   evidence={"statistic": 12.0})),
                     parameters=((index[0], {"flow_coefficient": 0.99,
                                             "friction_coefficient": 1.0}, "scheduled"),
-                                (index[15], {"flow_coefficient": 0.98}, "degradation")))
+                                (index[15], {"flow_coefficient": 0.98}, "degradation",
+                                 {"flow_coefficient": (0.965, 0.995)})))
             historian.commit_block("unit1", frames, flags, events=events)
         frames, flags = unit_block(0, 600, seed=7)
         historian.commit_block("unit2", frames, flags)

@@ -12,7 +12,8 @@ file per service, several units side by side:
   good). Long rather than wide so that a unit's signals, a new probe or another twin output
   need no schema change;
 * ``alarms`` (id, unit, kind, signal, start, end, evidence JSON, acknowledged_at/by);
-* ``parameters`` (unit, time, name, value, reason) — every swap of the live parameters;
+* ``parameters`` (unit, time, name, value, reason, low, high) — every swap of the live
+  parameters, with the filter's 95 % interval of each value it estimated;
 * ``states`` (unit, time, state JSON) — the newest :data:`KEPT_STATES` state snapshots of
   each unit, to restart from;
 * ``progress`` (unit, last_time) — the last committed sample;
@@ -65,7 +66,11 @@ _SCHEMA = (
        kind VARCHAR NOT NULL, signal VARCHAR, start TIMESTAMPTZ NOT NULL, "end" TIMESTAMPTZ,
        evidence JSON, acknowledged_at TIMESTAMPTZ, acknowledged_by VARCHAR)""",
     """CREATE TABLE IF NOT EXISTS parameters (unit VARCHAR NOT NULL, time TIMESTAMPTZ NOT NULL,
-       name VARCHAR NOT NULL, value DOUBLE NOT NULL, reason VARCHAR)""",
+       name VARCHAR NOT NULL, value DOUBLE NOT NULL, reason VARCHAR, low DOUBLE,
+       high DOUBLE)""",
+    # a database written before the interval columns existed gains them (NULL: not recorded)
+    "ALTER TABLE parameters ADD COLUMN IF NOT EXISTS low DOUBLE",
+    "ALTER TABLE parameters ADD COLUMN IF NOT EXISTS high DOUBLE",
     """CREATE TABLE IF NOT EXISTS states (unit VARCHAR NOT NULL, time TIMESTAMPTZ NOT NULL,
        state JSON NOT NULL)""",
     """CREATE TABLE IF NOT EXISTS progress (unit VARCHAR PRIMARY KEY,
@@ -117,10 +122,10 @@ class ProvisionalRows:
 class BlockEvents:
     """What a block did besides its samples: ``alarms`` started (:class:`Alarm`) and ended
     (:class:`AlarmEnd`), in the order they happened, and parameter swaps as
-    (time, name → value, reason)."""
+    (time, name → value, reason) or (time, name → value, reason, name → 95 % interval)."""
 
     alarms: tuple[Alarm | AlarmEnd, ...] = ()
-    parameters: tuple[tuple[pd.Timestamp, Mapping[str, float], str], ...] = ()
+    parameters: tuple[tuple, ...] = ()
 
 
 def _utc(times: pd.DatetimeIndex | pd.Series) -> pd.DatetimeIndex:
@@ -359,8 +364,8 @@ class LiveHistorian:
                 'DISTINCT FROM ? AND "end" IS NULL', [unit, alarm.kind, alarm.signal]).fetchone()
             if row[0] is not None:
                 self.end_alarm(int(row[0]), alarm.end)
-        for time, values, reason in events.parameters:
-            self.record_parameters(unit, time, values, reason)
+        for time, values, reason, *intervals in events.parameters:
+            self.record_parameters(unit, time, values, reason, *intervals)
 
     @staticmethod
     def _long(unit: str, frames: Mapping[str, pd.DataFrame], flags: pd.DataFrame | None
@@ -419,12 +424,19 @@ class LiveHistorian:
 
     @_serialised
     def record_parameters(self, unit: str, time: pd.Timestamp, values: Mapping[str, float],
-                          reason: str) -> None:
-        """One swap of the live parameters (name → value) and why it happened."""
+                          reason: str,
+                          intervals: Mapping[str, tuple[float, float]] | None = None) -> None:
+        """One swap of the live parameters (name → value) and why it happened; ``intervals``:
+        name → the estimate's 95 % interval (low, high), for the values that came from the
+        filter (columns ``low``/``high``, NULL for the others)."""
         stamp = _utc(pd.DatetimeIndex([time]))[0].to_pydatetime()
-        self.connection.executemany("INSERT INTO parameters VALUES (?, ?, ?, ?, ?)",
-                                    [[unit, stamp, name, float(value), reason]
-                                     for name, value in values.items()])
+        intervals = intervals or {}
+        self.connection.executemany(
+            "INSERT INTO parameters (unit, time, name, value, reason, low, high) "
+            "VALUES (?, ?, ?, ?, ?, ?, ?)",
+            [[unit, stamp, name, float(value), reason,
+              *((float(b) for b in intervals[name]) if name in intervals else (None, None))]
+             for name, value in values.items()])
 
     @_serialised
     def raise_alarm(self, alarm: Alarm) -> int:

@@ -24,8 +24,8 @@ The tracker's state is part of the service's saved state.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
-from dataclasses import asdict, dataclass, replace
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field, replace
 
 import pandas as pd
 
@@ -38,11 +38,15 @@ __all__ = ["LiveRecalibration", "ParameterSwap", "centred_priors", "swap_values"
 @dataclass(frozen=True)
 class ParameterSwap:
     """A change of the live parameters: ``time`` (the end of the data it rests on, UTC),
-    the new ``params`` and the ``reason`` ("schedule" or "degradation:<parameter>")."""
+    the new ``params``, the ``reason`` ("schedule" or "degradation:<parameter>") and
+    ``intervals``: name → the filter's 95 % interval (low, high) of each value it took from
+    the filter (the flow coefficient's widened by the flow meter's uncertainty,
+    :class:`~steamtwin.calibration.tracking.ParameterTracker`)."""
 
     time: pd.Timestamp
     params: ModelParameters
     reason: str
+    intervals: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
 
 class LiveRecalibration:
@@ -92,12 +96,16 @@ class LiveRecalibration:
             if following:
                 live = replace(live, **{p: getattr(self.tracker.params_, p) for p in following})
                 swaps.append(ParameterSwap(end, live,
-                                           ",".join(f"degradation:{p}" for p in following)))
+                                           ",".join(f"degradation:{p}" for p in following),
+                                           _intervals(row, following)))
                 self._last_swap = end
             self._settling = {p: n - 1 for p, n in self._settling.items() if n > 1}
         last = data.index[-1]
         if not swaps and last - self._last_swap >= pd.Timedelta(seconds=self.every_s):
-            swaps.append(ParameterSwap(last, self.tracker.params_, "schedule"))
+            estimated = [end for end, row in steps.iterrows() if not row["error"]]
+            intervals = (_intervals(steps.loc[estimated[-1]], self.tracker.tracked)
+                         if estimated else {})
+            swaps.append(ParameterSwap(last, self.tracker.params_, "schedule", intervals))
             self._last_swap = last
         return swaps
 
@@ -136,6 +144,11 @@ class LiveRecalibration:
         self._degraded = {str(p): pd.Timestamp(t) for p, t in state.get("degraded", {}).items()}
         self._settling = {str(k): int(v) for k, v in state.get("settling", {}).items()}
         return self
+
+
+def _intervals(row: pd.Series, names: Sequence[str]) -> dict[str, tuple[float, float]]:
+    """The 95 % intervals a tracker step's row gives for ``names``."""
+    return {name: (float(row[f"{name}_low"]), float(row[f"{name}_high"])) for name in names}
 
 
 def swap_values(swap: ParameterSwap) -> dict[str, float]:

@@ -363,7 +363,7 @@ class LiveTwin:
             swaps = [s for s in swaps if s.time > committed]
             if data.empty:
                 return
-        parameters = [(s.time, swap_values(s), s.reason) for s in swaps]
+        parameters = [(s.time, swap_values(s), s.reason, s.intervals) for s in swaps]
         if self.historian.resume_time(self.name) is None:  # the unit's first block
             parameters.insert(0, (data.index[0], {k: float(v) for k, v in
                                                   vars(starting).items()}, "start"))

@@ -382,22 +382,26 @@ class HistorianReader:
     # -- parameters and data quality ------------------------------------------------------
     def parameters(self, unit: str, start: pd.Timestamp | None = None,
                    end: pd.Timestamp | None = None) -> list[dict[str, object]]:
-        """Every swap of ``unit``'s live parameters in [start, end], oldest first."""
+        """Every swap of ``unit``'s live parameters in [start, end], oldest first, with the
+        filter's 95 % interval (low, high; None when the value did not come from the filter)."""
         clauses, arguments = ["unit = ?"], [unit]
         for bound, operator in ((start, ">="), (end, "<=")):
             if bound is not None:
                 clauses.append(f"time {operator} ?")
                 arguments.append(bound.to_pydatetime())
-        rows = self._rows(f"SELECT time, name, value, reason FROM parameters WHERE "
+        rows = self._rows(f"SELECT time, name, value, reason, low, high FROM parameters WHERE "
                           f"{' AND '.join(clauses)} ORDER BY time, name", arguments)
-        return [{"time": _iso(t), "name": n, "value": _number(v), "reason": r}
-                for t, n, v, r in rows]
+        return [{"time": _iso(t), "name": n, "value": _number(v), "reason": r,
+                 "low": _number(lo), "high": _number(hi)} for t, n, v, r, lo, hi in rows]
 
     def current_parameters(self, unit: str) -> dict[str, dict[str, object]]:
-        """Each parameter's latest value, its time and reason."""
-        rows = self._rows("SELECT name, arg_max(value, time), max(time), arg_max(reason, time) "
+        """Each parameter's latest value, its time, reason and 95 % interval (low, high; None
+        when that value did not come from the filter)."""
+        rows = self._rows("SELECT name, arg_max(value, time), max(time), arg_max(reason, time), "
+                          "arg_max_null(low, time), arg_max_null(high, time) "
                           "FROM parameters WHERE unit = ? GROUP BY name ORDER BY name", [unit])
-        return {n: {"value": _number(v), "time": _iso(t), "reason": r} for n, v, t, r in rows}
+        return {n: {"value": _number(v), "time": _iso(t), "reason": r, "low": _number(lo),
+                    "high": _number(hi)} for n, v, t, r, lo, hi in rows}
 
     def quality(self, unit: str, start: pd.Timestamp, end: pd.Timestamp) -> dict[str, object]:
         """The gate's verdicts on ``unit``'s measured samples in [start, end]: samples per

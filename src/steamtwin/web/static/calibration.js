@@ -49,11 +49,16 @@
         residualRms(signals, iso(at), iso(at + WINDOW_MS))]);
       const fmt = (values) => values.map((v, k) => `${signals[k]} ${
         v === null ? "—" : v.toPrecision(3)}`).join("; ");
-      rows.push([time, swaps.map((s) => `${s.name} = ${s.value}`).join(", "), swaps[0].reason,
+      // the filter's 95 % interval beside each value it estimated (none for the others)
+      const interval = (s) => (s.low === null || s.high === null ? ""
+        : ` [${s.low.toPrecision(4)}, ${s.high.toPrecision(4)}]`);
+      rows.push([time, swaps.map((s) => `${s.name} = ${s.value}${interval(s)}`).join(", "),
+                 swaps[0].reason,
                  fmt(before), fmt(after)]);
     }
     table(document.getElementById("swaps"),
-          ["time", "values", "reason", "residual RMS before (SI)", "residual RMS after (SI)"],
+          ["time", "values [95 % interval]", "reason", "residual RMS before (SI)",
+           "residual RMS after (SI)"],
           rows.length ? rows : [["no swap stored", "", "", "", ""]]);
     document.body.dataset.ready = "yes";
   }
