@@ -192,3 +192,14 @@ def test_history_export_command(tmp_path):
     missing = runner.invoke(app, ["history", "export", "--db", str(tmp_path / "no.duckdb"),
                                   "--out", str(out)])
     assert missing.exit_code == 2 and "no such historian database" in missing.output
+
+
+def test_the_memory_limit_bounds_duckdb_and_a_bad_one_is_refused(tmp_path):
+    with LiveHistorian(tmp_path / "bounded.duckdb", memory_limit_mb=64) as historian:
+        limit = historian.connection.execute("SELECT current_setting('memory_limit')").fetchone()
+    assert limit == ("61.0 MiB",)  # 64 MB
+    with LiveHistorian(tmp_path / "default.duckdb") as historian:  # DuckDB's own default
+        default = historian.connection.execute("SELECT current_setting('memory_limit')").fetchone()
+    assert default != limit
+    with pytest.raises(ValueError, match="memory_limit_mb must be a number ≥ 16"):
+        LiveHistorian(tmp_path / "bad.duckdb", memory_limit_mb=1).open()

@@ -48,6 +48,10 @@ def test_configuration_mistakes_name_file_and_key(tmp_path, plant):
     config.write_text('database = "twin.duckdb"\ncolour = "red"\n')
     with pytest.raises(ConfigError, match=r"unknown key\(s\) \['colour'\]"):
         load_config(config)
+    config.write_text(f'database = "twin.duckdb"\nhistorian_memory_mb = 4\n[[units]]\n'
+                      f'name = "u1"\ntags = "{paths["tag_map"]}"\n')
+    with pytest.raises(ConfigError, match=r"historian_memory_mb = 4: expected a number of MB"):
+        load_config(config)
 
 
 def test_serve_a_replayed_unit_and_restart_without_duplicates(tmp_path, plant):
@@ -64,6 +68,7 @@ def test_serve_a_replayed_unit_and_restart_without_duplicates(tmp_path, plant):
     assert again.exit_code == 0, again.output
     assert "unit1: 0 samples stored" in again.output  # everything was there already
     assert _samples(tmp_path / "twin.duckdb") == len(run.measured)
+    assert load_config(config).historian_memory_mb == 64.0  # the default bound
 
 
 def test_serve_reads_the_plant_over_opc_ua(tmp_path, plant):

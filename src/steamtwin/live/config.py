@@ -3,6 +3,7 @@
 ::
 
     database = "twin.duckdb"              # one DuckDB file per service (relative: to this file)
+    historian_memory_mb = 64              # optional: DuckDB's memory limit for the service, MB
 
     [[units]]                             # one table per unit; several run side by side
     name = "unit1"
@@ -36,6 +37,7 @@ the file and the key.
 
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -44,8 +46,8 @@ from typing import Any, Literal
 from steamtwin.errors import DataError
 from steamtwin.textfile import read_utf8_text
 
-__all__ = ["ConfigError", "RecalibrationConfig", "ServiceConfig", "SourceConfig", "UnitConfig",
-           "load_config"]
+__all__ = ["SERVICE_MEMORY_LIMIT_MB", "ConfigError", "RecalibrationConfig", "ServiceConfig",
+           "SourceConfig", "UnitConfig", "load_config"]
 
 SOURCE_KINDS = ("opcua", "replay")
 
@@ -100,6 +102,12 @@ class UnitConfig:
     rotor_allowable: float | None = None
 
 
+SERVICE_MEMORY_LIMIT_MB = 64.0
+"""DuckDB's memory limit for the service's historian connection (MB): room for the rows not
+yet checkpointed (DuckDB checkpoints at a 16 MB write-ahead log) and a block cache, and a
+bound for a service that runs for months (:class:`~steamtwin.live.historian.LiveHistorian`)."""
+
+
 @dataclass(frozen=True)
 class ServiceConfig:
     """The service: its ``database`` and ``units``; ``source`` the file it came from."""
@@ -107,6 +115,7 @@ class ServiceConfig:
     database: Path
     units: tuple[UnitConfig, ...]
     source: Path
+    historian_memory_mb: float = SERVICE_MEMORY_LIMIT_MB
 
 
 def _keys(table: dict[str, Any], allowed: set[str], where: str) -> None:
@@ -217,8 +226,13 @@ def load_config(path: str | Path) -> ServiceConfig:
     except tomllib.TOMLDecodeError as error:
         raise ConfigError(f"{path}: not valid TOML: {error}") from None
     base = path.parent
-    _keys(document, {"database", "units"}, str(path))
+    _keys(document, {"database", "units", "historian_memory_mb"}, str(path))
     database_text = _text(document, "database", str(path))
+    memory = document.get("historian_memory_mb", SERVICE_MEMORY_LIMIT_MB)
+    if (isinstance(memory, bool) or not isinstance(memory, int | float)
+            or not math.isfinite(memory) or memory < 16):
+        raise ConfigError(f"{path}: historian_memory_mb = {memory!r}: expected a number of MB "
+                          "≥ 16")
     units_table = document.get("units")
     if not isinstance(units_table, list) or not units_table:
         raise ConfigError(f"{path}: no [[units]]; add one per unit")
@@ -250,4 +264,4 @@ def load_config(path: str | Path) -> ServiceConfig:
                                                                    required=False),
             rotor_allowable=_allowable(table, where)))
     return ServiceConfig(database=(base / database_text).resolve(), units=tuple(units),
-                         source=path)
+                         source=path, historian_memory_mb=float(memory))

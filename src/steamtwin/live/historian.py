@@ -149,10 +149,18 @@ def _serialised(method: _Method) -> _Method:
 
 class LiveHistorian:
     """The DuckDB file at ``path`` (created with its tables if missing); use as a context
-    manager or call :meth:`close`."""
+    manager or call :meth:`close`.
 
-    def __init__(self, path: str | Path) -> None:
+    ``memory_limit_mb``: DuckDB's memory limit for this connection, MB (None: DuckDB's
+    default, 80 % of the RAM). DuckDB's buffer manager keeps the blocks it has written
+    cached until the limit presses (measured: its memory grows with the file, 31 MB after a
+    day of one unit), so a service that runs for months bounds it (``steamtwin serve``:
+    ``historian_memory_mb``, default 64); a query that needs more than the limit fails, so
+    exports keep the default."""
+
+    def __init__(self, path: str | Path, memory_limit_mb: float | None = None) -> None:
         self.path = Path(path)
+        self.memory_limit_mb = memory_limit_mb
         self._connection: duckdb.DuckDBPyConnection | None = None
         self._last_times: dict[str, pd.Timestamp | None] = {}  # what progress holds
         self._provisional: dict[str, bool] = {}  # unit → it may have provisional rows
@@ -174,6 +182,12 @@ class LiveHistorian:
             self.path.parent.mkdir(parents=True, exist_ok=True)
             connection = duckdb.connect(str(self.path))
             connection.execute("SET TimeZone = 'UTC'")
+            if self.memory_limit_mb is not None:  # DuckDB's own default: 80 % of the RAM
+                limit = float(self.memory_limit_mb)
+                if not (np.isfinite(limit) and limit >= 16.0):
+                    raise ValueError(f"memory_limit_mb must be a number ≥ 16 (MB; got "
+                                     f"{self.memory_limit_mb!r})")
+                connection.execute(f"SET memory_limit = '{limit:.0f}MB'")
             for statement in _SCHEMA:
                 connection.execute(statement)
             self._connection = connection

@@ -206,7 +206,8 @@ async def run_service(config: ServiceConfig, stop: asyncio.Event | None = None,
     client for the service (None: in this process); an unreachable address is a ValueError
     before any unit starts."""
     stop = stop if stop is not None else asyncio.Event()
-    historian = historian if historian is not None else LiveHistorian(config.database)
+    historian = historian if historian is not None else LiveHistorian(
+        config.database, memory_limit_mb=config.historian_memory_mb)
     historian.open()
     done = asyncio.Event()
     beside: list[asyncio.Task] = []
