@@ -17,6 +17,7 @@ hour its median and maximum, and their growth from hour 1 to the last whole hour
 memory at the end, and what the database holds.
 
 Run: taskset -c 0 python benchmarks/bench_live_service.py [--cache DIR] [--hours 24] [--block 60]
+     [--historian-memory-mb 64]
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ import pandas as pd
 from steamtwin.calibration.tracking import ParameterTracker, tracking_sigma
 from steamtwin.dcs.plant import plant_tag_map, run_plant, write_plant
 from steamtwin.geometry.meshing import blade_volume_mesh
+from steamtwin.live.config import SERVICE_MEMORY_LIMIT_MB
 from steamtwin.live.gate import StreamGate, gate_options
 from steamtwin.live.historian import LiveHistorian
 from steamtwin.live.monitor_file import fit_monitor
@@ -82,6 +84,8 @@ def main() -> None:
     parser.add_argument("--hours", type=float, default=None, help="default: the whole day")
     parser.add_argument("--block", type=int, default=60,
                         help="samples per source block (the service's block_samples)")
+    parser.add_argument("--historian-memory-mb", type=float, default=SERVICE_MEMORY_LIMIT_MB,
+                        help="DuckDB's memory limit (the service's historian_memory_mb)")
     args = parser.parse_args()
     args.cache.mkdir(parents=True, exist_ok=True)
     spec = load_spec("reference")
@@ -110,7 +114,9 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as folder:
         tracker = ParameterTracker(model, sigma=tracking_sigma(tag_map), step_s=600.0)
         twin = LiveTwin("unit1", model, params, StreamGate(gate_options(tag_map, instruments)),
-                        LiveHistorian(Path(folder) / "live.duckdb"), rom=rom, monitor=monitor,
+                        LiveHistorian(Path(folder) / "live.duckdb",
+                                      memory_limit_mb=args.historian_memory_mb),
+                        rom=rom, monitor=monitor,
                         monitored=monitor.sensors,
                         sensitivity=SensitivityCache(model, monitor.sensors),
                         recalibration=LiveRecalibration(tracker))
@@ -142,7 +148,8 @@ def main() -> None:
               f"{duckdb_mb:.0f} MB")
     if len(alarms):
         print(alarms[["kind", "signal", "start", "end"]].to_string())
-    print(f"block {args.block} samples; load average {os.getloadavg()[0]:.1f}")
+    print(f"block {args.block} samples; DuckDB memory limit {args.historian_memory_mb:.0f} MB; "
+          f"load average {os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

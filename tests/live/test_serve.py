@@ -68,7 +68,7 @@ def test_serve_a_replayed_unit_and_restart_without_duplicates(tmp_path, plant):
     assert again.exit_code == 0, again.output
     assert "unit1: 0 samples stored" in again.output  # everything was there already
     assert _samples(tmp_path / "twin.duckdb") == len(run.measured)
-    assert load_config(config).historian_memory_mb == 64.0  # the default bound
+    assert load_config(config).historian_memory_mb == 32.0  # the default bound
 
 
 def test_serve_reads_the_plant_over_opc_ua(tmp_path, plant):

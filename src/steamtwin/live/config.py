@@ -3,7 +3,7 @@
 ::
 
     database = "twin.duckdb"              # one DuckDB file per service (relative: to this file)
-    historian_memory_mb = 64              # optional: DuckDB's memory limit for the service, MB
+    historian_memory_mb = 32              # optional: DuckDB's memory limit for the service, MB
 
     [[units]]                             # one table per unit; several run side by side
     name = "unit1"
@@ -102,10 +102,14 @@ class UnitConfig:
     rotor_allowable: float | None = None
 
 
-SERVICE_MEMORY_LIMIT_MB = 64.0
-"""DuckDB's memory limit for the service's historian connection (MB): room for the rows not
-yet checkpointed (DuckDB checkpoints at a 16 MB write-ahead log) and a block cache, and a
-bound for a service that runs for months (:class:`~steamtwin.live.historian.LiveHistorian`)."""
+SERVICE_MEMORY_LIMIT_MB = 32.0
+"""DuckDB's memory limit for the service's historian connection (MB), which the dashboard's
+queries share (``serve --http-port``): room for the rows not yet checkpointed (DuckDB
+checkpoints at a 16 MB write-ahead log) and a small block cache, and a bound for a service
+that runs for months (:class:`~steamtwin.live.historian.LiveHistorian`). Measured: one unit's
+24-h replay flat within +7 MB of resident memory (DuckDB's default: +49 MB, its cache growing
+with the file); ten units × 6 h with whole-table aggregates every hour ran within it
+(docs/benchmarks.md, "Throughput and memory, session 16")."""
 
 
 @dataclass(frozen=True)

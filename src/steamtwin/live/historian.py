@@ -155,7 +155,7 @@ class LiveHistorian:
     default, 80 % of the RAM). DuckDB's buffer manager keeps the blocks it has written
     cached until the limit presses (measured: its memory grows with the file, 31 MB after a
     day of one unit), so a service that runs for months bounds it (``steamtwin serve``:
-    ``historian_memory_mb``, default 64); a query that needs more than the limit fails, so
+    ``historian_memory_mb``, default 32); a query that needs more than the limit fails, so
     exports keep the default."""
 
     def __init__(self, path: str | Path, memory_limit_mb: float | None = None) -> None:
