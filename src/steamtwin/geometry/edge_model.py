@@ -44,7 +44,7 @@ wedge is too open or closed, or whose radius lies at a bound of its search, keep
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -114,13 +114,15 @@ class EdgeModel:
     """Model points of the sparse edges: ``points`` (k, 3; m) and their side parameter ``s``
     (k,), ``replaced`` the cloud points (mask over the cloud) that they stand in for,
     ``parameters`` the side parameter from the model of the other cloud points of a modelled
-    slab (NaN elsewhere: keep their own), and the per-slab fits ``slabs``."""
+    slab (NaN elsewhere: keep their own), the per-slab records ``slabs`` and the model of
+    each modelled edge along the span, ``spans`` (edge name → :class:`SpanEdgeModel`)."""
 
     points: np.ndarray
     s: np.ndarray
     replaced: np.ndarray
     parameters: np.ndarray
     slabs: tuple[EdgeSlab, ...]
+    spans: dict[str, SpanEdgeModel] = field(default_factory=dict)
 
     def fit_data(self, points: np.ndarray, s: np.ndarray, side: np.ndarray) -> tuple:
         """For the side's fit: the cloud points kept (mask), every point's ``s`` with the
@@ -154,7 +156,7 @@ def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labe
     perimeter (m); ``spacing`` the cloud's point spacing (m); ``noise`` the largest RMS (m)
     of the flank points about their plane for the flank to count as straight.
     """
-    pieces, slabs = [], []
+    pieces, slabs, spans = [], [], {}
     replaced = np.zeros(len(points), dtype=bool)
     parameters = np.full(len(points), np.nan)
     for edge in ("trailing_edge", "leading_edge"):
@@ -168,15 +170,18 @@ def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labe
         slabs += result[1]
         replaced |= result[2]
         parameters = np.where(np.isnan(result[3]), parameters, result[3])
+        if result[4] is not None:
+            spans[edge] = result[4]
     model_points = np.vstack([p for p, _ in pieces]) if pieces else np.empty((0, 3))
     model_s = np.concatenate([q for _, q in pieces]) if pieces else np.empty(0)
     return EdgeModel(points=model_points, s=model_s, replaced=replaced, parameters=parameters,
-                     slabs=tuple(slabs))
+                     slabs=tuple(slabs), spans=spans)
 
 
 def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: np.ndarray,
                 spacing: float, noise: float, edge: str, centre_s: float) -> tuple:
-    """Slabs of one edge: (model point pieces, slab records, replaced mask, parameters)."""
+    """Slabs of one edge: (model point pieces, slab records, replaced mask, parameters, span
+    model or None)."""
     arc = np.full(len(points), np.inf)
     arc[mask] = _circular(s[mask] - centre_s) * perimeter[mask]  # signed arc length (m)
     # the half circle of a modelled edge is shorter than MODEL_SAMPLES spacings: its tangent
@@ -209,7 +214,7 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
     own = [k for k, (slab, _, _) in enumerate(fits) if slab.used]
     if not own:
         return [], [slab for slab, _, _ in fits], np.zeros(len(points), bool), np.full(
-            len(points), np.nan)
+            len(points), np.nan), None
     # one model along the span (edge_span), started from the slabs' own circles, fitted to
     # the points of every slab from the first to the last with a circle of its own and
     # EXTEND_SLABS beyond: the slabs between without one (a hole, stray points) are filled
@@ -257,7 +262,7 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
                 replaced[applied[1]] = True
                 parameters[applied[2]] = applied[3]
         slabs.append(slab)
-    return pieces, slabs, replaced, parameters
+    return pieces, slabs, replaced, parameters, model if pieces else None
 
 
 #: Slabs either side over which the cloud's order against the model is smoothed (median).

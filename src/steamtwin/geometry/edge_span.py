@@ -65,7 +65,7 @@ class SpanEdgeModel:
         """Centre (n, 2; m), radius (n,; m) and inward unit normals (n, 2, 2) at heights
         ``z`` (n,; m), clipped to ``z_range``."""
         values = BSpline(self.knots, self.coefficients, DEGREE, extrapolate=False)(
-            np.clip(z, *self.z_range))
+            _inside(self.knots, z))
         angles = values[:, 3:5]
         normals = np.stack([np.cos(angles), np.sin(angles)], axis=2)
         return values[:, :2], values[:, 2], normals
@@ -76,11 +76,18 @@ class SpanEdgeModel:
 
 
 def span_knots(z_range: tuple[float, float], knot_spacing: float = KNOT_SPACING) -> np.ndarray:
-    """Clamped cubic knot vector over ``z_range`` (m), interior knots at most
-    ``knot_spacing`` (m) apart."""
+    """Uniform cubic knot vector over ``z_range`` (m), knots at most ``knot_spacing`` (m)
+    apart and three more beyond either end: the equally spaced knots of P-splines, whose
+    second-difference penalty is zero for a straight line (clamped end knots would
+    penalise the slope of a leaning or twisting edge at both ends; Eilers & Marx 1996 §3)."""
     spans = max(1, math.ceil((z_range[1] - z_range[0]) / knot_spacing))
-    inner = np.linspace(z_range[0], z_range[1], spans + 1)
-    return np.concatenate([[z_range[0]] * DEGREE, inner, [z_range[1]] * DEGREE])
+    step = (z_range[1] - z_range[0]) / spans
+    return z_range[0] + step * np.arange(-DEGREE, spans + DEGREE + 1)
+
+
+def _inside(knots: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """Heights ``z`` (m) clipped to the base interval of the cubic ``knots``."""
+    return np.clip(z, knots[DEGREE], knots[-DEGREE - 1])
 
 
 def _second_difference(count: int) -> np.ndarray:
@@ -91,7 +98,7 @@ def _second_difference(count: int) -> np.ndarray:
 def initial_coefficients(knots: np.ndarray, z: np.ndarray, values: np.ndarray) -> np.ndarray:
     """Coefficients (K, 5) of penalised least-squares splines through per-slab ``values``
     (m, 5) at heights ``z`` (m,): the start of the robust fit."""
-    basis = BSpline.design_matrix(np.clip(z, knots[0], knots[-1]), knots, DEGREE).toarray()
+    basis = BSpline.design_matrix(_inside(knots, z), knots, DEGREE).toarray()
     count = basis.shape[1]
     difference = _second_difference(count)
     # a light penalty: the slabs' values where they are, a straight line between them
@@ -112,8 +119,7 @@ def fit_span_edge(points: np.ndarray, start: SpanEdgeModel,
     (knots and first coefficients, e.g. :func:`initial_coefficients`), radius within
     ``radius_bounds`` (m). Returns the model and the mask of the points kept."""
     knots, z_range = start.knots, start.z_range
-    z = np.clip(points[:, 2], *z_range)
-    basis = BSpline.design_matrix(z, knots, DEGREE).tocsr()
+    basis = BSpline.design_matrix(_inside(knots, points[:, 2]), knots, DEGREE).tocsr()
     count = basis.shape[1]
     difference = _second_difference(count)
     scale = np.repeat(PENALTY_SCALE, count - 2)  # per penalty row
@@ -161,7 +167,7 @@ def fit_span_edge(points: np.ndarray, start: SpanEdgeModel,
 
     for _ in range(TRIM_ROUNDS + 1):
         result = least_squares(residual, x, jac=jacobian, bounds=(lower, upper), loss="soft_l1",
-                               x_scale=x_scale, max_nfev=40, tr_solver="lsmr", args=(keep,))
+                               x_scale=x_scale, max_nfev=60, tr_solver="lsmr", args=(keep,))
         x = result.x
         values, normals = evaluate(x, np.ones(len(points), dtype=bool))
         d = edge_distance_at(points[:, :2], values[:, :2], values[:, 2], normals)[0]
