@@ -216,9 +216,9 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
         return [], [slab for slab, _, _ in fits], np.zeros(len(points), bool), np.full(
             len(points), np.nan), None
     # one model along the span (edge_span), started from the slabs' own circles, fitted to
-    # the points of every slab from the first to the last with a circle of its own and
-    # EXTEND_SLABS beyond: the slabs between without one (a hole, stray points) are filled
-    first, last = max(0, own[0] - EXTEND_SLABS), min(count - 1, own[-1] + EXTEND_SLABS)
+    # the points of every slab of the edge: the slabs without a circle of their own (a hole,
+    # stray points, the flanks cut short next to a cap) are filled by the model
+    first, last = 0, count - 1
     z_range = (float(edges_z[first]), float(edges_z[last + 1]))
     knots = span_knots(z_range)
     start = np.array([_section_values(fits[k][1]) for k in own])
@@ -267,10 +267,6 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
 
 #: Slabs either side over which the cloud's order against the model is smoothed (median).
 ORDER_SLABS = 3
-#: The span model reaches this many slabs beyond the first and last slab with a circle of
-#: its own (where the edge's points go on): the few slabs next to the hub and the tip caps,
-#: whose flanks are cut short by the caps' fillets.
-EXTEND_SLABS = 2
 
 
 def _section_values(geometry: tuple) -> list[float]:
