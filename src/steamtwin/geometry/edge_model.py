@@ -8,8 +8,9 @@ closes each end with a circle tangent to the pressure and suction sides (Dixon &
 Mechanics and Thermodynamics of Turbomachinery", 7th ed. 2014, §3.3 on profile geometry;
 Pritchard 1985, ASME 85-GT-219, the edge circles of the eleven-parameter profile, as in
 :mod:`~steamtwin.geometry.pritchard`). This module fits that model
-(:mod:`~steamtwin.geometry.edge_circle`, one section) slab by slab along the span and hands the
-side's fit model points instead of the sparse edge's own:
+(:mod:`~steamtwin.geometry.edge_circle`, one section) slab by slab along the span as the start
+of one smooth model of the whole edge along the span (:mod:`~steamtwin.geometry.edge_span`)
+and hands the side's fit that model's points instead of the sparse edge's own:
 
 - in slabs along the span, the flanks next to the edge (side points between ``a`` and ``L``
   of arc length from the edge, on either side of it) are each a plane through their points
@@ -25,20 +26,23 @@ side's fit model points instead of the sparse edge's own:
   along the bisector by δd / sin(β/2) for an error δd of a flank line
   (:mod:`~steamtwin.geometry.edge_circle`);
 - a slab whose radius is off its neighbours' median by more than :data:`SPAN_SPREAD`, or
-  whose arc points scatter or lean off the circle beyond the flanks' noise, is dropped; gaps of
-  up to :data:`MAX_BRIDGE` slabs get their neighbours' model interpolated along z;
+  whose arc points scatter or lean off the circle beyond the flanks' noise, gives no start;
+  the slabs' circles start the span model — centre, radius and the lines' angles as smooth
+  functions of z, fitted to the points of all slabs at once (:mod:`~steamtwin.geometry.
+  edge_span`) —, which also stands in for the slabs without a circle of their own (holes,
+  stray points, flanks cut short next to a cap);
 - the model is sampled on the arc and the flanks next to it (:data:`CUT_SPACINGS` spacings
   beyond the tangent points), denser than the cloud, and replaces the cloud's points there;
   every model point and every other point of the slab gets its side parameter ``s`` from its
   arc length along the model, scaled and shifted to the cloud's own ``s`` on the flanks (a
-  straight-line fit per slab, median over ±:data:`ORDER_SLABS` slabs): the cloud's order is
+  straight-line fit per slab, median over ±:data:`ORDER_SLABS` slabs, interpolated in z
+  across slabs without enough flank points): the cloud's order is
   0.3–0.8 mm off within a millimetre of a thin edge, and neighbouring slabs that disagree make
   the side's spline fold.
 
-An edge is modelled where its circle holds fewer than :data:`MODEL_SAMPLES` points of the
-cloud's spacing on the half circle; a slab whose flanks are not straight within the noise, whose
-wedge is too open or closed, or whose radius lies at a bound of its search, keeps its own points
-(:attr:`EdgeModel.slabs` records why).
+An edge is modelled where one of its slabs has a circle of its own, in the slabs where the span
+model's half circle holds fewer than :data:`MODEL_SAMPLES` points of the cloud's spacing;
+:attr:`EdgeModel.slabs` records each slab's own fit, or why it has none.
 """
 
 from __future__ import annotations
@@ -218,49 +222,44 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
     # one model along the span (edge_span), started from the slabs' own circles, fitted to
     # the points of every slab of the edge: the slabs without a circle of their own (a hole,
     # stray points, the flanks cut short next to a cap) are filled by the model
-    first, last = 0, count - 1
-    z_range = (float(edges_z[first]), float(edges_z[last + 1]))
+    z_range = (float(edges_z[0]), float(edges_z[-1]))
     knots = span_knots(z_range)
     start = np.array([_section_values(fits[k][1]) for k in own])
     start[:, 3:] = np.unwrap(start[:, 3:], axis=0)
     r_max = MODEL_SAMPLES * spacing / math.pi
-    inside = near[(z_near >= z_range[0]) & (z_near <= z_range[1])]
     z_own = np.array([fits[k][0].z for k in own])
-    model, _ = fit_span_edge(points[inside], SpanEdgeModel(
+    model, _ = fit_span_edge(points[near], SpanEdgeModel(
         knots, initial_coefficients(knots, z_own, start), z_range), (0.02 * r_max, 2.0 * r_max))
     centres, radii, _ = model.at(np.array([slab.z for slab, _, _ in fits]))
     # the cloud's order along the edge, scale and shift of its arc length against the model's
     # (:func:`_order_against_model`), smoothed along the span: each slab's own is noisy by a
     # few tenths of a millimetre, and the side's spline, smooth over several slabs, folds
     # where neighbouring slabs disagree
-    covered = np.arange(first, last + 1)
-    order = np.full((len(fits), 2), np.nan)
-    for k in covered:
-        order[k] = _order_against_model(points, arc, fits[k][2], model, spacing)
+    order = np.array([_order_against_model(points, arc, members, model, spacing)
+                      for _, _, members in fits])
     smooth = np.full((len(fits), 2), np.nan)
-    for k in covered:
-        around = order[max(first, k - ORDER_SLABS): k + ORDER_SLABS + 1]
+    for k in range(len(fits)):
+        around = order[max(0, k - ORDER_SLABS): k + ORDER_SLABS + 1]
         if np.isfinite(around[:, 0]).any():
             smooth[k] = np.nanmedian(around, axis=0)
-    known = covered[np.isfinite(smooth[covered, 0])]
+    known = np.flatnonzero(np.isfinite(smooth[:, 0]))  # slabs between: interpolated in z
     pieces, slabs = [], []
     replaced = np.zeros(len(points), dtype=bool)
     parameters = np.full(len(points), np.nan)
     for k, (slab, _, members) in enumerate(fits):
-        if first <= k <= last:
-            fitted = {"radius": float(radii[k]), "centre": (float(centres[k, 0]),
-                                                            float(centres[k, 1]))}
-            if math.pi * radii[k] >= MODEL_SAMPLES * spacing:
-                slab = replace(slab, **fitted, used=False, reason="edge resolved by the cloud")
-            elif len(known):
-                slab = replace(slab, **fitted, used=True, reason="" if slab.used else
-                               f"filled by the span model ({slab.reason})")
-                scale_shift = [np.interp(k, known, smooth[known, i]) for i in range(2)]
-                applied = _apply_model(points, perimeter, members, model, spacing, centre_s,
-                                       (edges_z[k], edges_z[k + 1]), scale_shift)
-                pieces.append(applied[0])
-                replaced[applied[1]] = True
-                parameters[applied[2]] = applied[3]
+        fitted = {"radius": float(radii[k]), "centre": (float(centres[k, 0]),
+                                                        float(centres[k, 1]))}
+        if math.pi * radii[k] >= MODEL_SAMPLES * spacing:
+            slab = replace(slab, **fitted, used=False, reason="edge resolved by the cloud")
+        elif len(known):
+            slab = replace(slab, **fitted, used=True, reason="" if slab.used else
+                           f"filled by the span model ({slab.reason})")
+            scale_shift = [np.interp(k, known, smooth[known, i]) for i in range(2)]
+            applied = _apply_model(points, perimeter, members, model, spacing, centre_s,
+                                   (edges_z[k], edges_z[k + 1]), scale_shift)
+            pieces.append(applied[0])
+            replaced[applied[1]] = True
+            parameters[applied[2]] = applied[3]
         slabs.append(slab)
     return pieces, slabs, replaced, parameters, model if pieces else None
 
