@@ -177,3 +177,26 @@ def test_fit_span_edge_recovers_a_known_model_from_a_poor_start() -> None:
     assert np.linalg.norm(fitted_centre - exact_centre(check), axis=1).max() < 0.01e-3
     assert np.abs(fitted_radius - radius_at(check)).max() < 0.01e-3
     assert keep.mean() > 0.95
+
+
+def test_slabs_next_to_a_cap_keep_their_own_points() -> None:
+    """With root and tip caps at z = 0 and HEIGHT, the slabs within three slab heights of
+    either cap are not modelled (the side's spline joins the cap rim from the cloud's own
+    points) and none of their points is replaced; the slabs between are."""
+    points, s, labels, perimeter = twisted_scan(seed=3)
+    cap_xy = np.zeros((20, 2))
+    points = np.vstack([points, np.column_stack([cap_xy, np.zeros(20)]),
+                        np.column_stack([cap_xy, np.full(20, HEIGHT)])])
+    labels = np.concatenate([labels, np.full(20, REGIONS.index("root")),
+                             np.full(20, REGIONS.index("tip"))])
+    s = np.concatenate([s, np.full(40, np.nan)])
+    perimeter = np.concatenate([perimeter, np.full(40, np.nan)])
+    side = ~np.isin(labels, [REGIONS.index("root"), REGIONS.index("tip")])
+    model = model_sparse_edges(points, s, side, labels, perimeter, SPACING)
+    slabs = [slab for slab in model.slabs if slab.edge == "trailing_edge"]
+    near_cap = [slab for slab in slabs if min(slab.z, HEIGHT - slab.z) < 4.5e-3]
+    assert near_cap and all(not slab.used and slab.reason == "next to a cap"
+                            for slab in near_cap)
+    assert any(slab.used for slab in slabs)
+    z = points[model.replaced, 2]
+    assert z.min() > 4.4e-3 and z.max() < HEIGHT - 4.4e-3
