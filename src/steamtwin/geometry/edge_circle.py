@@ -57,42 +57,50 @@ def tangent_centre(normals: np.ndarray, offsets: np.ndarray, radius: float) -> n
     return np.linalg.solve(normals, (offsets + radius).T).T
 
 
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Dot products over the last axis, broadcast."""
+    return np.sum(a * b, axis=-1)
+
+
 def _away(normals: np.ndarray, tip: np.ndarray) -> np.ndarray:
-    """Unit directions (n, 2) along the lines of inward ``normals`` (n, 2), away from ``tip``."""
-    away = np.column_stack([normals[:, 1], -normals[:, 0]])
-    return np.where((np.einsum("ij,ij->i", away, tip) > 0.0)[:, None], -away, away)
+    """Unit directions (…, 2) along the lines of inward ``normals`` (…, 2), away from
+    ``tip``."""
+    away = np.stack([normals[..., 1], -normals[..., 0]], axis=-1)
+    return np.where((_dot(away, tip) > 0.0)[..., None], -away, away)
 
 
 def tip_and_half_angle(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The unit direction (n, 2) from the centre to the tip of an edge whose lines have the
-    inward unit ``normals`` (n, 2, 2), along the wedge's bisector, and the angle (n,; rad)
+    """The unit direction (…, 2) from the centre to the tip of an edge whose lines have the
+    inward unit ``normals`` (…, 2, 2), along the wedge's bisector, and the angle (…; rad)
     from the tip to either tangent point, (π − β)/2 for a wedge angle β."""
-    tip = -(normals[:, 0] + normals[:, 1])
-    tip /= np.linalg.norm(tip, axis=1)[:, None]
-    return tip, np.arccos(np.clip(-np.einsum("ij,ij->i", normals[:, 0], tip), -1.0, 1.0))
+    tip = -(normals[..., 0, :] + normals[..., 1, :])
+    tip = tip / np.linalg.norm(tip, axis=-1, keepdims=True)
+    return tip, np.arccos(np.clip(-_dot(normals[..., 0, :], tip), -1.0, 1.0))
 
 
-def edge_distance_at(xy: np.ndarray, centre: np.ndarray, radius: np.ndarray,
+def edge_distance_at(xy: np.ndarray, centre: np.ndarray, radius: np.ndarray | float,
                      normals: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Signed distance (m, positive outside) of ``xy`` (n, 2) from an edge model given per
-    point — circle ``centre`` (n, 2; m) and ``radius`` (n,; m), inward unit normals
-    ``normals`` (n, 2, 2) of the two lines tangent to it, n·p = n·c − r —: the arc between the
-    tangent points c − r·nᵢ, then the lines beyond them. Returns the distance, the mask of the
-    points in the arc's sector (past both tangent points, towards the edge) and the index of
-    the line each other point is measured from (−1 in the sector)."""
+    point or shared — circle ``centre`` (n, 2; m) and ``radius`` (n, or scalar; m), inward
+    unit normals ``normals`` (n, 2, 2 or 2, 2) of the two lines tangent to it,
+    n·p = n·c − r —: the arc between the tangent points c − r·nᵢ, then the lines beyond them.
+    Returns the distance, the mask of the points in the arc's sector (past both tangent
+    points, towards the edge) and the index of the line each other point is measured from
+    (−1 in the sector)."""
     tip = tip_and_half_angle(normals)[0]
+    r = np.asarray(radius)
     sector = np.ones(len(xy), dtype=bool)
     line = np.full(len(xy), np.inf)
     which = np.full(len(xy), -1)
     for i in range(2):
-        n = normals[:, i]
-        past = np.einsum("ij,ij->i", xy - (centre - radius[:, None] * n), _away(n, tip)) < 0.0
+        n = normals[..., i, :]
+        past = _dot(xy - (centre - r[..., None] * n), _away(n, tip)) < 0.0
         sector &= past
-        distance = np.einsum("ij,ij->i", centre - xy, n) - radius  # positive outside the line
+        distance = _dot(centre - xy, n) - r  # positive outside the line
         beside = ~past & (np.abs(distance) < np.abs(line))
         line[beside] = distance[beside]
         which[beside] = i
-    circle = np.linalg.norm(xy - centre, axis=1) - radius
+    circle = np.linalg.norm(xy - centre, axis=1) - r
     which[sector] = -1
     return np.where(which < 0, circle, line), sector, which
 
@@ -103,9 +111,8 @@ def edge_distance(xy: np.ndarray, normals: np.ndarray, offsets: np.ndarray, radi
     of the circle of ``radius`` tangent to both lines nᵢ·p = dᵢ (``offsets`` (n, 2) at each
     point's height), then the lines beyond the tangent points c − r·nᵢ — and the mask of the
     points in the arc's sector (:func:`edge_distance_at` with the same lines at every point)."""
-    centre = np.broadcast_to(tangent_centre(normals, offsets, radius), xy.shape)
-    distance, sector, _ = edge_distance_at(xy, centre, np.full(len(xy), radius),
-                                           np.broadcast_to(normals, (len(xy), 2, 2)))
+    distance, sector, _ = edge_distance_at(xy, tangent_centre(normals, offsets, radius),
+                                           radius, normals)
     return distance, sector
 
 
