@@ -9,13 +9,12 @@ one-parameter family in r. :func:`edge_distance` measures points against the arc
 tangent points and the lines beyond them; :func:`fit_tangent_circle` fits r (geometric fit,
 Chernov & Lesort 2005, "Least squares fitting of circles", J. Math. Imaging Vision 23:239, with
 a robust loss); :func:`refine_edge` refits lines and radius together; :func:`flank_plane` fits
-a flank as a plane; :func:`model_arc_length` is the arc length along the model. Used by
-:mod:`~steamtwin.geometry.edge_model` slab by slab along the span.
+a flank as a plane; :func:`arc_length_at` is the arc length along the model. Used by
+:mod:`~steamtwin.geometry.edge_model` slab by slab and :mod:`~steamtwin.geometry.edge_span`
+along the span.
 """
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 from scipy.optimize import least_squares, minimize_scalar
@@ -58,26 +57,63 @@ def tangent_centre(normals: np.ndarray, offsets: np.ndarray, radius: float) -> n
     return np.linalg.solve(normals, (offsets + radius).T).T
 
 
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Dot products over the last axis, broadcast."""
+    return np.sum(a * b, axis=-1)
+
+
+def _away(normals: np.ndarray, tip: np.ndarray) -> np.ndarray:
+    """Unit directions (…, 2) along the lines of inward ``normals`` (…, 2), away from
+    ``tip``."""
+    away = np.stack([normals[..., 1], -normals[..., 0]], axis=-1)
+    return np.where((_dot(away, tip) > 0.0)[..., None], -away, away)
+
+
+def tip_and_half_angle(normals: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The unit direction (…, 2) from the centre to the tip of an edge whose lines have the
+    inward unit ``normals`` (…, 2, 2), along the wedge's bisector, and the angle (…; rad)
+    from the tip to either tangent point, (π − β)/2 for a wedge angle β."""
+    tip = -(normals[..., 0, :] + normals[..., 1, :])
+    tip = tip / np.linalg.norm(tip, axis=-1, keepdims=True)
+    return tip, np.arccos(np.clip(-_dot(normals[..., 0, :], tip), -1.0, 1.0))
+
+
+def edge_distance_at(xy: np.ndarray, centre: np.ndarray, radius: np.ndarray | float,
+                     normals: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Signed distance (m, positive outside) of ``xy`` (n, 2) from an edge model given per
+    point or shared — circle ``centre`` (n, 2; m) and ``radius`` (n, or scalar; m), inward
+    unit normals ``normals`` (n, 2, 2 or 2, 2) of the two lines tangent to it,
+    n·p = n·c − r —: the arc between the tangent points c − r·nᵢ, then the lines beyond them.
+    Returns the distance, the mask of the points in the arc's sector (past both tangent
+    points, towards the edge) and the index of the line each other point is measured from
+    (−1 in the sector)."""
+    tip = tip_and_half_angle(normals)[0]
+    r = np.asarray(radius)
+    sector = np.ones(len(xy), dtype=bool)
+    line = np.full(len(xy), np.inf)
+    which = np.full(len(xy), -1)
+    for i in range(2):
+        n = normals[..., i, :]
+        past = _dot(xy - (centre - r[..., None] * n), _away(n, tip)) < 0.0
+        sector &= past
+        distance = _dot(centre - xy, n) - r  # positive outside the line
+        beside = ~past & (np.abs(distance) < np.abs(line))
+        line[beside] = distance[beside]
+        which[beside] = i
+    circle = np.linalg.norm(xy - centre, axis=1) - r
+    which[sector] = -1
+    return np.where(which < 0, circle, line), sector, which
+
+
 def edge_distance(xy: np.ndarray, normals: np.ndarray, offsets: np.ndarray, radius: float
                   ) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance (m, positive outside) of ``xy`` (n, 2) from the edge model — the arc
     of the circle of ``radius`` tangent to both lines nᵢ·p = dᵢ (``offsets`` (n, 2) at each
     point's height), then the lines beyond the tangent points c − r·nᵢ — and the mask of the
-    points in the arc's sector (past both tangent points, towards the edge)."""
-    centre = tangent_centre(normals, offsets, radius)
-    tip = -(normals[0] + normals[1]) / np.linalg.norm(normals[0] + normals[1])
-    sector = np.ones(len(xy), dtype=bool)
-    line = np.full(len(xy), np.inf)
-    for i, n in enumerate(normals):
-        away = np.array([n[1], -n[0]])
-        away = -away if away @ tip > 0 else away
-        past = np.einsum("ij,j->i", xy - (centre - radius * n), away) < 0.0
-        sector &= past
-        distance = offsets[:, i] - xy @ n  # positive outside the line
-        beside = ~past & (np.abs(distance) < np.abs(line))
-        line[beside] = distance[beside]
-    circle = np.linalg.norm(xy - centre, axis=1) - radius
-    return np.where(sector | np.isinf(line), circle, line), sector
+    points in the arc's sector (:func:`edge_distance_at` with the same lines at every point)."""
+    distance, sector, _ = edge_distance_at(xy, tangent_centre(normals, offsets, radius),
+                                           radius, normals)
+    return distance, sector
 
 
 def fit_tangent_circle(xy: np.ndarray, normals: np.ndarray, offsets: np.ndarray,
@@ -146,24 +182,22 @@ def refine_edge(xy: np.ndarray, dz: np.ndarray, normals: np.ndarray, d0: np.ndar
     return n, e0, e1, float(r)
 
 
-def model_arc_length(xy: np.ndarray, normals: np.ndarray, offsets: np.ndarray, radius: float
-                     ) -> np.ndarray:
+def arc_length_at(xy: np.ndarray, centre: np.ndarray, radius: np.ndarray,
+                  normals: np.ndarray) -> np.ndarray:
     """Arc length u (m) of the points ``xy`` (n, 2) along the edge model of
-    :func:`edge_distance` from its tip, negative towards line 0: r × the angle from the tip
-    on the arc's sector, r·(π − β)/2 plus the distance along the line beyond it."""
-    centre = tangent_centre(normals, offsets, radius)
-    tip = -(normals[0] + normals[1]) / np.linalg.norm(normals[0] + normals[1])
-    half = math.acos(float(np.clip(-normals[0] @ tip, -1.0, 1.0)))
-    perp = np.array([-tip[1], tip[0]])
-    sign = 1.0 if -normals[0] @ perp > 0 else -1.0  # which way round line 0 lies
+    :func:`edge_distance_at` (per point: ``centre`` (n, 2), ``radius`` (n,), ``normals``
+    (n, 2, 2)) from its tip, negative towards line 0: r × the angle from the tip on the arc's
+    sector, r·(π − β)/2 plus the distance along the line beyond it."""
+    tip, half = tip_and_half_angle(normals)
+    perp = np.column_stack([-tip[:, 1], tip[:, 0]])
+    sign = np.where(-np.einsum("ij,ij->i", normals[:, 0], perp) > 0, 1.0, -1.0)  # line 0's side
     v = xy - centre
-    u = radius * np.arctan2(-sign * (v @ perp), v @ tip)
+    u = radius * np.arctan2(-sign * np.einsum("ij,ij->i", v, perp), np.einsum("ij,ij->i", v, tip))
     along, distance = np.zeros((2, len(xy))), np.zeros((2, len(xy)))
-    for i, n in enumerate(normals):
-        away = np.array([n[1], -n[0]])
-        away = -away if away @ tip > 0 else away
-        along[i] = np.einsum("ij,j->i", v + radius * n, away)
-        distance[i] = np.abs(offsets[:, i] - xy @ n)
+    for i in range(2):
+        n = normals[:, i]
+        along[i] = np.einsum("ij,ij->i", v + radius[:, None] * n, _away(n, tip))
+        distance[i] = np.abs(np.einsum("ij,ij->i", v, n) + radius)
     beside = along.max(axis=0) >= 0.0  # not past both tangent points: on a flank
     line = np.where((along[1] < 0.0) | ((along[0] >= 0.0) & (distance[0] <= distance[1])), 0, 1)
     flank_u = (radius * half + along[line, np.arange(len(xy))]) * np.where(line == 0, -1.0, 1.0)
