@@ -67,14 +67,19 @@ def _after_swap(degraded: bool, bias_at: int | None = None, seed: int = 31
     """The blocks after a degradation swap at START: 45 min at 60 % load, then the evening at
     90 % and at 40 %. ``degraded``: the plant's leftover offset, which the swapped flow
     coefficient does not explain, grows with the load away from 60 % — all four sensors
-    together, ±4 σ at the other holds. ``bias_at``: a real 4-σ exhaust bias from that block on.
+    together, ±4 σ at the other holds, arriving a few minutes after the load as on the
+    virtual plant (docs/benchmarks.md). ``bias_at``: a real 4-σ exhaust bias from that block on.
     A restart from the saved state (JSON) in the middle of the 90 % band's window."""
     monitor = _fitted()
     load = _load([(0.6, 45), (0.9, 90), (0.4, 90)], 0.6)
     day = _residuals(load, np.random.default_rng(seed), START + pd.Timedelta(minutes=1))
-    if degraded:
+    if degraded:  # reaching the sensors through their thermowells' lag, τ = 2 min
+        lagged = np.empty(load.size)
+        lagged[0] = load[0]
+        for k in range(1, load.size):
+            lagged[k] = lagged[k - 1] + (1.0 - np.exp(-0.5)) * (load[k] - lagged[k - 1])
         pattern = np.array([1.0, 1.0, -1.0, 1.0]) * [monitor.sigma_[s] for s in SENSORS]
-        day += np.outer((load - 0.6) / 0.3 * 4.0, pattern)
+        day += np.outer((lagged - 0.6) / 0.3 * 4.0, pattern)
     if bias_at is not None:
         day.iloc[bias_at:, 2] += 4.0 * monitor.sigma_["hp_exhaust_temperature"]
     monitor.restart(rebase_after=START)

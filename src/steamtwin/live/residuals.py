@@ -401,7 +401,8 @@ class ResidualMonitor:
                                  f"(got {dict(coverage)})")
             with np.errstate(divide="ignore"):  # no sample: σ = ∞, the sensor out of the block
                 sigma = sigma / np.sqrt(np.minimum(share, 1.0))
-        band = str(math.floor(load / self.settings.load_band)) if at_load else "offset"
+        band = (str(math.floor(self.filtered_load_[0] / self.settings.load_band)) if at_load
+                else "offset")  # the band of the lagged load (steamtwin.live.rebaseline)
         r = np.array([float(block.get(s, math.nan))
                       - (float(np.interp(load, *baseline[s]))
                          + float(imbalance @ self.transient_gain_[s]) if at_load
