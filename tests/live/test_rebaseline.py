@@ -141,3 +141,12 @@ def test_innovations_do_not_depend_on_the_new_centre(centre, values):
         assert plain.shift("30")[0] == pytest.approx(np.mean(values[:5]), abs=1e-9)
     assert plain.shift("31")[0] == 0.0  # another band keeps its centre
     assert plain.innovations(START - pd.Timedelta(seconds=1), "30", np.array([7.0]))[0] == 7.0
+
+
+def test_a_state_of_the_one_constant_rule_is_refused_by_name():
+    state = _fitted().get_state()
+    assert "rebaseline" in state and "shift" not in state
+    legacy = {k: v for k, v in state.items() if k != "rebaseline"} | {
+        "shift": {"hp_exhaust_temperature": 0.3}, "rebasing": None, "rebase_after": None}
+    with pytest.raises(ValueError, match="'shift'"):
+        ResidualMonitor(SENSORS, FLOOR).set_state(legacy)
