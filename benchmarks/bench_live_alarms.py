@@ -4,9 +4,10 @@ streamed FOM, clock-aligned 60-s blocks, ``ResidualMonitor`` with J per load ban
 (``SensitivityCache``), ``LiveRecalibration`` (10-min tracker steps, swaps on schedule every
 24 h and on a degradation alarm) and the DuckDB historian.
 
-Per case: the alarms (kind, signal, start, end) and the parameter swaps the database holds; for
-the fouling step (flow coefficient −2 % at noon): the degradation alarm's delay and the live
-flow coefficient against the new twin-equivalent truth 30 min after the step. The twin's
+Per case: the alarms (kind, signal, start, end), the sensor-fault alarm time after the fault's
+onset (sensor-hours, open alarms counted to the day's end) and the parameter swaps the database
+holds; for the fouling step (flow coefficient −2 % at noon): the degradation alarm's delay and
+the live flow coefficient against the new twin-equivalent truth 30 min after the step. The twin's
 parameters and the monitor come from a healthy calibration day (``day`` seed 100, the same
 instruments): the tracker run over it gives the parameters, the monitor is fitted on that day's
 residuals at them. Plant runs are shared with ``bench_alarms.py``'s cache.
@@ -115,6 +116,16 @@ def _hours(time: object, start: pd.Timestamp) -> str:
     return f"{(pd.Timestamp(time) - start) / pd.Timedelta(hours=1):.2f}"
 
 
+def _fault_hours(alarms: pd.DataFrame, start: pd.Timestamp, case: dict) -> float:
+    """Sensor-hours of sensor-fault alarms from the fault's onset (``FAULT_AT``) on, an open
+    alarm counted to the day's last sample."""
+    onset, last = start + FAULT_AT, case["measured"].index[-1]
+    faults = alarms[alarms["kind"] == "sensor_fault"]
+    begin = pd.to_datetime(faults["start"], utc=True).clip(lower=onset)
+    end = pd.to_datetime(faults["end"], utc=True).fillna(last)
+    return float(((end - begin).clip(lower=pd.Timedelta(0)) / pd.Timedelta(hours=1)).sum())
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--cache", type=Path,
@@ -129,8 +140,8 @@ def main() -> None:
     print(f"twin-equivalent flow coefficient after the step: "
           f"{truth_after.flow_coefficient:.4f}")
     calibrated: dict[int, tuple[ModelParameters, ResidualMonitor]] = {}
-    print("| case | alarms (kind signal start–end, h) | swaps | delay | live φ at +30 min "
-          "(error) | run |\n|---|---|---|---|---|---|")
+    print("| case | alarms (kind signal start–end, h) | sensor-fault h after the onset | swaps "
+          "| delay | live φ at +30 min (error) | run |\n|---|---|---|---|---|---|---|")
     for name in wanted:
         seed = int(name[-1]) if name.startswith("clean") else 0
         clean = _plant(args.cache, f"clean{seed}", lambda s=seed: run_plant("day", random_state=s))
@@ -166,8 +177,8 @@ def main() -> None:
             before = swaps[times <= at]
             value = before["value"].iloc[-1] if len(before) else params.flow_coefficient
             live = f"{value:.4f} ({value - truth_after.flow_coefficient:+.4f})"
-        print(f"| {name} | {len(alarms)}: {listed} | {len(swaps)} | {delay} | {live} | "
-              f"{seconds:.0f} s |", flush=True)
+        print(f"| {name} | {len(alarms)}: {listed} | {_fault_hours(alarms, start, case):.2f} | "
+              f"{len(swaps)} | {delay} | {live} | {seconds:.0f} s |", flush=True)
     print(f"block {BLOCK_S:.0f} s; params from the calibration day's tracker: "
           + ", ".join(f"{k} {v:.4f}" for k, v in dataclasses.asdict(
               next(iter(calibrated.values()))[0]).items())

@@ -267,8 +267,9 @@ def _after_a_degradation_swap(rebase: bool, seed: int = 12) -> tuple[list, list]
 
 
 def test_a_degradation_swap_re_bases_the_residuals():
-    """The rule of the module docstring (control chart revised after an assignable cause,
-    CUSUM restarted: Montgomery §5.3/§6.2; Page 1954): without it the casing's leftover
+    """The rule of steamtwin.live.rebaseline with one band (a monitor without loads; control
+    chart revised after an assignable cause, CUSUM restarted: Montgomery §5.3/§6.2; Page
+    1954): without it the casing's leftover
     offset is a 'sensor fault' for as long as the data last; with it, none — and a real
     sensor bias after the window is still flagged as one."""
     before, stale = _after_a_degradation_swap(rebase=False)

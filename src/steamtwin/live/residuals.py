@@ -61,27 +61,12 @@ that include ramps (a calibration day):
 
 Re-baselining after a known change (:meth:`ResidualMonitor.restart` with ``rebase_after``, at
 every swap of the live parameters a degradation alarm caused). The baseline is the healthy
-residual of the *old* plant: a degraded plant that the twin's coefficients follow only in the
-pattern its J describes (its own structure — valve overlap, tip leakage, metal — answers the
-fouling in ways the twin lacks) keeps a residual offset after the swap, which the sensor
-hypotheses, reading it against the old baseline, take for sensor faults for hours. The rule
-is the control chart's after an assignable cause is found and acted on: the centre line is
-estimated again from data of the changed process (Montgomery, *Introduction to Statistical
-Quality Control*, 7th ed., §5.3 and §6.2, revising centre line and limits) and the CUSUM
-restarts (Page, Biometrika 41 (1954) 100–115; Basseville & Nikiforov 1993, §2.2). Monitoring
-does not pause while the new centre is learned: for the next ``rebase_blocks`` blocks wholly
-after the swap (the residuals the new parameters made) each sensor's residual enters as a
-self-starting innovation, (r_n − r̄_{n−1})·√((n−1)/n) with r̄_{n−1} the mean of the window's
-earlier blocks — with σ known, these are independent N(0, σ²) whatever the new centre
-(Hawkins, The Statistician 36 (1987) 299–316; Quesenberry, J. Quality Technology 23 (1991)
-213–223), so the thresholds keep their false-alarm rate and a fault that starts inside the
-window is still seen at its onset; then each sensor's baseline moves by the window's mean (a
-shift at every operating point: the load dependence learned on the healthy plant is kept) and
-the plain residuals resume. A swap during the window starts it again.
-σ and the thresholds stay those of the healthy fit: the instruments did not change. The
-window's length sets the error of the new centre, σ/√n (0.18 σ at the default 30 blocks,
-small against the 2-σ design shift of a sensor hypothesis); a fault present from the swap on
-is taken into the new centre — the price of learning it from the data.
+residual of the *old* plant; the degraded plant leaves, after the swap, an offset the twin's
+coefficients do not explain and that depends on the load. The control chart's centre is then
+estimated again per load band as the new data visit each band, each band self-starting
+meanwhile (Montgomery, *SQC* 7th ed., §5.3/§6.2; Hawkins 1987; Quesenberry 1991): the rule, its
+justification and its price are in :mod:`steamtwin.live.rebaseline`. σ and the thresholds stay
+those of the healthy fit: the instruments did not change.
 
 Partial blocks. σ is that of a full block's mean. A block holding fewer samples — the last,
 open bin of a finished stream, the bins around a gap, samples the gate rejected or without a
@@ -111,6 +96,7 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import brentq, nnls
 
+from steamtwin.live.rebaseline import BandRebaseline
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import Simulator
 
@@ -193,7 +179,8 @@ class MonitorSettings:
     missing: 2 σ); ``parameter_shift``: design change per parameter (default 0.01 each);
     ``load_band``: width of the baseline's load bands (load fraction); ``transient_times_s``:
     the time constants (s) of the load lags behind the imbalances; ``rebase_blocks``: blocks
-    whose mean re-bases the residuals after a degradation swap (the module docstring)."""
+    per load band whose mean re-bases that band after a degradation swap
+    (:mod:`steamtwin.live.rebaseline`)."""
 
     block_s: float = 60.0
     arl0_blocks: float = 1.0e6
@@ -317,9 +304,7 @@ class ResidualMonitor:
         self.last_time_ = None
         self.statistics_: dict[str, float] = {}
         self.active_: dict[str, pd.Timestamp] = {}
-        self.shift_: dict[str, float] = {}
-        self.rebasing_: list[list[float]] | None = None
-        self.rebase_after_: pd.Timestamp | None = None
+        self.rebaseline_ = BandRebaseline(self.sensors, self.settings.rebase_blocks)
         return self
 
     def _bands(self, loads: np.ndarray, values: np.ndarray) -> tuple[list[float], list[float]]:
@@ -416,21 +401,15 @@ class ResidualMonitor:
                                  f"(got {dict(coverage)})")
             with np.errstate(divide="ignore"):  # no sample: σ = ∞, the sensor out of the block
                 sigma = sigma / np.sqrt(np.minimum(share, 1.0))
-        shift = getattr(self, "shift_", {})
+        band = (str(math.floor(self.filtered_load_[0] / self.settings.load_band)) if at_load
+                else "offset")  # the band of the lagged load (steamtwin.live.rebaseline)
         r = np.array([float(block.get(s, math.nan))
                       - (float(np.interp(load, *baseline[s]))
                          + float(imbalance @ self.transient_gain_[s]) if at_load
-                         else self.offset_[s]) - shift.get(s, 0.0) for s in self.sensors])
-        rebasing = getattr(self, "rebasing_", None)
-        if rebasing is not None and (pd.Timestamp(time) - pd.Timedelta(
-                seconds=self.settings.block_s) < self.rebase_after_):
-            rebasing = None  # a block (partly) before the swap: the old centre still holds
-        if rebasing is not None:  # self-starting innovations against the window's mean
-            past = np.array(rebasing, dtype=float).reshape(-1, len(self.sensors))
-            seen = np.isfinite(past).sum(axis=0)
-            centre = np.where(seen > 0, np.nansum(past, axis=0) / np.maximum(seen, 1), np.nan)
-            rebasing.append([float(v) for v in r])
-            r = (r - centre) * np.sqrt(seen / (seen + 1.0))
+                         else self.offset_[s]) for s in self.sensors])
+        r = self.rebaseline_.innovations(  # re-based per band after a degradation swap
+            pd.Timestamp(time) - pd.Timedelta(seconds=self.settings.block_s), band,
+            r - self.rebaseline_.shift(band))
         present = np.isfinite(r)
         z_raw = np.where(present, r / sigma, 0.0)
         hypotheses = self._hypotheses(sensitivity)
@@ -479,21 +458,7 @@ class ResidualMonitor:
             events.append(AlarmEvent(kind, signal, time, False, value, limit, evidence))
             for _, _, other, *_ in crossing:
                 self.statistics_[other] = 0.0  # the raised one's return CUSUM starts at 0
-        if rebasing is not None and len(rebasing) >= self.settings.rebase_blocks:
-            self._rebase(np.array(rebasing))
         return events
-
-    def _rebase(self, residuals: np.ndarray) -> None:
-        """End the re-baselining window: each sensor's baseline moves by the mean of the
-        window's residuals (blocks × sensors; NaN: sensor out of the block)."""
-        shift = dict(getattr(self, "shift_", {}))
-        for j, sensor in enumerate(self.sensors):
-            column = residuals[:, j][np.isfinite(residuals[:, j])]
-            if column.size:
-                shift[sensor] = shift.get(sensor, 0.0) + float(np.mean(column))
-        self.shift_ = shift
-        self.rebasing_ = None
-        self.rebase_after_ = None
 
     def restart(self, rebase_after: pd.Timestamp | None = None) -> None:
         """Zero the statistics of every hypothesis not in alarm (the active ones keep their
@@ -502,19 +467,19 @@ class ResidualMonitor:
         model it tests is re-identified (Basseville & Nikiforov, *Detection of Abrupt
         Changes*, 1993, §2.2 and §8.1). ``rebase_after`` (UTC; None: no re-basing): the change
         follows a known change of the plant (a degradation alarm's swap) and applies to the
-        samples after this time: re-base the residuals on the next ``settings.rebase_blocks``
-        blocks that start after it, self-starting meanwhile (module docstring)."""
+        samples after this time: every load band relearns its centre from the blocks that
+        start after it, ``settings.rebase_blocks`` per band, self-starting meanwhile
+        (:mod:`steamtwin.live.rebaseline`)."""
         if not hasattr(self, "statistics_"):
             raise RuntimeError("fit the monitor on healthy residuals first")
         self.statistics_ = {name: (value if name in self.active_ else 0.0)
                             for name, value in self.statistics_.items()}
         if rebase_after is not None:
-            self.rebasing_ = []
-            self.rebase_after_ = pd.Timestamp(rebase_after)
+            self.rebaseline_.open(rebase_after)
 
     def get_state(self) -> dict:
         """JSON-ready state (fitted σ, offsets, load baselines, ramp σ and activity, statistics,
-        active alarms, re-baselining shift and window) to restart from."""
+        active alarms, the per-band re-baselining) to restart from."""
         return {"sigma": self.sigma_, "offset": self.offset_, "statistics": self.statistics_,
                 "active": {k: v.isoformat() for k, v in self.active_.items()},
                 "baseline": {k: [list(c), list(m)] for k, (c, m) in
@@ -525,12 +490,7 @@ class ResidualMonitor:
                                   else list(self.filtered_load_)),
                 "last_time": (None if getattr(self, "last_time_", None) is None
                               else self.last_time_.isoformat()),
-                "shift": dict(getattr(self, "shift_", {})),
-                "rebasing": (None if getattr(self, "rebasing_", None) is None
-                             else [[None if math.isnan(v) else v for v in row]
-                                   for row in self.rebasing_]),
-                "rebase_after": (None if getattr(self, "rebase_after_", None) is None
-                                 else self.rebase_after_.isoformat())}
+                "rebaseline": self.rebaseline_.get_state()}
 
     def set_state(self, state: Mapping[str, object]) -> ResidualMonitor:
         """Restore :meth:`get_state`'s output exactly."""
@@ -548,10 +508,10 @@ class ResidualMonitor:
         self.filtered_load_ = None if filtered is None else [float(x) for x in filtered]
         last = state.get("last_time")
         self.last_time_ = None if last is None else pd.Timestamp(last)
-        self.shift_ = {k: float(v) for k, v in state.get("shift", {}).items()}
-        rebasing = state.get("rebasing")
-        self.rebasing_ = None if rebasing is None else [
-            [math.nan if v is None else float(v) for v in row] for row in rebasing]
-        after = state.get("rebase_after")
-        self.rebase_after_ = None if after is None else pd.Timestamp(after)
+        if state.get("shift") or state.get("rebasing") is not None:
+            raise ValueError("monitor state: a one-constant re-baselining ('shift', "
+                             "'rebasing') from before the per-band rule; refit the monitor")
+        self.rebaseline_ = BandRebaseline(self.sensors, self.settings.rebase_blocks)
+        if state.get("rebaseline") is not None:
+            self.rebaseline_.set_state(state["rebaseline"])
         return self
