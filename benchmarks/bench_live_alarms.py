@@ -104,8 +104,8 @@ def _run_case(model: FullOrderModel, case: dict, params: ModelParameters,
     seconds = time.perf_counter() - clock
     alarms = twin.historian.alarms("unit1")
     swaps = twin.historian.connection.execute(
-        "SELECT time, value, reason FROM parameters WHERE name = 'flow_coefficient' "
-        "ORDER BY time").df()
+        "SELECT time, value, reason, low, high FROM parameters "
+        "WHERE name = 'flow_coefficient' ORDER BY time").df()
     twin.close()
     return alarms, swaps, seconds
 
@@ -177,6 +177,10 @@ def main() -> None:
             before = swaps[times <= at]
             value = before["value"].iloc[-1] if len(before) else params.flow_coefficient
             live = f"{value:.4f} ({value - truth_after.flow_coefficient:+.4f})"
+            if len(before) and pd.notna(before["low"].iloc[-1]):  # the filter's 95 % interval
+                low, high = before["low"].iloc[-1], before["high"].iloc[-1]
+                holds = low <= truth_after.flow_coefficient <= high
+                live += f", 95 % [{low:.4f}, {high:.4f}] {'holds' if holds else 'misses'} the truth"
         print(f"| {name} | {len(alarms)}: {listed} | {_fault_hours(alarms, start, case):.2f} | "
               f"{len(swaps)} | {delay} | {live} | {seconds:.0f} s |", flush=True)
     print(f"block {BLOCK_S:.0f} s; params from the calibration day's tracker: "
