@@ -1,6 +1,6 @@
 """Benchmark: where the twin's steady bias against the virtual plant sits, load by load.
 
-Run: python benchmarks/bench_band_bias.py [--step 0.025] [--features] [--spec NAME]
+Run: python benchmarks/bench_band_bias.py [--step 0.025 | --loads L ...] [--features]
 
 Noise-free steady states of the virtual plant (:func:`~steamtwin.dcs.plant_model.
 plant_steady_states`, loads 30 … 100 %) against the twin fed the plant's measured inputs at the
@@ -9,7 +9,7 @@ instrument error (RMS of a class-1 instrument's error: the rectangular bias ±to
 its noise σ in quadrature — what a perfect model scores against the DCS; ``dcs.sensors``).
 ``--features`` repeats the table with each of the plant's structural features (issue 18 item 8)
 switched off in turn, so the feature behind a load band's bias shows as the one whose removal
-takes it away. ``--spec`` runs the twin from another spec (a name or a TOML path).
+takes it away. The twin is the reference spec's, as :attr:`PlantTruth.twin_equivalent` fits it.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from steamtwin.dcs.plant_model import (
 )
 from steamtwin.dcs.sensors import default_sensor_models
 from steamtwin.model.fom import FullOrderModel
+from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.spec import load_spec
 
@@ -49,12 +50,12 @@ def instrument_error(name: str, value: float) -> float:
     return float(np.hypot(tol / np.sqrt(3.0), model.noise_sigma))
 
 
-def deviations(truth: PlantTruth, loads: tuple[float, ...], spec_name: str = "reference"
-               ) -> tuple[pd.DataFrame, object]:
+def deviations(truth: PlantTruth, loads: tuple[float, ...]
+               ) -> tuple[pd.DataFrame, ModelParameters]:
     """Twin − plant per load and signal, in instrument errors; and the parameters used."""
     states = plant_steady_states(loads, truth)
     params = twin_equivalent_parameters(replace(truth, drift=None))
-    twin = FullOrderModel(load_spec(spec_name))
+    twin = FullOrderModel(load_spec("reference"))
     rows = {}
     for load in states.index:
         frame = states.loc[[load], list(INPUT_SIGNALS)].set_axis(pd.to_datetime([START]))
@@ -68,14 +69,12 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--step", type=float, default=0.025)
     parser.add_argument("--features", action="store_true")
-    parser.add_argument("--spec", default="reference")
     parser.add_argument("--loads", type=float, nargs="+",
                         help="load fractions instead of 0.30 … 1.00 by --step")
     arguments = parser.parse_args()
     loads = tuple(arguments.loads or np.round(np.arange(0.30, 1.0 + 1e-9, arguments.step), 4))
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, Python "
-          f"{platform.python_version()}; load average {os.getloadavg()[0]:.1f}; "
-          f"twin spec {arguments.spec!r}")
+          f"{platform.python_version()}; load average {os.getloadavg()[0]:.1f}")
     cases = {"plant": PlantTruth()}
     if arguments.features:
         cases |= {
@@ -87,7 +86,7 @@ def main() -> None:
         }
     for label, truth in cases.items():
         wall, cpu = time.perf_counter(), time.process_time()
-        table, params = deviations(truth, loads, arguments.spec)
+        table, params = deviations(truth, loads)
         print(f"\n{label}: twin − plant / instrument error at twin-equivalent φ "
               f"{params.flow_coefficient:.4f}, friction {params.friction_coefficient:.3f} "
               f"({time.perf_counter() - wall:.0f} s wall, {time.process_time() - cpu:.0f} s CPU)")
