@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 
 import pytest
 from hypothesis import settings
 
 from steamtwin.model.fom import FullOrderModel
-from steamtwin.spec import TurbineSpec, load_spec
+from steamtwin.spec import ControlStage, TurbineSpec, load_spec
 
 # Property tests draw the same examples on every run (CI included): a failure is reproducible
 # and a green run stays green. HYPOTHESIS_PROFILE=explore searches afresh with more examples.
@@ -28,6 +29,24 @@ def reference_spec() -> TurbineSpec:
 def reference_model(reference_spec: TurbineSpec) -> FullOrderModel:
     model = FullOrderModel(reference_spec)
     _ = model.design_  # design step (compiles the kernel) once per session
+    return model
+
+
+@pytest.fixture(scope="session")
+def sequential_spec(reference_spec: TurbineSpec) -> TurbineSpec:
+    """The reference unit without its valve management: governing valves opened strictly in
+    sequence, flow linear in lift (the spec defaults) — the premise of the valve-schedule tests
+    written before the reference stated its overlap and characteristic."""
+    control = dataclasses.replace(reference_spec.control_stage,
+                                  valve_overlap=ControlStage.valve_overlap,
+                                  valve_characteristic=ControlStage.valve_characteristic)
+    return dataclasses.replace(reference_spec, control_stage=control)
+
+
+@pytest.fixture(scope="session")
+def sequential_model(sequential_spec: TurbineSpec) -> FullOrderModel:
+    model = FullOrderModel(sequential_spec)
+    _ = model.design_
     return model
 
 

@@ -29,8 +29,8 @@ def test_check_reference_prints_verdict_design_point_and_line(reference_model):
     result = runner.invoke(app, ["turbine", "check", "reference"])
     assert result.exit_code == 0, result.output
     assert "reference: consistent" in result.output
-    assert "13.03 MPa" in result.output and "13.022 MPa" in result.output  # spec, model p1
-    assert "177.38 MW" in result.output
+    assert "13.03 MPa" in result.output and "13.026 MPa" in result.output  # spec, model p1
+    assert "177.36 MW" in result.output
     for row in ("p1 (MPa)", "T ex (°C)", "HP power (MW)", "GV4 opening (%)", "30 %"):
         assert row in result.output
 
@@ -51,7 +51,8 @@ def test_check_writes_the_line_in_engineering_units(tmp_path, reference_spec,
     assert table.loc[100, "main_steam_flow_t_per_h"] == pytest.approx(1800)
     assert table.loc[50, "hp_exhaust_temperature_degC"] == pytest.approx(
         line.loc[0.5, "hp_exhaust_temperature"] - 273.15, abs=1e-3)
-    assert table.loc[100, "GV4_opening_pct"] == 0.0
+    # the reference's valve management (10 % overlap) cracks GV4 as GV3 nears full lift
+    assert 0.0 < table.loc[100, "GV4_opening_pct"] < 5.0
 
 
 def test_check_refuses_every_valve_open_with_the_reason(all_valves_open_spec, tmp_path):
@@ -67,7 +68,7 @@ def test_check_refuses_every_valve_open_with_the_reason(all_valves_open_spec, tm
 def test_show_puts_the_model_beside_the_heat_balance(reference_model):
     result = runner.invoke(app, ["turbine", "show", "reference"])
     assert result.exit_code == 0, result.output
-    assert "model − spec" in result.output and "13.022 MPa" in result.output
+    assert "model − spec" in result.output and "13.026 MPa" in result.output
 
 
 def test_show_refuses_a_spec_the_model_cannot_run(all_valves_open_spec):

@@ -45,16 +45,16 @@ def test_reference_design_point_reproduces_the_heat_balance(reference_spec, refe
     assert point.loc["control_stage_pressure", "spec"] == design.control_stage_pressure
 
 
-def test_design_line_falls_with_load_and_opens_the_valves_in_order(reference_spec,
-                                                                    reference_model):
-    line = design_line(reference_spec, model=reference_model)
+def test_design_line_falls_with_load_and_opens_the_valves_in_order(sequential_spec,
+                                                                    sequential_model):
+    line = design_line(sequential_spec, model=sequential_model)
     assert list(line.index) == list(DEFAULT_LOADS)  # falling loads
     for name in ("main_steam_flow", "control_stage_pressure", "hp_exhaust_pressure",
                  "hp_power"):
         assert (np.diff(line[name].to_numpy()) < 0).all(), name
     assert (np.diff(line["main_steam_pressure"].to_numpy()) <= 0).all()  # sliding below 77 %
     rated = line.loc[1.0]
-    point = design_point(reference_spec, model=reference_model)
+    point = design_point(sequential_spec, model=sequential_model)
     assert rated["control_stage_pressure"] == pytest.approx(
         point.loc["control_stage_pressure", "model"], rel=1e-9)
     # rated load is the GV1-3 valve point of the reference unit; GV4 is the overload reserve
@@ -62,16 +62,16 @@ def test_design_line_falls_with_load_and_opens_the_valves_in_order(reference_spe
     assert rated["GV3_opening"] == pytest.approx(1.0, abs=1e-3)
     # below 77 % load only the first valve level (GV1+GV2) admits steam
     assert (line.loc[[0.75, 0.5, 0.4, 0.3], ["GV3_opening", "GV4_opening"]] == 0.0).all().all()
-    arcs = np.array([v.admission_arc for v in reference_spec.control_stage.valves])
-    openings = line[[f"{v.name}_opening" for v in reference_spec.control_stage.valves]]
+    arcs = np.array([v.admission_arc for v in sequential_spec.control_stage.valves])
+    openings = line[[f"{v.name}_opening" for v in sequential_spec.control_stage.valves]]
     np.testing.assert_allclose(openings.to_numpy() @ arcs, line["admission_arc"], rtol=1e-12)
 
 
 @given(fraction=st.floats(0.0, 1.0))
-def test_valve_openings_fill_the_levels_in_opening_order(reference_spec, fraction):
-    valves = reference_spec.control_stage.valves
+def test_valve_openings_fill_the_levels_in_opening_order(sequential_spec, fraction):
+    valves = sequential_spec.control_stage.valves
     arc = fraction * sum(valve.admission_arc for valve in valves)
-    openings = valve_openings(reference_spec, arc)
+    openings = valve_openings(sequential_spec, arc)
     assert all(0.0 <= value <= 1.0 for value in openings.values())
     assert sum(openings[v.name] * v.admission_arc for v in valves) == pytest.approx(arc,
                                                                                    abs=1e-12)
@@ -82,9 +82,9 @@ def test_valve_openings_fill_the_levels_in_opening_order(reference_spec, fractio
 
 
 @given(fraction=st.floats(0.0, 1.0), overlap=st.floats(0.0, 0.5))
-def test_valve_openings_follow_the_overlap_of_opening(reference_spec, fraction, overlap):
-    spec = dataclasses.replace(reference_spec, control_stage=dataclasses.replace(
-        reference_spec.control_stage, valve_overlap=overlap))
+def test_valve_openings_follow_the_overlap_of_opening(sequential_spec, fraction, overlap):
+    spec = dataclasses.replace(sequential_spec, control_stage=dataclasses.replace(
+        sequential_spec.control_stage, valve_overlap=overlap))
     valves = spec.control_stage.valves
     arc = fraction * sum(valve.admission_arc for valve in valves)
     openings = valve_openings(spec, arc)

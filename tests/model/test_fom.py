@@ -91,12 +91,12 @@ def _constant_pressure_frame(spec, flows):
     }, index=np.arange(n) * 1e7)  # far apart: each sample is steady
 
 
-def test_valve_points_are_efficiency_peaks(reference_model, reference_spec):
-    design = reference_spec.design
+def test_valve_points_are_efficiency_peaks(sequential_model, sequential_spec):
+    design = sequential_spec.design
     fractions = np.array([0.82, 0.90, 0.99, 1.00, 1.01])
     flows = fractions * design.main_steam_flow
-    frame = _constant_pressure_frame(reference_spec, flows)
-    diagnostics = reference_model.simulate_detailed(frame, stages=False).diagnostics
+    frame = _constant_pressure_frame(sequential_spec, flows)
+    diagnostics = sequential_model.simulate_detailed(frame, stages=False).diagnostics
     h0 = if97.enthalpy_pt(design.main_steam_pressure, design.main_steam_temperature)
     s0 = if97.entropy_pt(design.main_steam_pressure, design.main_steam_temperature)
     isentropic = if97.enthalpy_ps(frame["hp_exhaust_pressure"].to_numpy(), s0)

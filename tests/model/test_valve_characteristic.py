@@ -47,13 +47,13 @@ def _flux(spec: TurbineSpec, p_valve: float) -> float:
     return psi * math.sqrt(p_valve / v)
 
 
-def test_a_rated_point_between_valve_points_throttles_the_last_open_group(reference_spec):
+def test_a_rated_point_between_valve_points_throttles_the_last_open_group(sequential_spec):
     """GV3 (the last group open at design) throttled to 99 % of the wide-open valve outlet at
     design: the throats grow so that GV1–3 still pass the rated flow, and at rated load the
     model's GV3 passes the share of its wide-open flow that the nozzle law gives there."""
-    outlet = 0.99 * _wide_open_outlet(reference_spec)
-    spec = _with_design(reference_spec, valve_outlet_pressure=outlet)
-    before = kernel_constants(reference_spec).control.level_area
+    outlet = 0.99 * _wide_open_outlet(sequential_spec)
+    spec = _with_design(sequential_spec, valve_outlet_pressure=outlet)
+    before = kernel_constants(sequential_spec).control.level_area
     after = kernel_constants(spec).control.level_area
     # rated flow = A/arc·(arc_12·flux_wide + arc_3·flux_throttled): solved for A/arc
     arcs = kernel_constants(spec).control.level_arc
@@ -118,13 +118,13 @@ def test_the_lift_schedule_passes_the_flow_through_the_characteristic(reference_
     np.testing.assert_allclose(shares, np.interp(lifts, *CONCAVE), rtol=1e-14)
 
 
-def test_openings_are_reported_as_lifts(reference_spec):
+def test_openings_are_reported_as_lifts(sequential_spec):
     """GV1–2 wide open and GV3 passing 80 % of its wide-open flow: with the concave
     characteristic GV3 stands at 30 % lift (linear: 80 %)."""
-    arcs = kernel_constants(reference_spec).control.level_arc
+    arcs = kernel_constants(sequential_spec).control.level_arc
     arc = arcs[0] + 0.8 * arcs[1]
-    concave = _with_control(reference_spec, valve_characteristic=CONCAVE)
+    concave = _with_control(sequential_spec, valve_characteristic=CONCAVE)
     assert valve_openings(concave, arc)["GV3"] == pytest.approx(0.3, abs=1e-9)
-    assert valve_openings(reference_spec, arc)["GV3"] == pytest.approx(0.8, abs=1e-9)
+    assert valve_openings(sequential_spec, arc)["GV3"] == pytest.approx(0.8, abs=1e-9)
     assert valve_openings(concave, arc)["GV1"] == 1.0
     assert valve_openings(concave, arc)["GV4"] == 0.0

@@ -16,7 +16,7 @@ from steamtwin.model.design import kernel_constants
 from steamtwin.model.design_check import design_line
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.kernel import _level_lift, _valve_demand
-from steamtwin.spec import TurbineSpec
+from steamtwin.spec import ControlStage, TurbineSpec
 
 # The reference design line at 100/75/50/30 % load computed by the kernel before the overlap
 # existed (commit ffa6f49), as float.hex: overlap 0 must reproduce it to round-off. Bit for bit
@@ -31,9 +31,9 @@ def _with_overlap(spec: TurbineSpec, overlap: float) -> TurbineSpec:
         spec.control_stage, valve_overlap=overlap))
 
 
-def test_no_overlap_reproduces_the_reference_design_line(reference_spec):
-    assert reference_spec.control_stage.valve_overlap == 0.0  # the default
-    line = design_line(_with_overlap(reference_spec, 0.0), (1.0, 0.75, 0.5, 0.3))
+def test_no_overlap_reproduces_the_reference_design_line(sequential_spec):
+    assert ControlStage.valve_overlap == 0.0  # the default: strictly sequential
+    line = design_line(_with_overlap(sequential_spec, 0.0), (1.0, 0.75, 0.5, 0.3))
     before = json.loads(REFERENCE_LINE.read_text(encoding="utf-8"))
     assert sorted(before) == sorted(line.columns)
     for column, values in before.items():
@@ -49,14 +49,14 @@ def _steady(spec: TurbineSpec, flow_fraction: float) -> pd.Series:
     return model.simulate_detailed(inputs, stages=False).diagnostics.iloc[0]
 
 
-def test_overlap_throttles_two_groups_near_a_valve_point(reference_spec):
+def test_overlap_throttles_two_groups_near_a_valve_point(sequential_spec):
     """At 75 % of the design flow at rated pressure GV1–2 (level 1) pass ~90 % of their
     wide-open flow: with 30 % overlap GV3 has opened too and both groups throttle, so more steam
     is throttled and the control stage leaves hotter (measured +5.4 K) with less HP power
     (−2.5 MW). At 40 % (level 1 at ~50 %, below where the overlap starts) only the design step
     moves (−0.4 K, +0.35 MW: rated flow now sits on the overlapping schedule); the
     comparison removes that."""
-    states = {(share, overlap): _steady(_with_overlap(reference_spec, overlap), share)
+    states = {(share, overlap): _steady(_with_overlap(sequential_spec, overlap), share)
               for share in (0.75, 0.4) for overlap in (0.0, 0.3)}
 
     def change(share: float, name: str) -> float:
@@ -70,11 +70,11 @@ def test_overlap_throttles_two_groups_near_a_valve_point(reference_spec):
 
 @settings(max_examples=60, deadline=None)
 @given(overlap=st.floats(0.01, 0.5), share=st.floats(0.01, 1.0))
-def test_the_lift_schedule_passes_the_flow_and_overlaps_as_specified(reference_spec, overlap,
+def test_the_lift_schedule_passes_the_flow_and_overlaps_as_specified(sequential_spec, overlap,
                                                                      share):
     """The demand's lifts pass exactly the flow asked; a level opens only when the one before
     is within ``overlap`` of full lift; lifts never rise along the opening order."""
-    control = kernel_constants(_with_overlap(reference_spec, overlap)).control
+    control = kernel_constants(_with_overlap(sequential_spec, overlap)).control
     open_flux = 1.0e4  # kg/(s·m²), any positive value: the schedule scales with it
     wide_open = open_flux * control.level_area
     flow = share * wide_open.sum()

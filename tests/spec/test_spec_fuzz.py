@@ -29,7 +29,7 @@ from steamtwin.model.parameters import (
     ModelParameters,
     ParameterError,
 )
-from steamtwin.spec import SpecError, load_spec, parse_spec
+from steamtwin.spec import ControlStage, SpecError, load_spec, parse_spec
 from steamtwin.spec.loader import OPTIONAL_KEYS, SPEC_KEYS
 
 REFERENCE_TEXT = (resources.files("steamtwin.spec") / "data" / "reference.toml").read_text(
@@ -113,10 +113,8 @@ def test_reference_uses_every_known_key_and_no_other():
                 if schema not in ("part_load", "leakages")}
     expected[""] -= {"part_load", "leakages"}  # the reference unit states no leakages
     expected["stages"] -= {"tip_leakage"}
-    # the reference unit opens strictly in sequence with linear valves, at a valve point, and
-    # the model sizes its nozzle throats
-    expected["control_stage"] -= {"valve_overlap", "valve_characteristic"}
-    del expected["control_stage.valve_characteristic"]
+    # the reference unit states its valve management (overlap and the valves' flow
+    # characteristic), reaches rated load at a valve point, and the model sizes its nozzle throats
     expected["design"] -= {"valve_outlet_pressure"}
     expected["control_stage.valves"] -= {"throat_area"}
     # the reference unit's boiler holds the design main-steam temperature at every load
@@ -138,6 +136,12 @@ def test_every_key_but_the_optional_ones_is_required():
         del _get(mutated, path[:-1])[path[-1]]
         if len(path) == 1 and path[0] in OPTIONAL_KEYS:
             assert getattr(parse_spec(toml_text(mutated), SOURCE), path[0]) in ((), None)
+            continue
+        if path[0] == "control_stage" and len(path) == 2 and ".".join(path) in OPTIONAL_KEYS:
+            # the reference's valve management: without it, the documented default
+            default = getattr(ControlStage, path[-1])
+            assert getattr(parse_spec(toml_text(mutated), SOURCE).control_stage,
+                           path[-1]) == default
             continue
         with pytest.raises(SpecError, match=r"fuzz-unit\.toml: ") as error:
             parse_spec(toml_text(mutated), SOURCE)

@@ -92,7 +92,7 @@ from steamtwin.model.operating import operating_point
 from steamtwin.model.parameters import PARAMETER_BOUNDS, ModelParameters
 from steamtwin.model.simulator import INPUT_SIGNALS
 from steamtwin.progress import ProgressCallback
-from steamtwin.spec import Material, MetalGroup, TurbineSpec, load_spec
+from steamtwin.spec import ControlStage, Material, MetalGroup, TurbineSpec, load_spec
 from steamtwin.spec.turbine import DEFAULT_CASING_THERMOCOUPLE_DEPTH
 
 __all__ = [
@@ -273,7 +273,11 @@ def plant_spec(spec: TurbineSpec) -> TurbineSpec:
                 casing_mass=group.casing_mass * share, casing_area=group.casing_area * share,
                 rotor_mass=group.rotor_mass * share, rotor_area=group.rotor_area * share,
                 geometry=geometry))
-    return replace(spec, metal_groups=tuple(groups))
+    # the design point is solved for sequential valves as before; the plant's own valve law
+    # (PlantTruth.valve_overlap, its poppet characteristic) replaces them afterwards
+    control = replace(spec.control_stage, valve_overlap=ControlStage.valve_overlap,
+                      valve_characteristic=ControlStage.valve_characteristic)
+    return replace(spec, metal_groups=tuple(groups), control_stage=control)
 
 
 def tip_leakage_fractions(spec: TurbineSpec, clearances: tuple[float, ...]) -> np.ndarray:

@@ -239,17 +239,22 @@ FIELDS: tuple[Field, ...] = (
     Field("control_stage.valve_overlap", "number",
           "Overlap of opening: the share of a valve's lift by which the next opening group "
           "starts before the previous one is fully open, so that near a valve point two groups "
-          "throttle at once; each group's flow is taken linear in its lift.",
+          "throttle at once; each group passes the share of its wide-open flow that "
+          "valve_characteristic gives at its lift. Without it a twin misses the throttling "
+          "near a valve point where its unit's valves overlap (the reference unit: up to 2x "
+          "the instruments' error at 80 % load, docs/benchmarks.md).",
           "OEM valve lift diagram or DEH valve-management curve (thermal kit "
           "`machine.valve_overlap`); 0.05-0.15 usual [Cotton, ch. 6: valve-point loops; "
-          "Traupel, Bd. 2, nozzle governing].",
+          "Traupel, Bd. 2, nozzle governing]; the reference unit states 0.10.",
           example=0.1, low=0.0, high=0.5, default="0: strictly sequential opening"),
     Field("control_stage.valve_characteristic", "table",
           "Flow characteristic of the governing valves (all alike): the share of its wide-open "
           "flow a valve passes against its lift, linearly interpolated; used where the lift "
           "schedule (valve_overlap) sets several lifts at once, and to report lifts.",
           "OEM valve test or the DEH valve flow-characteristic curve; poppet valves pass "
-          "most of their flow in the first third of their lift [Cotton, ch. 6].",
+          "most of their flow in the first third of their lift [Cotton, ch. 6]; from the "
+          "valve drawing: curtain area pi*d*L in series with the seat area pi*d^2/4 "
+          "[Heywood 1988, sec. 6.3] (the reference unit: full lift 0.3 d, at 20 % steps).",
           default="linear: flow share = lift"),
     Field("control_stage.valve_characteristic.lift", "array",
           "Valve lift as a share of full lift, strictly increasing from 0 to 1.",
