@@ -11,9 +11,12 @@ plant's ``day``, instruments seed 0, the same objective settings):
 2. **Concurrency**: CPU time per evaluation (the pair, one candidate) in one process alone, then
    in two processes at once (spawned, started on a common clock), alternately ``--repeats``
    times, then the same with a compute-only co-runner (a dependent floating-point chain that
-   touches no memory) beside one evaluating process. If the pool's CPU time per evaluation
-   exceeds the lone process's, the two workers slow each other down — no evaluator change
-   removes that.
+   touches no memory) and with a memory-streaming co-runner (copies between two 64-MB arrays)
+   beside one evaluating process. If the pool's CPU time per evaluation exceeds the lone
+   process's, the two workers slow each other down — no evaluator change removes that; if
+   the streaming co-runner slows the kernel and the compute-only one does not, the kernel's
+   speed depends on the shared caches and memory, which other jobs (and other virtual
+   machines on the host) load too.
 
 CPU times next to wall times and the load average with every figure: the machine is shared.
 """
@@ -31,6 +34,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from bench_joint_calibration import two_hold_pair
 from steamtwin.calibration import Calibrator, GeneticSearch
@@ -158,6 +162,27 @@ def generations(pair: WindowSet, sigma: dict[str, float], population: int, count
           f"evaluation")
 
 
+@njit(cache=False)
+def _dependent_chain(n: int) -> float:
+    """Two multiply–adds per iteration, each waiting for the last: 4 dependent floating-point
+    operations of 3 cycles each on AMD Zen 3/4 (Agner Fog, *Instruction tables*), 12 cycles."""
+    x = 1.0
+    for _ in range(n):
+        x = x * 1.0000001 + 1e-9
+        x = x - 1e-9 * x
+    return x
+
+
+def clock_reference(iterations: int = 100_000_000) -> float:
+    """The core's effective clock (GHz) from :func:`_dependent_chain`'s CPU time: what the
+    processor delivers to code that touches no memory, against which a slower kernel shows
+    whether the clock or something shared (caches, memory, a sibling thread) changed."""
+    _dependent_chain(10)
+    start = time.process_time()
+    _dependent_chain(iterations)
+    return 12.0 * iterations / (time.process_time() - start) / 1e9
+
+
 def _evaluate_alone(arguments: tuple[dict[str, float], WindowSet, int, float]) -> float:
     sigma, pair, repeats, begin = arguments
     objective = _calibrator(sigma).problem(pair).objective
@@ -180,12 +205,25 @@ def _spin(arguments: tuple[dict[str, float], WindowSet, int, float]) -> float:
     return float("nan")
 
 
+def _stream(arguments: tuple[dict[str, float], WindowSet, int, float]) -> float:
+    """Copies between two 64-MB arrays (twice the last-level cache) for about as long."""
+    begin = arguments[3]
+    source, target = np.ones(8 * 2**20), np.empty(8 * 2**20)
+    time.sleep(max(0.0, begin - time.time()))
+    stop = time.perf_counter() + 3.0
+    while time.perf_counter() < stop:
+        np.copyto(target, source)
+    return float("nan")
+
+
 def concurrency(pair: WindowSet, sigma: dict[str, float], repeats: int, rounds: int) -> None:
     """Part 2: CPU per evaluation alone, two at once, and beside a compute-only co-runner."""
     context = multiprocessing.get_context("spawn")
     cases = {"alone": [_evaluate_alone], "two evaluating": [_evaluate_alone] * 2,
-             "beside a compute-only loop": [_evaluate_alone, _spin]}
-    print(f"\nCPU ms per evaluation of the pair (candidate {CANDIDATE.tolist()}, {repeats} "
+             "beside a compute-only loop": [_evaluate_alone, _spin],
+             "beside a memory-streaming loop": [_evaluate_alone, _stream]}
+    print(f"\nclock reference (dependent chain, CPU time): {clock_reference():.2f} GHz; {_load()}")
+    print(f"CPU ms per evaluation of the pair (candidate {CANDIDATE.tolist()}, {repeats} "
           "in a row per process)")
     for round_ in range(rounds):
         for name, tasks in cases.items():
