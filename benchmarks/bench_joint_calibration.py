@@ -92,11 +92,7 @@ def main() -> None:
     if arguments.skip_ga:
         return
 
-    holds = [w for w in windows if w.kind == "steady"]
-    pair = [min(holds, key=lambda w: abs(w.load_fraction - 0.3)),
-            max(holds, key=lambda w: (round(w.load_fraction, 2), w.data.index[0]))]
-    pair_set = WindowSet(tuple(CalibrationWindow(w.data.iloc[-7200:], w.kind, w.load_fraction,
-                                                 w.source, w.sigma) for w in pair))
+    pair_set = two_hold_pair(windows)
     loads = ", ".join(f"{100 * w.load_fraction:.0f} %" for w in pair_set)
     print(f"\n2. two 2-h windows jointly ({loads}), GA P = {population}, G = {generations} on "
           "the local pool")
@@ -120,6 +116,16 @@ def main() -> None:
           f"{surrogate.rmse_:.3f} K ({difference:+.3f} K against the GA "
           f"{'✓' if abs(difference) <= 0.1 else '✗'}), score {surrogate.score_:.4f}")
     _parameters(surrogate, truth)
+
+
+def two_hold_pair(windows: WindowSet) -> WindowSet:
+    """Part 2's two 2-h windows: the last 7 200 s of the hold nearest 30 % load and of the
+    last hold at the highest load."""
+    holds = [w for w in windows if w.kind == "steady"]
+    pair = [min(holds, key=lambda w: abs(w.load_fraction - 0.3)),
+            max(holds, key=lambda w: (round(w.load_fraction, 2), w.data.index[0]))]
+    return WindowSet(tuple(CalibrationWindow(w.data.iloc[-7200:], w.kind, w.load_fraction,
+                                             w.source, w.sigma) for w in pair))
 
 
 def _parameters(calibrator: Calibrator, truth: ModelParameters) -> None:
