@@ -92,9 +92,11 @@ def _plant_heat_balance() -> HeatBalance:
     return HeatBalance("virtual plant", MACHINE, tuple(points), "virtual-plant")
 
 
-def test_default_part_load_leaves_the_reference_line_unchanged(reference_spec):
+def test_default_part_load_leaves_the_reference_line_unchanged(sequential_spec):
     """Defaults are the model as it was: any other value moves the line, the defaults do not
-    (figures of the line before [part_load] existed, rounded)."""
+    (figures of the line before [part_load] existed, rounded; the reference's valves as they
+    were then, in sequence)."""
+    reference_spec = sequential_spec
     line = design_line(reference_spec, (1.0, 0.5, 0.3))
     explicit = dataclasses.replace(reference_spec, part_load=PartLoad(0.0, 1.0, 1.0, 1.0))
     assert design_line(explicit, (1.0, 0.5, 0.3)).equals(line)
@@ -134,15 +136,16 @@ def test_perturbed_laws_are_recovered_from_the_models_own_heat_balance(reference
 
 
 def test_fit_against_the_virtual_plant_reduces_the_residuals(reference_spec):
-    """Measured (docs/benchmarks.md): before, control-stage p −1.87…−2.14 %, T −1.05…−4.52 K,
-    exhaust T −1.39…+0.59 K; after, p within 0.09 %, control-stage T within 0.49 K, exhaust T
-    within 1.39 K (the rated point's exhaust T is the spec's design figure, which the design
-    step meets by construction and the fit cannot move)."""
+    """Measured with the reference's valve management (2026-11-27): before, control-stage p
+    −1.90…−2.11 %, T −1.23…−3.94 K, exhaust T −1.39…+0.09 K; after, p within 0.09 %,
+    control-stage T within 0.50 K, exhaust T within 1.39 K (the rated point's exhaust T is the
+    spec's design figure, which the design step meets by construction and the fit cannot
+    move); the squared residuals fall to 6 %."""
     heat_balance = _plant_heat_balance()
     fit = fit_design(reference_spec, heat_balance)
     before, after = fit.initial_residuals.abs(), fit.residuals.abs()
     assert before["control_stage_pressure_pct"].min() > 1.8
-    assert before["control_stage_temperature_k"].max() > 4.0
+    assert before["control_stage_temperature_k"].max() > 3.5
     assert after["control_stage_pressure_pct"].max() < 0.15
     assert after["control_stage_temperature_k"].max() < 0.6
     assert after.drop(index="100%")["hp_exhaust_temperature_k"].max() < 0.7
