@@ -8,6 +8,8 @@ normal pointing out of the blade, and labelled with one of :data:`REGIONS`.
 from __future__ import annotations
 
 import contextlib
+import ctypes
+import signal
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -96,6 +98,23 @@ def validate(mesh: VolumeMesh, source: str = "volume mesh") -> None:
                         f"boundary faces of the tetrahedra (got {len(tri)})")
 
 
+def _ignore_sigpipe_again() -> None:
+    """Undo what gmsh.initialize() does to SIGPIPE. Python ignores SIGPIPE, so that a write to
+    a closed pipe or socket raises BrokenPipeError (Python docs, :mod:`signal`: "SIGPIPE is
+    ignored"); gmsh's initialize sets it back to the default action — terminate — in C,
+    behind Python's back (measured: the SigIgn bit of SIGPIPE in /proc/self/status cleared
+    while ``signal.getsignal`` still says SIG_IGN). A process that meshed and then writes to
+    a closed connection (the demo's OPC UA server and web server, a DevTools pipe to a
+    browser that exited) was killed outright (exit 141). Set through libc, so that it also
+    works off the main thread (``signal.signal`` is main-thread only)."""
+    if not hasattr(signal, "SIGPIPE") or signal.getsignal(signal.SIGPIPE) != signal.SIG_IGN:
+        return  # no SIGPIPE here, or the application chose otherwise: leave it
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.signal.argtypes = (ctypes.c_int, ctypes.c_void_p)
+    libc.signal.restype = ctypes.c_void_p
+    libc.signal(int(signal.SIGPIPE), ctypes.c_void_p(int(signal.SIG_IGN)))
+
+
 @contextlib.contextmanager
 def gmsh_session() -> Iterator[object]:
     """An initialised, silent gmsh with a fresh model; finalises only what it initialised."""
@@ -104,6 +123,7 @@ def gmsh_session() -> Iterator[object]:
     started = not gmsh.isInitialized()
     if started:
         gmsh.initialize(readConfigFiles=False)
+        _ignore_sigpipe_again()
     gmsh.option.setNumber("General.Terminal", 0)
     gmsh.option.setNumber("General.Verbosity", 0)
     name = f"steamtwin-{id(object())}"
