@@ -201,5 +201,6 @@ def test_the_memory_limit_bounds_duckdb_and_a_bad_one_is_refused(tmp_path):
     with LiveHistorian(tmp_path / "default.duckdb") as historian:  # DuckDB's own default
         default = historian.connection.execute("SELECT current_setting('memory_limit')").fetchone()
     assert default != limit
-    with pytest.raises(ValueError, match="memory_limit_mb must be a number ≥ 16"):
-        LiveHistorian(tmp_path / "bad.duckdb", memory_limit_mb=1).open()
+    for bad in (1, "64", float("nan"), True):
+        with pytest.raises(ValueError, match="memory_limit_mb must be a number ≥ 16"):
+            LiveHistorian(tmp_path / "bad.duckdb", memory_limit_mb=bad).open()

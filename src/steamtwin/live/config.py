@@ -46,8 +46,8 @@ from typing import Any, Literal
 from steamtwin.errors import DataError
 from steamtwin.textfile import read_utf8_text
 
-__all__ = ["SERVICE_MEMORY_LIMIT_MB", "ConfigError", "RecalibrationConfig", "ServiceConfig",
-           "SourceConfig", "UnitConfig", "load_config"]
+__all__ = ["MIN_MEMORY_LIMIT_MB", "SERVICE_MEMORY_LIMIT_MB", "ConfigError",
+           "RecalibrationConfig", "ServiceConfig", "SourceConfig", "UnitConfig", "load_config"]
 
 SOURCE_KINDS = ("opcua", "replay")
 
@@ -101,6 +101,10 @@ class UnitConfig:
     rotor: Path | Literal["fit"] | None = None
     rotor_allowable: float | None = None
 
+
+MIN_MEMORY_LIMIT_MB = 16.0
+"""The smallest DuckDB memory limit accepted (MB): below it the rows of one checkpoint
+interval alone do not fit."""
 
 SERVICE_MEMORY_LIMIT_MB = 32.0
 """DuckDB's memory limit for the service's historian connection (MB), which the dashboard's
@@ -234,9 +238,9 @@ def load_config(path: str | Path) -> ServiceConfig:
     database_text = _text(document, "database", str(path))
     memory = document.get("historian_memory_mb", SERVICE_MEMORY_LIMIT_MB)
     if (isinstance(memory, bool) or not isinstance(memory, int | float)
-            or not math.isfinite(memory) or memory < 16):
+            or not math.isfinite(memory) or memory < MIN_MEMORY_LIMIT_MB):
         raise ConfigError(f"{path}: historian_memory_mb = {memory!r}: expected a number of MB "
-                          "≥ 16")
+                          f"≥ {MIN_MEMORY_LIMIT_MB:g}")
     units_table = document.get("units")
     if not isinstance(units_table, list) or not units_table:
         raise ConfigError(f"{path}: no [[units]]; add one per unit")

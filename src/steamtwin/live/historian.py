@@ -52,6 +52,8 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
+from steamtwin.live.config import MIN_MEMORY_LIMIT_MB
+
 __all__ = ["SOURCES", "Alarm", "AlarmEnd", "BlockEvents", "LiveHistorian", "ProvisionalRows",
            "export_history"]
 
@@ -183,10 +185,12 @@ class LiveHistorian:
             connection = duckdb.connect(str(self.path))
             connection.execute("SET TimeZone = 'UTC'")
             if self.memory_limit_mb is not None:  # DuckDB's own default: 80 % of the RAM
-                limit = float(self.memory_limit_mb)
-                if not (np.isfinite(limit) and limit >= 16.0):
-                    raise ValueError(f"memory_limit_mb must be a number ≥ 16 (MB; got "
-                                     f"{self.memory_limit_mb!r})")
+                limit = self.memory_limit_mb
+                if (isinstance(limit, bool) or not isinstance(limit, int | float)
+                        or not np.isfinite(limit) or limit < MIN_MEMORY_LIMIT_MB):
+                    connection.close()
+                    raise ValueError(f"memory_limit_mb must be a number ≥ "
+                                     f"{MIN_MEMORY_LIMIT_MB:g} (MB; got {limit!r})")
                 connection.execute(f"SET memory_limit = '{limit:.0f}MB'")
             for statement in _SCHEMA:
                 connection.execute(statement)

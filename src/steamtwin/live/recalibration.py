@@ -102,9 +102,9 @@ class LiveRecalibration:
             self._settling = {p: n - 1 for p, n in self._settling.items() if n > 1}
         last = data.index[-1]
         if not swaps and last - self._last_swap >= pd.Timedelta(seconds=self.every_s):
-            estimated = [end for end, row in steps.iterrows() if not row["error"]]
-            intervals = (_intervals(steps.loc[estimated[-1]], self.tracker.tracked)
-                         if estimated else {})
+            estimated = steps[~steps["error"].astype(bool)]  # the steps that gave an estimate
+            intervals = (_intervals(estimated.iloc[-1], self.tracker.tracked)
+                         if len(estimated) else {})
             swaps.append(ParameterSwap(last, self.tracker.params_, "schedule", intervals))
             self._last_swap = last
         return swaps
