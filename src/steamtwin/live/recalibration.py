@@ -102,7 +102,8 @@ class LiveRecalibration:
             self._settling = {p: n - 1 for p, n in self._settling.items() if n > 1}
         last = data.index[-1]
         if not swaps and last - self._last_swap >= pd.Timedelta(seconds=self.every_s):
-            estimated = steps[~steps["error"].astype(bool)]  # the steps that gave an estimate
+            # the steps that gave an estimate (a block without a step has no columns)
+            estimated = steps[~steps["error"].astype(bool)] if len(steps) else steps
             intervals = (_intervals(estimated.iloc[-1], self.tracker.tracked)
                          if len(estimated) else {})
             swaps.append(ParameterSwap(last, self.tracker.params_, "schedule", intervals))
