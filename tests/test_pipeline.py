@@ -84,3 +84,19 @@ def test_cheap_stages_on_a_toml_spec_and_row_hp13(tmp_path, reference_toml):
     # the ROM's mesh is hp13's blade (span 163 mm), not hp1's (32 mm)
     extent = np.ptp(np.asarray(twin.blade_rom.mesh.points), axis=0).max()
     assert extent == pytest.approx(twin.blade_design("hp13").span, rel=0.1)
+
+
+def test_the_live_stage_draws_the_calibrated_plants_instruments():
+    """The demo's live stage runs the plant the twin was calibrated on: the instruments
+    (calibration errors, drift rates) the plant stage's seed draws, whatever the scenario —
+    with another seed's instruments the live residuals were the instruments' difference
+    (HP exhaust 1.8 K mean abs, control-stage pressure 155 kPa, instead of 0.44 K / 2 kPa)."""
+    from steamtwin.dcs.plant import run_plant
+    from steamtwin.pipeline import _instruments
+
+    drawn = _instruments(3)
+    day = run_plant("day", hours=0.05, random_state=3).injected.sensors
+    other = run_plant("day", hours=0.05, random_state=4).injected.sensors
+    columns = ["bias_fraction", "drift_rate"]
+    assert np.array_equal(drawn[columns].to_numpy(), day.loc[drawn.index, columns].to_numpy())
+    assert not np.allclose(drawn["bias_fraction"], other.loc[drawn.index, "bias_fraction"])

@@ -297,7 +297,8 @@ def run_demo(out: str | Path, settings: DemoSettings | None = None,
                 sections += _sensitivity_stage(twin, plant, settings, out, report)
         if "live twin" in run:
             with clock.stage("live twin") as report:
-                sections += _live_stage(twin, settings, out, report)
+                sections += _live_stage(twin, settings, out, report,
+                                        instruments=None if plant is None else plant.instruments)
         with clock.stage("monitoring and report") as report:
             twin.save(out)
             for warning in caught:
@@ -349,6 +350,12 @@ LOOK_AHEAD_SAMPLES = 61 + 60
 one, and the open 60-s clock bin it judges whole."""
 
 
+def _instruments(random_state: int) -> pd.DataFrame:
+    """The virtual plant's instruments (calibration errors, drift rates) that the plant stage
+    draws with ``random_state``: every run of one seed has the same ones (``measure``)."""
+    return run_plant("deep-peak-50", hours=LIVE_HOURS, random_state=random_state).injected.sensors
+
+
 def _stored(database: Path) -> int:
     """Samples the live service has committed so far (its database, read beside the writer)."""
     if not database.exists():
@@ -358,8 +365,8 @@ def _stored(database: Path) -> int:
             "SELECT count(DISTINCT time) FROM series").fetchone()[0]
 
 
-def _live_stage(twin: Twin, settings: DemoSettings, out: Path,
-                report: Callable[..., None]) -> list[Section]:
+def _live_stage(twin: Twin, settings: DemoSettings, out: Path, report: Callable[..., None],
+                instruments: pd.DataFrame | None = None) -> list[Section]:
     """The virtual plant published over OPC UA on loopback, the live service reading it with
     the calibrated parameters (and the blade ROM, when built) into ``out/live.duckdb`` and
     serving the dashboard on a free loopback port: what was stored, what the twin said, and a
@@ -369,7 +376,11 @@ def _live_stage(twin: Twin, settings: DemoSettings, out: Path,
     from steamtwin.web.screenshots import DASHBOARD_PAGES, dashboard_sections, screenshot_pages
     from steamtwin.web.server import HttpSettings, http_companion
 
-    run = run_plant("deep-peak-50", hours=LIVE_HOURS, random_state=settings.random_state + 1000)
+    # the plant's own instruments (calibration errors the twin was calibrated against) on a
+    # new run: noise and faults drawn anew; without the plant stage's record, its seed's
+    run = run_plant("deep-peak-50", hours=LIVE_HOURS, random_state=settings.random_state + 1000,
+                    instruments=instruments if instruments is not None
+                    else _instruments(settings.random_state))
     report(0.3)
     tags = out / "live-tags.toml"
     write_tag_map(plant_node_ids(plant_tag_map()), tags)
@@ -537,6 +548,7 @@ class _PlantData:
     validation: History  # the day run, read and cleaned
     validation_spans: dict[str, tuple[pd.Timestamp, pd.Timestamp]]  # its 30/50 % holds
     ramp: pd.DataFrame  # the 50 % run from 90 % demand down to 30 min into the hold
+    instruments: pd.DataFrame  # the runs' instruments (one seed: the same in every run)
     sections: list[Section]
 
 
@@ -580,7 +592,7 @@ def _plant_stage(settings: DemoSettings, out: Path, report: Callable[..., None])
         hold_index = demand.index[longest][-samples:]
         spans[f"{round(load * 100)} % load"] = (hold_index[0], hold_index[-1])
     report(1.0, "day")
-    return _PlantData(calibration, holds, history, spans, ramp, sections)
+    return _PlantData(calibration, holds, history, spans, ramp, run.injected.sensors, sections)
 
 
 def _ramp_window(run: PlantRun, data: pd.DataFrame) -> pd.DataFrame:

@@ -111,7 +111,9 @@ def test_the_live_stage_stored_what_the_plant_published(demo):
     published, stored = rows["samples published over OPC UA"], rows["samples stored"]
     # all but the gate's last look-ahead and its open 60-s clock bin
     assert published - 121 <= stored <= published
-    assert 0.0 < rows["HP-exhaust residual, mean abs (K)"] < 10.0
+    # the plant the twin was calibrated on (its instruments, new noise): the residual is the
+    # twin's error, not another plant's thermocouple bias (that was 1.8 K on the quick demo)
+    assert 0.0 < rows["HP-exhaust residual, mean abs (K)"] < 1.2
     assert (result.out / "live.duckdb").stat().st_size > 0
 
 
