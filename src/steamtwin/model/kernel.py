@@ -288,12 +288,41 @@ def _level_lift(overlap, level, demand):
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
+def _characteristic_share(lift_points, flow_shares, lift):
+    """The valves' flow characteristic (share of the wide-open flow, piecewise linear in the
+    lift) at ``lift`` (0…1).
+
+    A scan of its few points rather than ``np.interp``, whose compiled form checks and searches
+    its arrays at every call: at ~80 ns a call it made the valve demand's search most of a
+    control-stage evaluation.
+    """
+    m = 1
+    while m < lift_points.size - 1 and lift_points[m] <= lift:
+        m += 1
+    return flow_shares[m - 1] + (flow_shares[m] - flow_shares[m - 1]) / (
+        lift_points[m] - lift_points[m - 1]) * (lift - lift_points[m - 1])
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
 def _level_share(cs, level, demand):
     """Share (0…1) of its wide-open flow that level ``level`` passes at valve demand ``demand``:
-    the valves' flow characteristic (flow share against lift, piecewise linear) at the level's
-    scheduled lift."""
-    return np.interp(_level_lift(cs.valve_overlap, level, demand), cs.characteristic_lift,
-                     cs.characteristic_flow)
+    the valves' flow characteristic at the level's scheduled lift."""
+    return _characteristic_share(cs.characteristic_lift, cs.characteristic_flow,
+                                 _level_lift(cs.valve_overlap, level, demand))
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
+def _scheduled_share(level_area, lift_points, flow_shares, overlap, demand):
+    """Σ level area × share at valve ``demand`` (m²): the scheduled flow per open-valve flux.
+
+    Takes the arrays it uses, not the constants: a compiled call counts references to every
+    array it is handed.
+    """
+    total = 0.0
+    for level in range(level_area.size):
+        total += level_area[level] * _characteristic_share(
+            lift_points, flow_shares, _level_lift(overlap, level, demand))
+    return total
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -301,22 +330,41 @@ def _valve_demand(cs, open_flux, flow):
     """Valve demand at which the overlapping lift schedule passes ``flow`` (kg/s).
 
     The scheduled flow Σ wide-open × share(lift) is piecewise linear and non-decreasing in the
-    demand, so bisection on [0, full lift of the last level] finds it to round-off; a flow
-    above what every valve wide open passes gets the full demand (the caller reports over
-    capacity).
+    demand, with corners only where a level's lift passes a point of the characteristic
+    (demand = level·(1 − overlap) + lift point). So the demand is found exactly: walk the
+    corners upward to the first whose flow reaches ``flow`` and interpolate linearly from the
+    corner below — the least demand that passes the flow, as a bisection to round-off would
+    give it, at a few evaluations instead of 64. The walk starts at the last level-opening
+    corner (demand level·(1 − overlap)) below the flow, found first. A flow above what every
+    valve wide open passes gets the full demand (the caller reports over capacity).
     """
     overlap = cs.valve_overlap
-    low, high = 0.0, (cs.level_area.size - 1) * (1.0 - overlap) + 1.0
-    for _ in range(64):
-        middle = 0.5 * (low + high)
-        scheduled = 0.0
-        for level in range(cs.level_area.size):
-            scheduled += open_flux * cs.level_area[level] * _level_share(cs, level, middle)
-        if scheduled < flow:
-            low = middle
-        else:
-            high = middle
-    return high
+    area, points, shares = cs.level_area, cs.characteristic_lift, cs.characteristic_flow
+    full = (area.size - 1) * (1.0 - overlap) + 1.0
+    target = flow / open_flux  # m²
+    low = 0.0
+    share_low = _scheduled_share(area, points, shares, overlap, low)
+    if share_low >= target:
+        return low
+    for level in range(1, area.size):  # skip the levels that open below the flow
+        start = level * (1.0 - overlap)
+        share_start = _scheduled_share(area, points, shares, overlap, start)
+        if share_start >= target:
+            break
+        low, share_low = start, share_start
+    while low < full:
+        high = full
+        for level in range(area.size):  # the next corner above ``low``
+            start = level * (1.0 - overlap)
+            for m in range(points.size):
+                if start + points[m] > low:
+                    high = min(high, start + points[m])
+                    break
+        share_high = _scheduled_share(area, points, shares, overlap, high)
+        if share_high >= target:
+            return low + (target - share_low) / (share_high - share_low) * (high - low)
+        low, share_low = high, share_high
+    return full
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -459,7 +507,7 @@ def _group_heat(group, temperature, surface):
     return heat
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
 def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressures,
                   enthalpies, inlet_pv, throttled, metal, pivot, rhs, surface, group_temperature,
                   cs_out, properties, tolerance, result, max_iter, accepted, predict,
@@ -471,6 +519,10 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
     ``predict``: carry the previous sample's p·v to these inputs first (step 0; pointless when
     the inputs did not change). ``leak_flow`` (kg/s per leakage): the last forward sweep's
     leakage flows, warm start in, solution out.
+
+    Inlined into :func:`run_kernel` (numba ``inline="always"``): called once per sample with
+    ~45 arrays (the constants, the tables, the carried state), its reference counting at entry
+    and exit cost ~10 % of a window-run (2026-11-27; compiling the kernel takes ~3 s more).
     """
     n = c.stage_capacity.size
     control, metal_constants = c.control, c.metal
@@ -535,7 +587,10 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
                 result[2] = ph_property(tables, PH_T, p_exhaust, enthalpies[n])
             _commit_metal(metal_constants.conductance, pivot, rhs, surface, group_temperature,
                           metal)
-            result[3] = _casing_thermocouple(c, metal, surface, group_temperature)
+            result[3] = _casing_thermocouple(c.sensor_group, c.sensor_node, c.sensor_weight,
+                                             metal_constants.half_cell_resistance,
+                                             metal_constants.area, metal, surface,
+                                             group_temperature)
             result[4] = power
             result[5] = heat_total
             result[6] = extraction_energy
@@ -705,22 +760,25 @@ def _polytropic_pv(reference, pressures, inlet_pv, first_pv):
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
-def _casing_thermocouple(c, metal, surface, group_temperature):
+def _casing_thermocouple(sensor_group, sensor_node, sensor_weight, half_cell_resistance, area,
+                         metal, surface, group_temperature):
     """Casing metal temperature (K) at the thermocouple's depth, linear between neighbours.
 
-    Node j's temperature belongs to its cell centre, (j + ½)·Δx under the bore; above node 0 the
-    neighbour is the bore surface, where the steam-side flux q = G·(T_steam − T_0) gives
-    T_wall = T_0 + q·r_half/A. Interpolating at a physical depth keeps the reading independent of
-    the node count (second order in Δx).
+    The sensor's place and the chains' ``half_cell_resistance`` (m²·K/W) and ``area`` (m²) as
+    in :class:`KernelConstants` (only these: a compiled call counts references to every array
+    it is handed). Node j's temperature belongs to its cell centre, (j + ½)·Δx under the bore;
+    above node 0 the neighbour is the bore surface, where the steam-side flux
+    q = G·(T_steam − T_0) gives T_wall = T_0 + q·r_half/A. Interpolating at a physical depth
+    keeps the reading independent of the node count (second order in Δx).
     """
-    chain = 2 * c.sensor_group + CASING
-    j = c.sensor_node
+    chain = 2 * sensor_group + CASING
+    j = sensor_node
     if j >= 0:
-        return metal[chain, j] + c.sensor_weight * (metal[chain, j + 1] - metal[chain, j])
+        return metal[chain, j] + sensor_weight * (metal[chain, j + 1] - metal[chain, j])
     node_0 = metal[chain, 0]
-    flux = surface[chain, 0] * (group_temperature[c.sensor_group] - node_0)
-    wall = node_0 + flux * c.metal.half_cell_resistance[chain] / c.metal.area[chain]
-    return wall + c.sensor_weight * (node_0 - wall)
+    flux = surface[chain, 0] * (group_temperature[sensor_group] - node_0)
+    wall = node_0 + flux * half_cell_resistance[chain] / area[chain]
+    return wall + sensor_weight * (node_0 - wall)
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
