@@ -14,9 +14,8 @@ import math
 
 import numpy as np
 import pytest
-from test_edge_model import WedgeSection
-
 from scipy.spatial import cKDTree
+from test_edge_model import WedgeSection
 
 from steamtwin.geometry.edge_circle import tip_and_half_angle
 from steamtwin.geometry.edge_model import model_sparse_edges
