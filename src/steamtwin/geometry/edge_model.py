@@ -117,8 +117,10 @@ class EdgeSlab:
 class EdgeModel:
     """Model points of the sparse edges: ``points`` (k, 3; m) and their side parameter ``s``
     (k,), ``replaced`` the cloud points (mask over the cloud) that they stand in for,
-    ``parameters`` the side parameter from the model of the other cloud points of a modelled
-    slab (NaN elsewhere: keep their own), the per-slab records ``slabs`` and the model of
+    ``parameters`` the side parameter from the model of every cloud point of a modelled slab
+    (NaN elsewhere: keep their own; for the replaced points the start of their projection onto
+    the fitted side, which from their own ``s`` — 0.3–0.8 mm of arc off next to a thin edge —
+    can land on the other face), the per-slab records ``slabs`` and the model of
     each modelled edge along the span, ``spans`` (edge name → :class:`SpanEdgeModel`)."""
 
     points: np.ndarray
@@ -163,15 +165,13 @@ def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labe
     pieces, slabs, spans = [], [], {}
     replaced = np.zeros(len(points), dtype=bool)
     parameters = np.full(len(points), np.nan)
-    caps = [float(np.median(points[labels == REGIONS.index(cap), 2])) for cap in ("root", "tip")
-            if np.any(labels == REGIONS.index(cap))]
     for edge in ("trailing_edge", "leading_edge"):
         on = mask & (labels == REGIONS.index(edge))
         if on.sum() < MIN_ARC_POINTS:
             continue
         base = 0.0 if edge == "trailing_edge" else 0.5
         centre_s = float(np.mod(base + np.median(_circular(s[on] - base)), 1.0))
-        result = _model_edge(points, s, mask, perimeter, spacing, noise, edge, centre_s, caps)
+        result = _model_edge(points, s, mask, perimeter, spacing, noise, edge, centre_s)
         pieces += result[0]
         slabs += result[1]
         replaced |= result[2]
@@ -185,10 +185,10 @@ def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labe
 
 
 def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: np.ndarray,
-                spacing: float, noise: float, edge: str, centre_s: float, caps: list[float]
-                ) -> tuple:
+                spacing: float, noise: float, edge: str, centre_s: float) -> tuple:
     """Slabs of one edge: (model point pieces, slab records, replaced mask, parameters, span
-    model or None); ``caps`` the heights (m) of the caps found."""
+    model or None). The slabs next to a cap are modelled like the others (the span model
+    holds there, :data:`ORDER_SLABS`)."""
     arc = np.full(len(points), np.inf)
     arc[mask] = _circular(s[mask] - centre_s) * perimeter[mask]  # signed arc length (m)
     # the half circle of a modelled edge is shorter than MODEL_SAMPLES spacings: its tangent
@@ -254,8 +254,6 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
                                                         float(centres[k, 1]))}
         if math.pi * radii[k] >= MODEL_SAMPLES * spacing:
             slab = replace(slab, **fitted, used=False, reason="edge resolved by the cloud")
-        elif any(abs(slab.z - cap) < END_SLABS * height for cap in caps):
-            slab = replace(slab, **fitted, used=False, reason="next to a cap")
         elif len(known):
             slab = replace(slab, **fitted, used=True, reason="" if slab.used else
                            f"filled by the span model ({slab.reason})")
@@ -269,13 +267,19 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
     return pieces, slabs, replaced, parameters, model if pieces else None
 
 
-#: Slabs within this many slab heights of a cap keep the cloud's own points: there the side's
-#: spline joins the cap's rim, and model points that end a ring short of the cap bent it
-#: outward at the trailing edge's corner (naca-twisted 80k, blade frame: 0.038 mm without the
-#: model, 0.12 mm with it to the last slab, 0.095 mm with one slab kept, < 0.08 mm with three).
-END_SLABS = 3
-#: Slabs either side over which the cloud's order against the model is smoothed (median).
-ORDER_SLABS = 3
+#: Slabs either side over which the cloud's order against the model is smoothed (median):
+#: ±15 mm at 1.5-mm slabs. The cloud's own order comes from nine slab mappings interpolated
+#: along the span (reconstruct.initial_parameters), so its true change is slow, while each
+#: slab's scale and shift against the model scatter by 0.5 mm of arc; where neighbouring
+#: slabs disagree the side's spline, smooth over 15-mm knot spans in z, cuts the edge short.
+#: Measured (bench_foreign_blades, 80k, random pose, 2026-11-27): lean-sweep seed 1 with ±3
+#: slabs, a 0.77-mm jump of the shift between two slabs at 60 % span cut the trailing edge
+#: 0.23 mm; with ±10 the whole blade is within 0.068 mm of the exact surface. The slabs next
+#: to a cap were once left to the cloud's own points and order (3 slabs each end); that
+#: mixture of orders cut the edge 0.16–0.20 mm at the rims (naca-twisted seeds 0 and 1),
+#: while the span model itself holds to the cap planes (tests/geometry/test_edge_span.py):
+#: modelled to the caps, naca-twisted comes within 0.037 / 0.044 mm of the exact surface.
+ORDER_SLABS = 10
 
 
 def _section_values(geometry: tuple) -> list[float]:
@@ -374,7 +378,7 @@ def _apply_model(points: np.ndarray, perimeter: np.ndarray, members: np.ndarray,
                  model: SpanEdgeModel, spacing: float, centre_s: float,
                  z_range: tuple[float, float], order: list[float]) -> tuple:
     """Model points of a slab and the parameters of its cloud points: ((model points, s),
-    replaced indices, other indices, their s). The cloud's order s is unreliable next to a
+    replaced indices, the slab's indices, their s). The cloud's order s is unreliable next to a
     sparse edge: every point of the slab gets the s of its arc length u along the model,
     through the (smoothed) ``order`` — scale and shift — of :func:`_order_against_model`.
     Model points lie in rings every spacing / RING_DENSITY over the slab, ARC_DENSITY per
@@ -395,5 +399,4 @@ def _apply_model(points: np.ndarray, perimeter: np.ndarray, members: np.ndarray,
     model_s = np.mod(centre_s + (shift + scale * model_u) / length, 1.0)
     replaced = sector | (np.abs(u) < cut)  # the model's points, and stray points beyond it
     members_s = np.mod(centre_s + (shift + scale * u) / length, 1.0)
-    return ((model_xyz, model_s), members[replaced], members[~replaced],
-            members_s[~replaced])
+    return (model_xyz, model_s), members[replaced], members, members_s
