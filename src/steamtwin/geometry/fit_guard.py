@@ -114,6 +114,10 @@ class GuardSettings:
     points are also that far (an isolated outlier has none: 1 % outliers put on average 0.2 of
     its 20 neighbours out); counted points linked within ``link_spacings`` spacings form a gap
     when there are ``min_gap_points`` or more (a gap one point spacing across and a few long).
+
+    ``cpu_budget`` (s of the process's CPU time, None: unlimited): a repair refit is started
+    only when the reconstruction's CPU time so far plus the dearest refit's stays within it
+    (:mod:`~steamtwin.geometry.repair_budget`; issue 19: ≤ 30 s per 80k-point cloud).
     """
 
     neighbours: int = 20
@@ -127,6 +131,7 @@ class GuardSettings:
     coherent_share: float = 0.5
     link_spacings: float = 3.0
     min_gap_points: int = 10
+    cpu_budget: float | None = 30.0
 
 
 @dataclass(frozen=True)

@@ -31,6 +31,7 @@ mesh_io.write_stl` writes it into the STL, :mod:`.reconstruction_report` reports
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -42,6 +43,7 @@ from steamtwin.geometry.fit_guard import GuardReport, GuardSettings, guard_surfa
 from steamtwin.geometry.mesh_sections import check_closed
 from steamtwin.geometry.pritchard import GeometryError
 from steamtwin.geometry.profile import cap_triangles
+from steamtwin.geometry.repair_budget import RepairBudget
 from steamtwin.geometry.segmentation import (
     SIDE_REGIONS,
     CapPlane,
@@ -160,7 +162,9 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
     ``segmentation``: the cloud's, when already computed.
     """
     settings = settings or ReconstructionSettings()
+    budget = RepairBudget.start(settings.guard.cpu_budget if settings.guard else None)
     segmentation = segmentation or segment_blade(points, settings.segmentation)
+    fitting = time.process_time()
     points = np.asarray(points, dtype=np.float64)
     labels = segmentation.labels
     have = np.isin(labels, [REGIONS.index(name) for name in SIDE_REGIONS])
@@ -199,26 +203,32 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
                                   points=points, segmentation=segmentation, surface=surface,
                                   root=root, tip=tip, residuals=residuals, inliers=inliers,
                                   parameters=parameters, boundaries=boundaries,
-                                  fit_history=fit.history_, ring_parameters=ring_s), settings)
+                                  fit_history=fit.history_, ring_parameters=ring_s), settings,
+                   budget, fitting)
 
 
-def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings) -> Reconstruction:
+def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings,
+            budget: RepairBudget | None = None, fitting: float | None = None) -> Reconstruction:
     """The reconstruction with its guard report (:func:`~steamtwin.geometry.fit_guard.
-    guard_surface`); a surface standing off the cloud, or missing a coherent part of it
-    (``GuardReport.gaps``), is refitted with the guard's stronger penalties in turn (a beak or
-    spike is an overshoot of the spline where few points hold it) and refused with
-    :class:`ReconstructionError` naming where and how far when none passes. The repairs stop
-    at the first whose worst defect is no smaller than the previous fit's: a stronger penalty
-    that does not shrink it only smooths the surface further from the cloud (and each repair
-    is a whole adaptive fit: two of them made the refused clouds the slowest, 32–37 s of CPU
-    at 80k points)."""
+    guard_surface`); a surface off the cloud or missing part of it is refitted with the
+    guard's stronger penalties in turn (a beak is an overshoot of the spline where few points
+    hold it), refused with :class:`ReconstructionError` saying where and how far when none
+    passes. The repairs stop at one that does not shrink the worst defect (more penalty only
+    smooths further from the cloud), or when one more would overrun ``GuardSettings.
+    cpu_budget`` (:mod:`~steamtwin.geometry.repair_budget`: ``budget`` from the start,
+    ``fitting`` the process time at which the fit began; default: now)."""
     if settings.guard is None:
         return reconstruction
+    budget = budget or RepairBudget.start(settings.guard.cpu_budget)
     report = guard_surface(reconstruction, settings.guard)
+    budget.measure(budget.started if fitting is None else fitting)
     if not report.failed:
         return replace(reconstruction, guard=replace(report, repairs=settings.penalty_factor))
     first = report
     for factor in [f for f in settings.guard.penalty_factors if f > settings.penalty_factor]:
+        if not budget.allows_refit():
+            break
+        since = time.process_time()
         try:
             repaired = reconstruct_blade(reconstruction.points,
                                          replace(settings, penalty_factor=factor, guard=None),
@@ -226,6 +236,7 @@ def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings) ->
         except ReconstructionError:
             break  # the stronger penalty misses the cloud: refuse with the defect found
         trial = guard_surface(repaired, settings.guard)
+        budget.measure(since)
         if not trial.failed:
             return replace(repaired, guard=replace(trial, repairs=factor))
         if _worst(trial) >= _worst(report):
