@@ -317,14 +317,14 @@ BRIDGE_REACH = 5.0
 
 def _bridged(samples: np.ndarray, normals: np.ndarray, towards: np.ndarray, beyond: np.ndarray,
              points: np.ndarray, tree: cKDTree, span_axis: np.ndarray) -> np.ndarray:
-    """Whether each sample that lies ``beyond`` (m, > 0) its nearest points, on the far side
-    from ``towards`` (unit, in its tangent plane), is bridged across a scan hole: within
+    """Whether each sample that lies ``beyond`` (m, > 0) its nearest points, on the far side from
+    ``towards`` (unit, in its tangent plane), is bridged across a scan hole: within
     :data:`BRIDGE_REACH` × ``beyond`` of it there are points both above and below it along
-    ``span_axis`` that reach at least as far out along the section's tangent (the tangent-plane direction across
-    the span, signed away from the nearest points). A beak or spike sticks out beyond the edge
-    line in its section and in the sections next to it; a tensor-product spline across a hole
-    at an edge lies between data above and below it (a 2-mm hole cuts through a thin part and
-    its edge: issue 19's compressor blade, true deviation ≤ 0.005 mm where the extent alone
+    ``span_axis`` that reach at least as far out along the section's tangent (the tangent-plane
+    direction across the span, signed away from the nearest points). A beak or spike sticks out
+    beyond the edge line in its section and in the sections next to it; a tensor-product spline
+    across a hole at an edge lies between data above and below it (a 2-mm hole cuts through a thin
+    part and its edge: issue 19's compressor blade, true deviation ≤ 0.005 mm where the extent alone
     said 0.36 mm)."""
     result = np.zeros(len(samples), dtype=bool)
     for i in np.flatnonzero(beyond > 0.0):
