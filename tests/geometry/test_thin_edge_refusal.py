@@ -27,3 +27,34 @@ def test_a_side_gap_at_the_end_of_the_chord_is_at_that_edge() -> None:
     found = at_edges(_report(rear, front, middle, edge, side))
     assert found["trailing_edge"] == [rear]
     assert found["leading_edge"] == [edge, front]
+
+
+def test_a_folding_side_is_refused_with_the_edge_density_it_needs(monkeypatch) -> None:
+    """A side that folds (the slender blade's refusal at 80k points) is refused with the
+    density note of the sparse edges, asked for only when it is refused."""
+    import numpy as np
+    import pytest
+
+    from steamtwin.geometry.blade_cloud import ReconstructionError
+    from steamtwin.geometry.reconstruct import check_side_fit
+
+    class Folding:
+        inliers_ = np.ones(10, dtype=bool)
+        outlier_distance = 0.1e-3
+
+        class surface_:
+            @staticmethod
+            def folds() -> bool:
+                return True
+
+    asked = []
+
+    def note() -> str:
+        asked.append(True)
+        return "; too few points on the edge: trailing edge at 80–100 % span: 2.1 per mm"
+
+    with pytest.raises(ReconstructionError, match=r"folds over itself.*trailing edge at 80–100"):
+        check_side_fit(Folding(), note)
+    Folding.surface_.folds = staticmethod(lambda: False)
+    check_side_fit(Folding(), note)
+    assert len(asked) == 1

@@ -25,24 +25,31 @@ from dataclasses import dataclass
 @dataclass
 class RepairBudget:
     """CPU seconds of one reconstruction: ``seconds`` the budget (None: unlimited), ``started``
-    the process time at its start, ``refit_seconds`` the dearest refit measured (s)."""
+    the process time at its start, ``refit_seconds`` the dearest refit measured and ``since``
+    the process time at which the current one began (s; default: ``started``)."""
 
     seconds: float | None
     started: float
     refit_seconds: float = 0.0
+    since: float | None = None
 
     @classmethod
     def start(cls, seconds: float | None) -> RepairBudget:
         """A budget of ``seconds`` of CPU (None: unlimited) counted from now."""
         return cls(seconds=seconds, started=time.process_time())
 
+    def mark(self) -> None:
+        """A refit (or the first fit, from the segmented cloud) begins now."""
+        self.since = time.process_time()
+
     @property
     def spent(self) -> float:
         """CPU seconds since the start."""
         return time.process_time() - self.started
 
-    def measure(self, since: float) -> None:
-        """Record a refit that began at process time ``since`` (s) and ends now."""
+    def measure(self) -> None:
+        """Record the refit that began at the last :meth:`mark` (or the start) and ends now."""
+        since = self.started if self.since is None else self.since
         self.refit_seconds = max(self.refit_seconds, time.process_time() - since)
 
     def allows_refit(self) -> bool:
