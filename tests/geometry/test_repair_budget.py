@@ -84,12 +84,13 @@ def test_no_repair_starts_that_would_overrun_the_budget(stand_ins) -> None:
 
 def test_the_dearest_refit_measured_bounds_the_next(stand_ins) -> None:
     """A first repair that costs more than the time left stops the chain after it: a budget
-    of 0.15 s of CPU, a fit measured at ~0 s and a repair that burns 0.1 s."""
+    of 0.2 s of CPU, a fit measured at ~0 s and a repair that burns 0.1 s (the next one, with
+    the margin, would need 0.15 s more)."""
     calls, state = stand_ins
     state["cost"] = 0.1
     with pytest.raises(ReconstructionError, match=r"0\.70 mm"):
-        reconstruct.guarded(_Fit(np.zeros((1, 3)), None, 1.0), _settings(0.15),
-                            RepairBudget.start(0.15))
+        reconstruct.guarded(_Fit(np.zeros((1, 3)), None, 1.0), _settings(0.2),
+                            RepairBudget.start(0.2))
     assert calls == [10.0]
 
 
@@ -110,3 +111,5 @@ def test_the_budget_measures_the_process_cpu_time() -> None:
     budget.measure()
     assert 0.04 <= budget.refit_seconds <= 0.5 and budget.spent >= 0.05
     assert budget.allows_refit() and not replace(budget, seconds=0.06).allows_refit()
+    # the margin: 0.05 s spent and 0.05 s for a refit do not fit 0.11 s (1.5 × 0.05 = 0.075)
+    assert not replace(budget, seconds=budget.spent + 1.2 * budget.refit_seconds).allows_refit()
