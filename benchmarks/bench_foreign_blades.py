@@ -16,7 +16,7 @@ also counts the time the process waited for a core).
 
 Run: python benchmarks/bench_foreign_blades.py [--quick] [--members NAME ...]
      [--points 40000 80000 planned] [--seeds N] [--pose blade|random] [--model-edges]
-     [--out DIR]
+     [--bridge-holes] [--out DIR]
 (--quick: 40k points, one seed; "planned": 4.5 points on the smallest edge's half circle.)
 Prints a table; writes foreign_blades.csv and .json to --out (default: the temporary
 directory, steamtwin-bench/foreign_blades).
@@ -43,6 +43,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "geometry
 from foreign_blades import FAMILY, compare_with_exact, family_blade, laser_cloud, random_pose
 
 from steamtwin.geometry.blade_cloud import ReconstructionError
+from steamtwin.geometry.fit_guard import GuardSettings
 from steamtwin.geometry.frame import reconstruct_in_any_pose
 from steamtwin.geometry.reconstruct import (
     Reconstruction,
@@ -171,7 +172,11 @@ if __name__ == "__main__":
                         help="fit sparse edges as circles tangent to both flanks (edge_model)")
     parser.add_argument("--out", type=Path,
                         default=Path(tempfile.gettempdir()) / "steamtwin-bench" / "foreign_blades")
+    parser.add_argument("--bridge-holes", action="store_true",
+                        help="the guard takes a vertex across a scan hole as bridged "
+                             "(GuardSettings.bridge_holes)")
     args = parser.parse_args()
     sizes, seeds = (["40000"], 1) if args.quick else (args.points, args.seeds)
-    SETTINGS = ReconstructionSettings(model_edges=args.model_edges)
+    SETTINGS = ReconstructionSettings(model_edges=args.model_edges,
+                                      guard=GuardSettings(bridge_holes=args.bridge_holes))
     main(args.members, sizes, seeds, args.pose, args.out)

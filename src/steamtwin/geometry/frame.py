@@ -80,9 +80,14 @@ CAP_BAND = 0.1
 #: Fewest cap-like points that make a planar end patch (a plane's three parameters, ten times
 #: over).
 MIN_CAP_POINTS = 30
-#: The end planes must be parallel, and agree with the side's axis, within this angle to give
-#: the axis (the twist and taper of our rows tilt the side normals' axis by up to 2.3°, hp5).
+#: The end planes must be parallel within this angle to give the axis (the twist and taper of
+#: our rows tilt the side normals' axis by up to 2.3°, hp5).
 CAP_AGREEMENT = math.radians(5.0)
+#: ... and within this angle of the side normals' axis (:data:`FIT_ANGLE`: the tilt the axis
+#: score allows a side normal): a strongly twisted blade tilts the side normals' axis by more
+#: than CAP_AGREEMENT (issue 19's compressor blade, 60°→70° stagger over 60 mm: 4.8–7.2°),
+#: while its end planes, where found, are parallel within 0.6°.
+CAP_TO_SIDE = math.radians(15.0)
 #: Sections whose robust Feret diameters differ by less than this share count as untapered
 #: (the 0.9 taper of reaction blading gives 8 % between 10 % and 90 % span).
 TAPER_MARGIN = 0.02
@@ -223,6 +228,26 @@ def _plane_normal(points: np.ndarray, spacing: float) -> tuple[np.ndarray, float
     return normal, float(np.sqrt(np.mean(distance[keep] ** 2)))
 
 
+def _end_face(members: np.ndarray, axis: np.ndarray, low: bool, spacing: float) -> np.ndarray:
+    """The cap-like points (m) of an end band that can lie on the end face: within the height
+    an end plane up to :data:`CAP_AGREEMENT` off perpendicular to ``axis`` spans over the
+    points' extent across it, plus four spacings (noise), of the extreme end. The rest of the
+    band's cap-like points are side points with tilted k-NN normals — at a thin, sparsely
+    sampled edge, many over a tenth of the span — that would turn a least-squares plane through
+    them all away from the end face (issue 19: a 250 mm blade's end planes came out 41° apart
+    and 86° off the span axis, whose estimate from the side normals a 40° twist tilts by 2°).
+    Where the side normals' axis is tilted further, the window holds a part of the end face
+    only, which gives the same plane."""
+    if len(members) < MIN_CAP_POINTS:
+        return members
+    height = members @ axis
+    across = members - np.outer(height, axis)
+    extent = float(np.linalg.norm(np.ptp(across, axis=0)))
+    reach = extent * math.sin(CAP_AGREEMENT) + 4.0 * spacing
+    end = np.percentile(height, 1.0 if low else 99.0)
+    return members[np.abs(height - end) <= reach]
+
+
 def _plane_basis(axis: np.ndarray) -> np.ndarray:
     """Two unit vectors (2, 3) completing ``axis`` to an orthonormal basis."""
     helper = np.eye(3)[int(np.argmin(np.abs(axis)))]
@@ -303,7 +328,7 @@ def estimate_blade_frame(points: np.ndarray, *, hub_end: str | None = None,
     checks: dict[str, float] = {}
     for name, near in (("low", sample_height < low + CAP_BAND * (high - low)),
                        ("high", sample_height > high - CAP_BAND * (high - low))):
-        members = sample[cap_like & near]
+        members = _end_face(sample[cap_like & near], side_axis, name == "low", spacing)
         if len(members) >= MIN_CAP_POINTS:
             normal, rms = _plane_normal(members, spacing)
             caps[name] = (normal if np.dot(normal, side_axis) >= 0.0 else -normal, members)
@@ -321,7 +346,7 @@ def estimate_blade_frame(points: np.ndarray, *, hub_end: str | None = None,
     checks["end_planes_angle_deg"] = math.degrees(ends_angle)
     checks["side_axis_to_end_planes_deg"] = math.degrees(side_cap)
     checks["normals_explained"] = float(max(scores))
-    if ends_angle < CAP_AGREEMENT and side_cap < CAP_AGREEMENT:
+    if ends_angle < CAP_AGREEMENT and side_cap < CAP_TO_SIDE:
         axis = cap_axis
         rules["span_axis"] = (f"common normal of the two parallel end planes "
                               f"({math.degrees(side_cap):.2f}° from the side normals' axis)")

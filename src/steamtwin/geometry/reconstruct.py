@@ -38,10 +38,17 @@ import numpy as np
 from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.bspline import AdaptiveSurfaceFit, PeriodicSurface, clamped_knots
 from steamtwin.geometry.edge_model import EdgeModel, model_sparse_edges
-from steamtwin.geometry.fit_guard import GuardReport, GuardSettings, guard_surface, refusal_message
+from steamtwin.geometry.fit_guard import (
+    GuardReport,
+    GuardSettings,
+    guard_surface,
+    refusal_message,
+    sparse_edges,
+)
 from steamtwin.geometry.mesh_sections import check_closed
 from steamtwin.geometry.pritchard import GeometryError
 from steamtwin.geometry.profile import cap_triangles
+from steamtwin.geometry.repair_budget import RepairBudget
 from steamtwin.geometry.segmentation import (
     SIDE_REGIONS,
     CapPlane,
@@ -160,7 +167,9 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
     ``segmentation``: the cloud's, when already computed.
     """
     settings = settings or ReconstructionSettings()
+    budget = RepairBudget.start(settings.guard.cpu_budget if settings.guard else None)
     segmentation = segmentation or segment_blade(points, settings.segmentation)
+    budget.mark()  # the refits repeat what follows
     points = np.asarray(points, dtype=np.float64)
     labels = segmentation.labels
     have = np.isin(labels, [REGIONS.index(name) for name in SIDE_REGIONS])
@@ -180,7 +189,7 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
              else EdgeModel.none(len(points)))
     kept, s0, fit_data = model.fit_data(points, s0, have)
     surface = fit.fit(*fit_data, breaks, z_knots).surface_
-    check_side_fit(fit)
+    check_side_fit(fit, lambda: sparse_edges(points, segmentation))
     parameters, residuals = np.full((2, len(points)), np.nan)
     inliers, own, count = np.zeros(len(points), bool), model.replaced, int(kept.sum())
     parameters[kept], residuals[kept] = fit.parameters_[:count], fit.residuals_[:count]
@@ -199,26 +208,31 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
                                   points=points, segmentation=segmentation, surface=surface,
                                   root=root, tip=tip, residuals=residuals, inliers=inliers,
                                   parameters=parameters, boundaries=boundaries,
-                                  fit_history=fit.history_, ring_parameters=ring_s), settings)
+                                  fit_history=fit.history_, ring_parameters=ring_s), settings,
+                   budget)
 
 
-def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings) -> Reconstruction:
+def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings,
+            budget: RepairBudget | None = None) -> Reconstruction:
     """The reconstruction with its guard report (:func:`~steamtwin.geometry.fit_guard.
-    guard_surface`); a surface standing off the cloud, or missing a coherent part of it
-    (``GuardReport.gaps``), is refitted with the guard's stronger penalties in turn (a beak or
-    spike is an overshoot of the spline where few points hold it) and refused with
-    :class:`ReconstructionError` naming where and how far when none passes. The repairs stop
-    at the first whose worst defect is no smaller than the previous fit's: a stronger penalty
-    that does not shrink it only smooths the surface further from the cloud (and each repair
-    is a whole adaptive fit: two of them made the refused clouds the slowest, 32–37 s of CPU
-    at 80k points)."""
+    guard_surface`); a surface off the cloud or missing part of it is refitted with the
+    guard's stronger penalties in turn (a beak is an overshoot of the spline where few points
+    hold it), refused with :class:`ReconstructionError` saying where and how far when none
+    passes. The repairs stop at one that does not shrink the worst defect (more penalty only
+    smooths further from the cloud), or when one more would overrun ``GuardSettings.
+    cpu_budget`` (:mod:`~steamtwin.geometry.repair_budget`; default: from now)."""
     if settings.guard is None:
         return reconstruction
+    budget = budget or RepairBudget.start(settings.guard.cpu_budget)
     report = guard_surface(reconstruction, settings.guard)
+    budget.measure()
     if not report.failed:
         return replace(reconstruction, guard=replace(report, repairs=settings.penalty_factor))
     first = report
     for factor in [f for f in settings.guard.penalty_factors if f > settings.penalty_factor]:
+        if not budget.allows_refit():
+            break
+        budget.mark()
         try:
             repaired = reconstruct_blade(reconstruction.points,
                                          replace(settings, penalty_factor=factor, guard=None),
@@ -226,18 +240,14 @@ def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings) ->
         except ReconstructionError:
             break  # the stronger penalty misses the cloud: refuse with the defect found
         trial = guard_surface(repaired, settings.guard)
+        budget.measure()
         if not trial.failed:
             return replace(repaired, guard=replace(trial, repairs=factor))
-        if _worst(trial) >= _worst(report):
+        if trial.worst >= report.worst:
             break
         report = trial
     raise ReconstructionError(refusal_message(first, reconstruction.points,
                                               reconstruction.segmentation))
-
-
-def _worst(report: GuardReport) -> float:
-    """The largest defect size or gap distance of a guard report (m)."""
-    return max([d.size for d in report.defects] + [g.distance for g in report.gaps] + [0.0])
 
 
 # --- parameters and knots ------------------------------------------------------------------------
@@ -301,16 +311,17 @@ def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.
 MAX_TRIMMED = 0.1
 
 
-def check_side_fit(fit: AdaptiveSurfaceFit) -> None:
+def check_side_fit(fit: AdaptiveSurfaceFit, edges=None) -> None:
     """Raise :class:`ReconstructionError` when the fitted side folds over itself or leaves more
     than :data:`MAX_TRIMMED` of the side points out (farther than the outlier distance): the
-    surface then does not follow the cloud, whatever the triangulation would make of it."""
+    surface then does not follow the cloud, whatever the triangulation would make of it.
+    ``edges()`` gives the note on sparse edges (:func:`~.fit_guard.sparse_edges`)."""
     trimmed = float(np.mean(~fit.inliers_))
     if fit.surface_.folds() or trimmed > MAX_TRIMMED:
         raise ReconstructionError(
             f"the fitted side folds over itself or misses the cloud ({trimmed:.0%} of the side "
             f"points farther than {fit.outlier_distance * 1e3:.3g} mm): is the cloud too "
-            "sparse at the edges, or not in the blade frame?")
+            "sparse at the edges, or not in the blade frame?" + (edges() if edges else ""))
 
 
 def _circular(s: np.ndarray, centre: float) -> np.ndarray:
