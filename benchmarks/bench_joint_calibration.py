@@ -34,12 +34,15 @@ import os
 import platform
 import time
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import least_squares
 
 from steamtwin.calibration import Calibrator, GeneticSearch, SurrogateSearch
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
+from steamtwin.calibration.objective import CalibrationProblem, Objective
 from steamtwin.calibration.settings import DEFAULT_SENSORS, THERMOCOUPLE_BIAS, ObjectiveSettings
 from steamtwin.calibration.windowset import CalibrationWindow, WindowSet, find_calibration_windows
 from steamtwin.dcs.plant import plant_tag_map, run_plant
@@ -62,6 +65,8 @@ def main() -> None:
     parser.add_argument("--skip-ga", action="store_true", help="only the joint MAP (part 1)")
     parser.add_argument("--ga-only", action="store_true",
                         help="only part 2 (the GA and the surrogate on the two 2-h windows)")
+    parser.add_argument("--profile", action="store_true",
+                        help="part 1: also profile the score along the friction coefficient")
     arguments = parser.parse_args()
     warnings.simplefilter("ignore", IdentifiabilityWarning)
     population, generations = (20, 20) if arguments.quick else (50, 200)
@@ -158,6 +163,58 @@ def _joint(spec, run, windows: WindowSet, sigma: dict[str, float],
           f"instruments; plant {time.perf_counter() - start:.0f} s)")
     _bands(sensed, delivered, holds, [_band(h, rated) for h in holds], joint.params_,
            other.true_outputs)
+    if arguments.profile:
+        problem = CalibrationProblem(sensed, windows, ObjectiveSettings(
+            sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS))
+        _friction_profile(replace(problem.objective, tempering=joint.tempering_),
+                          joint.params_)
+
+
+def _friction_profile(objective: Objective, at: ModelParameters) -> None:
+    """The negative log posterior (κχ² + Σz²)/2 along the friction coefficient, the flow and
+    heat-transfer coefficients re-fitted (trust-region least squares on the objective's
+    residuals and prior terms, as :func:`~steamtwin.calibration.posterior.fit_map`) and the
+    offsets profiled out; for the objective as it is (the offsets' class-1 prior at full
+    weight) and as it was before (that prior tempered with the likelihood: β → β/√κ)."""
+    scale = 1.0 / np.sqrt(objective.tempering)
+    before = replace(objective, windows=tuple(
+        replace(w, bias_spread=None if w.bias_spread is None else w.bias_spread * scale)
+        for w in objective.windows))
+    grid = (0.8, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0)
+    print(f"  friction profile (κ {objective.tempering:.2e}; flow and heat transfer re-fitted; "
+          "ΔNLP against the grid's least; offsets control stage / exhaust / casing, K):")
+    for name, scored in (("offsets' prior at full weight", objective),
+                         ("offsets' prior tempered (before)", before)):
+        rows = [(f, *_profile_point(scored, at, f)) for f in grid]
+        least = min(row[1] for row in rows)
+        print(f"    {name}:")
+        for f, nlp, fitted, offsets, rmse in rows:
+            print(f"      friction {f:.1f}: ΔNLP {nlp - least:7.3f}; flow "
+                  f"{fitted.flow_coefficient:.4f}, heat transfer "
+                  f"{fitted.heat_transfer_coefficient:.3f}; offsets " + " / ".join(
+                      f"{offsets[s]:+.2f}" for s in DEFAULT_SENSORS)
+                  + f"; weighted RMSE raw {rmse:.3f} K")
+
+
+def _profile_point(objective: Objective, at: ModelParameters, friction: float
+                   ) -> tuple[float, ModelParameters, dict[str, float], float]:
+    """NLP, fitted parameters, offsets and weighted raw RMSE (K) with the friction fixed."""
+
+    def params(free: np.ndarray) -> ModelParameters:
+        return ModelParameters(float(free[0]), friction, float(np.exp(free[1])))
+
+    def residuals(free: np.ndarray) -> np.ndarray:
+        x = params(free)
+        return np.concatenate([objective.standardised_residuals(x), objective.prior_terms(
+            [x.flow_coefficient, friction, x.heat_transfer_coefficient])])
+
+    start = np.array([at.flow_coefficient, np.log(at.heat_transfer_coefficient)])
+    found = least_squares(residuals, start, bounds=([0.9, np.log(0.5)], [1.1, np.log(2.0)]),
+                          diff_step=1e-3, x_scale=[0.05, 0.35], max_nfev=15)
+    fitted = params(found.x)
+    x = [fitted.flow_coefficient, friction, fitted.heat_transfer_coefficient]
+    return (0.5 * float(found.fun @ found.fun), fitted, objective.sensor_offsets(fitted),
+            objective.evaluate(x).rmse)
 
 
 def two_hold_pair(windows: WindowSet) -> WindowSet:
