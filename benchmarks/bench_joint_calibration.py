@@ -44,7 +44,12 @@ from steamtwin.calibration import Calibrator, GeneticSearch, SurrogateSearch
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
 from steamtwin.calibration.objective import CalibrationProblem, Objective
 from steamtwin.calibration.settings import DEFAULT_SENSORS, THERMOCOUPLE_BIAS, ObjectiveSettings
-from steamtwin.calibration.windowset import CalibrationWindow, WindowSet, find_calibration_windows
+from steamtwin.calibration.windowset import (
+    CalibrationWindow,
+    WindowSet,
+    find_calibration_windows,
+    split_at_input_dropouts,
+)
 from steamtwin.dcs.plant import plant_tag_map, run_plant
 from steamtwin.dcs.windows import find_steady_windows, select_window
 from steamtwin.model.fom import FullOrderModel
@@ -267,7 +272,8 @@ def _band(frame: pd.DataFrame, rated: float) -> str:
 def _held_out(measured: pd.DataFrame, windows: WindowSet, rated: float
               ) -> list[tuple[pd.DataFrame, str]]:
     """The day's steady holds (≥ 1 h, ±2 % of rated) less every sample a calibration
-    window holds: the contiguous pieces of at least :data:`HELD_OUT_MIN_S`, with their band."""
+    window holds: the contiguous pieces of at least :data:`HELD_OUT_MIN_S`, cut around input
+    dropouts, with their band."""
     used = windows.windows[0].data.index
     for window in windows.windows[1:]:
         used = used.union(window.data.index)
@@ -278,9 +284,9 @@ def _held_out(measured: pd.DataFrame, windows: WindowSet, rated: float
         free = ~frame.index.isin(used)
         runs = np.cumsum(np.diff(np.concatenate([[False], free])) != 0)
         for label in np.unique(runs[free]):
-            piece = frame[free & (runs == label)]
-            if len(piece) >= HELD_OUT_MIN_S:  # 1-s data
-                pieces.append((piece, _band(piece, rated)))
+            # cut around input dropouts the model cannot fill, as the window search does
+            pieces += [(piece, _band(piece, rated)) for piece in split_at_input_dropouts(
+                frame[free & (runs == label)]) if len(piece) >= HELD_OUT_MIN_S]  # 1-s data
     return pieces
 
 
