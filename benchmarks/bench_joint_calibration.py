@@ -13,6 +13,15 @@ DCS recorded it):
    the separate term): RMSE per load band against the instruments' error on that band (RMS of
    measured − true: bias included, what a perfect model would score), the parameters with
    their 95 % intervals against the plant's twin-equivalent truth, wall time and model runs.
+   The model is calibrated as ``calibrate`` builds it for the plant's tag map
+   (:func:`~steamtwin.model.sensor_setup.sensor_setup`: the thermocouples' lags), and each
+   band's RMSE is given twice: *raw* (the calibrated model's readings, no offsets) and *as
+   delivered* — the model :func:`steamtwin.twin.monitoring_model` builds for ``validate
+   --params`` (the same sensors plus the sensor offsets the calibration estimated, what
+   params.json carries); the verdict (✓/✗ against 1.5×) is on the as-delivered column. The
+   offsets are fitted on the same windows, so the same twin is also judged out of sample: on
+   the parts of the day's holds no calibration window covers, and on the plant's ``day-2``
+   (seed 1000 + N, the same instruments; other loads, as ``bench_unseen_day.py``).
 2. **Timing and surrogate check** on two 2-h windows jointly (the 30 % and the evening 100 %
    holds): the method's GA (P 50 × G 200; ``--quick``: P 20 × G 20) on the local pool (target
    ≤ 5 min) and the surrogate mode (target: within 0.1 K of the GA with ≤ 10 % of its runs).
@@ -25,19 +34,33 @@ import os
 import platform
 import time
 import warnings
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import least_squares
 
 from steamtwin.calibration import Calibrator, GeneticSearch, SurrogateSearch
 from steamtwin.calibration.identifiability import IdentifiabilityWarning
-from steamtwin.calibration.objective import CalibrationProblem
+from steamtwin.calibration.objective import CalibrationProblem, Objective
 from steamtwin.calibration.settings import DEFAULT_SENSORS, THERMOCOUPLE_BIAS, ObjectiveSettings
-from steamtwin.calibration.windowset import CalibrationWindow, WindowSet, find_calibration_windows
-from steamtwin.dcs.plant import run_plant
+from steamtwin.calibration.windowset import (
+    CalibrationWindow,
+    WindowSet,
+    find_calibration_windows,
+    split_at_input_dropouts,
+)
+from steamtwin.dcs.plant import plant_tag_map, run_plant
+from steamtwin.dcs.windows import find_steady_windows, select_window
 from steamtwin.model.fom import FullOrderModel
-from steamtwin.model.parameters import DEFAULT_PRIORS, ModelParameters
+from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.spec import load_spec
+from steamtwin.twin import monitoring_model
+
+#: Shortest held-out piece of a hold (s): half an hour, long enough for the metal to settle
+#: from the model's steady start.
+HELD_OUT_MIN_S = 1800.0
 
 
 def main() -> None:
@@ -47,6 +70,8 @@ def main() -> None:
     parser.add_argument("--skip-ga", action="store_true", help="only the joint MAP (part 1)")
     parser.add_argument("--ga-only", action="store_true",
                         help="only part 2 (the GA and the surrogate on the two 2-h windows)")
+    parser.add_argument("--profile", action="store_true",
+                        help="part 1: also profile the score along the friction coefficient")
     arguments = parser.parse_args()
     warnings.simplefilter("ignore", IdentifiabilityWarning)
     population, generations = (20, 20) if arguments.quick else (50, 200)
@@ -72,23 +97,7 @@ def main() -> None:
     print(summary[["kind", "band", "load_pct", "samples", "weight"]].to_string(
         float_format=lambda v: f"{v:.2f}"))
     if not arguments.ga_only:
-        start = time.perf_counter()
-        search = SurrogateSearch(max_evaluations=150 if arguments.quick else 400)
-        joint = Calibrator(model, objective=ObjectiveSettings(sigma=sigma,
-                                                                 sensor_bias=THERMOCOUPLE_BIAS),
-                           search=search).fit(windows)
-        joint_time = time.perf_counter() - start
-        print(f"surrogate: {joint_time:.0f} s wall, {joint.n_evaluations_} model runs; "
-              f"weighted RMSE {joint.rmse_:.3f} K (empirical "
-              f"{Calibrator(model).rmse(windows, ModelParameters()):.3f} K)")
-        _parameters(joint, truth)
-        problem = CalibrationProblem(model, windows, ObjectiveSettings(
-            sigma=sigma, priors=DEFAULT_PRIORS, sensor_bias=THERMOCOUPLE_BIAS))
-        estimated = problem.objective.sensor_biases(joint.params_)[0]
-        print("  thermocouple biases estimated / true: " + ", ".join(
-            f"{s} {b:+.2f} / {biases[s]:+.2f} K"
-            for s, b in zip(DEFAULT_SENSORS, estimated, strict=True)))
-        _bands(model, windows, joint.params_, true)
+        _joint(spec, run, windows, sigma, biases, arguments)
     if arguments.skip_ga:
         return
 
@@ -118,6 +127,101 @@ def main() -> None:
     _parameters(surrogate, truth)
 
 
+def _joint(spec, run, windows: WindowSet, sigma: dict[str, float],
+           biases: dict[str, float], arguments: argparse.Namespace) -> None:
+    """Part 1: the joint MAP, its parameters and the per-band RMSE raw and as delivered, in
+    and out of sample."""
+    tag_map = plant_tag_map()
+    # what calibrate's sensor_model builds for the plant's tag map (no τ or depth stated:
+    # the typical thermowells and the spec's depth)
+    sensed = sensor_setup(spec, tag_map).model(spec)
+    start, cpu = time.perf_counter(), _cpu()
+    search = SurrogateSearch(max_evaluations=150 if arguments.quick else 400)
+    joint = Calibrator(sensed, objective=ObjectiveSettings(sigma=sigma,
+                                                            sensor_bias=THERMOCOUPLE_BIAS),
+                       search=search).fit(windows)
+    joint_time = time.perf_counter() - start
+    print(f"surrogate: {joint_time:.0f} s wall, {_cpu() - cpu:.0f} s CPU (this process and "
+          f"its workers), {joint.n_evaluations_} model runs; weighted RMSE {joint.rmse_:.3f} K "
+          f"(empirical {Calibrator(sensed).rmse(windows, ModelParameters()):.3f} K)")
+    _parameters(joint, run.truth.twin_equivalent)
+    offsets = joint.sensor_offsets_  # what params.json's sensor_offsets carry
+    print("  sensor offsets estimated / true biases: " + ", ".join(
+        f"{s} {offsets[s]:+.2f} / {biases[s]:+.2f} K" for s in DEFAULT_SENSORS))
+    # what validate --params reads the model through (steamtwin.twin.monitoring_model)
+    delivered = monitoring_model(spec, "fom", True, tag_map, offsets)
+    rated = spec.design.generator_power
+    print("  in sample: the calibration's windows")
+    _bands(sensed, delivered, [w.data for w in windows], windows.bands(), joint.params_,
+           run.true_outputs)
+    held_out = _held_out(run.measured, windows, rated)
+    print(f"  out of sample: the day's holds outside every calibration window "
+          f"({len(held_out)} pieces ≥ {HELD_OUT_MIN_S:.0f} s)")
+    _bands(sensed, delivered, [f for f, _ in held_out], [b for _, b in held_out],
+           joint.params_, run.true_outputs)
+    start = time.perf_counter()
+    other = run_plant("day-2", random_state=1000 + arguments.seed,
+                      instruments=run.injected.sensors)
+    holds = [select_window(other.measured, h.start, h.end) for h in find_steady_windows(
+        other.measured, duration_s=3600.0, rated_load_w=rated, tolerance=0.02)]
+    print(f"  out of sample: day-2's {len(holds)} holds (seed {1000 + arguments.seed}, same "
+          f"instruments; plant {time.perf_counter() - start:.0f} s)")
+    _bands(sensed, delivered, holds, [_band(h, rated) for h in holds], joint.params_,
+           other.true_outputs)
+    if arguments.profile:
+        problem = CalibrationProblem(sensed, windows, ObjectiveSettings(
+            sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS))
+        _friction_profile(replace(problem.objective, tempering=joint.tempering_),
+                          joint.params_)
+
+
+def _friction_profile(objective: Objective, at: ModelParameters) -> None:
+    """The negative log posterior (κχ² + Σz²)/2 along the friction coefficient, the flow and
+    heat-transfer coefficients re-fitted (trust-region least squares on the objective's
+    residuals and prior terms, as :func:`~steamtwin.calibration.posterior.fit_map`) and the
+    offsets profiled out; for the objective as it is (the offsets' class-1 prior at full
+    weight) and as it was before (that prior tempered with the likelihood: β → β/√κ)."""
+    scale = 1.0 / np.sqrt(objective.tempering)
+    before = replace(objective, windows=tuple(
+        replace(w, bias_spread=None if w.bias_spread is None else w.bias_spread * scale)
+        for w in objective.windows))
+    grid = (0.8, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0)
+    print(f"  friction profile (κ {objective.tempering:.2e}; flow and heat transfer re-fitted; "
+          "ΔNLP against the grid's least; offsets control stage / exhaust / casing, K):")
+    for name, scored in (("offsets' prior at full weight", objective),
+                         ("offsets' prior tempered (before)", before)):
+        rows = [(f, *_profile_point(scored, at, f)) for f in grid]
+        least = min(row[1] for row in rows)
+        print(f"    {name}:")
+        for f, nlp, fitted, offsets, rmse in rows:
+            print(f"      friction {f:.1f}: ΔNLP {nlp - least:7.3f}; flow "
+                  f"{fitted.flow_coefficient:.4f}, heat transfer "
+                  f"{fitted.heat_transfer_coefficient:.3f}; offsets " + " / ".join(
+                      f"{offsets[s]:+.2f}" for s in DEFAULT_SENSORS)
+                  + f"; weighted RMSE raw {rmse:.3f} K")
+
+
+def _profile_point(objective: Objective, at: ModelParameters, friction: float
+                   ) -> tuple[float, ModelParameters, dict[str, float], float]:
+    """NLP, fitted parameters, offsets and weighted raw RMSE (K) with the friction fixed."""
+
+    def params(free: np.ndarray) -> ModelParameters:
+        return ModelParameters(float(free[0]), friction, float(np.exp(free[1])))
+
+    def residuals(free: np.ndarray) -> np.ndarray:
+        x = params(free)
+        return np.concatenate([objective.standardised_residuals(x), objective.prior_terms(
+            [x.flow_coefficient, friction, x.heat_transfer_coefficient])])
+
+    start = np.array([at.flow_coefficient, np.log(at.heat_transfer_coefficient)])
+    found = least_squares(residuals, start, bounds=([0.9, np.log(0.5)], [1.1, np.log(2.0)]),
+                          diff_step=1e-3, x_scale=[0.05, 0.35], max_nfev=15)
+    fitted = params(found.x)
+    x = [fitted.flow_coefficient, friction, fitted.heat_transfer_coefficient]
+    return (0.5 * float(found.fun @ found.fun), fitted, objective.sensor_offsets(fitted),
+            objective.evaluate(x).rmse)
+
+
 def two_hold_pair(windows: WindowSet) -> WindowSet:
     """Part 2's two 2-h windows: the last 7 200 s of the hold nearest 30 % load and of the
     last hold at the highest load."""
@@ -142,17 +246,54 @@ def _parameters(calibrator: Calibrator, truth: ModelParameters) -> None:
               f"{row['shrinkage']:.2f})")
 
 
-def _bands(model: FullOrderModel, windows: WindowSet, params: ModelParameters,
-           true: pd.DataFrame) -> None:
-    """RMSE per band, empirical and calibrated, against the instruments' error there."""
-    bands = windows.bands()
-    print("  band | windows | RMSE empirical → calibrated | instrument error | ratio")
-    for band in sorted(set(bands)):
-        frames = [w.data for w, b in zip(windows, bands, strict=True) if b == band]
-        before, after = (Calibrator(model).rmse(frames, p) for p in (ModelParameters(), params))
-        floor = _instrument_error(frames, true, DEFAULT_SENSORS)
-        print(f"  {band} | {len(frames)} | {before:.3f} → {after:.3f} K | {floor:.3f} K | "
-              f"{after / floor:.2f} {'✓' if after <= 1.5 * floor else '✗'}")
+def _bands(raw: FullOrderModel, delivered: FullOrderModel, frames: list[pd.DataFrame],
+           labels: list[str], params: ModelParameters, true: pd.DataFrame) -> None:
+    """RMSE (K) per band of ``frames`` (band ``labels``): empirical, calibrated raw (``raw``
+    at ``params``) and calibrated as delivered (``delivered``: the same sensors with the
+    offsets), against the instruments' error there; the verdict on the as-delivered ratio."""
+    print("    band | windows | RMSE empirical → calibrated raw / as delivered | instrument "
+          "error | ratio raw / as delivered")
+    for band in sorted(set(labels)):
+        chosen = [f for f, b in zip(frames, labels, strict=True) if b == band]
+        before = Calibrator(raw).rmse(chosen, ModelParameters())
+        after, shown = (Calibrator(m).rmse(chosen, params) for m in (raw, delivered))
+        floor = _instrument_error(chosen, true, DEFAULT_SENSORS)
+        print(f"    {band} | {len(chosen)} | {before:.3f} → {after:.3f} / {shown:.3f} K | "
+              f"{floor:.3f} K | {after / floor:.2f} / {shown / floor:.2f} "
+              f"{'✓' if shown <= 1.5 * floor else '✗'}")
+
+
+def _band(frame: pd.DataFrame, rated: float) -> str:
+    """The 10 % load band (as :meth:`WindowSet.bands` labels it) of a hold's mean load."""
+    decade = int(np.floor(10.0 * float(frame["load"].mean()) / rated + 1e-9))
+    return f"{10 * decade}–{10 * decade + 10} %"
+
+
+def _held_out(measured: pd.DataFrame, windows: WindowSet, rated: float
+              ) -> list[tuple[pd.DataFrame, str]]:
+    """The day's steady holds (≥ 1 h, ±2 % of rated) less every sample a calibration
+    window holds: the contiguous pieces of at least :data:`HELD_OUT_MIN_S`, cut around input
+    dropouts, with their band."""
+    used = windows.windows[0].data.index
+    for window in windows.windows[1:]:
+        used = used.union(window.data.index)
+    pieces = []
+    for hold in find_steady_windows(measured, duration_s=3600.0, rated_load_w=rated,
+                                    tolerance=0.02):
+        frame = select_window(measured, hold.start, hold.end)
+        free = ~frame.index.isin(used)
+        runs = np.cumsum(np.diff(np.concatenate([[False], free])) != 0)
+        for label in np.unique(runs[free]):
+            # cut around input dropouts the model cannot fill, as the window search does
+            pieces += [(piece, _band(piece, rated)) for piece in split_at_input_dropouts(
+                frame[free & (runs == label)]) if len(piece) >= HELD_OUT_MIN_S]  # 1-s data
+    return pieces
+
+
+def _cpu() -> float:
+    """CPU time (s) of this process and its finished child processes (the pool's workers)."""
+    times = os.times()
+    return times.user + times.system + times.children_user + times.children_system
 
 
 def _instrument_error(frames: list[pd.DataFrame], true: pd.DataFrame, sensors) -> float:

@@ -41,6 +41,16 @@ Sensor biases (``sensor_bias``)
     calibration then learns from how the temperatures change across loads and time, not from
     their absolute level, which the thermocouples cannot vouch for.
 
+    Tempering tempers the likelihood only (a power likelihood, Grünwald & van Ommen 2017;
+    Bissiri, Holmes & Walker 2016, *J. R. Stat. Soc. B* 78:1103: the prior is not raised to
+    κ). The bias prior b ~ N(0, β²) is a prior like the parameters', so what the optimisers
+    minimise is ``κ Σ p (r − b)² + b²/β² + Σ z²`` with b profiled out:
+    ``κχ² = κ Σ p r² − (κ Σ p r)² / (κ Σ p + 1/β²)``, i.e. the formula above with
+    1/β² → 1/(κβ²) in the score's χ²-scale. Tempering χ² *after* the integral instead (the
+    first version) weakened the offsets' class-1 prior by κ (≈ 1/4000 on the virtual plant's
+    day): the offsets ran to 2.5× their tolerance/√3 to trade with the friction coefficient,
+    whose prior kept its full weight (docs/benchmarks.md, "The offsets' class-1 prior").
+
 Infeasible candidates
     When the simulator rejects a candidate (``ValueError``, e.g. the FOM's ``InputError`` for a
     flow coefficient too low to pass rated flow) or returns non-finite temperatures at valid
@@ -140,7 +150,7 @@ class Objective:
         return np.array([(prior.to_internal(float(v)) - prior.mean_internal) / prior.spread
                          for prior, v in zip(self.priors, x, strict=True)])
 
-    def _residuals(self, params: ModelParameters) -> list[tuple[np.ndarray, np.ndarray]]:
+    def residual_parts(self, params: ModelParameters) -> list[tuple[np.ndarray, np.ndarray]]:
         """Per window: residuals T_sim − T_meas (samples, sensors; K; NaN where not measured)
         and each sensor's precision w_s·ω/σ_s² (1/K²); raises if the model rejects ``params``."""
         parts = []
@@ -156,7 +166,9 @@ class Objective:
     def _bias_sums(self, parts: list[tuple[np.ndarray, np.ndarray]]
                    ) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """Per instrument group and sensor: A = Σ p, B = Σ p·r over its windows' valid samples
-        and 1/β² (+inf where a sensor has no bias term, so that B²/(A + 1/β²) vanishes)."""
+        and 1/(κβ²) — the bias prior's precision on the untempered χ² scale, so that it keeps
+        its full weight in κχ² (module docstring) — +inf where a sensor has no bias term, so
+        that B²/(A + 1/(κβ²)) vanishes."""
         sums: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         for window, (residual, precision) in zip(self.windows, parts, strict=True):
             valid = ~np.isnan(residual)
@@ -165,7 +177,7 @@ class Objective:
             spread = np.zeros(len(self.sensors)) if window.bias_spread is None \
                 else window.bias_spread
             inverse = np.full(len(self.sensors), np.inf)
-            inverse[spread > 0] = 1.0 / spread[spread > 0] ** 2
+            inverse[spread > 0] = 1.0 / (self.tempering * spread[spread > 0] ** 2)
             if window.group in sums:
                 a0, b0, _ = sums[window.group]
                 a, b = a + a0, b + b0
@@ -175,7 +187,7 @@ class Objective:
     def sensor_biases(self, params: ModelParameters) -> dict[int, np.ndarray]:
         """Per instrument group: each sensor's bias estimate (measured − model, K; its
         posterior mean given ``params``; 0 where a sensor has no bias term)."""
-        sums = self._bias_sums(self._residuals(params))
+        sums = self._bias_sums(self.residual_parts(params))
         return {g: -b / (a + inverse) for g, (a, b, inverse) in sums.items()}
 
     def sensor_offsets(self, params: ModelParameters) -> dict[str, float]:
@@ -183,7 +195,7 @@ class Objective:
         group — the posterior mean of one constant bias per sensor given ``params``, as if all
         files came from the same instruments (one plant): what validate and predict add to
         the model's readings. Empty without bias terms."""
-        sums = list(self._bias_sums(self._residuals(params)).values())
+        sums = list(self._bias_sums(self.residual_parts(params)).values())
         a = sum(part[0] for part in sums)
         b = sum(part[1] for part in sums)
         inverse = np.mean([part[2] for part in sums], axis=0)
@@ -191,22 +203,31 @@ class Objective:
                 if np.isfinite(inverse[j])}
 
     def standardised_residuals(self, params: ModelParameters) -> np.ndarray:
-        """Residuals whose sum of squares is χ² (module docstring): every valid sample's
-        √(w_s ω)·(T_sim − T_meas − b)/σ_s with b the bias estimate of its sensor, then each bias
-        term's b/β, flattened (dimensionless; order fixed by the windows); raises if the model
-        rejects ``params``."""
-        return self._standardised(self._residuals(params))
+        """Residuals whose sum of squares is κχ² (module docstring): every valid sample's
+        √(κ w_s ω)·(T_sim − T_meas − b)/σ_s with b the bias estimate of its sensor (the
+        :meth:`data_rows` first), then each bias term's b/β — its prior, untempered —,
+        flattened (dimensionless; order fixed by the windows); raises if the model rejects
+        ``params``."""
+        return self.standardise(self.residual_parts(params))
 
-    def _standardised(self, parts: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
-        """:meth:`standardised_residuals` of the per-window residuals ``parts``."""
+    def standardise(self, parts: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+        """:meth:`standardised_residuals` of the per-window residuals ``parts`` (from
+        :meth:`residual_parts`) under this objective's tempering: no model run, so one run's
+        residuals can be standardised for several κ."""
         sums = self._bias_sums(parts)
         bias = {g: b / (a + inverse) for g, (a, b, inverse) in sums.items()}
-        flat = [((residual - bias[w.group]) * np.sqrt(precision))[~np.isnan(residual)]
-                for w, (residual, precision) in zip(self.windows, parts, strict=True)]
+        flat = [((residual - bias[w.group]) * np.sqrt(precision * self.tempering))[
+            ~np.isnan(residual)] for w, (residual, precision) in zip(self.windows, parts,
+                                                                   strict=True)]
         for group, (_, _, inverse) in sums.items():
             has = np.isfinite(inverse)
-            flat.append(bias[group][has] * np.sqrt(inverse[has]))
-        return np.concatenate(flat) * np.sqrt(self.tempering)
+            flat.append(bias[group][has] * np.sqrt(inverse[has] * self.tempering))
+        return np.concatenate(flat)
+
+    def data_rows(self) -> int:
+        """How many of :meth:`standardised_residuals` are samples (the first ones; the rest
+        are the bias terms' prior rows)."""
+        return int(sum((~np.isnan(w.measured)).sum() for w in self.windows))
 
     def weighted_count(self) -> float:
         """Σ_w ω_w Σ_s w_s n_ws: the number of samples the objective counts."""
@@ -236,13 +257,13 @@ class Objective:
         if isinstance(parts, Evaluation):
             return parts, None
         return (self._evaluation(x, parts),
-                np.concatenate([self._standardised(parts), self.prior_terms(x)]))
+                np.concatenate([self.standardise(parts), self.prior_terms(x)]))
 
     def _parts_or_penalty(self, x: Sequence[float]
                           ) -> list[tuple[np.ndarray, np.ndarray]] | Evaluation:
         """:meth:`_residuals` of ``x``, or the penalised :class:`Evaluation` if rejected."""
         try:
-            return self._residuals(self.parameters(x))
+            return self.residual_parts(self.parameters(x))
         except ValueError as error:
             reason = str(error) or type(error).__name__
             return Evaluation(PENALTY_RMSE, reason, PENALTY_RMSE)

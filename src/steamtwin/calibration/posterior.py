@@ -13,8 +13,11 @@ Coordinates
 Laplace approximation (MacKay 2003, *Information Theory, Inference and Learning Algorithms*,
 ch. 27; Bates & Watts 1988, §2.2 for the Gauss–Newton Hessian)
     With J = ∂r/∂θ of the standardised residuals r = √(ω w_s)·(T_sim − T_meas)/σ_s (central
-    differences), the posterior precision at the MAP is ``H = J^T J / (τ·S²) + diag(1/s²)`` and
-    the covariance ``C = H⁻¹``; 95 % intervals are θ̂ ± 1.96 √C_ii mapped back to x.
+    differences), the posterior precision at the MAP is ``H = J^T J / (τ·S²) + J_bᵀJ_b +
+    diag(1/s²)`` and the covariance ``C = H⁻¹``; 95 % intervals are θ̂ ± 1.96 √C_ii mapped
+    back to x. J_b is the Jacobian of the sensor-bias terms' prior rows b/β (the biases
+    profiled out, :mod:`~steamtwin.calibration.objective`): a prior, so neither τ nor S
+    scales it.
 
     * τ ≥ 1 is the residuals' integrated autocorrelation time (samples; Sokal's estimator as
       in :mod:`~steamtwin.calibration.identifiability`): the Gaussian likelihood counts every
@@ -384,21 +387,27 @@ def laplace_posterior(objective: Objective, params: ModelParameters,
     theta = np.array([p.to_internal(getattr(params, n))
                       for n, p in zip(PARAMETER_NAMES, prior_tuple, strict=True)])
     low, high = _theta_bounds(prior_tuple)
-    base = objective.standardised_residuals(params)
-    jacobian = np.empty((base.size, theta.size))
+    parts = objective.residual_parts(params)
+    base = objective.standardise(parts)
+    kappa = objective.tempering  # undo the objective's tempering: τ and S give it anew
+    data = objective.data_rows()  # the samples' rows; the bias priors' rows follow
+    tau = _residual_time(objective, params) if inflate else 1.0
+    freedom = objective.weighted_count() - theta.size
+    scale = float(np.sqrt(max(1.0, base[:data] @ base[:data] / kappa / freedom))) \
+        if inflate and freedom > 0 else 1.0
+    # the posterior the intervals report: the likelihood weighted 1/(τ S²), the bias priors
+    # at full weight, the biases profiled at that weight
+    laplace = replace(objective, tempering=1.0 / (tau * scale**2))
+    jacobian = np.empty((base.size, theta.size))  # of the objective's residuals (κ)
+    weighted = np.empty((base.size, theta.size))  # of the reported posterior's
     for i in range(theta.size):
         up, down = theta.copy(), theta.copy()
         up[i], down[i] = min(theta[i] + _STEP, high[i]), max(theta[i] - _STEP, low[i])
-        r_up = objective.standardised_residuals(_to_params(up, prior_tuple))
-        r_down = objective.standardised_residuals(_to_params(down, prior_tuple))
-        jacobian[:, i] = (r_up - r_down) / (up[i] - down[i])
-    kappa = objective.tempering  # undo the objective's tempering: τ and S give it anew
-    tau = _residual_time(objective, params) if inflate else 1.0
-    freedom = objective.weighted_count() - theta.size
-    scale = float(np.sqrt(max(1.0, base @ base / kappa / freedom))) if inflate and \
-        freedom > 0 else 1.0
-    precision = jacobian.T @ jacobian / (kappa * tau * scale**2) + np.diag(
-        [1.0 / p.spread**2 for p in prior_tuple])
+        runs = [objective.residual_parts(_to_params(x, prior_tuple)) for x in (up, down)]
+        for target, scored in ((jacobian, objective), (weighted, laplace)):
+            target[:, i] = (scored.standardise(runs[0]) - scored.standardise(runs[1])) / (
+                up[i] - down[i])
+    precision = weighted.T @ weighted + np.diag([1.0 / p.spread**2 for p in prior_tuple])
     covariance = np.linalg.inv(precision)
     posterior = Posterior(params, theta, covariance, prior_tuple, tau, int(base.size), scale)
     if clusters is not None:
@@ -412,10 +421,10 @@ def laplace_posterior(objective: Objective, params: ModelParameters,
                                 cluster_shifts=shifts)
     if not inputs:
         return posterior
-    gain = covariance @ jacobian.T / (kappa * tau * scale**2)  # δθ = −gain·δr
+    gain = covariance @ weighted.T  # δθ = −gain·δr, r the reported posterior's residuals
     used = {name: u for name, u in inputs.items()
             if name in objective.simulator.input_signals}
-    covariance_in, rejected = input_covariance(objective, params, gain, used)
+    covariance_in, rejected = input_covariance(laplace, params, gain, used)
     return replace(posterior, input_covariance=covariance_in, input_sources=tuple(
         (name, f"not propagated: the model rejects the inputs with {name} moved by ±{u.source}"
          if name in rejected else u.source) for name, u in used.items()))
@@ -531,7 +540,7 @@ def _residual_time(objective: Objective, params: ModelParameters) -> float:
 def likelihood_tempering(objective: Objective, params: ModelParameters) -> float:
     """κ = 1/(τ·S²) ∈ (0, 1] at ``params`` (module docstring): how much of its naive weight
     the likelihood deserves given the residuals' autocorrelation time τ and Birge ratio S."""
-    residuals = objective.standardised_residuals(params)
+    residuals = objective.standardised_residuals(params)[:objective.data_rows()]
     freedom = max(objective.weighted_count() - len(PARAMETER_NAMES), 1.0)
     ratio = max(1.0, residuals @ residuals / objective.tempering / freedom)
     return float(1.0 / (_residual_time(objective, params) * ratio))
