@@ -26,6 +26,10 @@ blade without a nominal by :func:`~steamtwin.geometry.frame.estimate_blade_frame
 
 The patch of every triangle is kept in ``Reconstruction.regions``; :func:`~steamtwin.geometry.
 mesh_io.write_stl` writes it into the STL, :mod:`.reconstruction_report` reports the result.
+
+Kept as one module because the steps share one state — the side's parameters, its knots and the
+guard's repair loop, which refits from step 3 — while each step's own work lives in its module
+(segmentation, sections, bspline, edge_model, fit_guard, repair_budget).
 """
 
 from __future__ import annotations
