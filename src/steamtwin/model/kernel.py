@@ -68,12 +68,14 @@ from steamtwin.steam.tables import (
     PH_T,
     PH_V,
     enthalpy_ps_at,
-    enthalpy_pt,
+    enthalpy_pt_at,
     entropy_and_pv_at,
+    heat_transfer_properties_at,
+    locate_log_pressure,
     locate_pressure,
-    ph_domain_position,
-    ph_properties,
+    ph_domain_position_at,
     ph_property,
+    ph_property_and_position_at,
     ph_property_at,
     pressure_in_range,
 )
@@ -368,9 +370,10 @@ def _valve_demand(cs, open_flux, flow):
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
-def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params, throttled,
-                   out, throttle_tolerance):
-    """Expand the nozzle groups to ``p1``; returns the mixed outlet enthalpy (J/kg).
+def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, cell_1, coordinate_1,
+                   params, throttled, out, throttle_tolerance):
+    """Expand the nozzle groups to ``p1`` (located as ``cell_1``, ``coordinate_1``:
+    :func:`locate_pressure`); returns the mixed outlet enthalpy (J/kg).
 
     The wide-open valves pass steam at ``p_valve`` (Pa) with entropy ``s_valve`` and p·v
     ``pv_valve`` (J/kg), set once per sample. ``out`` receives [status, power W, efficiency,
@@ -381,7 +384,6 @@ def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params,
     out, each pressure passing its flow to the relative ``throttle_tolerance``.
     """
     flow_coefficient, friction_coefficient = params[0], params[1]
-    cell_1, coordinate_1 = locate_pressure(tables, p1)
     # every wide-open group expands alike: from the valve outlet (p_valve, h0) to p1
     open_flux = cs.nozzle_discharge_coefficient * flow_coefficient * nozzle_flow_function(
         p1 / p_valve, KAPPA_SUPERHEATED) * p_valve / math.sqrt(pv_valve)
@@ -511,14 +513,16 @@ def _group_heat(group, temperature, surface):
 def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressures,
                   enthalpies, inlet_pv, throttled, metal, pivot, rhs, surface, group_temperature,
                   cs_out, properties, tolerance, result, max_iter, accepted, predict,
-                  leak_flow):
+                  leak_flow, log_pressure, cell, coordinate):
     """Solve one sample and advance ``metal`` (K) in place; returns a status code.
 
     ``pivot`` holds the metal chains factored for this step (:func:`factor_chain`);
     ``tolerance`` = (relative pressure, enthalpy in J/kg) bounds of the estimated error left;
     ``predict``: carry the previous sample's p·v to these inputs first (step 0; pointless when
     the inputs did not change). ``leak_flow`` (kg/s per leakage): the last forward sweep's
-    leakage flows, warm start in, solution out.
+    leakage flows, warm start in, solution out. ``log_pressure``, ``cell``, ``coordinate``
+    (stages + 1, work space): each sweep's pressures located on the tables' ln p axis, once,
+    for every look-up at them in that sweep and at acceptance.
 
     Inlined into :func:`run_kernel` (numba ``inline="always"``): called once per sample with
     ~45 arrays (the constants, the tables, the carried state), its reference counting at entry
@@ -544,13 +548,14 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
                         flow_coefficient, p_exhaust, inlet_pv, pressures, leak_flow)
         if not (pressures[0] < p_valve and pressure_in_range(tables, pressures[0])):
             break  # the sweeps below report it
+        cell_1, coordinate_1 = locate_pressure(tables, pressures[0])
         h1 = _control_stage(control, tables, flow, p_valve, s_valve, pv_valve, h0, pressures[0],
-                            params, throttled, cs_out, throttle_tolerance)
-        if cs_out[0] != STATUS_OK or not 0.0 <= ph_domain_position(tables, pressures[0],
-                                                                   h1) <= 1.0:
+                            cell_1, coordinate_1, params, throttled, cs_out, throttle_tolerance)
+        v1, position = ph_property_and_position_at(tables, PH_V, cell_1, coordinate_1,
+                                                   pressures[0], h1)
+        if cs_out[0] != STATUS_OK or not 0.0 <= position <= 1.0:
             break
-        _polytropic_pv(accepted, pressures, inlet_pv,
-                       pressures[0] * ph_property(tables, PH_V, pressures[0], h1))
+        _polytropic_pv(accepted, pressures, inlet_pv, pressures[0] * v1)
         if cs_out[4] > 0.0:  # a valve part open: the flow is passed with a margin
             predicted_p1, predicted_h1, predicted_level = pressures[0], h1, cs_out[4]
     previous_p1 = pressures[0]
@@ -573,18 +578,21 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             if over_capacity:
                 return STATUS_OVER_CAPACITY
             # superheat only falls along an HP expansion: checking the control-stage outlet and
-            # the exhaust keeps every stage within the superheated tables
-            for i in (0, n):
-                if not 0.0 <= ph_domain_position(tables, pressures[i], enthalpies[i]) <= 1.0:
-                    return STATUS_OUT_OF_TABLES
+            # the exhaust keeps every stage within the superheated tables; both pressures are
+            # where the last forward sweep located them
+            temperature_1, position = ph_property_and_position_at(
+                tables, PH_T, cell[0], coordinate[0], pressures[0], enthalpies[0])
+            if not 0.0 <= position <= 1.0 or not 0.0 <= ph_domain_position_at(
+                    tables, cell[n], coordinate[n], enthalpies[n]) <= 1.0:
+                return STATUS_OUT_OF_TABLES
             result[0] = pressures[0]
-            result[1] = ph_property(tables, PH_T, pressures[0], enthalpies[0])
+            result[1] = temperature_1
+            h_exhaust = enthalpies[n]
             if rejoin_flow > 0.0:  # the exhaust mixes the blading's outlet and the leakages
                 h_exhaust = (stage_flow * enthalpies[n] + rejoin_energy) / (stage_flow
                                                                            + rejoin_flow)
-                result[2] = ph_property(tables, PH_T, p_exhaust, h_exhaust)
-            else:
-                result[2] = ph_property(tables, PH_T, p_exhaust, enthalpies[n])
+            result[2] = ph_property_at(tables, PH_T, cell[n], coordinate[n], p_exhaust,
+                                       h_exhaust)
             _commit_metal(metal_constants.conductance, pivot, rhs, surface, group_temperature,
                           metal)
             result[3] = _casing_thermocouple(c.sensor_group, c.sensor_node, c.sensor_weight,
@@ -614,6 +622,9 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             return STATUS_PRESSURE_INVERSION
         if not pressure_in_range(tables, pressures[0]):
             return STATUS_OUT_OF_TABLES
+        # every pressure of this sweep is located once (one logarithm), for all its look-ups
+        log_pressure[0] = math.log(pressures[0])
+        cell[0], coordinate[0] = locate_log_pressure(tables, log_pressure[0])
         # 2. control stage; the first sweep reuses the predictor's when p1 moved little since
         # (same part-open valve as where its slope was measured); a full evaluation after the
         # predictor's measures that slope anew
@@ -623,22 +634,26 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             h1 = _shifted_control_stage(predicted_h1, shift, flow, cs_out)
         else:
             h1 = _control_stage(control, tables, flow, p_valve, s_valve, pv_valve, h0,
-                                pressures[0], params, throttled, cs_out, throttle_tolerance)
+                                pressures[0], cell[0], coordinate[0], params, throttled, cs_out,
+                                throttle_tolerance)
             if iteration == 0 and cs_out[4] == predicted_level and shift != 0.0:
                 cs_out[5], cs_out[6] = (h1 - predicted_h1) / shift, predicted_level
         # over capacity at an unconverged p1 says nothing: from a rough start the first sweeps
         # probe a higher control-stage pressure than the converged one; decided at acceptance
         over_capacity = cs_out[0] == STATUS_OVER_CAPACITY
-        if not 0.0 <= ph_domain_position(tables, pressures[0], h1) <= 1.0:
+        if iteration == 0:
+            position = heat_transfer_properties_at(tables, cell[0], coordinate[0], pressures[0],
+                                                   h1, properties)
+        else:
+            temperature, position = ph_property_and_position_at(
+                tables, PH_T, cell[0], coordinate[0], pressures[0], h1)
+        if not 0.0 <= position <= 1.0:
             return STATUS_OUT_OF_TABLES
         heat_total = 0.0
         g = c.group_ending_at_stage[0]
         if iteration == 0:
-            ph_properties(tables, pressures[0], h1, properties)
             temperature = _setup_group_metal(metal_constants, g, flow, params[2], metal, pivot,
                                              rhs, surface, properties)
-        else:
-            temperature = ph_property(tables, PH_T, pressures[0], h1)
         group_temperature[g] = temperature
         heat = _group_heat(g, temperature, surface)
         heat_total += heat
@@ -651,9 +666,8 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
         stage_flow = flow
         extraction_energy = 0.0
         rejoin_flow = rejoin_energy = outside_energy = 0.0
-        cell_in, coordinate_in = locate_pressure(tables, pressures[0])
         for i in range(n):
-            s_in, inlet_pv[i] = entropy_and_pv_at(tables, cell_in, coordinate_in, enthalpies[i])
+            s_in, inlet_pv[i] = entropy_and_pv_at(tables, cell[i], coordinate[i], enthalpies[i])
             for j in range(leaks):  # leakages leaving here, at this sweep's state
                 if c.leak_origin[j] == i:
                     leak = labyrinth_flow(c.leak_capacity[j], pressures[i], inlet_pv[i],
@@ -665,8 +679,9 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
                         rejoin_energy += leak * enthalpies[i]
                     else:
                         outside_energy += leak * enthalpies[i]
-            cell_in, coordinate_in = locate_pressure(tables, pressures[i + 1])
-            drop = enthalpies[i] - enthalpy_ps_at(tables, cell_in, coordinate_in, s_in)
+            log_pressure[i + 1] = math.log(pressures[i + 1])
+            cell[i + 1], coordinate[i + 1] = locate_log_pressure(tables, log_pressure[i + 1])
+            drop = enthalpies[i] - enthalpy_ps_at(tables, cell[i + 1], coordinate[i + 1], s_in)
             velocity_ratio = c.stage_blade_speed[i] / math.sqrt(2.0 * drop)
             efficiency = stage_efficiency(velocity_ratio, c.stage_optimum_ratio[i],
                                           c.stage_peak_efficiency[i],
@@ -680,14 +695,19 @@ def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressu
             g = c.group_ending_at_stage[i + 1]
             if g >= 0:
                 first = c.group_first_stage[g]
+                # the geometric mean pressure, located at the mean of the logarithms
                 p_mean = math.sqrt(pressures[first - 1] * pressures[i + 1])
+                cell_mean, coordinate_mean = locate_log_pressure(
+                    tables, 0.5 * (log_pressure[first - 1] + log_pressure[i + 1]))
                 h_mean = 0.5 * (enthalpies[first - 1] + h_out)
                 if iteration == 0:
-                    ph_properties(tables, p_mean, h_mean, properties)
+                    heat_transfer_properties_at(tables, cell_mean, coordinate_mean, p_mean,
+                                                h_mean, properties)
                     temperature = _setup_group_metal(metal_constants, g, stage_flow, params[2],
                                                      metal, pivot, rhs, surface, properties)
                 else:
-                    temperature = ph_property(tables, PH_T, p_mean, h_mean)
+                    temperature = ph_property_at(tables, PH_T, cell_mean, coordinate_mean,
+                                                 p_mean, h_mean)
                 group_temperature[g] = temperature
                 heat = _group_heat(g, temperature, surface)
                 heat_total += heat
@@ -843,6 +863,8 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
     factored_inverse_dt = math.nan
     accepted = np.empty(pressures.size)
     properties = np.empty(6)
+    log_pressure, coordinate = np.empty(pressures.size), np.empty(pressures.size)
+    cell = np.zeros(pressures.size, dtype=np.int64)
     detail = stage_pressures.shape[0] == n_samples
     if not resume:
         throttled[0, :] = p0[0]
@@ -860,8 +882,9 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
         if not pressure_in_range(tables, p0[k]) or not pressure_in_range(tables, p_exhaust[k]):
             status[k] = STATUS_OUT_OF_TABLES
             return k
-        h0 = enthalpy_pt(tables, p0[k], t0[k])
-        if not 0.0 <= ph_domain_position(tables, p0[k], h0) <= 1.0:
+        cell_0, coordinate_0 = locate_pressure(tables, p0[k])
+        h0 = enthalpy_pt_at(tables, cell_0, coordinate_0, t0[k])
+        if not 0.0 <= ph_domain_position_at(tables, cell_0, coordinate_0, h0) <= 1.0:
             status[k] = STATUS_OUT_OF_TABLES
             return k
         # the first sample is steady (infinite step); the chains are factored anew only when the
@@ -884,7 +907,7 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                                      pressures, enthalpies, inlet_pv, throttled, metal, pivot,
                                      rhs, surface, group_temperature, cs_out, properties,
                                      start_tolerance, results[k], 200, accepted, True,
-                                     leak_flow)
+                                     leak_flow, log_pressure, cell, coordinate)
                 if code != STATUS_OK or np.abs(metal - before).max() < 1e-9:
                     break
         else:
@@ -897,7 +920,8 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
             code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], current, inverse_dt,
                                  pressures, enthalpies, inlet_pv, throttled, metal, pivot, rhs,
                                  surface, group_temperature, cs_out, properties, tolerance,
-                                 results[k], 200, accepted, changed, leak_flow)
+                                 results[k], 200, accepted, changed, leak_flow, log_pressure,
+                                 cell, coordinate)
         status[k] = code
         if code != STATUS_OK:
             return k
