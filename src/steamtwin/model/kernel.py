@@ -71,6 +71,7 @@ from steamtwin.steam.tables import (
     enthalpy_pt_at,
     entropy_and_pv_at,
     heat_transfer_properties_at,
+    isentropic_step_at,
     locate_log_pressure,
     locate_pressure,
     ph_domain_position_at,
@@ -670,6 +671,12 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
     n = c.stage_capacity.size
     control, metal_constants = c.control, c.metal
     leaks = c.leak_origin.size
+    # the arrays the loop hands to compiled calls, taken out of the constants once: an array
+    # taken out of a tuple inside the loop is reference-counted at every pass
+    stage_capacity, extraction_fraction, leak_origin = (c.stage_capacity, c.extraction_fraction,
+                                                         c.leak_origin)
+    capacity, conductance = metal_constants.capacity, metal_constants.conductance
+    outer_conductance = metal_constants.outer_conductance
     before = np.empty_like(metal)  # the steady start's metal before a repeat
     for k in range(n_samples):
         if varying:
@@ -689,8 +696,8 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
         inverse_dt = 0.0 if steady else 1.0 / time_step[k]
         if inverse_dt != factored_inverse_dt:
             for chain in range(chains):
-                factor_chain(chain, metal_constants.capacity, metal_constants.conductance,
-                             metal_constants.outer_conductance[chain], inverse_dt, pivot)
+                factor_chain(chain, capacity, conductance, outer_conductance[chain], inverse_dt,
+                             pivot)
             factored_inverse_dt = inverse_dt
         # the sample's solve (steps 0–4 of the module docstring), written out here rather than
         # called: a compiled call, even one numba inlines, counts references to every array it
@@ -717,9 +724,8 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
             if steady:
                 before[:] = metal
             code = STATUS_NO_CONVERGENCE
-            prepare_chains(metal, metal_constants.capacity, metal_constants.conductance,
-                           metal_constants.outer_conductance, metal_constants.ambient_temperature,
-                           inverse_dt, pivot, rhs)
+            prepare_chains(metal, capacity, conductance, outer_conductance,
+                           metal_constants.ambient_temperature, inverse_dt, pivot, rhs)
             flow_coefficient = current[0]
             throttle_tolerance = THROTTLE_TOLERANCE * min(
                 enthalpy_tolerance / ENTHALPY_TOLERANCE, 1.0)
@@ -732,9 +738,9 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
             predicted_h1 = predicted_level = 0.0
             for _pass in range(PREDICTOR_PASSES if predict else 0):
                 accepted[:] = pressures  # the pressures inlet_pv belongs to
-                _backward_sweep(c.stage_capacity, c.extraction_fraction, c.leak_origin,
-                                sample_flow, flow_coefficient, exhaust_pressure, inlet_pv,
-                                pressures, leak_flow)
+                _backward_sweep(stage_capacity, extraction_fraction, leak_origin, sample_flow,
+                                flow_coefficient, exhaust_pressure, inlet_pv, pressures,
+                                leak_flow)
                 if not (pressures[0] < p_valve and pressure_in_range(tables, pressures[0])):
                     break  # the sweeps below report it
                 cell_1, coordinate_1 = locate_pressure(tables, pressures[0])
@@ -756,9 +762,9 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                 # 1. backward Stodola sweep; from the second on it also probes the previous
                 # sweep's state
                 accepted[:] = pressures
-                _backward_sweep(c.stage_capacity, c.extraction_fraction, c.leak_origin,
-                                sample_flow, flow_coefficient, exhaust_pressure, inlet_pv,
-                                pressures, leak_flow)
+                _backward_sweep(stage_capacity, extraction_fraction, leak_origin, sample_flow,
+                                flow_coefficient, exhaust_pressure, inlet_pv, pressures,
+                                leak_flow)
                 change_p = abs(pressures[0] - previous_p1) / pressures[0]
                 change_max = 0.0
                 for i in range(n):
@@ -786,8 +792,7 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                                      / (stage_flow + rejoin_flow))
                     results[k, 2] = ph_property_at(tables, PH_T, cell[n], coordinate[n],
                                                    exhaust_pressure, h_exhaust)
-                    _commit_metal(metal_constants.conductance, pivot, rhs, surface,
-                                  group_temperature, metal)
+                    _commit_metal(conductance, pivot, rhs, surface, group_temperature, metal)
                     results[k, 3] = _casing_thermocouple(
                         c.sensor_group, c.sensor_node, c.sensor_weight,
                         metal_constants.half_cell_resistance, metal_constants.area, metal,
@@ -801,8 +806,7 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                     results[k, 10] = cs_out[3]
                     results[k, 11] = iteration
                     results[k, 12], results[k, 13] = _metal_energy(
-                        metal_constants.capacity, metal_constants.outer_conductance,
-                        metal_constants.ambient_temperature, metal)
+                        capacity, outer_conductance, metal_constants.ambient_temperature, metal)
                     results[k, 14] = outside_energy
                     results[k, 15] = 0.0
                     for j in range(leaks):
@@ -866,8 +870,10 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                 extraction_energy = 0.0
                 rejoin_flow = rejoin_energy = outside_energy = 0.0
                 for i in range(n):
-                    s_in, inlet_pv[i] = entropy_and_pv_at(tables, cell[i], coordinate[i],
-                                                          enthalpies[i])
+                    log_pressure[i + 1] = math.log(pressures[i + 1])
+                    inlet_pv[i], cell[i + 1], coordinate[i + 1], isentropic = (
+                        isentropic_step_at(tables, cell[i], coordinate[i], enthalpies[i],
+                                           log_pressure[i + 1]))
                     for j in range(leaks):  # leakages leaving here, at this sweep's state
                         if c.leak_origin[j] == i:
                             leak = labyrinth_flow(c.leak_capacity[j], pressures[i], inlet_pv[i],
@@ -879,11 +885,7 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                                 rejoin_energy += leak * enthalpies[i]
                             else:
                                 outside_energy += leak * enthalpies[i]
-                    log_pressure[i + 1] = math.log(pressures[i + 1])
-                    cell[i + 1], coordinate[i + 1] = locate_log_pressure(tables,
-                                                                         log_pressure[i + 1])
-                    drop = enthalpies[i] - enthalpy_ps_at(tables, cell[i + 1], coordinate[i + 1],
-                                                          s_in)
+                    drop = enthalpies[i] - isentropic
                     velocity_ratio = c.stage_blade_speed[i] / math.sqrt(2.0 * drop)
                     efficiency = stage_efficiency(velocity_ratio, c.stage_optimum_ratio[i],
                                                   c.stage_peak_efficiency[i],

@@ -652,20 +652,48 @@ def heat_transfer_properties_at(
     return y
 
 
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
+def _entropy_and_pv(tables: SteamTables, i: int, t: float, h: float) -> tuple[float, float]:
+    j, u = _ph_cell(tables, i, t, h)
+    return _bicubic(tables.ph, PH_S, i, j, t, u), _bicubic(tables.ph, PH_V, i, j, t, u)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
+def _enthalpy_ps(tables: SteamTables, i: int, t: float, s: float) -> float:
+    s_lo = _cubic(tables.bounds, _B_SLOW, i, t)
+    s_hi = _cubic(tables.bounds, _B_SHIGH, i, t)
+    j, u = _locate_y((s - s_lo) / (s_hi - s_lo), tables.meta[_M_C_PS], tables.ps.shape[2])
+    return _bicubic(tables.ps, 0, i, j, t, u)
+
+
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
 def entropy_and_pv_at(tables: SteamTables, i: int, t: float, h: float) -> tuple[float, float]:
     """Entropy J/(kg·K) and the product p·v (J/kg) at a located pressure and enthalpy h (J/kg)."""
-    j, u = _ph_cell(tables, i, t, h)
-    return _bicubic(tables.ph, PH_S, i, j, t, u), _bicubic(tables.ph, PH_V, i, j, t, u)
+    return _entropy_and_pv(tables, i, t, h)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
 def enthalpy_ps_at(tables: SteamTables, i: int, t: float, s: float) -> float:
     """Specific enthalpy h (J/kg) at a located pressure and entropy s (J/(kg·K))."""
-    s_lo = _cubic(tables.bounds, _B_SLOW, i, t)
-    s_hi = _cubic(tables.bounds, _B_SHIGH, i, t)
-    j, u = _locate_y((s - s_lo) / (s_hi - s_lo), tables.meta[_M_C_PS], tables.ps.shape[2])
-    return _bicubic(tables.ps, 0, i, j, t, u)
+    return _enthalpy_ps(tables, i, t, s)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+def isentropic_step_at(
+    tables: SteamTables, i: int, t: float, h: float, x_out: float
+) -> tuple[float, int, float, float]:
+    """The look-ups of one expansion step in one call: p·v (J/kg) at the inlet, located as cell
+    ``i`` and coordinate ``t``, with enthalpy h (J/kg); the outlet pressure, given as
+    x_out = ln(p_out / Pa), located (cell, coordinate); and the isentropic outlet enthalpy
+    h(p_out, s_in) (J/kg).
+
+    The same values as :func:`entropy_and_pv_at`, :func:`locate_log_pressure` and
+    :func:`enthalpy_ps_at` in turn, for a third of the calls: each call hands over the tables'
+    five arrays field by field (~57 machine words), which costs about as much as a look-up.
+    """
+    s, pv = _entropy_and_pv(tables, i, t, h)
+    i_out, t_out = _locate_ln_p(tables.meta, x_out)
+    return pv, i_out, t_out, _enthalpy_ps(tables, i_out, t_out, s)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
