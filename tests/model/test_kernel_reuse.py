@@ -21,9 +21,10 @@ def _stage(constants, tables, flow, p0, t0, p1, throttled):
     cell, coordinate = locate_pressure(tables, p_valve)
     s_valve, pv_valve = entropy_and_pv_at(tables, cell, coordinate, h0)
     out = np.zeros(7)
+    cell_1, coordinate_1 = locate_pressure(tables, p1)
     h1 = kernel._control_stage(constants.control, tables, flow, p_valve, s_valve, pv_valve, h0,
-                               p1, np.array([1.0, 1.0, 1.0]), throttled, out,
-                               kernel.THROTTLE_TOLERANCE)
+                               p1, cell_1, coordinate_1, np.array([1.0, 1.0, 1.0]), throttled,
+                               out, kernel.THROTTLE_TOLERANCE)
     return h1, out
 
 

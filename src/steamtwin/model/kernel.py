@@ -68,12 +68,15 @@ from steamtwin.steam.tables import (
     PH_T,
     PH_V,
     enthalpy_ps_at,
-    enthalpy_pt,
+    enthalpy_pt_at,
     entropy_and_pv_at,
+    heat_transfer_properties_at,
+    isentropic_step_at,
+    locate_log_pressure,
     locate_pressure,
-    ph_domain_position,
-    ph_properties,
+    ph_domain_position_at,
     ph_property,
+    ph_property_and_position_at,
     ph_property_at,
     pressure_in_range,
 )
@@ -117,6 +120,7 @@ N_RESULTS = len(RESULT_COLUMNS)
 PRESSURE_TOLERANCE = 1e-4
 ENTHALPY_TOLERANCE = 25.0  # J/kg
 PREDICTOR_PASSES = 1  # control stage + polytropic p·v update + backward sweep, per sample
+MAX_SWEEPS = 200  # per sample; then STATUS_NO_CONVERGENCE
 # The first sweep reuses the predictor's control stage shifted linearly to the new p1
 # (:func:`_shifted_control_stage`) when the shift (dh1/dp1)·|Δp1| is at most REUSE_SHARE times
 # the enthalpy tolerance. The slope dh1/dp1 is a secant measured on an earlier sample that
@@ -368,9 +372,10 @@ def _valve_demand(cs, open_flux, flow):
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
-def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params, throttled,
-                   out, throttle_tolerance):
-    """Expand the nozzle groups to ``p1``; returns the mixed outlet enthalpy (J/kg).
+def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, cell_1, coordinate_1,
+                   params, throttled, out, throttle_tolerance):
+    """Expand the nozzle groups to ``p1`` (located as ``cell_1``, ``coordinate_1``:
+    :func:`locate_pressure`); returns the mixed outlet enthalpy (J/kg).
 
     The wide-open valves pass steam at ``p_valve`` (Pa) with entropy ``s_valve`` and p·v
     ``pv_valve`` (J/kg), set once per sample. ``out`` receives [status, power W, efficiency,
@@ -381,7 +386,6 @@ def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, params,
     out, each pressure passing its flow to the relative ``throttle_tolerance``.
     """
     flow_coefficient, friction_coefficient = params[0], params[1]
-    cell_1, coordinate_1 = locate_pressure(tables, p1)
     # every wide-open group expands alike: from the valve outlet (p_valve, h0) to p1
     open_flux = cs.nozzle_discharge_coefficient * flow_coefficient * nozzle_flow_function(
         p1 / p_valve, KAPPA_SUPERHEATED) * p_valve / math.sqrt(pv_valve)
@@ -507,197 +511,6 @@ def _group_heat(group, temperature, surface):
     return heat
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"}, inline="always")
-def _solve_sample(c, tables, p0, h0, flow, p_exhaust, params, inverse_dt, pressures,
-                  enthalpies, inlet_pv, throttled, metal, pivot, rhs, surface, group_temperature,
-                  cs_out, properties, tolerance, result, max_iter, accepted, predict,
-                  leak_flow):
-    """Solve one sample and advance ``metal`` (K) in place; returns a status code.
-
-    ``pivot`` holds the metal chains factored for this step (:func:`factor_chain`);
-    ``tolerance`` = (relative pressure, enthalpy in J/kg) bounds of the estimated error left;
-    ``predict``: carry the previous sample's p·v to these inputs first (step 0; pointless when
-    the inputs did not change). ``leak_flow`` (kg/s per leakage): the last forward sweep's
-    leakage flows, warm start in, solution out.
-
-    Inlined into :func:`run_kernel` (numba ``inline="always"``): called once per sample with
-    ~45 arrays (the constants, the tables, the carried state), its reference counting at entry
-    and exit cost ~10 % of a window-run (2026-11-27; compiling the kernel takes ~3 s more).
-    """
-    n = c.stage_capacity.size
-    control, metal_constants = c.control, c.metal
-    prepare_chains(metal, metal_constants.capacity, metal_constants.conductance,
-                   metal_constants.outer_conductance, metal_constants.ambient_temperature,
-                   inverse_dt, pivot, rhs)
-    flow_coefficient = params[0]
-    throttle_tolerance = THROTTLE_TOLERANCE * min(tolerance[1] / ENTHALPY_TOLERANCE, 1.0)
-    # the state after the wide-open valves depends on the inputs only
-    p_valve = p0 * (1.0 - control.valve_pressure_drop)
-    cell_v, coordinate_v = locate_pressure(tables, p_valve)
-    s_valve, pv_valve = entropy_and_pv_at(tables, cell_v, coordinate_v, h0)
-    # 0. carry the previous sample's p·v to this sample's inputs
-    predicted_p1 = math.nan  # the control stage evaluated there, for reuse in the first sweep
-    predicted_h1 = predicted_level = 0.0
-    for _ in range(PREDICTOR_PASSES if predict else 0):
-        accepted[:] = pressures  # the pressures inlet_pv belongs to
-        _backward_sweep(c.stage_capacity, c.extraction_fraction, c.leak_origin, flow,
-                        flow_coefficient, p_exhaust, inlet_pv, pressures, leak_flow)
-        if not (pressures[0] < p_valve and pressure_in_range(tables, pressures[0])):
-            break  # the sweeps below report it
-        h1 = _control_stage(control, tables, flow, p_valve, s_valve, pv_valve, h0, pressures[0],
-                            params, throttled, cs_out, throttle_tolerance)
-        if cs_out[0] != STATUS_OK or not 0.0 <= ph_domain_position(tables, pressures[0],
-                                                                   h1) <= 1.0:
-            break
-        _polytropic_pv(accepted, pressures, inlet_pv,
-                       pressures[0] * ph_property(tables, PH_V, pressures[0], h1))
-        if cs_out[4] > 0.0:  # a valve part open: the flow is passed with a margin
-            predicted_p1, predicted_h1, predicted_level = pressures[0], h1, cs_out[4]
-    previous_p1 = pressures[0]
-    stage_flow = power = heat_total = extraction_energy = 0.0  # of the last full sweep
-    rejoin_flow = rejoin_energy = outside_energy = 0.0  # leakages, of the last full sweep
-    leaks = c.leak_origin.size
-    over_capacity = False
-    for iteration in range(max_iter + 1):
-        # 1. backward Stodola sweep; from the second on it also probes the previous sweep's state
-        accepted[:] = pressures
-        _backward_sweep(c.stage_capacity, c.extraction_fraction, c.leak_origin, flow,
-                        flow_coefficient, p_exhaust, inlet_pv, pressures, leak_flow)
-        change_p = abs(pressures[0] - previous_p1) / pressures[0]
-        change_max = 0.0
-        for i in range(n):
-            change_max = max(change_max, abs(pressures[i] - accepted[i]) / pressures[i])
-        if iteration > 0 and change_p <= tolerance[0] and (
-                inlet_pv[n - 1] * change_max <= tolerance[1]):
-            pressures[:] = accepted  # the state of the last full sweep
-            if over_capacity:
-                return STATUS_OVER_CAPACITY
-            # superheat only falls along an HP expansion: checking the control-stage outlet and
-            # the exhaust keeps every stage within the superheated tables
-            for i in (0, n):
-                if not 0.0 <= ph_domain_position(tables, pressures[i], enthalpies[i]) <= 1.0:
-                    return STATUS_OUT_OF_TABLES
-            result[0] = pressures[0]
-            result[1] = ph_property(tables, PH_T, pressures[0], enthalpies[0])
-            if rejoin_flow > 0.0:  # the exhaust mixes the blading's outlet and the leakages
-                h_exhaust = (stage_flow * enthalpies[n] + rejoin_energy) / (stage_flow
-                                                                           + rejoin_flow)
-                result[2] = ph_property(tables, PH_T, p_exhaust, h_exhaust)
-            else:
-                result[2] = ph_property(tables, PH_T, p_exhaust, enthalpies[n])
-            _commit_metal(metal_constants.conductance, pivot, rhs, surface, group_temperature,
-                          metal)
-            result[3] = _casing_thermocouple(c.sensor_group, c.sensor_node, c.sensor_weight,
-                                             metal_constants.half_cell_resistance,
-                                             metal_constants.area, metal, surface,
-                                             group_temperature)
-            result[4] = power
-            result[5] = heat_total
-            result[6] = extraction_energy
-            result[7] = stage_flow * enthalpies[n] + rejoin_energy
-            result[8] = flow * h0
-            result[9] = cs_out[2]
-            result[10] = cs_out[3]
-            result[11] = iteration
-            result[12], result[13] = _metal_energy(metal_constants.capacity,
-                                                   metal_constants.outer_conductance,
-                                                   metal_constants.ambient_temperature, metal)
-            result[14] = outside_energy
-            result[15] = 0.0
-            for j in range(leaks):
-                result[15] += leak_flow[j]
-            return STATUS_OK
-        if iteration == max_iter:
-            break
-        previous_p1 = pressures[0]
-        if not pressures[0] < p_valve:
-            return STATUS_PRESSURE_INVERSION
-        if not pressure_in_range(tables, pressures[0]):
-            return STATUS_OUT_OF_TABLES
-        # 2. control stage; the first sweep reuses the predictor's when p1 moved little since
-        # (same part-open valve as where its slope was measured); a full evaluation after the
-        # predictor's measures that slope anew
-        shift = pressures[0] - predicted_p1
-        if iteration == 0 and cs_out[6] == predicted_level and (
-                abs(shift) * cs_out[5] <= REUSE_SHARE * tolerance[1]):
-            h1 = _shifted_control_stage(predicted_h1, shift, flow, cs_out)
-        else:
-            h1 = _control_stage(control, tables, flow, p_valve, s_valve, pv_valve, h0,
-                                pressures[0], params, throttled, cs_out, throttle_tolerance)
-            if iteration == 0 and cs_out[4] == predicted_level and shift != 0.0:
-                cs_out[5], cs_out[6] = (h1 - predicted_h1) / shift, predicted_level
-        # over capacity at an unconverged p1 says nothing: from a rough start the first sweeps
-        # probe a higher control-stage pressure than the converged one; decided at acceptance
-        over_capacity = cs_out[0] == STATUS_OVER_CAPACITY
-        if not 0.0 <= ph_domain_position(tables, pressures[0], h1) <= 1.0:
-            return STATUS_OUT_OF_TABLES
-        heat_total = 0.0
-        g = c.group_ending_at_stage[0]
-        if iteration == 0:
-            ph_properties(tables, pressures[0], h1, properties)
-            temperature = _setup_group_metal(metal_constants, g, flow, params[2], metal, pivot,
-                                             rhs, surface, properties)
-        else:
-            temperature = ph_property(tables, PH_T, pressures[0], h1)
-        group_temperature[g] = temperature
-        heat = _group_heat(g, temperature, surface)
-        heat_total += heat
-        enthalpies[0] = h1 - heat / flow
-        power = cs_out[1]
-        # 3. forward sweep over the pressure stages; the Reynolds correction raises each
-        # stage's loss 1 − η by the factor (m/m_design)^(−n), added as (1 − η)·(factor − 1) so
-        # that n = 0 leaves η bit for bit
-        reynolds_excess = (flow / c.design_flow) ** -c.reynolds_exponent - 1.0
-        stage_flow = flow
-        extraction_energy = 0.0
-        rejoin_flow = rejoin_energy = outside_energy = 0.0
-        cell_in, coordinate_in = locate_pressure(tables, pressures[0])
-        for i in range(n):
-            s_in, inlet_pv[i] = entropy_and_pv_at(tables, cell_in, coordinate_in, enthalpies[i])
-            for j in range(leaks):  # leakages leaving here, at this sweep's state
-                if c.leak_origin[j] == i:
-                    leak = labyrinth_flow(c.leak_capacity[j], pressures[i], inlet_pv[i],
-                                          c.leak_sink_ratio[j] * p_exhaust)
-                    leak_flow[j] = leak
-                    stage_flow -= leak
-                    if c.leak_rejoins[j]:
-                        rejoin_flow += leak
-                        rejoin_energy += leak * enthalpies[i]
-                    else:
-                        outside_energy += leak * enthalpies[i]
-            cell_in, coordinate_in = locate_pressure(tables, pressures[i + 1])
-            drop = enthalpies[i] - enthalpy_ps_at(tables, cell_in, coordinate_in, s_in)
-            velocity_ratio = c.stage_blade_speed[i] / math.sqrt(2.0 * drop)
-            efficiency = stage_efficiency(velocity_ratio, c.stage_optimum_ratio[i],
-                                          c.stage_peak_efficiency[i],
-                                          params[1] * c.stage_friction_loss[i])
-            efficiency = max(efficiency - (1.0 - efficiency) * reynolds_excess, 0.0)
-            # tip leakage bypasses the blading and mixes back after it (Traupel, Bd. 1, §8)
-            if c.stage_tip_passing[i] != 1.0:
-                efficiency *= c.stage_tip_passing[i]
-            h_out = enthalpies[i] - efficiency * drop
-            power += stage_flow * efficiency * drop
-            g = c.group_ending_at_stage[i + 1]
-            if g >= 0:
-                first = c.group_first_stage[g]
-                p_mean = math.sqrt(pressures[first - 1] * pressures[i + 1])
-                h_mean = 0.5 * (enthalpies[first - 1] + h_out)
-                if iteration == 0:
-                    ph_properties(tables, p_mean, h_mean, properties)
-                    temperature = _setup_group_metal(metal_constants, g, stage_flow, params[2],
-                                                     metal, pivot, rhs, surface, properties)
-                else:
-                    temperature = ph_property(tables, PH_T, p_mean, h_mean)
-                group_temperature[g] = temperature
-                heat = _group_heat(g, temperature, surface)
-                heat_total += heat
-                h_out -= heat / stage_flow
-            enthalpies[i + 1] = h_out
-            if c.extraction_fraction[i] > 0.0:
-                bleed = flow * c.extraction_fraction[i]
-                extraction_energy += bleed * h_out
-                stage_flow -= bleed
-    return STATUS_NO_CONVERGENCE
 
 
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
@@ -843,6 +656,8 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
     factored_inverse_dt = math.nan
     accepted = np.empty(pressures.size)
     properties = np.empty(6)
+    log_pressure, coordinate = np.empty(pressures.size), np.empty(pressures.size)
+    cell = np.zeros(pressures.size, dtype=np.int64)
     detail = stage_pressures.shape[0] == n_samples
     if not resume:
         throttled[0, :] = p0[0]
@@ -853,6 +668,16 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
             inlet_pv[i] = pressures[i] * ph_property(tables, PH_V, pressures[i], enthalpies[i])
     current = params[0].copy()
     varying = params.shape[0] > 1
+    n = c.stage_capacity.size
+    control, metal_constants = c.control, c.metal
+    leaks = c.leak_origin.size
+    # the arrays the loop hands to compiled calls, taken out of the constants once: an array
+    # taken out of a tuple inside the loop is reference-counted at every pass
+    stage_capacity, extraction_fraction, leak_origin = (c.stage_capacity, c.extraction_fraction,
+                                                         c.leak_origin)
+    capacity, conductance = metal_constants.capacity, metal_constants.conductance
+    outer_conductance = metal_constants.outer_conductance
+    before = np.empty_like(metal)  # the steady start's metal before a repeat
     for k in range(n_samples):
         if varying:
             for j in range(current.size):
@@ -860,8 +685,9 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
         if not pressure_in_range(tables, p0[k]) or not pressure_in_range(tables, p_exhaust[k]):
             status[k] = STATUS_OUT_OF_TABLES
             return k
-        h0 = enthalpy_pt(tables, p0[k], t0[k])
-        if not 0.0 <= ph_domain_position(tables, p0[k], h0) <= 1.0:
+        cell_0, coordinate_0 = locate_pressure(tables, p0[k])
+        h0 = enthalpy_pt_at(tables, cell_0, coordinate_0, t0[k])
+        if not 0.0 <= ph_domain_position_at(tables, cell_0, coordinate_0, h0) <= 1.0:
             status[k] = STATUS_OUT_OF_TABLES
             return k
         # the first sample is steady (infinite step); the chains are factored anew only when the
@@ -870,34 +696,234 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
         inverse_dt = 0.0 if steady else 1.0 / time_step[k]
         if inverse_dt != factored_inverse_dt:
             for chain in range(chains):
-                factor_chain(chain, c.metal.capacity, c.metal.conductance,
-                             c.metal.outer_conductance[chain], inverse_dt, pivot)
+                factor_chain(chain, capacity, conductance, outer_conductance[chain], inverse_dt,
+                             pivot)
             factored_inverse_dt = inverse_dt
+        # the sample's solve (steps 0–4 of the module docstring), written out here rather than
+        # called: a compiled call, even one numba inlines, counts references to every array it
+        # is handed (~60: the constants, the tables, the carried state) at entry and exit,
+        # ~15 % of a window-run (2026-11-27)
         if steady:
             # steady start: repeat the infinite-step (steady) metal solution to equilibrium,
             # with sweeps converged 10⁶× tighter so that a hold continues without drift
-            code = STATUS_OK
-            start_tolerance = np.minimum(tolerance, np.maximum(tolerance * 1e-6, START_FLOOR))
-            for _ in range(50):
-                before = metal.copy()
-                code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], current, 0.0,
-                                     pressures, enthalpies, inlet_pv, throttled, metal, pivot,
-                                     rhs, surface, group_temperature, cs_out, properties,
-                                     start_tolerance, results[k], 200, accepted, True,
-                                     leak_flow)
-                if code != STATUS_OK or np.abs(metal - before).max() < 1e-9:
-                    break
+            pressure_tolerance = min(tolerance[0], max(tolerance[0] * 1e-6, START_FLOOR[0]))
+            enthalpy_tolerance = min(tolerance[1], max(tolerance[1] * 1e-6, START_FLOOR[1]))
+            repeats, predict = 50, True
         else:
             if k == 0:  # continuing: against the last sample of the previous call
-                changed = (p0[0] != previous[0] or t0[0] != previous[1]
+                predict = (p0[0] != previous[0] or t0[0] != previous[1]
                            or flow[0] != previous[2] or p_exhaust[0] != previous[3] or varying)
             else:
-                changed = (p0[k] != p0[k - 1] or t0[k] != t0[k - 1] or flow[k] != flow[k - 1]
+                predict = (p0[k] != p0[k - 1] or t0[k] != t0[k - 1] or flow[k] != flow[k - 1]
                            or p_exhaust[k] != p_exhaust[k - 1] or varying)
-            code = _solve_sample(c, tables, p0[k], h0, flow[k], p_exhaust[k], current, inverse_dt,
-                                 pressures, enthalpies, inlet_pv, throttled, metal, pivot, rhs,
-                                 surface, group_temperature, cs_out, properties, tolerance,
-                                 results[k], 200, accepted, changed, leak_flow)
+            pressure_tolerance, enthalpy_tolerance = tolerance[0], tolerance[1]
+            repeats = 1
+        sample_flow, exhaust_pressure = flow[k], p_exhaust[k]
+        code = STATUS_OK
+        for _repeat in range(repeats):
+            if steady:
+                before[:] = metal
+            code = STATUS_NO_CONVERGENCE
+            prepare_chains(metal, capacity, conductance, outer_conductance,
+                           metal_constants.ambient_temperature, inverse_dt, pivot, rhs)
+            flow_coefficient = current[0]
+            throttle_tolerance = THROTTLE_TOLERANCE * min(
+                enthalpy_tolerance / ENTHALPY_TOLERANCE, 1.0)
+            # the state after the wide-open valves depends on the inputs only
+            p_valve = p0[k] * (1.0 - control.valve_pressure_drop)
+            cell_v, coordinate_v = locate_pressure(tables, p_valve)
+            s_valve, pv_valve = entropy_and_pv_at(tables, cell_v, coordinate_v, h0)
+            # 0. carry the previous sample's p·v to this sample's inputs
+            predicted_p1 = math.nan  # the control stage evaluated there, reused by sweep 1
+            predicted_h1 = predicted_level = 0.0
+            for _pass in range(PREDICTOR_PASSES if predict else 0):
+                accepted[:] = pressures  # the pressures inlet_pv belongs to
+                _backward_sweep(stage_capacity, extraction_fraction, leak_origin, sample_flow,
+                                flow_coefficient, exhaust_pressure, inlet_pv, pressures,
+                                leak_flow)
+                if not (pressures[0] < p_valve and pressure_in_range(tables, pressures[0])):
+                    break  # the sweeps below report it
+                cell_1, coordinate_1 = locate_pressure(tables, pressures[0])
+                h1 = _control_stage(control, tables, sample_flow, p_valve, s_valve, pv_valve, h0,
+                                    pressures[0], cell_1, coordinate_1, current, throttled,
+                                    cs_out, throttle_tolerance)
+                v1, position = ph_property_and_position_at(tables, PH_V, cell_1, coordinate_1,
+                                                           pressures[0], h1)
+                if cs_out[0] != STATUS_OK or not 0.0 <= position <= 1.0:
+                    break
+                _polytropic_pv(accepted, pressures, inlet_pv, pressures[0] * v1)
+                if cs_out[4] > 0.0:  # a valve part open: the flow is passed with a margin
+                    predicted_p1, predicted_h1, predicted_level = pressures[0], h1, cs_out[4]
+            previous_p1 = pressures[0]
+            stage_flow = power = heat_total = extraction_energy = 0.0  # of the last full sweep
+            rejoin_flow = rejoin_energy = outside_energy = 0.0  # leakages, of the last full sweep
+            over_capacity = False
+            for iteration in range(MAX_SWEEPS + 1):
+                # 1. backward Stodola sweep; from the second on it also probes the previous
+                # sweep's state
+                accepted[:] = pressures
+                _backward_sweep(stage_capacity, extraction_fraction, leak_origin, sample_flow,
+                                flow_coefficient, exhaust_pressure, inlet_pv, pressures,
+                                leak_flow)
+                change_p = abs(pressures[0] - previous_p1) / pressures[0]
+                change_max = 0.0
+                for i in range(n):
+                    change_max = max(change_max, abs(pressures[i] - accepted[i]) / pressures[i])
+                if iteration > 0 and change_p <= pressure_tolerance and (
+                        inlet_pv[n - 1] * change_max <= enthalpy_tolerance):
+                    pressures[:] = accepted  # the state of the last full sweep
+                    if over_capacity:
+                        code = STATUS_OVER_CAPACITY
+                        break
+                    # superheat only falls along an HP expansion: checking the control-stage
+                    # outlet and the exhaust keeps every stage within the superheated tables;
+                    # both pressures are where the last forward sweep located them
+                    temperature_1, position = ph_property_and_position_at(
+                        tables, PH_T, cell[0], coordinate[0], pressures[0], enthalpies[0])
+                    if not 0.0 <= position <= 1.0 or not 0.0 <= ph_domain_position_at(
+                            tables, cell[n], coordinate[n], enthalpies[n]) <= 1.0:
+                        code = STATUS_OUT_OF_TABLES
+                        break
+                    results[k, 0] = pressures[0]
+                    results[k, 1] = temperature_1
+                    h_exhaust = enthalpies[n]
+                    if rejoin_flow > 0.0:  # the exhaust mixes the blading's outlet and leakages
+                        h_exhaust = ((stage_flow * enthalpies[n] + rejoin_energy)
+                                     / (stage_flow + rejoin_flow))
+                    results[k, 2] = ph_property_at(tables, PH_T, cell[n], coordinate[n],
+                                                   exhaust_pressure, h_exhaust)
+                    _commit_metal(conductance, pivot, rhs, surface, group_temperature, metal)
+                    results[k, 3] = _casing_thermocouple(
+                        c.sensor_group, c.sensor_node, c.sensor_weight,
+                        metal_constants.half_cell_resistance, metal_constants.area, metal,
+                        surface, group_temperature)
+                    results[k, 4] = power
+                    results[k, 5] = heat_total
+                    results[k, 6] = extraction_energy
+                    results[k, 7] = stage_flow * enthalpies[n] + rejoin_energy
+                    results[k, 8] = sample_flow * h0
+                    results[k, 9] = cs_out[2]
+                    results[k, 10] = cs_out[3]
+                    results[k, 11] = iteration
+                    results[k, 12], results[k, 13] = _metal_energy(
+                        capacity, outer_conductance, metal_constants.ambient_temperature, metal)
+                    results[k, 14] = outside_energy
+                    results[k, 15] = 0.0
+                    for j in range(leaks):
+                        results[k, 15] += leak_flow[j]
+                    code = STATUS_OK
+                    break
+                if iteration == MAX_SWEEPS:
+                    break
+                previous_p1 = pressures[0]
+                if not pressures[0] < p_valve:
+                    code = STATUS_PRESSURE_INVERSION
+                    break
+                if not pressure_in_range(tables, pressures[0]):
+                    code = STATUS_OUT_OF_TABLES
+                    break
+                # every pressure of this sweep is located once (one logarithm), for all its
+                # look-ups
+                log_pressure[0] = math.log(pressures[0])
+                cell[0], coordinate[0] = locate_log_pressure(tables, log_pressure[0])
+                # 2. control stage; the first sweep reuses the predictor's when p1 moved little
+                # since (same part-open valve as where its slope was measured); a full evaluation
+                # after the predictor's measures that slope anew
+                shift = pressures[0] - predicted_p1
+                if iteration == 0 and cs_out[6] == predicted_level and (
+                        abs(shift) * cs_out[5] <= REUSE_SHARE * enthalpy_tolerance):
+                    h1 = _shifted_control_stage(predicted_h1, shift, sample_flow, cs_out)
+                else:
+                    h1 = _control_stage(control, tables, sample_flow, p_valve, s_valve, pv_valve,
+                                        h0, pressures[0], cell[0], coordinate[0], current,
+                                        throttled, cs_out, throttle_tolerance)
+                    if iteration == 0 and cs_out[4] == predicted_level and shift != 0.0:
+                        cs_out[5], cs_out[6] = (h1 - predicted_h1) / shift, predicted_level
+                # over capacity at an unconverged p1 says nothing: from a rough start the first
+                # sweeps probe a higher control-stage pressure than the converged one; decided at
+                # acceptance
+                over_capacity = cs_out[0] == STATUS_OVER_CAPACITY
+                if iteration == 0:
+                    position = heat_transfer_properties_at(tables, cell[0], coordinate[0],
+                                                           pressures[0], h1, properties)
+                else:
+                    temperature, position = ph_property_and_position_at(
+                        tables, PH_T, cell[0], coordinate[0], pressures[0], h1)
+                if not 0.0 <= position <= 1.0:
+                    code = STATUS_OUT_OF_TABLES
+                    break
+                heat_total = 0.0
+                g = c.group_ending_at_stage[0]
+                if iteration == 0:
+                    temperature = _setup_group_metal(metal_constants, g, sample_flow, current[2],
+                                                     metal, pivot, rhs, surface, properties)
+                group_temperature[g] = temperature
+                heat = _group_heat(g, temperature, surface)
+                heat_total += heat
+                enthalpies[0] = h1 - heat / sample_flow
+                power = cs_out[1]
+                # 3. forward sweep over the pressure stages; the Reynolds correction raises each
+                # stage's loss 1 − η by the factor (m/m_design)^(−n), added as
+                # (1 − η)·(factor − 1) so that n = 0 leaves η bit for bit
+                reynolds_excess = (sample_flow / c.design_flow) ** -c.reynolds_exponent - 1.0
+                stage_flow = sample_flow
+                extraction_energy = 0.0
+                rejoin_flow = rejoin_energy = outside_energy = 0.0
+                for i in range(n):
+                    log_pressure[i + 1] = math.log(pressures[i + 1])
+                    inlet_pv[i], cell[i + 1], coordinate[i + 1], isentropic = (
+                        isentropic_step_at(tables, cell[i], coordinate[i], enthalpies[i],
+                                           log_pressure[i + 1]))
+                    for j in range(leaks):  # leakages leaving here, at this sweep's state
+                        if c.leak_origin[j] == i:
+                            leak = labyrinth_flow(c.leak_capacity[j], pressures[i], inlet_pv[i],
+                                                  c.leak_sink_ratio[j] * exhaust_pressure)
+                            leak_flow[j] = leak
+                            stage_flow -= leak
+                            if c.leak_rejoins[j]:
+                                rejoin_flow += leak
+                                rejoin_energy += leak * enthalpies[i]
+                            else:
+                                outside_energy += leak * enthalpies[i]
+                    drop = enthalpies[i] - isentropic
+                    velocity_ratio = c.stage_blade_speed[i] / math.sqrt(2.0 * drop)
+                    efficiency = stage_efficiency(velocity_ratio, c.stage_optimum_ratio[i],
+                                                  c.stage_peak_efficiency[i],
+                                                  current[1] * c.stage_friction_loss[i])
+                    efficiency = max(efficiency - (1.0 - efficiency) * reynolds_excess, 0.0)
+                    # tip leakage bypasses the blading and mixes back after it (Traupel, Bd. 1, §8)
+                    if c.stage_tip_passing[i] != 1.0:
+                        efficiency *= c.stage_tip_passing[i]
+                    h_out = enthalpies[i] - efficiency * drop
+                    power += stage_flow * efficiency * drop
+                    g = c.group_ending_at_stage[i + 1]
+                    if g >= 0:
+                        first = c.group_first_stage[g]
+                        # the geometric mean pressure, located at the mean of the logarithms
+                        p_mean = math.sqrt(pressures[first - 1] * pressures[i + 1])
+                        cell_mean, coordinate_mean = locate_log_pressure(
+                            tables, 0.5 * (log_pressure[first - 1] + log_pressure[i + 1]))
+                        h_mean = 0.5 * (enthalpies[first - 1] + h_out)
+                        if iteration == 0:
+                            heat_transfer_properties_at(tables, cell_mean, coordinate_mean, p_mean,
+                                                        h_mean, properties)
+                            temperature = _setup_group_metal(
+                                metal_constants, g, stage_flow, current[2], metal, pivot, rhs,
+                                surface, properties)
+                        else:
+                            temperature = ph_property_at(tables, PH_T, cell_mean, coordinate_mean,
+                                                         p_mean, h_mean)
+                        group_temperature[g] = temperature
+                        heat = _group_heat(g, temperature, surface)
+                        heat_total += heat
+                        h_out -= heat / stage_flow
+                    enthalpies[i + 1] = h_out
+                    if c.extraction_fraction[i] > 0.0:
+                        bleed = sample_flow * c.extraction_fraction[i]
+                        extraction_energy += bleed * h_out
+                        stage_flow -= bleed
+            if code != STATUS_OK or not steady or np.abs(metal - before).max() < 1e-9:
+                break
         status[k] = code
         if code != STATUS_OK:
             return k

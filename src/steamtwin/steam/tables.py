@@ -506,7 +506,17 @@ def steam_tables() -> SteamTables:
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
 def _locate_x(meta: FloatArray, p: float) -> tuple[int, float]:
     """Cell index along ln p and local coordinate t (unclamped, for extrapolation)."""
-    x = math.log(p) if p > 0.0 else math.nan
+    return _locate_ln_p(meta, math.log(p) if p > 0.0 else math.nan)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
+def _locate_ln_p(meta: FloatArray, x: float) -> tuple[int, float]:
+    """As :func:`_locate_x` for x = ln(p / Pa) given.
+
+    The ln p axis is uniform in each of its two segments, so the cell follows from x by index
+    arithmetic (no search, so no warm start either: Press et al., *Numerical Recipes*, 3rd ed.,
+    §3.1.1, "hunt", helps only on non-uniform tables).
+    """
     if x < meta[_M_X_SPLIT]:
         r = (x - meta[_M_X_MIN]) * meta[_M_INV_DX_A]
         n = meta[_M_N_A]
@@ -572,9 +582,7 @@ def locate_pressure(tables: SteamTables, p: float) -> tuple[int, float]:
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
 def _ph_cell(tables: SteamTables, i: int, t: float, h: float) -> tuple[int, float]:
-    h_lo = _cubic(tables.bounds, _B_HLOW, i, t)
-    h_hi = _cubic(tables.bounds, _B_HHIGH, i, t)
-    return _locate_y((h - h_lo) / (h_hi - h_lo), tables.meta[_M_C_PH], tables.ph.shape[2])
+    return _locate_y(_ph_position(tables, i, t, h), tables.meta[_M_C_PH], tables.ph.shape[2])
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
@@ -590,19 +598,102 @@ def ph_property_at(tables: SteamTables, prop: int, i: int, t: float, p: float, h
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
-def entropy_and_pv_at(tables: SteamTables, i: int, t: float, h: float) -> tuple[float, float]:
-    """Entropy J/(kg·K) and the product p·v (J/kg) at a located pressure and enthalpy h (J/kg)."""
+def locate_log_pressure(tables: SteamTables, x: float) -> tuple[int, float]:
+    """As :func:`locate_pressure` for x = ln(p / Pa): a caller that keeps ln p of its pressures
+    locates a geometric mean sqrt(p_a·p_b) at (x_a + x_b)/2 without a logarithm."""
+    return _locate_ln_p(tables.meta, x)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
+def _ph_position(tables: SteamTables, i: int, t: float, h: float) -> float:
+    h_lo = _cubic(tables.bounds, _B_HLOW, i, t)
+    h_hi = _cubic(tables.bounds, _B_HHIGH, i, t)
+    return (h - h_lo) / (h_hi - h_lo)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+def ph_domain_position_at(tables: SteamTables, i: int, t: float, h: float) -> float:
+    """As :func:`ph_domain_position` at a pressure located as cell ``i``, coordinate ``t``
+    (no range check: the caller located a pressure it checked); h in J/kg."""
+    return _ph_position(tables, i, t, h)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+def ph_property_and_position_at(
+    tables: SteamTables, prop: int, i: int, t: float, p: float, h: float
+) -> tuple[float, float]:
+    """:func:`ph_property_at` and :func:`ph_domain_position_at` of one state from one cell
+    location: property ``prop`` (PH_*, SI) and Y at the located pressure p (Pa), h (J/kg)."""
+    y = _ph_position(tables, i, t, h)
+    j, u = _locate_y(y, tables.meta[_M_C_PH], tables.ph.shape[2])
+    val = _bicubic(tables.ph, prop, i, j, t, u)
+    if prop == PH_V:
+        val /= p
+    return val, y
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+def heat_transfer_properties_at(
+    tables: SteamTables, i: int, t: float, p: float, h: float, out: FloatArray
+) -> float:
+    """T (K), v (m³/kg), cp (J/(kg·K)), μ (Pa·s), k (W/(m·K)) into ``out[PH_*]`` at the located
+    pressure p (Pa) and h (J/kg); returns the state's domain position Y.
+
+    As :func:`ph_properties` without the entropy (``out[PH_S]`` is left as it was), which a
+    convective heat-transfer coefficient does not use.
+    """
+    y = _ph_position(tables, i, t, h)
+    j, u = _locate_y(y, tables.meta[_M_C_PH], tables.ph.shape[2])
+    out[PH_T] = _bicubic(tables.ph, PH_T, i, j, t, u)
+    out[PH_V] = _bicubic(tables.ph, PH_V, i, j, t, u) / p
+    out[PH_CP] = _bicubic(tables.ph, PH_CP, i, j, t, u)
+    out[PH_MU] = _bicubic(tables.ph, PH_MU, i, j, t, u)
+    out[PH_K] = _bicubic(tables.ph, PH_K, i, j, t, u)
+    return y
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
+def _entropy_and_pv(tables: SteamTables, i: int, t: float, h: float) -> tuple[float, float]:
     j, u = _ph_cell(tables, i, t, h)
     return _bicubic(tables.ph, PH_S, i, j, t, u), _bicubic(tables.ph, PH_V, i, j, t, u)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
+def _enthalpy_ps(tables: SteamTables, i: int, t: float, s: float) -> float:
+    s_lo = _cubic(tables.bounds, _B_SLOW, i, t)
+    s_hi = _cubic(tables.bounds, _B_SHIGH, i, t)
+    j, u = _locate_y((s - s_lo) / (s_hi - s_lo), tables.meta[_M_C_PS], tables.ps.shape[2])
+    return _bicubic(tables.ps, 0, i, j, t, u)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+def entropy_and_pv_at(tables: SteamTables, i: int, t: float, h: float) -> tuple[float, float]:
+    """Entropy J/(kg·K) and the product p·v (J/kg) at a located pressure and enthalpy h (J/kg)."""
+    return _entropy_and_pv(tables, i, t, h)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
 def enthalpy_ps_at(tables: SteamTables, i: int, t: float, s: float) -> float:
     """Specific enthalpy h (J/kg) at a located pressure and entropy s (J/(kg·K))."""
-    s_lo = _cubic(tables.bounds, _B_SLOW, i, t)
-    s_hi = _cubic(tables.bounds, _B_SHIGH, i, t)
-    j, u = _locate_y((s - s_lo) / (s_hi - s_lo), tables.meta[_M_C_PS], tables.ps.shape[2])
-    return _bicubic(tables.ps, 0, i, j, t, u)
+    return _enthalpy_ps(tables, i, t, s)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+def isentropic_step_at(
+    tables: SteamTables, i: int, t: float, h: float, x_out: float
+) -> tuple[float, int, float, float]:
+    """The look-ups of one expansion step in one call: p·v (J/kg) at the inlet, located as cell
+    ``i`` and coordinate ``t``, with enthalpy h (J/kg); the outlet pressure, given as
+    x_out = ln(p_out / Pa), located (cell, coordinate); and the isentropic outlet enthalpy
+    h(p_out, s_in) (J/kg).
+
+    The same values as :func:`entropy_and_pv_at`, :func:`locate_log_pressure` and
+    :func:`enthalpy_ps_at` in turn, for a third of the calls: each call hands over the tables'
+    five arrays field by field (~57 machine words), which costs about as much as a look-up.
+    """
+    s, pv = _entropy_and_pv(tables, i, t, h)
+    i_out, t_out = _locate_ln_p(tables.meta, x_out)
+    return pv, i_out, t_out, _enthalpy_ps(tables, i_out, t_out, s)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
@@ -639,6 +730,12 @@ def enthalpy_ps(tables: SteamTables, p: float, s: float) -> float:
 def enthalpy_pt(tables: SteamTables, p: float, T: float) -> float:
     """Specific enthalpy h (J/kg) at p (Pa), T (K)."""
     i, t = _locate_x(tables.meta, p)
+    return enthalpy_pt_at(tables, i, t, T)
+
+
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+def enthalpy_pt_at(tables: SteamTables, i: int, t: float, T: float) -> float:
+    """Specific enthalpy h (J/kg) at a located pressure and T (K)."""
     T_lo = _cubic(tables.bounds, _B_TLOW, i, t)
     j, u = _locate_y(
         (T - T_lo) / (tables.meta[_M_T_MAX] - T_lo), tables.meta[_M_C_PT], tables.pt.shape[2]
@@ -656,9 +753,7 @@ def ph_domain_position(tables: SteamTables, p: float, h: float) -> float:
     if not pressure_in_range(tables, p):
         return math.nan
     i, t = _locate_x(tables.meta, p)
-    h_lo = _cubic(tables.bounds, _B_HLOW, i, t)
-    h_hi = _cubic(tables.bounds, _B_HHIGH, i, t)
-    return (h - h_lo) / (h_hi - h_lo)
+    return _ph_position(tables, i, t, h)
 
 
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
