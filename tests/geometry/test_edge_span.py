@@ -241,28 +241,3 @@ def test_span_model_holds_up_to_the_cap_planes_without_a_bulge(capped) -> None:
         assert distance.max() < 0.04e-3, f"z = {height * 1e3:.2f} mm"
     assert len(model.points) and model.points[:, 2].min() >= 0.0
     assert model.points[:, 2].max() <= HEIGHT
-
-
-TIP_GAP = (HEIGHT - 3.2e-3, HEIGHT)  # m of span next to the tip without edge points
-
-
-def test_radius_and_angles_are_held_beyond_the_last_own_circle() -> None:
-    """No points within 3 mm of the trailing edge over the last 3.2 mm of span (the end slabs
-    carry no circle of their own): beyond one knot span past the last slab with its own circle
-    the model's radius and angles are held — zero slope up to the end of the model, the
-    natural end condition (Eilers & Marx 1996) — instead of drifting, and the radius there is
-    within 0.02 mm of the truth (which grows by 0.01 mm over the gap)."""
-    _, model = span_model(gap=TIP_GAP, seed=4)
-    span = model.spans["trailing_edge"]
-    own = [slab.z for slab in model.slabs if slab.edge == "trailing_edge" and slab.used
-           and not slab.reason]
-    step = float(span.knots[1] - span.knots[0])
-    assert span.held is not None
-    assert span.held[1] == pytest.approx(max(own) + step)
-    assert span.held[1] < span.z_range[1]  # the hold is in force at the tip
-    z = np.linspace(span.held[1], span.z_range[1], 12)
-    _, radius, normals = span.at(z)
-    assert np.ptp(radius) == 0.0 and np.ptp(normals, axis=0).max() == 0.0
-    assert np.abs(radius - radius_at(z)).max() < 0.02e-3
-    inside = np.linspace(span.held[0], span.held[1], 12)
-    assert np.ptp(span.at(inside)[1]) > 0.0  # within the own circles the radius follows them

@@ -231,13 +231,8 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
     start[:, 3:] = np.unwrap(start[:, 3:], axis=0)
     r_max = MODEL_SAMPLES * spacing / math.pi
     z_own = np.array([fits[k][0].z for k in own])
-    # beyond one knot span past the last slabs with a circle of their own the radius and the
-    # angles are held (SpanEdgeModel.held): flank points alone leave them free to drift
-    step = float(knots[1] - knots[0])
-    held = (float(z_own.min()) - step, float(z_own.max()) + step)
     model, _ = fit_span_edge(points[near], SpanEdgeModel(
-        knots, initial_coefficients(knots, z_own, start), z_range, held),
-        (0.02 * r_max, 2.0 * r_max))
+        knots, initial_coefficients(knots, z_own, start), z_range), (0.02 * r_max, 2.0 * r_max))
     centres, radii, _ = model.at(np.array([slab.z for slab, _, _ in fits]))
     # the cloud's order along the edge, scale and shift of its arc length against the model's
     # (:func:`_order_against_model`), smoothed along the span: each slab's own is noisy by a

@@ -55,24 +55,17 @@ DEGREE = 3
 class SpanEdgeModel:
     """An edge along the span: cubic B-splines (``knots``, ``coefficients`` (K, 5): centre x,
     centre y, radius (m), angles of the two lines' inward normals (rad)) valid over
-    ``z_range`` (m). Outside ``held`` (m; None: the whole range) the radius and the angles are
-    held at their values at its ends — zero slope, the natural end condition of a penalised
-    spline beyond its data (Eilers & Marx 1996 §3) — while the centre follows its spline: the
-    slabs beyond the last with a circle of their own carry flank points only, which leave r and
-    the angles free to drift (issue 19: high-camber-turbine 40k, r 0.29 → 0.336 mm over filled
-    end slabs, the trailing edge cut 0.17–0.29 mm below the tip)."""
+    ``z_range`` (m)."""
 
     knots: np.ndarray
     coefficients: np.ndarray
     z_range: tuple[float, float]
-    held: tuple[float, float] | None = None
 
     def at(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Centre (n, 2; m), radius (n,; m) and inward unit normals (n, 2, 2) at heights
-        ``z`` (n,; m), clipped to ``z_range``; radius and normals held outside ``held``."""
-        spline = BSpline(self.knots, self.coefficients, DEGREE, extrapolate=False)
-        values = spline(_inside(self.knots, z))
-        values[:, 2:5] = spline(_inside(self.knots, _held(self.held, z)))[:, 2:5]
+        ``z`` (n,; m), clipped to ``z_range``."""
+        values = BSpline(self.knots, self.coefficients, DEGREE, extrapolate=False)(
+            _inside(self.knots, z))
         angles = values[:, 3:5]
         normals = np.stack([np.cos(angles), np.sin(angles)], axis=2)
         return values[:, :2], values[:, 2], normals
@@ -95,12 +88,6 @@ def span_knots(z_range: tuple[float, float], knot_spacing: float = KNOT_SPACING)
 def _inside(knots: np.ndarray, z: np.ndarray) -> np.ndarray:
     """Heights ``z`` (m) clipped to the base interval of the cubic ``knots``."""
     return np.clip(z, knots[DEGREE], knots[-DEGREE - 1])
-
-
-def _held(held: tuple[float, float] | None, z: np.ndarray) -> np.ndarray:
-    """Heights ``z`` (m) clipped to ``held`` (m; unchanged when None): where the radius and the
-    angles of :class:`SpanEdgeModel` are evaluated."""
-    return z if held is None else np.clip(z, *held)
 
 
 def _second_difference(count: int) -> np.ndarray:
@@ -131,11 +118,8 @@ def fit_span_edge(points: np.ndarray, start: SpanEdgeModel,
     """Fit the span model to ``points`` (n, 3; m) of the edge and its flanks, from ``start``
     (knots and first coefficients, e.g. :func:`initial_coefficients`), radius within
     ``radius_bounds`` (m). Returns the model and the mask of the points kept."""
-    knots, z_range, held = start.knots, start.z_range, start.held
+    knots, z_range = start.knots, start.z_range
     basis = BSpline.design_matrix(_inside(knots, points[:, 2]), knots, DEGREE).tocsr()
-    # radius and angles beyond ``held`` are those at its ends (SpanEdgeModel)
-    basis_held = BSpline.design_matrix(_inside(knots, _held(held, points[:, 2])), knots,
-                                       DEGREE).tocsr()
     count = basis.shape[1]
     difference = _second_difference(count)
     scale = np.repeat(PENALTY_SCALE, count - 2)  # per penalty row
@@ -149,9 +133,7 @@ def fit_span_edge(points: np.ndarray, start: SpanEdgeModel,
     keep = np.ones(len(points), dtype=bool)
 
     def evaluate(x: np.ndarray, use: np.ndarray) -> tuple:
-        coefficients = x.reshape(5, count).T
-        values = np.column_stack([basis[use] @ coefficients[:, :2],
-                                  basis_held[use] @ coefficients[:, 2:]])
+        values = basis[use] @ x.reshape(5, count).T
         normals = np.stack([np.cos(values[:, 3:5]), np.sin(values[:, 3:5])], axis=2)
         return values, normals
 
@@ -176,9 +158,9 @@ def fit_span_edge(points: np.ndarray, start: SpanEdgeModel,
             gradient[on, :2] = n
             gradient[on, 3 + i] = np.einsum("ij,ij->i", np.column_stack([-n[:, 1], n[:, 0]]),
                                             centre[on] - xy[on])
-        local, local_held = basis[use], basis_held[use]
-        data = sparse.hstack([sparse.diags(gradient[:, f] / SOFT_SCALE)
-                              @ (local if f < 2 else local_held) for f in range(5)])
+        local = basis[use]
+        data = sparse.hstack([sparse.diags(gradient[:, f] / SOFT_SCALE) @ local
+                              for f in range(5)])
         q = (difference @ x.reshape(5, count).T).T.ravel() / scale
         rows = sparse.diags(_penalty(q)[1] / scale) @ sparse.block_diag([difference] * 5)
         return sparse.vstack([data, rows]).tocsr()
@@ -194,7 +176,7 @@ def fit_span_edge(points: np.ndarray, start: SpanEdgeModel,
         if np.array_equal(new, keep):
             break
         keep = new
-    return SpanEdgeModel(knots, x.reshape(5, count).T.copy(), z_range, held), keep
+    return SpanEdgeModel(knots, x.reshape(5, count).T.copy(), z_range), keep
 
 
 def sample_span_edge(model: SpanEdgeModel, z: np.ndarray, u_fraction: np.ndarray,
