@@ -120,11 +120,14 @@ class GuardSettings:
     when there are ``min_gap_points`` or more (a gap one point spacing across and a few long).
 
     ``bridge_holes``: a vertex beyond its nearest points with points as far out above and
-    below it is a bridged scan hole (:func:`local_excursion`'s ``span_axis``). Off by default:
-    it clears the false alarms at holes through thin edges (compressor-dca 80k seed 1 passes,
-    0.043 mm), but on thick-impulse seed 0 the false alarm (0.29 mm where the fit is within
-    0.003 mm) is what started the repair that also removed a 0.33 mm bulge of the tip rim,
-    which the guard does not judge (``rim_spacings``): with it on that cloud fails.
+    below it is a bridged scan hole (:func:`local_excursion`'s ``span_axis``): it clears the
+    false alarms at holes through thin edges (compressor-dca 80k seed 1 passes, 0.043 mm). On
+    thick-impulse 80k seed 0 such a false alarm (0.29 mm where the fit is within 0.003 mm) was
+    what started the repair that also removed a 0.33 mm bulge of the tip rim; since the rim
+    zones are judged (:func:`rim_excursion`) the rim check starts it, and that cloud passes
+    with the bridging too. Off by default: with the model off the 80k family gives 6 pass / 1
+    fail / 5 refused with it (5 / 2 / 5 without), under the 8 passes that a flipped default
+    was to show (docs/benchmarks.md, "The guard at the cap rims").
     ``cpu_budget`` (s of the process's CPU time, None: unlimited): a repair refit is started
     only when the reconstruction's CPU time so far plus the dearest refit's stays within it
     (:mod:`~steamtwin.geometry.repair_budget`; issue 19: ≤ 30 s per 80k-point cloud).
