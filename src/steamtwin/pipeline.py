@@ -85,6 +85,7 @@ from steamtwin.rotor.report import MODEL_FILE, life_table, rotor_stress
 from steamtwin.spec import TurbineSpec, load_spec
 from steamtwin.spec.fingerprint import spec_hash
 from steamtwin.twin import Twin
+from steamtwin.twinfile import write_parameters_file
 from steamtwin.validation.html import (
     FigureSection,
     NotesSection,
@@ -385,7 +386,7 @@ def _live_stage(twin: Twin, settings: DemoSettings, out: Path, report: Callable[
     tags = out / "live-tags.toml"
     write_tag_map(plant_node_ids(plant_tag_map()), tags)
     params_path = out / "live-params.json"
-    twin.parameters.to_json(params_path)
+    write_parameters_file(params_path, twin.parameters, twin.offsets)  # the offsets too
     with socket.socket() as probe:  # a free loopback port
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
@@ -620,11 +621,12 @@ def _calibration_stage(twin: Twin, plant: _PlantData, settings: DemoSettings, ou
                    min_steady_s=0.5 * hold_s, max_steady_s=hold_s,
                    population=settings.population, generations=settings.generations,
                    max_evaluations=settings.evaluations, random_state=settings.random_state,
-                   workers=settings.workers,
+                   workers=settings.workers, sensor_bias=True,
                    progress=lambda fraction, message="": report(0.9 * fraction, message))
     report(0.9, "Table 6, Figure 8")
     model, calibrator, p = twin.model_, twin.calibrator_, twin.params_
-    table6 = rmse_table(model, {name: [hold] for name, hold in plant.holds.items()}, p)
+    table6 = rmse_table(model, {name: [hold] for name, hold in plant.holds.items()}, p,
+                        delivered=twin.delivered_model)
     figure8 = temperature_comparison_figure(model, plant.holds["50 % load"], p,
                                             out / "figure8_temperatures.png",
                                             title="Predicted vs measured, 50 % load (Figure 8)")
@@ -644,7 +646,10 @@ def _calibration_stage(twin: Twin, plant: _PlantData, settings: DemoSettings, ou
         TableSection("table6_rmse", table6.reset_index(),
                      f"Table 6 — RMSE (K) of the three DCS temperatures on the "
                      f"{settings.hold_hours:g}-h holds with empirical constants (1, 1, 1) and "
-                     "calibrated, and the reduction"),
+                     "calibrated, and the reduction; then the calibrated twin as it is "
+                     "delivered (`rmse_delivered_K`: the thermocouples' offsets the "
+                     "calibration estimated within their class-1 tolerance applied, as "
+                     "validate and predict apply them)"),
         TableSection("calibrated_parameters", parameters,
                      f"Calibrated parameters (MAP under the default priors; {method}, "
                      f"{calibrator.n_evaluations_} model runs, on both deep-peak runs' "

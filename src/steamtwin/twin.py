@@ -69,8 +69,8 @@ class Twin:
     parameters (default: the empirical 1, 1, 1); ``rom``: a blade ROM
     (:class:`~steamtwin.rom.romfile.BladeRom`) built for this spec and these parameters;
     ``spec_toml``: the spec's TOML text (what :meth:`save` writes; default: the built-in's text
-    when ``spec`` is a built-in turbine); ``sensor_offsets``: signal → measured − model (K),
-    a calibration's estimate of each thermocouple's bias, read by :meth:`validate`;
+    when ``spec`` is a built-in turbine); ``sensor_offsets``: signal → measured − model (K;
+    Pa for a pressure), a calibration's estimate of each sensor's bias, read by :meth:`validate`;
     ``provenance``: earlier steps (dicts) this twin carries on.
 
     Fitted attributes: after :meth:`calibrate` ``params_``, ``sensor_offsets_``,
@@ -120,8 +120,19 @@ class Twin:
 
     @property
     def offsets(self) -> dict[str, float]:
-        """Sensor offsets in use (K): the calibration's, else the constructor's."""
+        """Sensor offsets in use (K; Pa for a pressure witness): the calibration's, else the
+        constructor's."""
         return dict(getattr(self, "sensor_offsets_", self.sensor_offsets))
+
+    @property
+    def delivered_model(self) -> FullOrderModel:
+        """The calibrated FOM as ``validate`` and ``predict`` read it: the plant's sensors of
+        the calibration (time constants, thermocouple depth) and the sensor offsets in use
+        (:attr:`offsets`, K). Needs :meth:`calibrate` first (``model_``)."""
+        if not hasattr(self, "model_"):
+            raise TwinError("the twin is not calibrated: call calibrate(history) first")
+        return FullOrderModel(self.model_.spec, sensor_offsets=self.offsets or None,
+                              sensor_time_constants=self.model_.sensor_time_constants)
 
     @property
     def intervals(self) -> dict[str, tuple[float, float]]:
@@ -312,7 +323,9 @@ class Twin:
         windows = [w.data for w in window_set]
         names = [f"window {i + 1}: {w.name}" for i, w in enumerate(window_set)]
         written = [folder / "table6_rmse.csv"]
-        band_rmse_table(model, window_set, calibrator.params_).to_csv(written[-1])
+        band_rmse_table(model, window_set, calibrator.params_,
+                        delivered=self.delivered_model if self.offsets else None
+                        ).to_csv(written[-1])
         if calibrator.posterior_ is not None:
             written.append(folder / "table6_parameters.csv")
             parameter_table(calibrator.posterior_).to_csv(written[-1])

@@ -85,7 +85,7 @@ class TwinFolder:
 def write_parameters_file(path: Path, params: ModelParameters,
                           offsets: Mapping[str, float]) -> Path:
     """``params.json`` of a twin that was not calibrated here (coefficients, bounds, sensor
-    offsets in K); the schema :meth:`ModelParameters.from_json` reads."""
+    offsets in SI: K, Pa for a pressure); the schema :meth:`ModelParameters.from_json` reads."""
     document: dict[str, object] = {
         "schema_version": PARAMETERS_SCHEMA_VERSION, "parameters": asdict(params),
         "bounds": {name: list(bounds) for name, bounds in PARAMETER_BOUNDS.items()}}

@@ -60,13 +60,17 @@ def test_calibrate_surrogate_with_report(plant_run, tmp_path):
         "calibrate", "--data", str(paths["historian"]), "--tags", str(paths["tag_map"]),
         "--out", str(tmp_path / "params.json"), "--surrogate", "--max-evaluations", "40",
         "--window", f"{start.isoformat()}/{end.isoformat()}", "--workers", "1",
-        "--report", str(tmp_path / "report"),
+        "--report", str(tmp_path / "report"), "--sensor-bias",
     ])
     assert result.exit_code == 0, result.output
     assert "evaluations: 40" in result.output or "evaluations: 3" in result.output
     assert "not identifiable" in result.output  # a 10-min hold cannot see heat transfer
     table6 = pd.read_csv(tmp_path / "report" / "table6_rmse.csv", index_col="condition")
     assert table6["rmse_calibrated_K"].iloc[0] <= table6["rmse_empirical_K"].iloc[0]
+    # with the thermocouples' offsets estimated, Table 6 also scores the twin as delivered:
+    # offsets shrunk from the windows' mean residuals can only lower the RMSE there
+    assert table6["rmse_delivered_K"].iloc[0] <= table6["rmse_calibrated_K"].iloc[0]
+    assert "delivered_over_instrument" in table6.columns  # NaN: this tag map gives no σ
     assert (tmp_path / "report" / "figure8_temperatures.png").stat().st_size > 10_000
     assert (tmp_path / "report" / "identifiability.csv").exists()
     both = CliRunner().invoke(app, [

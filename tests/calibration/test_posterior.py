@@ -414,6 +414,16 @@ def test_sensor_offsets_recover_the_sensors_biases_and_reach_the_parameter_file(
     (tmp_path / "bad.json").write_text(json.dumps(document))
     with pytest.raises(ParameterError, match=r"sensor_offsets\.hp_exhaust_temperature = 40"):
         sensor_offsets_from_json(tmp_path / "bad.json")
+    # a pressure witness's offset is in Pa (a transmitter's, within 375 kPa), not K: what a
+    # calibration with the control-stage pressure and sensor biases writes reads back
+    document["sensor_offsets"] = {"control_stage_pressure": 2149.0}
+    (tmp_path / "pressure.json").write_text(json.dumps(document))
+    assert sensor_offsets_from_json(tmp_path / "pressure.json") == {
+        "control_stage_pressure": 2149.0}
+    document["sensor_offsets"] = {"control_stage_pressure": 4.0e5}
+    (tmp_path / "pressure.json").write_text(json.dumps(document))
+    with pytest.raises(ParameterError, match=r"expected a number of Pa within ±375000"):
+        sensor_offsets_from_json(tmp_path / "pressure.json")
 
 
 def _full_load_discrepancy(seed: int, kelvin: float) -> WindowSet:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from steamtwin.calibration import Calibrator, GeneticSearch
@@ -28,6 +29,41 @@ def test_rmse_table_pools_windows_per_condition(linear_simulator, low_load_windo
     assert row["reduction_pct"] == pytest.approx(
         100 * (1 - row["rmse_calibrated_K"] / row["rmse_empirical_K"]))
     assert table.loc["both", "samples"] == len(low_load_window)
+
+
+class _OffsetSimulator:
+    """The linear stand-in read with constant sensor offsets (K), as the delivered twin is."""
+
+    def __init__(self, inner, offsets):
+        self.inner, self.offsets = inner, offsets
+        self.input_signals, self.output_signals = inner.input_signals, inner.output_signals
+
+    def simulate(self, inputs, params):
+        return self.inner.simulate(inputs, params) + pd.Series(self.offsets)
+
+
+def test_rmse_table_scores_the_twin_as_delivered_beside_the_raw_readings(linear_simulator,
+                                                                         linear_window):
+    """With ``delivered`` (the calibrated model read with its sensor offsets), Table 6 adds
+    the delivered RMSE and per-sensor columns; a bias the offsets carry leaves the raw figure
+    and drops out of the delivered one."""
+    fitted = ModelParameters(1.02, 1.2, 0.8)  # what linear_window was drawn at, ±0.5 K noise
+    bias = {"control_stage_temperature": 1.5, "hp_exhaust_temperature": -1.0,
+            "hp_inner_casing_temperature": 0.7, "hp_power": 0.0}
+    window = linear_window.copy()
+    for sensor in ("control_stage_temperature", "hp_exhaust_temperature",
+                   "hp_inner_casing_temperature"):
+        window[sensor] += bias[sensor]
+    delivered = _OffsetSimulator(linear_simulator, bias)
+    table = rmse_table(linear_simulator, {"hold": [window]}, fitted, delivered=delivered)
+    expected = window_rmse(delivered, [window], fitted)
+    assert table.loc["hold", "rmse_delivered_K"] == pytest.approx(expected.loc[0, "rmse"])
+    assert table.loc["hold", "delivered:hp_exhaust_temperature"] == pytest.approx(
+        expected.loc[0, "rmse:hp_exhaust_temperature"])
+    assert table.loc["hold", "rmse_delivered_K"] < 0.6 < 1.0 < table.loc["hold",
+                                                                         "rmse_calibrated_K"]
+    assert "rmse_delivered_K" not in rmse_table(linear_simulator, {"hold": [window]},
+                                                fitted).columns
 
 
 def test_sensitivity_table_and_figures(linear_simulator, reference_model, low_load_window,

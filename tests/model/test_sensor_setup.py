@@ -133,3 +133,14 @@ def test_the_estimate_recovers_a_pure_lag_and_flags_flat_data():
     flat = estimate_time_constant([(np.full(600, 3.0), np.full(600, 2.0), np.ones(600))])
     assert not flat.identified
     assert (flat.low, flat.high) == pytest.approx(TIME_CONSTANT_SEARCH_S)
+
+
+def test_offsets_are_described_in_their_signals_units():
+    """A thermocouple's offset in K, a pressure witness's (SI Pa inside) in kPa."""
+    from steamtwin.model.sensor_setup import SensorSetup
+
+    setup = SensorSetup({}, {}, offsets={"hp_exhaust_temperature": -1.25,
+                                         "control_stage_pressure": 2149.0})
+    assert setup.describe() == [
+        "hp_exhaust_temperature: offset -1.25 K (the calibration's estimate of its bias)",
+        "control_stage_pressure: offset +2.15 kPa (the calibration's estimate of its bias)"]

@@ -245,6 +245,15 @@ def test_headlines_are_only_those_the_tables_hold():
                                                            (2.5, 2.34, False)]
     ratio = [h.passed for h in headlines if "instrument" in h.figure]
     assert ratio == [True, False, False]  # 1.51 > 1.5; NaN never passes
+    # the twin as delivered (sensor offsets applied) is the figure where the table has it
+    table6 = table6.assign(rmse_delivered_K=[0.5, 1.2, 0.9],
+                           delivered_over_instrument=[0.9, 1.4, 1.6])
+    delivered = headline_figures({"table6_rmse": table6})
+    assert [(h.value, h.passed) for h in delivered if "instrument" in h.figure] == [
+        (0.9, True), (1.4, True), (1.6, False)]
+    assert all("sensor offsets applied" in h.figure for h in delivered)
+    assert [h.value for h in delivered if h.figure.startswith("Calibrated RMSE of")] == [
+        0.5, 1.2]
     scan = pd.DataFrame({"row": ["hp1", "hp13", "hp2"],
                          "hp_exhaust_temperature_max_deviation_K": [0.332, 0.236, np.nan]})
     # a row not propagated to the steam path (NaN) has no headline

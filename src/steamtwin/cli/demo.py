@@ -90,7 +90,10 @@ def _summary(console: Console, result) -> None:  # result: steamtwin.pipeline.De
         f"calibrated: flow {p.flow_coefficient:.4f}, friction {p.friction_coefficient:.3f}, "
         f"heat transfer {p.heat_transfer_coefficient:.3f}; RMSE " + "; ".join(
             f"{name}: {row.rmse_empirical_K:.2f} → {row.rmse_calibrated_K:.2f} K "
-            f"(−{row.reduction_pct:.0f} %)" for name, row in table6.iterrows()))
+            f"(−{row.reduction_pct:.0f} %)" + (
+                f", {row.rmse_delivered_K:.2f} K with the sensor offsets"
+                if "rmse_delivered_K" in table6.columns else "")
+            for name, row in table6.iterrows()))
     table8 = result.tables["table8_deviation"]
     for row in table8[table8["signal"] == "hp_exhaust_temperature"].itertuples(index=False):
         console.print(f"monitoring, {row.window} (day run, unseen): HP-exhaust temperature mean "

@@ -46,6 +46,7 @@ from pathlib import Path
 from statistics import NormalDist
 from typing import Any
 
+from steamtwin.dcs.signals import SIGNALS
 from steamtwin.errors import ModelError
 from steamtwin.keys import unknown_key_message
 from steamtwin.textfile import read_utf8_text
@@ -64,6 +65,10 @@ METADATA_KEYS = frozenset({"bounds", "calibration", "priors", "posterior", "sens
 #: Largest sensor offset a parameter file may state, K: three times the IEC 60584-1 class-2
 #: thermocouple tolerance at 600 °C (±4.5 K); beyond it the sensor is faulty, not offset.
 MAX_SENSOR_OFFSET_K = 13.5
+#: Largest pressure-sensor offset, Pa: three times a 0.5 %-of-span transmitter error (the
+#: accuracy class of IEC 60770-1 process transmitters) on a 0–25 MPa span, the main-steam
+#: range; a control-stage pressure witness calibrated with sensor biases has one.
+MAX_SENSOR_OFFSET_PA = 3.0 * 0.005 * 25.0e6
 
 PARAMETERS_SCHEMA_VERSION = 2
 """Version of the parameter-file format: 1 = coefficients (+ bounds, calibration); 2 adds
@@ -308,10 +313,11 @@ class ModelParameters:
 
 
 def sensor_offsets_from_json(path: str | Path) -> dict[str, float]:
-    """The ``sensor_offsets`` section of a parameter file (signal → measured − model, K, as a
-    joint calibration with sensor biases estimated them; empty when the file has none).
-    ParameterError naming the file and key for a value that is not a finite number within
-    ±:data:`MAX_SENSOR_OFFSET_K`."""
+    """The ``sensor_offsets`` section of a parameter file (signal → measured − model in the
+    signal's SI unit — K, or Pa for a pressure — as a joint calibration with sensor biases
+    estimated them; empty when the file has none). ParameterError naming the file and key for
+    a value that is not a finite number within ±:data:`MAX_SENSOR_OFFSET_K` (K) or
+    ±:data:`MAX_SENSOR_OFFSET_PA` (Pa)."""
     text = read_utf8_text(path, "parameter file", "JSON", ParameterError)
     try:
         document = json.loads(text, object_pairs_hook=_reject_duplicate_keys)
@@ -321,9 +327,12 @@ def sensor_offsets_from_json(path: str | Path) -> dict[str, float]:
     offsets = document.get("sensor_offsets", {})
     result = {}
     for name, value in offsets.items():
+        signal = SIGNALS.get(str(name))
+        unit, limit = (("Pa", MAX_SENSOR_OFFSET_PA) if signal is not None
+                       and signal.si_unit == "Pa" else ("K", MAX_SENSOR_OFFSET_K))
         if (isinstance(value, bool) or not isinstance(value, int | float)
-                or not abs(value) <= MAX_SENSOR_OFFSET_K):
+                or not abs(value) <= limit):
             raise ParameterError(f"{path}: sensor_offsets.{name} = {value!r}: expected a "
-                                 f"number of K within ±{MAX_SENSOR_OFFSET_K:g}")
+                                 f"number of {unit} within ±{limit:g}")
         result[str(name)] = float(value)
     return result

@@ -38,6 +38,7 @@ import pandas as pd
 from scipy.optimize import brentq, minimize_scalar
 
 from steamtwin.calibration.identifiability import integrated_time
+from steamtwin.dcs.signals import SIGNALS
 from steamtwin.dcs.tagmap import MAX_TIME_CONSTANT_S, METAL_THERMOCOUPLE, TagMap
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.measurement import TYPICAL_TIME_CONSTANTS_S, lag
@@ -70,7 +71,7 @@ class TimeConstantEstimate:
 class SensorSetup:
     """How the twin reads its temperatures: ``time_constants`` (output → τ, s), each one's
     ``sources`` entry (text), the casing thermocouple's depth (m; None: the spec's) and
-    ``offsets`` (output → measured − model, K: a calibration's estimate of each sensor's
+    ``offsets`` (output → measured − model, K or Pa: a calibration's estimate of each sensor's
     calibration error, for validate and predict; never for a calibration, which estimates
     them)."""
 
@@ -98,8 +99,8 @@ class SensorSetup:
         if self.casing_thermocouple_depth is not None:
             lines.append(f"{METAL_THERMOCOUPLE}: depth {self.casing_thermocouple_depth * 1e3:g} mm"
                          f" ({self.depth_source})")
-        lines += [f"{name}: offset {value:+.2f} K (the calibration's estimate of its bias)"
-                  for name, value in self.offsets.items()]
+        lines += [f"{name}: offset {_offset_text(name, value)} (the calibration's estimate of "
+                  "its bias)" for name, value in self.offsets.items()]
         return lines
 
 
@@ -222,3 +223,10 @@ def _instantaneous(model: FullOrderModel, windows: Sequence[pd.DataFrame],
         runs.append(model.simulate(inputs, params))
     return runs
 
+
+def _offset_text(name: str, value: float) -> str:
+    """An offset in its signal's unit: K, or kPa for a pressure (SI Pa inside)."""
+    signal = SIGNALS.get(name)
+    if signal is not None and signal.si_unit == "Pa":
+        return f"{value / 1e3:+.2f} kPa"
+    return f"{value:+.2f} K"

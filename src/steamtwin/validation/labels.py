@@ -72,6 +72,7 @@ WORDS: dict[str, str] = {
 _STATISTICS = {"mean": "mean", "min": "min", "max": "max"}
 _PREFIXES = {"empirical": ("{name} RMSE, empirical constants", "K"),
              "calibrated": ("{name} RMSE, calibrated", "K"),
+             "delivered": ("{name} RMSE, calibrated, sensor offsets applied", "K"),
              "corr": ("Correlation with {lower}", "")}
 """``<prefix>:<name>`` columns (Table 6's per-sensor RMSEs, the identifiability correlations)."""
 
@@ -106,6 +107,8 @@ COLUMN_LABELS: dict[str, tuple[str, str]] = {
     "rmse_calibrated_K": ("RMSE, calibrated", "K"), "reduction_pct": ("Reduction", "%"),
     "instrument_error_K": ("Instrument error", "K"),
     "calibrated_over_instrument": ("Calibrated RMSE / instrument error", ""),
+    "rmse_delivered_K": ("RMSE, calibrated, sensor offsets applied", "K"),
+    "delivered_over_instrument": ("RMSE with the offsets / instrument error", ""),
     "parameter": ("Parameter", ""), "calibrated": ("Calibrated", ""),
     "low_95": ("95 % interval, low", ""), "high_95": ("95 % interval, high", ""),
     "prior_low_95": ("Prior 95 %, low", ""), "prior_high_95": ("Prior 95 %, high", ""),
