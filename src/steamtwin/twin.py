@@ -128,7 +128,7 @@ class Twin:
     def delivered_model(self) -> FullOrderModel:
         """The calibrated FOM as ``validate`` and ``predict`` read it: the plant's sensors of
         the calibration (time constants, thermocouple depth) and the sensor offsets in use
-        (:attr:`offsets`, K). Needs :meth:`calibrate` first (``model_``)."""
+        (:attr:`offsets`, K; Pa for a pressure). Needs :meth:`calibrate` first (``model_``)."""
         if not hasattr(self, "model_"):
             raise TwinError("the twin is not calibrated: call calibrate(history) first")
         return FullOrderModel(self.model_.spec, sensor_offsets=self.offsets or None,

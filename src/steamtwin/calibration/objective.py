@@ -261,7 +261,7 @@ class Objective:
 
     def _parts_or_penalty(self, x: Sequence[float]
                           ) -> list[tuple[np.ndarray, np.ndarray]] | Evaluation:
-        """:meth:`_residuals` of ``x``, or the penalised :class:`Evaluation` if rejected."""
+        """:meth:`residual_parts` of ``x``, or the penalised :class:`Evaluation` if rejected."""
         try:
             return self.residual_parts(self.parameters(x))
         except ValueError as error:

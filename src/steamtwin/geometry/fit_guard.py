@@ -471,8 +471,7 @@ def guard_surface(reconstruction: GuardedMesh, settings: GuardSettings | None = 
         [(cloud, cloud_normals), (cap_points, vertex_normals[rim][nearest])],
         settings.neighbours)
     judged = np.ones(len(excursion), dtype=bool)
-    defects = [d for d in _defects(reconstruction, np.where(judged, excursion, 0.0),
-                                   limit + allowance)
+    defects = [d for d in _defects(reconstruction, excursion, limit + allowance)
                if d.vertices >= settings.min_vertices or d.size > settings.isolated_limit]
     back_distance = np.full(len(reconstruction.points), np.nan)
     assigned = segmentation.labels >= 0

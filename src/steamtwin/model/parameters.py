@@ -312,6 +312,13 @@ class ModelParameters:
         Path(path).write_text(json.dumps(document, indent=2) + "\n", encoding="utf-8")
 
 
+def sensor_offset_unit(signal: str) -> str:
+    """The SI unit of ``signal``'s offset: "Pa" for a pressure of the data contract, else "K"
+    (a thermocouple's)."""
+    known = SIGNALS.get(signal)
+    return "Pa" if known is not None and known.si_unit == "Pa" else "K"
+
+
 def sensor_offsets_from_json(path: str | Path) -> dict[str, float]:
     """The ``sensor_offsets`` section of a parameter file (signal → measured − model in the
     signal's SI unit — K, or Pa for a pressure — as a joint calibration with sensor biases
@@ -327,9 +334,8 @@ def sensor_offsets_from_json(path: str | Path) -> dict[str, float]:
     offsets = document.get("sensor_offsets", {})
     result = {}
     for name, value in offsets.items():
-        signal = SIGNALS.get(str(name))
-        unit, limit = (("Pa", MAX_SENSOR_OFFSET_PA) if signal is not None
-                       and signal.si_unit == "Pa" else ("K", MAX_SENSOR_OFFSET_K))
+        unit = sensor_offset_unit(str(name))
+        limit = MAX_SENSOR_OFFSET_PA if unit == "Pa" else MAX_SENSOR_OFFSET_K
         if (isinstance(value, bool) or not isinstance(value, int | float)
                 or not abs(value) <= limit):
             raise ParameterError(f"{path}: sensor_offsets.{name} = {value!r}: expected a "

@@ -38,11 +38,10 @@ import pandas as pd
 from scipy.optimize import brentq, minimize_scalar
 
 from steamtwin.calibration.identifiability import integrated_time
-from steamtwin.dcs.signals import SIGNALS
 from steamtwin.dcs.tagmap import MAX_TIME_CONSTANT_S, METAL_THERMOCOUPLE, TagMap
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.model.measurement import TYPICAL_TIME_CONSTANTS_S, lag
-from steamtwin.model.parameters import ModelParameters
+from steamtwin.model.parameters import ModelParameters, sensor_offset_unit
 from steamtwin.spec import TurbineSpec
 
 __all__ = ["SensorSetup", "TimeConstantEstimate", "estimate_time_constant", "sensor_setup"]
@@ -226,7 +225,6 @@ def _instantaneous(model: FullOrderModel, windows: Sequence[pd.DataFrame],
 
 def _offset_text(name: str, value: float) -> str:
     """An offset in its signal's unit: K, or kPa for a pressure (SI Pa inside)."""
-    signal = SIGNALS.get(name)
-    if signal is not None and signal.si_unit == "Pa":
+    if sensor_offset_unit(name) == "Pa":
         return f"{value / 1e3:+.2f} kPa"
     return f"{value:+.2f} K"
