@@ -19,7 +19,10 @@ For each instrument draw k (the plant's instruments: calibration errors, drift, 
    measured − true, bias included); parameters against the plant's twin-equivalent truth and
    whether their 95 % intervals hold it — the reported interval (the wider of the Laplace and
    the cluster-robust one over the load bands, :mod:`steamtwin.calibration.posterior`), each
-   of the two alone, which one made it, and each parameter's MAP without each band.
+   of the two alone, which one made it, and each parameter's MAP without each band. The
+   heat-transfer coefficient's truth is the plant's, carried over; it is also judged against
+   the twin's own equivalent, the value a perfect calibration finds on the day's noise-free
+   readings (:func:`steamtwin.dcs.twin_equivalent.twin_equivalent_heat_transfer`).
 
 Targets (issue 18): HP-exhaust mean abs ≤ 0.6 K, max abs ≤ 2.5 K on unseen days; RMSE ≤ 1.5×
 the instruments' error at every steady load; flow coefficient within 0.015 of the truth;
@@ -50,6 +53,7 @@ from steamtwin.calibration.windowprep import (
 from steamtwin.calibration.windowset import WindowSet, find_calibration_windows
 from steamtwin.dcs.plant import run_plant
 from steamtwin.dcs.quality import QualityOptions, clean
+from steamtwin.dcs.twin_equivalent import twin_equivalent_heat_transfer
 from steamtwin.dcs.windows import find_steady_windows, select_window
 from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.spec import load_spec
@@ -93,6 +97,9 @@ def main() -> None:
         print(f"  {name} interval holds the truth in {100 * frame[f'{name}_inside'].mean():.0f} "
               f"% of draws (Laplace alone {100 * frame[f'{name}_laplace_inside'].mean():.0f} %, "
               f"cluster-robust alone {100 * frame[f'{name}_robust_inside'].mean():.0f} %)")
+    print(f"  heat_transfer interval holds the twin's noise-free equivalent "
+          f"({frame['heat_transfer_fitted_truth'].iloc[0]:.3f}) in "
+          f"{100 * frame['heat_transfer_inside_fitted'].mean():.0f} % of draws")
     arguments.out.write_text(json.dumps(rows, indent=1, default=float))
 
 
@@ -136,6 +143,12 @@ def _draw(spec, rated: float, seed: int, sensors: tuple[str, ...], quick: bool) 
         result[f"{name}_without_band"] = {
             band: round(values[f"{name}_coefficient"], 4)
             for band, values in calibrator.posterior_.without_cluster().items()}
+    # the heat-transfer coefficient above is the plant's, carried over; the twin's own
+    # equivalent is what a perfect calibration finds on the day's noise-free readings
+    fitted = twin_equivalent_heat_transfer(day, model, DEFAULT_SENSORS)
+    row = table.loc["heat_transfer_coefficient"]
+    result["heat_transfer_fitted_truth"] = fitted
+    result["heat_transfer_inside_fitted"] = bool(row["low"] <= fitted <= row["high"])
     result["flow_error"] = result["flow"] - result["flow_truth"]
     result["offsets"] = {s: float(offsets[s]) for s in DEFAULT_SENSORS}
     result["true_biases"] = {s: float(day.injected.sensors.loc[s, "bias"])
