@@ -1,6 +1,7 @@
 """Benchmark: joint calibration across loads (issue 18, items 1–2) on the virtual plant.
 
 Run: python benchmarks/bench_joint_calibration.py [--quick] [--seed N] [--skip-ga | --ga-only]
+[--fit bench-joint-fit-seed<N>.json]
 — on the plant's ``day``
 (24 h of load following: holds at 30/50/75/100 % and the ramps between them, 1-s data, as the
 DCS recorded it):
@@ -21,7 +22,13 @@ DCS recorded it):
    params.json carries); the verdict (✓/✗ against 1.5×) is on the as-delivered column. The
    offsets are fitted on the same windows, so the same twin is also judged out of sample: on
    the parts of the day's holds no calibration window covers, and on the plant's ``day-2``
-   (seed 1000 + N, the same instruments; other loads, as ``bench_unseen_day.py``).
+   (seed 1000 + N, the same instruments; other loads, as ``bench_unseen_day.py``) — each
+   replayed two ways by :func:`steamtwin.validation.replay.replay` (what ``validate``'s
+   ``replay_over`` runs): from a steady start at each piece's first sample, and as a user
+   runs the twin, once over the whole day (metal and thermowell state carried through the
+   ramps) then judged on the held-out samples only; with a per-piece diagnosis (residual in
+   the first 30 min against the rest; per sensor the residual's mean and spread, the
+   instruments' own error and the model's). ``--fit FILE`` re-judges a fit a run saved.
 2. **Timing and surrogate check** on two 2-h windows jointly (the 30 % and the evening 100 %
    holds): the method's GA (P 50 × G 200; ``--quick``: P 20 × G 20) on the local pool (target
    ≤ 5 min) and the surrogate mode (target: within 0.1 K of the GA with ≤ 10 % of its runs).
