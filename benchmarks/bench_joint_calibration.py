@@ -336,7 +336,8 @@ def _out_of_sample(raw: FullOrderModel, delivered: FullOrderModel, params: Model
     print(f"    diagnosis per piece (as delivered; K): mean residual measured − twin in the first "
           f"{SETTLING_S / 60:.0f} min → after, steady start | continuous; RMSE first → after; "
           "per sensor the continuous run's residual mean ± std after, the instruments' own "
-          "mean error (measured − true) and the model's (true − raw twin) there")
+          "mean error (measured − true) and the model's (true − raw twin) there; the first "
+          f"{SETTLING_S / 60:.0f} min's RMSE per sensor, both replays")
     for piece, band in pieces:
         elapsed = (piece.index - piece.index[0]) / pd.Timedelta(seconds=1)
         early = np.asarray(elapsed < SETTLING_S)
@@ -348,13 +349,18 @@ def _out_of_sample(raw: FullOrderModel, delivered: FullOrderModel, params: Model
                          f"{_rms([error[~early]]):.2f}")
         print(f"    {band}, {piece.index[0]:%H:%M}–{piece.index[-1]:%H:%M} "
               f"({len(piece) / 60:.0f} min): " + "; ".join(cells))
+        first = {kind: _residual(piece.loc[early], runs[kind, "delivered"], sensors)
+                 for kind in ("steady", "continuous")}
         after = piece.index[~early]
         residual = _residual(piece.loc[after], runs["continuous", "delivered"], sensors)
         instrument = (piece.loc[after, sensors] - true.loc[after, sensors]).to_numpy()
         model = (true.loc[after, sensors]
                  - runs["continuous", "raw"].loc[after, sensors]).to_numpy()
         for k, sensor in enumerate(sensors):
-            print(f"      {sensor}: {np.nanmean(residual[:, k]):+.2f} ± "
+            print(f"      {sensor}: first {SETTLING_S / 60:.0f} min RMSE steady "
+                  f"{_rms([first['steady'][:, k]]):.2f} / continuous "
+                  f"{_rms([first['continuous'][:, k]]):.2f}; after "
+                  f"{np.nanmean(residual[:, k]):+.2f} ± "
                   f"{np.nanstd(residual[:, k]):.2f}; instrument {np.nanmean(instrument[:, k]):+.2f}"
                   f" (offset {offsets[sensor]:+.2f}), model {np.nanmean(model[:, k]):+.2f} ± "
                   f"{np.nanstd(model[:, k]):.2f}")
