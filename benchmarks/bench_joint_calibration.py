@@ -1,6 +1,7 @@
 """Benchmark: joint calibration across loads (issue 18, items 1–2) on the virtual plant.
 
 Run: python benchmarks/bench_joint_calibration.py [--quick] [--seed N] [--skip-ga | --ga-only]
+[--fit bench-joint-fit-seed<N>.json]
 — on the plant's ``day``
 (24 h of load following: holds at 30/50/75/100 % and the ramps between them, 1-s data, as the
 DCS recorded it):
@@ -21,7 +22,13 @@ DCS recorded it):
    params.json carries); the verdict (✓/✗ against 1.5×) is on the as-delivered column. The
    offsets are fitted on the same windows, so the same twin is also judged out of sample: on
    the parts of the day's holds no calibration window covers, and on the plant's ``day-2``
-   (seed 1000 + N, the same instruments; other loads, as ``bench_unseen_day.py``).
+   (seed 1000 + N, the same instruments; other loads, as ``bench_unseen_day.py``) — each
+   replayed two ways by :func:`steamtwin.validation.replay.replay` (what ``validate``'s
+   ``replay_over`` runs): from a steady start at each piece's first sample, and as a user
+   runs the twin, once over the whole day (metal and thermowell state carried through the
+   ramps) then judged on the held-out samples only; with a per-piece diagnosis (residual in
+   the first 30 min against the rest; per sensor the residual's mean and spread, the
+   instruments' own error and the model's). ``--fit FILE`` re-judges a fit a run saved.
 2. **Timing and surrogate check** on two 2-h windows jointly (the 30 % and the evening 100 %
    holds): the method's GA (P 50 × G 200; ``--quick``: P 20 × G 20) on the local pool (target
    ≤ 5 min) and the surrogate mode (target: within 0.1 K of the GA with ≤ 10 % of its runs).
@@ -30,11 +37,13 @@ DCS recorded it):
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import time
 import warnings
-from dataclasses import replace
+from dataclasses import asdict, replace
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -57,10 +66,14 @@ from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.sensor_setup import sensor_setup
 from steamtwin.spec import load_spec
 from steamtwin.twin import monitoring_model
+from steamtwin.validation.replay import replay
 
-#: Shortest held-out piece of a hold (s): half an hour, long enough for the metal to settle
-#: from the model's steady start.
+#: Shortest held-out piece of a hold (s): half an hour.
 HELD_OUT_MIN_S = 1800.0
+#: The first part of a held-out piece (s) the diagnosis sets apart: the model's casing metal
+#: settles from a steady start with a time constant of about 30 min
+#: (tests/validation/test_continuous_replay.py).
+SETTLING_S = 1800.0
 
 
 def main() -> None:
@@ -72,6 +85,9 @@ def main() -> None:
                         help="only part 2 (the GA and the surrogate on the two 2-h windows)")
     parser.add_argument("--profile", action="store_true",
                         help="part 1: also profile the score along the friction coefficient")
+    parser.add_argument("--fit", type=Path, default=None,
+                        help="part 1: judge the fit a run saved (bench-joint-fit-seed<N>.json) "
+                             "instead of calibrating")
     arguments = parser.parse_args()
     warnings.simplefilter("ignore", IdentifiabilityWarning)
     population, generations = (20, 20) if arguments.quick else (50, 200)
@@ -135,6 +151,51 @@ def _joint(spec, run, windows: WindowSet, sigma: dict[str, float],
     # what calibrate's sensor_model builds for the plant's tag map (no τ or depth stated:
     # the typical thermowells and the spec's depth)
     sensed = sensor_setup(spec, tag_map).model(spec)
+    if arguments.fit is not None:  # a fit this benchmark saved: judge it again
+        saved = json.loads(arguments.fit.read_text(encoding="utf-8"))
+        params = ModelParameters(**saved["parameters"])
+        offsets = {s: float(v) for s, v in saved["sensor_offsets"].items()}
+        tempering = saved.get("tempering")  # None: a fit saved without it (no --profile)
+        print(f"fit read from {arguments.fit}: {params}; offsets " + ", ".join(
+            f"{s} {v:+.3f} K" for s, v in offsets.items()))
+    else:
+        params, offsets, tempering = _calibrate(sensed, windows, sigma, run, arguments)
+    print("  sensor offsets estimated / true biases: " + ", ".join(
+        f"{s} {offsets[s]:+.2f} / {biases[s]:+.2f} K" for s in DEFAULT_SENSORS))
+    # what validate --params reads the model through (steamtwin.twin.monitoring_model)
+    delivered = monitoring_model(spec, "fom", True, tag_map, offsets)
+    rated = spec.design.generator_power
+    print("  in sample: the calibration's windows")
+    _bands(sensed, delivered, [w.data for w in windows], windows.bands(), params,
+           run.true_outputs)
+    held_out = _held_out(run.measured, windows, rated)
+    print(f"  out of sample: the day's holds outside every calibration window "
+          f"({len(held_out)} pieces ≥ {HELD_OUT_MIN_S:.0f} s)")
+    _out_of_sample(sensed, delivered, params, offsets, run.measured, held_out,
+                   run.true_outputs, "day")
+    start = time.perf_counter()
+    other = run_plant("day-2", random_state=1000 + arguments.seed,
+                      instruments=run.injected.sensors)
+    holds = [select_window(other.measured, h.start, h.end) for h in find_steady_windows(
+        other.measured, duration_s=3600.0, rated_load_w=rated, tolerance=0.02)]
+    print(f"  out of sample: day-2's {len(holds)} holds (seed {1000 + arguments.seed}, same "
+          f"instruments; plant {time.perf_counter() - start:.0f} s)")
+    _out_of_sample(sensed, delivered, params, offsets, other.measured,
+                   [(h, _band(h, rated)) for h in holds], other.true_outputs, "day-2")
+    if arguments.profile:
+        if tempering is None:
+            raise SystemExit(f"--profile needs the fit's tempering; {arguments.fit} has none")
+        problem = CalibrationProblem(sensed, windows, ObjectiveSettings(
+            sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS))
+        _friction_profile(replace(problem.objective, tempering=tempering),
+                          params)
+
+
+def _calibrate(sensed: FullOrderModel, windows: WindowSet, sigma: dict[str, float], run,
+               arguments: argparse.Namespace
+               ) -> tuple[ModelParameters, dict[str, float], float]:
+    """The joint MAP by the surrogate mode; its parameters, sensor offsets (K) and likelihood
+    tempering κ, also written to ``bench-joint-fit-seed<N>.json`` for ``--fit``."""
     start, cpu = time.perf_counter(), _cpu()
     search = SurrogateSearch(max_evaluations=150 if arguments.quick else 400)
     joint = Calibrator(sensed, objective=ObjectiveSettings(sigma=sigma,
@@ -145,34 +206,11 @@ def _joint(spec, run, windows: WindowSet, sigma: dict[str, float],
           f"its workers), {joint.n_evaluations_} model runs; weighted RMSE {joint.rmse_:.3f} K "
           f"(empirical {Calibrator(sensed).rmse(windows, ModelParameters()):.3f} K)")
     _parameters(joint, run.truth.twin_equivalent)
-    offsets = joint.sensor_offsets_  # what params.json's sensor_offsets carry
-    print("  sensor offsets estimated / true biases: " + ", ".join(
-        f"{s} {offsets[s]:+.2f} / {biases[s]:+.2f} K" for s in DEFAULT_SENSORS))
-    # what validate --params reads the model through (steamtwin.twin.monitoring_model)
-    delivered = monitoring_model(spec, "fom", True, tag_map, offsets)
-    rated = spec.design.generator_power
-    print("  in sample: the calibration's windows")
-    _bands(sensed, delivered, [w.data for w in windows], windows.bands(), joint.params_,
-           run.true_outputs)
-    held_out = _held_out(run.measured, windows, rated)
-    print(f"  out of sample: the day's holds outside every calibration window "
-          f"({len(held_out)} pieces ≥ {HELD_OUT_MIN_S:.0f} s)")
-    _bands(sensed, delivered, [f for f, _ in held_out], [b for _, b in held_out],
-           joint.params_, run.true_outputs)
-    start = time.perf_counter()
-    other = run_plant("day-2", random_state=1000 + arguments.seed,
-                      instruments=run.injected.sensors)
-    holds = [select_window(other.measured, h.start, h.end) for h in find_steady_windows(
-        other.measured, duration_s=3600.0, rated_load_w=rated, tolerance=0.02)]
-    print(f"  out of sample: day-2's {len(holds)} holds (seed {1000 + arguments.seed}, same "
-          f"instruments; plant {time.perf_counter() - start:.0f} s)")
-    _bands(sensed, delivered, holds, [_band(h, rated) for h in holds], joint.params_,
-           other.true_outputs)
-    if arguments.profile:
-        problem = CalibrationProblem(sensed, windows, ObjectiveSettings(
-            sigma=sigma, sensor_bias=THERMOCOUPLE_BIAS))
-        _friction_profile(replace(problem.objective, tempering=joint.tempering_),
-                          joint.params_)
+    offsets = {s: float(v) for s, v in joint.sensor_offsets_.items()}  # params.json's
+    Path(f"bench-joint-fit-seed{arguments.seed}.json").write_text(json.dumps(
+        {"parameters": asdict(joint.params_), "sensor_offsets": offsets,
+         "tempering": joint.tempering_}, indent=1))
+    return joint.params_, offsets, joint.tempering_
 
 
 def _friction_profile(objective: Objective, at: ModelParameters) -> None:
@@ -261,6 +299,83 @@ def _bands(raw: FullOrderModel, delivered: FullOrderModel, frames: list[pd.DataF
         print(f"    {band} | {len(chosen)} | {before:.3f} → {after:.3f} / {shown:.3f} K | "
               f"{floor:.3f} K | {after / floor:.2f} / {shown / floor:.2f} "
               f"{'✓' if shown <= 1.5 * floor else '✗'}")
+
+
+def _out_of_sample(raw: FullOrderModel, delivered: FullOrderModel, params: ModelParameters,
+                   offsets: dict[str, float], whole: pd.DataFrame,
+                   pieces: list[tuple[pd.DataFrame, str]], true: pd.DataFrame,
+                   name: str) -> None:
+    """RMSE ratio per band of the held-out ``pieces`` of the file ``whole``, the twin replayed
+    two ways by the library's :func:`~steamtwin.validation.replay.replay`: from a steady
+    start at each piece's first sample (the piece alone), and as a user runs it — once,
+    continuously over the whole file, the state carried through the ramps — then judged on
+    the piece's samples only. Then the diagnosis: the residual measured − twin (as delivered)
+    in each piece's first :data:`SETTLING_S` against the rest, per sensor."""
+    sensors = list(DEFAULT_SENSORS)
+    runs = {}
+    for label, model in (("raw", raw), ("delivered", delivered)):
+        start, cpu = time.perf_counter(), _cpu()
+        runs["continuous", label] = replay(model, whole, params, name=name)
+        runs["steady", label] = pd.concat([replay(model, piece, params, name=f"{name} piece")
+                                           for piece, _ in pieces])
+        print(f"    ({label}: one run over all of {name}, {len(whole)} samples, and "
+              f"{len(pieces)} steady starts: {time.perf_counter() - start:.1f} s wall, "
+              f"{_cpu() - cpu:.1f} s CPU)")
+    print("    band | pieces | instrument error | ratio steady start raw / as delivered | "
+          "ratio continuous raw / as delivered")
+    for band in sorted({b for _, b in pieces}):
+        chosen = [f for f, b in pieces if b == band]
+        floor = _instrument_error(chosen, true, DEFAULT_SENSORS)
+        ratios = {key: _rms([_residual(f, runs[key], sensors) for f in chosen]) / floor
+                  for key in runs}
+        print(f"    {band} | {len(chosen)} | {floor:.3f} K | "
+              f"{ratios['steady', 'raw']:.2f} / {ratios['steady', 'delivered']:.2f} "
+              f"{'✓' if ratios['steady', 'delivered'] <= 1.5 else '✗'} | "
+              f"{ratios['continuous', 'raw']:.2f} / {ratios['continuous', 'delivered']:.2f} "
+              f"{'✓' if ratios['continuous', 'delivered'] <= 1.5 else '✗'}")
+    print(f"    diagnosis per piece (as delivered; K): mean residual measured − twin in the first "
+          f"{SETTLING_S / 60:.0f} min → after, steady start | continuous; RMSE first → after; "
+          "per sensor the continuous run's residual mean ± std after, the instruments' own "
+          "mean error (measured − true) and the model's (true − raw twin) there; the first "
+          f"{SETTLING_S / 60:.0f} min's RMSE per sensor, both replays")
+    for piece, band in pieces:
+        elapsed = (piece.index - piece.index[0]) / pd.Timedelta(seconds=1)
+        early = np.asarray(elapsed < SETTLING_S)
+        cells = []
+        for kind in ("steady", "continuous"):
+            error = _residual(piece, runs[kind, "delivered"], sensors)
+            cells.append(f"{kind} {np.nanmean(error[early]):+.2f} → "
+                         f"{np.nanmean(error[~early]):+.2f}, RMSE {_rms([error[early]]):.2f} → "
+                         f"{_rms([error[~early]]):.2f}")
+        print(f"    {band}, {piece.index[0]:%H:%M}–{piece.index[-1]:%H:%M} "
+              f"({len(piece) / 60:.0f} min): " + "; ".join(cells))
+        first = {kind: _residual(piece.loc[early], runs[kind, "delivered"], sensors)
+                 for kind in ("steady", "continuous")}
+        after = piece.index[~early]
+        residual = _residual(piece.loc[after], runs["continuous", "delivered"], sensors)
+        instrument = (piece.loc[after, sensors] - true.loc[after, sensors]).to_numpy()
+        model = (true.loc[after, sensors]
+                 - runs["continuous", "raw"].loc[after, sensors]).to_numpy()
+        for k, sensor in enumerate(sensors):
+            print(f"      {sensor}: first {SETTLING_S / 60:.0f} min RMSE steady "
+                  f"{_rms([first['steady'][:, k]]):.2f} / continuous "
+                  f"{_rms([first['continuous'][:, k]]):.2f}; after "
+                  f"{np.nanmean(residual[:, k]):+.2f} ± "
+                  f"{np.nanstd(residual[:, k]):.2f}; instrument {np.nanmean(instrument[:, k]):+.2f}"
+                  f" (offset {offsets[sensor]:+.2f}), model {np.nanmean(model[:, k]):+.2f} ± "
+                  f"{np.nanstd(model[:, k]):.2f}")
+
+
+def _residual(piece: pd.DataFrame, predicted: pd.DataFrame, sensors: list[str]) -> np.ndarray:
+    """measured − predicted (K; samples × sensors) on ``piece``'s samples."""
+    twin = predicted.loc[~predicted.index.duplicated()].reindex(piece.index)
+    return (piece[sensors] - twin[sensors]).to_numpy(dtype=float)
+
+
+def _rms(errors: list[np.ndarray]) -> float:
+    """RMS (K) over every finite entry of ``errors``."""
+    values = np.concatenate([e.ravel() for e in errors])
+    return float(np.sqrt(np.nanmean(values**2)))
 
 
 def _band(frame: pd.DataFrame, rated: float) -> str:

@@ -4,7 +4,8 @@ Modules: ``tables`` (Table 5 operating conditions, Table 8 deviations, ROM prove
 ``figures`` (Figure 10 HP-exhaust tracking), ``html`` (the report writer: HTML + CSV + JSON),
 ``labels`` (readable column names, units and rounding), ``summary`` (the headline figures),
 ``monitor`` (ROM replay over windows and :func:`validate`, used by ``steamtwin validate`` and
-the demo), ``sensitivity`` (Sobol sensitivity) and ``noise`` (noise propagation).
+the demo), ``replay`` (one continuous run of the model over a whole file, the windows taken
+from it), ``sensitivity`` (Sobol sensitivity) and ``noise`` (noise propagation).
 """
 
 from steamtwin.validation.figures import exhaust_tracking_figure

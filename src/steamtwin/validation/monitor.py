@@ -38,6 +38,7 @@ from steamtwin.rom.snapshots import SnapshotSet
 from steamtwin.units import convert
 from steamtwin.validation.figures import exhaust_tracking_figure
 from steamtwin.validation.html import Section, ValidationReport
+from steamtwin.validation.replay import replay
 from steamtwin.validation.tables import (
     deviation_table,
     operating_table,
@@ -81,7 +82,8 @@ _DEFINITIONS = (
 
 def monitor_windows(bundle: BladeRom, windows: Mapping[str, pd.DataFrame],
                     simulator: Simulator | None = None,
-                    sensors: SensorSetup | None = None) -> dict[str, pd.DataFrame]:
+                    sensors: SensorSetup | None = None,
+                    replay_over: pd.DataFrame | None = None) -> dict[str, pd.DataFrame]:
     """Monitored values (SI) with their flags for every sample of every window.
 
     Each frame is :attr:`SeriesPrediction.sensors` of
@@ -100,11 +102,22 @@ def monitor_windows(bundle: BladeRom, windows: Mapping[str, pd.DataFrame],
     ``sensors`` (ROM monitoring only; a ``simulator`` reads through its own): the ROM's steady
     temperatures read as the DCS reads them — each thermocouple's lag and the calibration's
     offsets (:func:`~steamtwin.rom.reconstruction.read_through`).
+
+    ``replay_over`` (with a ``simulator``): the whole file the windows were cut from
+    (canonical SI, the windows' time index). The simulator then runs once, continuously over
+    all of it (:func:`~steamtwin.validation.replay.replay`: the metal's and the thermowells'
+    state carried through the ramps between the windows), and each window takes that run's
+    samples, instead of a fresh run from steady state at the window's first sample.
     """
+    if replay_over is not None and simulator is None:
+        raise ValueError("replay_over needs a simulator: the ROM is a steady map, it has no "
+                         "state to carry")
     if simulator is not None and sensors is not None:
         raise ValueError("sensors apply to ROM monitoring; a simulator reads through its own "
                          "sensor models")
     params = rom_parameters(bundle) if simulator is not None else None
+    replayed = (None if replay_over is None
+                else replay(simulator, replay_over, params, name="the whole file"))
     monitored = {}
     for name, frame in windows.items():
         missing = [str(s) for s in bundle.rom.input_names_ if s not in frame.columns]
@@ -113,7 +126,13 @@ def monitor_windows(bundle: BladeRom, windows: Mapping[str, pd.DataFrame],
         predicted = predict_series(bundle, frame).sensors
         if sensors is not None:
             predicted = read_through(predicted, sensors)
-        if simulator is not None:
+        if replayed is not None:
+            outputs = replayed.loc[replayed.index.intersection(frame.index)].dropna(
+                subset=list(simulator.output_signals))
+            for column in simulator.output_signals:
+                predicted[column] = outputs[column].reindex(predicted.index)
+            predicted[FLAG_INVALID] |= ~predicted.index.isin(outputs.index)
+        elif simulator is not None:
             prepared = prepare_window(frame, simulator, (), name=f"window {name!r}",
                                       min_samples=1)
             outputs = simulator.simulate(prepared.inputs, params)
@@ -133,7 +152,8 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
              extra_sections: Sequence[Section] = (),
              simulator: Simulator | None = None,
              sensors: SensorSetup | None = None,
-             time_zone: str | None = None) -> ValidationReport:
+             time_zone: str | None = None,
+             replay_over: pd.DataFrame | None = None) -> ValidationReport:
     """Compare the ROM with measured windows and write the report into ``out_dir``.
 
     ``windows`` maps a name (e.g. "50 % load") to canonical SI data. ``settings``,
@@ -141,7 +161,7 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
     caller head the report; ``field_check`` (FOM fields, e.g. from
     :func:`~steamtwin.rom.snapshots.generate_snapshots` on the ROM's mesh) adds Figure 9 per
     field with a table of its errors; ``extra_sections`` follow the validation's own.
-    ``simulator`` / ``sensors``: see :func:`monitor_windows`.
+    ``simulator`` / ``sensors`` / ``replay_over``: see :func:`monitor_windows`.
     ``time_zone`` (IANA name, e.g. "Asia/Shanghai"; the tag map's ``historian.time_zone``):
     the zone the report's times are given in (default: the windows' own).
     Writes ``report.html``, ``report.json``, the CSV tables, the per-sample series
@@ -154,11 +174,13 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
             raise ValueError(f"window {name!r} holds no sample")
     if time_zone is not None:
         windows = {name: _in_zone(frame, time_zone, name) for name, frame in windows.items()}
+        if replay_over is not None:
+            replay_over = _in_zone(replay_over, time_zone, "the whole file")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     stages = dict(timings or {})
     clock = time.perf_counter()
-    monitored = monitor_windows(bundle, windows, simulator, sensors)
+    monitored = monitor_windows(bundle, windows, simulator, sensors, replay_over)
     stages["ROM prediction over the windows"] = time.perf_counter() - clock
 
     clock = time.perf_counter()
@@ -190,6 +212,8 @@ def validate(bundle: BladeRom, windows: Mapping[str, pd.DataFrame], out_dir: str
         "ROM inputs": [str(name) for name in bundle.rom.input_names_],
         "steam-path temperatures monitored by": (
             "the full-order model with the ROM's parameters (metal dynamics, exhaust pressure)"
+            + (", run once over the whole file (state carried between the windows)"
+               if replay_over is not None else ", started at steady state in each window")
             if simulator is not None else "the ROM's steady map from (p0, T0, p1)"),
         "blade temperatures monitored by": "the ROM",
     })
