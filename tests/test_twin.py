@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import dataclasses
 import hashlib
 import json
 import os
@@ -115,6 +116,35 @@ def test_validate_writes_the_report_the_twin_folder_keeps(small_rom, plant, plan
     manifest = json.loads((twin.save(tmp_path / "twin") / "twin.json").read_text())
     assert "reports/validation/report.html" in manifest["files"]
     assert manifest["provenance"][-1]["step"] == "validate"
+
+
+def test_validate_runs_the_fom_on_through_the_file_and_says_when_it_cannot(
+        small_rom, plant, plant_files, tmp_path):
+    """The FOM is run once from the file's start through the ramp into the window (its metal
+    still settling there), not started steady at the window; a row it cannot take before the
+    window makes each window start steady instead, with a warning and the report saying so."""
+    history = steamtwin.load_history(plant_files["historian"])
+    span = (plant.measured.index[-600], plant.measured.index[-1])
+
+    def exhaust_deviation(report) -> float:
+        table8 = report.tables["table8_deviation"]
+        return float(table8[table8["signal"] == "hp_exhaust_temperature"].iloc[0][
+            "mean_deviation"])
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        continuous = copy.copy(small_rom).validate(history, tmp_path / "continuous",
+                                                   windows=[span])
+    assert continuous.settings["model runs"].startswith(
+        f"one continuous run from {history.data.index[0]}")
+    data = history.data.copy()
+    data.iloc[60, data.columns.get_loc("main_steam_flow")] *= 5.0  # beyond the valves
+    broken = dataclasses.replace(history, data=data)
+    with pytest.warns(UserWarning, match="each window from steady state"):
+        steady = copy.copy(small_rom).validate(broken, tmp_path / "steady", windows=[span])
+    assert steady.settings["model runs"].startswith("each window from steady state")
+    # the window starts ~5 min after a 3 %/min ramp: the steady start misses the metal's lag
+    assert abs(exhaust_deviation(steady) - exhaust_deviation(continuous)) > 0.05
 
 
 def test_load_refuses_a_changed_or_mismatched_folder(small_rom, tmp_path):

@@ -18,6 +18,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import time
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict
 from datetime import UTC, datetime
@@ -29,7 +30,7 @@ import pandas as pd
 
 from steamtwin.dcs.history import History
 from steamtwin.dcs.tagmap import TagMap
-from steamtwin.model.fom import FullOrderModel
+from steamtwin.model.fom import FullOrderModel, InputError
 from steamtwin.model.parameters import (
     DEFAULT_PRIORS,
     ModelParameters,
@@ -488,6 +489,7 @@ class Twin:
         """
         from steamtwin.dcs.windows import name_windows
         from steamtwin.validation.monitor import validate as run_validation
+        from steamtwin.validation.replay import WARM_UP_S, replay_span
         from steamtwin.validation.tables import quality_section
 
         if monitor not in ("fom", "rom"):
@@ -542,16 +544,37 @@ class Twin:
         }
         if progress is not None:
             progress(0.5, "monitoring the windows and writing the report")
-        report = run_validation(
-            bundle, named, out_dir, settings=report_settings, timings=timings,
-            field_check=reference, time_zone=zone,
-            simulator=monitoring_model(self.spec, monitor, sensor_lag, history.tag_map,
-                                       offsets),
-            sensors=rom_sensors(self.spec, monitor, sensor_lag, history.tag_map, offsets),
-            extra_sections=[quality_section(history.report, "Data quality of the export "
-                                            "(whole file, before windowing)"),
-                            *extra_sections],
-            **({} if title is None else {"title": title}))
+        simulator = monitoring_model(self.spec, monitor, sensor_lag, history.tag_map, offsets)
+        replay_over = None if simulator is None else replay_span(history.data, frames)
+        if replay_over is not None:
+            report_settings["model runs"] = (
+                f"one continuous run from {replay_over.index[0]} (up to "
+                f"{WARM_UP_S / 3600:g} h before the first window): the metal's and the "
+                "thermowells' state carried through the ramps between the windows")
+
+        def monitored(replay_over: pd.DataFrame | None) -> Any:
+            return run_validation(
+                bundle, named, out_dir, settings=report_settings, timings=timings,
+                field_check=reference, time_zone=zone, simulator=simulator,
+                sensors=rom_sensors(self.spec, monitor, sensor_lag, history.tag_map, offsets),
+                replay_over=replay_over,
+                extra_sections=[quality_section(history.report, "Data quality of the export "
+                                                "(whole file, before windowing)"),
+                                *extra_sections],
+                **({} if title is None else {"title": title}))
+
+        try:
+            report = monitored(replay_over)
+        except InputError as error:
+            if replay_over is None:
+                raise
+            # a row between the windows the model cannot take (a trip, a start-up): each
+            # window is then run on its own, from steady state, and the report says so
+            report_settings["model runs"] = (
+                "each window from steady state at its first sample: the continuous run "
+                f"stopped at a row between the windows ({error})")
+            warnings.warn(f"validate: {report_settings['model runs']}", stacklevel=2)
+            report = monitored(None)
         self.validation_ = report
         self._record(_step("validate", data=history.historian.source, windows=list(named),
                            monitor=monitor, report=str(out_dir)))

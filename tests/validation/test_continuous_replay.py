@@ -12,7 +12,7 @@ import pytest
 import steamtwin.validation.monitor as monitor
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.rom.reconstruction import FLAG_INVALID
-from steamtwin.validation.replay import ELAPSED, replay
+from steamtwin.validation.replay import ELAPSED, replay, replay_span
 
 CASING = "hp_inner_casing_temperature"
 
@@ -109,3 +109,16 @@ def test_monitor_windows_takes_each_window_from_the_one_run(
     assert not whole[FLAG_INVALID].any()
     with pytest.raises(ValueError, match="replay_over needs a simulator"):
         monitor.monitor_windows(bundle, windows, replay_over=ramp_then_hold)
+
+
+def test_replay_span_starts_the_warm_up_before_the_first_window_and_ends_with_the_last():
+    index = pd.date_range("2026-03-01", periods=10 * 3600, freq="s", tz="UTC")
+    data = pd.DataFrame({"x": np.arange(index.size, dtype=float)}, index=index)
+    late, early = data.iloc[30000:30600], data.iloc[20000:20600]
+    span = replay_span(data, [late, early], warm_up_s=3600.0)
+    assert span.index[0] == early.index[0] - pd.Timedelta(hours=1)
+    assert span.index[-1] == late.index[-1]
+    # a warm-up longer than the file before the window starts at the file's first row
+    assert replay_span(data, [early], warm_up_s=24 * 3600.0).index[0] == index[0]
+    with pytest.raises(ValueError, match="at least one window"):
+        replay_span(data, [])

@@ -21,6 +21,8 @@ after a restart.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 import pandas as pd
 
@@ -30,11 +32,29 @@ from steamtwin.calibration.windowset import split_at_input_dropouts
 from steamtwin.model.parameters import ModelParameters
 from steamtwin.model.simulator import Simulator
 
-__all__ = ["ELAPSED", "replay"]
+__all__ = ["ELAPSED", "WARM_UP_S", "replay", "replay_span"]
 
 ELAPSED = "replay_elapsed_s"
 """Column of :func:`replay`: seconds (s) since the run reaching the sample started (NaN where
 the model did not run)."""
+
+
+WARM_UP_S = 3.0 * 3600.0
+"""How long (s) :func:`replay_span` runs the model before the first window: six time constants
+of the reference unit's casing wall (τ ≈ 30 min, ρcV/(hA) of its lumped metal), after which a
+steady start's error has decayed to e⁻⁶ ≈ 0.25 % of itself (Incropera & DeWitt §5.1)."""
+
+
+def replay_span(data: pd.DataFrame, windows: Sequence[pd.DataFrame],
+                warm_up_s: float = WARM_UP_S) -> pd.DataFrame:
+    """The rows of ``data`` (indexed by time) a continuous replay over ``windows`` needs: from
+    ``warm_up_s`` (s) before the earliest window's first sample, or ``data``'s first row, to the
+    latest window's last sample."""
+    if not windows:
+        raise ValueError("replay_span needs at least one window")
+    start = min(frame.index[0] for frame in windows) - pd.Timedelta(seconds=warm_up_s)
+    end = max(frame.index[-1] for frame in windows)
+    return data.loc[(data.index >= start) & (data.index <= end)]
 
 
 def replay(simulator: Simulator, data: pd.DataFrame, params: ModelParameters | None = None, *,
