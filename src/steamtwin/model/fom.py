@@ -135,6 +135,13 @@ class CheckedInputs:
     columns: dict[str, np.ndarray]
     time_step: np.ndarray
 
+    @cached_property
+    def first_enthalpy(self) -> float:
+        """Specific enthalpy (J/kg, IAPWS-IF97) of the first sample's main steam, where a fresh
+        run starts: computed once per series, not at each of a calibration's runs."""
+        return float(if97.enthalpy_pt(self.columns["main_steam_pressure"][0],
+                                      self.columns["main_steam_temperature"][0]))
+
 
 class FullOrderModel:
     """HP-section full-order model of a turbine described by ``spec``.
@@ -415,7 +422,7 @@ class FullOrderModel:
             # pressures falling linearly from 80 % of throttle to the exhaust, enthalpy
             # 100 kJ/kg under inlet
             "pressures": np.linspace(0.8 * p0[0], p_exhaust[0], stages + 1),
-            "enthalpies": np.full(stages + 1, float(if97.enthalpy_pt(p0[0], t0[0])) - 1.0e5),
+            "enthalpies": np.full(stages + 1, checked.first_enthalpy - 1.0e5),
             "metal": np.full(constants.metal.capacity.shape, t0[0]),
             "throttled": np.zeros((2, constants.control.level_area.size)),
             "cs_out": np.zeros(7),

@@ -216,7 +216,7 @@ class KernelConstants(NamedTuple):
     leak_rejoins: np.ndarray  # int, 1: rejoins before the HP exhaust, 0: leaves the HP section
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _nozzle_group_flow(area, p1, pressure, specific_volume):
     """Flow (kg/s) of a nozzle group fed at ``pressure`` (Pa) with ``specific_volume`` (m³/kg).
 
@@ -227,7 +227,7 @@ def _nozzle_group_flow(area, p1, pressure, specific_volume):
         pressure / specific_volume)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _throttled_pressure(flow, area, p1, p_valve, wide_open, h0, tables, guess, slope,
                         tolerance=THROTTLE_TOLERANCE):
     """Pressure after a part-open valve whose nozzle group must pass ``flow`` (kg/s).
@@ -270,7 +270,7 @@ def _throttled_pressure(flow, area, p1, p_valve, wide_open, h0, tables, guess, s
     return x1, slope
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _nozzle_group_expansion(cs, tables, cell_1, coordinate_1, h0, s_in, friction_coefficient):
     """Outlet enthalpy and isentropic drop (J/kg) of a nozzle group expanding to p1 (located)."""
     drop = max(h0 - enthalpy_ps_at(tables, cell_1, coordinate_1, s_in), 0.0)
@@ -280,7 +280,7 @@ def _nozzle_group_expansion(cs, tables, cell_1, coordinate_1, h0, s_in, friction
     return h0 - efficiency * drop, drop
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _level_lift(overlap, level, demand):
     """Lift (0…1) of opening level ``level`` (0-based) at valve demand ``demand``.
 
@@ -291,7 +291,7 @@ def _level_lift(overlap, level, demand):
     return min(max(demand - level * (1.0 - overlap), 0.0), 1.0)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _characteristic_share(lift_points, flow_shares, lift):
     """The valves' flow characteristic (share of the wide-open flow, piecewise linear in the
     lift) at ``lift`` (0…1).
@@ -307,7 +307,7 @@ def _characteristic_share(lift_points, flow_shares, lift):
         lift_points[m] - lift_points[m - 1]) * (lift - lift_points[m - 1])
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _level_share(cs, level, demand):
     """Share (0…1) of its wide-open flow that level ``level`` passes at valve demand ``demand``:
     the valves' flow characteristic at the level's scheduled lift."""
@@ -315,7 +315,7 @@ def _level_share(cs, level, demand):
                                  _level_lift(cs.valve_overlap, level, demand))
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _scheduled_share(level_area, lift_points, flow_shares, overlap, demand):
     """Σ level area × share at valve ``demand`` (m²): the scheduled flow per open-valve flux.
 
@@ -329,7 +329,7 @@ def _scheduled_share(level_area, lift_points, flow_shares, overlap, demand):
     return total
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _valve_demand(cs, open_flux, flow):
     """Valve demand at which the overlapping lift schedule passes ``flow`` (kg/s).
 
@@ -371,7 +371,7 @@ def _valve_demand(cs, open_flux, flow):
     return full
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, cell_1, coordinate_1,
                    params, throttled, out, throttle_tolerance):
     """Expand the nozzle groups to ``p1`` (located as ``cell_1``, ``coordinate_1``:
@@ -457,7 +457,7 @@ def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, cell_1,
     return h1
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _shifted_control_stage(h1, shift, flow, out):
     """Control-stage outlet enthalpy (J/kg) at p1 + ``shift`` (Pa) from its state at p1.
 
@@ -471,7 +471,7 @@ def _shifted_control_stage(h1, shift, flow, out):
     return h1 + dh
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _setup_group_metal(metal, group, flow, htc_multiplier, metal_old, pivot, rhs, surface,
                        properties):
     """Steam-side coefficients and the implicit metal step of one group; its steam T (K).
@@ -502,7 +502,7 @@ def _setup_group_metal(metal, group, flow, htc_multiplier, metal_old, pivot, rhs
     return temperature
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _group_heat(group, temperature, surface):
     """Heat (W) the casing and rotor of ``group`` take from steam at ``temperature`` (K)."""
     heat = 0.0
@@ -513,7 +513,7 @@ def _group_heat(group, temperature, surface):
 
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _backward_sweep(stage_capacity, extraction_fraction, leak_origin, flow, flow_coefficient,
                     p_exhaust, inlet_pv, pressures, leak_flow):
     """Stage inlet pressures (Pa) by Stodola's law from the exhaust, with inlet p·v (J/kg).
@@ -552,7 +552,7 @@ def labyrinth_flow(capacity: float, upstream_pressure: float, upstream_pv: float
     return capacity * math.sqrt(head / upstream_pv) if head > 0.0 else 0.0
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _polytropic_pv(reference, pressures, inlet_pv, first_pv):
     """Carry the stage-inlet p·v (J/kg) from the ``reference`` pressures to ``pressures`` (Pa).
 
@@ -572,7 +572,7 @@ def _polytropic_pv(reference, pressures, inlet_pv, first_pv):
     inlet_pv[0] = first_pv
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _casing_thermocouple(sensor_group, sensor_node, sensor_weight, half_cell_resistance, area,
                          metal, surface, group_temperature):
     """Casing metal temperature (K) at the thermocouple's depth, linear between neighbours.
@@ -594,7 +594,7 @@ def _casing_thermocouple(sensor_group, sensor_node, sensor_weight, half_cell_res
     return wall + sensor_weight * (node_0 - wall)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _metal_energy(capacity, outer_conductance, ambient_temperature, metal):
     """Heat content of all metal (J, from 0 K) and the lagging loss (W) of a metal state.
 
@@ -619,7 +619,7 @@ def _metal_energy(capacity, outer_conductance, ambient_temperature, metal):
     return (sum_0 + sum_1) + (sum_2 + sum_3), loss
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _commit_metal(conductance, pivot, rhs, surface, group_temperature, metal):
     """Metal temperatures (K) at the end of the step, from the converged steam temperatures."""
     for chain in range(metal.shape[0]):
