@@ -61,6 +61,7 @@ Infeasible candidates
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from functools import cached_property
@@ -70,6 +71,7 @@ import numpy as np
 import pandas as pd
 from pymoo.core.problem import Problem
 
+from steamtwin.cache import njit
 from steamtwin.calibration.settings import PARAMETER_NAMES, ObjectiveSettings, check_bounds
 from steamtwin.calibration.windowprep import (
     PreparedWindow,
@@ -201,7 +203,7 @@ class Objective:
             inverse = np.full(len(self.sensors), np.inf)
             inverse[spread > 0] = 1.0 / (self.tempering * spread[spread > 0] ** 2)
             constants.append(_WindowConstants(
-                valid=None if valid.all() else valid, counts=valid.sum(axis=0),
+                counts=valid.sum(axis=0),
                 precision=window.weight * self.weights / sigma**2, bias_inverse=inverse))
         return tuple(constants)
 
@@ -273,9 +275,10 @@ class Objective:
         try:
             params = self.parameters(x)
             sums = []
-            for window, constants in zip(self.windows, self._window_constants, strict=True):
+            for window in self.windows:
                 predicted = predict_window(self.simulator, window, params, self.sensors)
-                window_sums = _residual_sums(predicted - window.measured, constants.valid)
+                window_sums = _prediction_sums(np.ascontiguousarray(predicted, dtype=float),
+                                               window.measured)
                 if not (np.isfinite(window_sums[0]).all() and np.isfinite(window_sums[1]).all()):
                     raise ValueError("the simulator returned non-finite temperatures")
                 sums.append(window_sums)
@@ -452,22 +455,37 @@ class CalibrationProblem(Problem):
 
 
 class _WindowConstants(NamedTuple):
-    """What scoring a window needs besides the model run: its valid samples (None: all),
-    their count per sensor, each sensor's precision w_s·ω/σ_s² (1/K²) and its bias prior's
-    1/(κβ²) (+inf: no bias term)."""
+    """What scoring a window needs besides the model run: its valid samples' count per
+    sensor, each sensor's precision w_s·ω/σ_s² (1/K²) and its bias prior's 1/(κβ²) (+inf: no
+    bias term)."""
 
-    valid: np.ndarray | None
     counts: np.ndarray
     precision: np.ndarray
     bias_inverse: np.ndarray
 
 
-def _residual_sums(residual: np.ndarray, valid: np.ndarray | None
+def _residual_sums(residual: np.ndarray, valid: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray]:
-    """Per sensor Σ r and Σ r² over the ``valid`` samples (None: all) of ``residual``
-    (samples, sensors)."""
-    filled = residual if valid is None else np.where(valid, residual, 0.0)
+    """Per sensor Σ r and Σ r² over the ``valid`` samples of ``residual`` (samples,
+    sensors)."""
+    filled = np.where(valid, residual, 0.0)
     return filled.sum(axis=0), (filled**2).sum(axis=0)
+
+
+@njit(cache=True)
+def _prediction_sums(predicted: np.ndarray, measured: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_residual_sums` of r = predicted − measured over the samples measured (not NaN),
+    in one pass and in the same order (sample by sample), so to the same bits."""
+    sum_r = np.zeros(measured.shape[1])
+    sum_r2 = np.zeros(measured.shape[1])
+    for k in range(measured.shape[0]):
+        for j in range(measured.shape[1]):
+            if not math.isnan(measured[k, j]):
+                r = predicted[k, j] - measured[k, j]
+                sum_r[j] += r
+                sum_r2[j] += r * r
+    return sum_r, sum_r2
 
 
 def _penalty(error: ValueError) -> Evaluation:
