@@ -627,14 +627,45 @@ def _commit_metal(conductance, pivot, rhs, surface, group_temperature, metal):
     finish_chains(conductance, pivot, rhs, metal)
 
 
+INLET_ROWS = 4  # rows of :func:`inlet_states`' array
+
+
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
-def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance, pressures,
-               enthalpies, metal, results, status, stage_pressures, stage_temperatures,
-               throttled, cs_out, leak_flow, inlet_pv, previous, resume):
+def inlet_states(tables, valve_pressure_drop, design_flow, reynolds_exponent, p0, t0, flow,
+                 p_exhaust, inlet):
+    """What each sample's solve needs of its inputs alone, whatever the parameters: fills
+    ``inlet`` (:data:`INLET_ROWS`, samples) with the main steam's enthalpy h0 (J/kg), its
+    entropy (J/(kg·K)) and p·v (J/kg) after the wide-open valves (at p0·(1 −
+    ``valve_pressure_drop``)), and the Reynolds factor's excess (m/m_design)^(−n) − 1 of the
+    stage losses (see :func:`run_kernel`); h0 NaN where the inputs leave the tables (the
+    kernel then reports :data:`STATUS_OUT_OF_TABLES`).
+
+    A calibration runs one series thousands of times: computed once per series
+    (``FullOrderModel``), these look-ups and powers leave the time loop.
+    """
+    for k in range(p0.size):
+        inlet[0, k] = math.nan
+        if not pressure_in_range(tables, p0[k]) or not pressure_in_range(tables, p_exhaust[k]):
+            continue
+        cell_0, coordinate_0 = locate_pressure(tables, p0[k])
+        h0 = enthalpy_pt_at(tables, cell_0, coordinate_0, t0[k])
+        if not 0.0 <= ph_domain_position_at(tables, cell_0, coordinate_0, h0) <= 1.0:
+            continue
+        inlet[0, k] = h0
+        cell_v, coordinate_v = locate_pressure(tables, p0[k] * (1.0 - valve_pressure_drop))
+        inlet[1, k], inlet[2, k] = entropy_and_pv_at(tables, cell_v, coordinate_v, h0)
+        inlet[3, k] = (flow[k] / design_flow) ** -reynolds_exponent - 1.0
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
+def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, inlet, params, tolerance,
+               pressures, enthalpies, metal, results, status, stage_pressures,
+               stage_temperatures, throttled, cs_out, leak_flow, inlet_pv, previous, resume):
     """Simulate a series; the first sample starts from steady metal (equilibrium), or, with
     ``resume``, continues the series whose state the carried arrays hold.
 
-    ``params`` (rows, 3): flow, friction and heat-transfer coefficients, one row for the whole
+    ``inlet``: the series' :func:`inlet_states`. ``params`` (rows, 3): flow, friction and
+    heat-transfer coefficients, one row for the whole
     series or one per sample; ``tolerance`` (relative pressure, J/kg) bounds each sample's
     estimated convergence error. ``pressures``/``enthalpies`` (stages + 1) carry the warm start
     in and the last solution out; ``metal`` (chains, nodes) the metal temperatures (K), chain
@@ -682,12 +713,8 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
         if varying:
             for j in range(current.size):
                 current[j] = params[k, j]
-        if not pressure_in_range(tables, p0[k]) or not pressure_in_range(tables, p_exhaust[k]):
-            status[k] = STATUS_OUT_OF_TABLES
-            return k
-        cell_0, coordinate_0 = locate_pressure(tables, p0[k])
-        h0 = enthalpy_pt_at(tables, cell_0, coordinate_0, t0[k])
-        if not 0.0 <= ph_domain_position_at(tables, cell_0, coordinate_0, h0) <= 1.0:
+        h0 = inlet[0, k]
+        if math.isnan(h0):
             status[k] = STATUS_OUT_OF_TABLES
             return k
         # the first sample is steady (infinite step); the chains are factored anew only when the
@@ -731,8 +758,7 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                 enthalpy_tolerance / ENTHALPY_TOLERANCE, 1.0)
             # the state after the wide-open valves depends on the inputs only
             p_valve = p0[k] * (1.0 - control.valve_pressure_drop)
-            cell_v, coordinate_v = locate_pressure(tables, p_valve)
-            s_valve, pv_valve = entropy_and_pv_at(tables, cell_v, coordinate_v, h0)
+            s_valve, pv_valve = inlet[1, k], inlet[2, k]
             # 0. carry the previous sample's p·v to this sample's inputs
             predicted_p1 = math.nan  # the control stage evaluated there, reused by sweep 1
             predicted_h1 = predicted_level = 0.0
@@ -865,7 +891,7 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                 # 3. forward sweep over the pressure stages; the Reynolds correction raises each
                 # stage's loss 1 − η by the factor (m/m_design)^(−n), added as
                 # (1 − η)·(factor − 1) so that n = 0 leaves η bit for bit
-                reynolds_excess = (sample_flow / c.design_flow) ** -c.reynolds_exponent - 1.0
+                reynolds_excess = inlet[3, k]
                 stage_flow = sample_flow
                 extraction_energy = 0.0
                 rejoin_flow = rejoin_energy = outside_energy = 0.0
