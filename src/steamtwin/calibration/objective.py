@@ -277,8 +277,7 @@ class Objective:
             sums = []
             for window in self.windows:
                 predicted = predict_window(self.simulator, window, params, self.sensors)
-                window_sums = _prediction_sums(np.ascontiguousarray(predicted, dtype=float),
-                                               window.measured)
+                window_sums = _window_sums(predicted, window.measured)
                 if not (np.isfinite(window_sums[0]).all() and np.isfinite(window_sums[1]).all()):
                     raise ValueError("the simulator returned non-finite temperatures")
                 sums.append(window_sums)
@@ -472,11 +471,22 @@ def _residual_sums(residual: np.ndarray, valid: np.ndarray
     return filled.sum(axis=0), (filled**2).sum(axis=0)
 
 
+def _window_sums(predicted: np.ndarray, measured: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_residual_sums` of r = predicted − measured over the samples measured, to the
+    bits of NumPy's sums: a C-ordered prediction (the FOM's) in one compiled pass in NumPy's
+    order for it, any other (a DataFrame's columns) by NumPy, whose order there differs."""
+    if predicted.dtype == np.float64 and predicted.flags.c_contiguous:
+        return _prediction_sums(predicted, measured)
+    return _residual_sums(predicted - measured, ~np.isnan(measured))
+
+
 @njit(cache=True)
 def _prediction_sums(predicted: np.ndarray, measured: np.ndarray
                      ) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`_residual_sums` of r = predicted − measured over the samples measured (not NaN),
-    in one pass and in the same order (sample by sample), so to the same bits."""
+    """:func:`_residual_sums` of r = predicted − measured (C-ordered, samples × sensors) over
+    the samples measured (not NaN), in one pass, sample by sample: the order NumPy sums a
+    C-ordered array over its first axis in, so to the same bits."""
     sum_r = np.zeros(measured.shape[1])
     sum_r2 = np.zeros(measured.shape[1])
     for k in range(measured.shape[0]):
