@@ -216,6 +216,11 @@ class KernelConstants(NamedTuple):
     leak_rejoins: np.ndarray  # int, 1: rejoins before the HP exhaust, 0: leaves the HP section
 
 
+# The helpers below allocate nothing, so they are compiled without numba's reference counting
+# (``_nrt=False``, numba's flag for code that needs no runtime): a compiled call otherwise
+# increments and decrements the count of every array it is handed at entry and exit (~20 pairs
+# per control-stage evaluation; docs/benchmarks.md, sessions 18–19). ``run_kernel`` allocates
+# its work arrays and keeps the runtime.
 @njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _nozzle_group_flow(area, p1, pressure, specific_volume):
     """Flow (kg/s) of a nozzle group fed at ``pressure`` (Pa) with ``specific_volume`` (m³/kg).
