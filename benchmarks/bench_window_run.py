@@ -83,7 +83,8 @@ def kernel_call(model: FullOrderModel, checked, params: ModelParameters):
     def call() -> None:
         carry = model._carry(constants, checked, None)  # the fresh start _solve makes
         kernel.run_kernel(
-            constants, tables, checked.time_step, p0, t0, flow, p_exhaust, parameter_array,
+            constants, tables, checked.time_step, p0, t0, flow, p_exhaust,
+            checked.inlet_states(constants), parameter_array,
             tolerance, carry["pressures"], carry["enthalpies"], carry["metal"],
             np.full((n, kernel.N_RESULTS), np.nan), np.zeros(n, dtype=np.int64),
             np.zeros((0, stages + 1)), np.zeros((0, stages + 1)), carry["throttled"],

@@ -61,13 +61,17 @@ Infeasible candidates
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
+from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 import pandas as pd
 from pymoo.core.problem import Problem
 
+from steamtwin.cache import njit
 from steamtwin.calibration.settings import PARAMETER_NAMES, ObjectiveSettings, check_bounds
 from steamtwin.calibration.windowprep import (
     PreparedWindow,
@@ -169,20 +173,39 @@ class Objective:
         and 1/(κβ²) — the bias prior's precision on the untempered χ² scale, so that it keeps
         its full weight in κχ² (module docstring) — +inf where a sensor has no bias term, so
         that B²/(A + 1/(κβ²)) vanishes."""
-        sums: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-        for window, (residual, precision) in zip(self.windows, parts, strict=True):
-            valid = ~np.isnan(residual)
-            a = precision * valid.sum(axis=0)
-            b = precision * np.where(valid, residual, 0.0).sum(axis=0)
+        return self._group_sums([_residual_sums(residual, ~np.isnan(residual))
+                                 for residual, _ in parts])
+
+    def _group_sums(self, sums: list[tuple[np.ndarray, np.ndarray]]
+                    ) -> dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """:meth:`_bias_sums` from each window's per-sensor Σ r and Σ r²
+        (:func:`_residual_sums`)."""
+        grouped: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        for window, constants, (sum_r, _) in zip(self.windows, self._window_constants, sums,
+                                                  strict=True):
+            a = constants.precision * constants.counts
+            b = constants.precision * sum_r
+            if window.group in grouped:
+                a0, b0, _ = grouped[window.group]
+                a, b = a + a0, b + b0
+            grouped[window.group] = (a, b, constants.bias_inverse)
+        return grouped
+
+    @cached_property
+    def _window_constants(self) -> tuple[_WindowConstants, ...]:
+        """What the score needs of each window besides the model run, computed once."""
+        constants = []
+        for window in self.windows:
+            valid = ~np.isnan(window.measured)
+            sigma = np.ones(len(self.sensors)) if window.sigma is None else window.sigma
             spread = np.zeros(len(self.sensors)) if window.bias_spread is None \
                 else window.bias_spread
             inverse = np.full(len(self.sensors), np.inf)
             inverse[spread > 0] = 1.0 / (self.tempering * spread[spread > 0] ** 2)
-            if window.group in sums:
-                a0, b0, _ = sums[window.group]
-                a, b = a + a0, b + b0
-            sums[window.group] = (a, b, inverse)
-        return sums
+            constants.append(_WindowConstants(
+                counts=valid.sum(axis=0),
+                precision=window.weight * self.weights / sigma**2, bias_inverse=inverse))
+        return tuple(constants)
 
     def sensor_biases(self, params: ModelParameters) -> dict[int, np.ndarray]:
         """Per instrument group: each sensor's bias estimate (measured − model, K; its
@@ -244,43 +267,50 @@ class Objective:
                 for w in self.windows]
 
     def evaluate(self, x: Sequence[float]) -> Evaluation:
-        """Score one decision vector; a rejected candidate scores :data:`PENALTY_RMSE`."""
-        parts = self._parts_or_penalty(x)
-        return parts if isinstance(parts, Evaluation) else self._evaluation(x, parts)
+        """Score one decision vector; a rejected candidate scores :data:`PENALTY_RMSE`.
+
+        The GA's and the surrogate's path: per window only each sensor's Σ r and Σ r² of the
+        residuals r are formed (no residual arrays kept), the same sums and score as
+        :meth:`evaluate_with_residuals` gives."""
+        try:
+            params = self.parameters(x)
+            sums = []
+            for window in self.windows:
+                predicted = predict_window(self.simulator, window, params, self.sensors)
+                window_sums = _window_sums(predicted, window.measured)
+                if not (np.isfinite(window_sums[0]).all() and np.isfinite(window_sums[1]).all()):
+                    raise ValueError("the simulator returned non-finite temperatures")
+                sums.append(window_sums)
+        except ValueError as error:
+            return _penalty(error)
+        return self._evaluation(x, sums)
 
     def evaluate_with_residuals(self, x: Sequence[float]) -> tuple[Evaluation, np.ndarray | None]:
         """One model run of ``x``: its :class:`Evaluation` (as :meth:`evaluate`) and the
         residual vector ``[standardised_residuals; prior_terms]`` (dimensionless), whose sum of
         squares is ``κχ² + Σz²`` — the score's square times κ·:meth:`weighted_count`, so a
         least-squares method on it minimises the score; None when the model rejects ``x``."""
-        parts = self._parts_or_penalty(x)
-        if isinstance(parts, Evaluation):
-            return parts, None
-        return (self._evaluation(x, parts),
+        try:
+            parts = self.residual_parts(self.parameters(x))
+        except ValueError as error:
+            return _penalty(error), None
+        sums = [_residual_sums(residual, ~np.isnan(residual)) for residual, _ in parts]
+        return (self._evaluation(x, sums),
                 np.concatenate([self.standardise(parts), self.prior_terms(x)]))
 
-    def _parts_or_penalty(self, x: Sequence[float]
-                          ) -> list[tuple[np.ndarray, np.ndarray]] | Evaluation:
-        """:meth:`residual_parts` of ``x``, or the penalised :class:`Evaluation` if rejected."""
-        try:
-            return self.residual_parts(self.parameters(x))
-        except ValueError as error:
-            reason = str(error) or type(error).__name__
-            return Evaluation(PENALTY_RMSE, reason, PENALTY_RMSE)
-
-    def _evaluation(self, x: Sequence[float], parts: list[tuple[np.ndarray, np.ndarray]]
+    def _evaluation(self, x: Sequence[float], sums: list[tuple[np.ndarray, np.ndarray]]
                     ) -> Evaluation:
-        """RMSE and score of ``x`` from its per-window residuals ``parts``."""
+        """RMSE and score of ``x`` from each window's per-sensor Σ r and Σ r² (K, K²;
+        :func:`_residual_sums`)."""
         sse = count = counted = chi2 = 0.0
         kelvin = self.weights * self.temperature_mask  # the RMSE is over temperatures (K)
-        for window, (residual, precision) in zip(self.windows, parts, strict=True):
-            valid = ~np.isnan(residual)
-            squares = (np.where(valid, residual, 0.0) ** 2).sum(axis=0)
+        for window, constants, (_, squares) in zip(self.windows, self._window_constants, sums,
+                                                    strict=True):
             sse += window.weight * (kelvin * squares).sum()
-            count += window.weight * (kelvin * valid.sum(axis=0)).sum()
-            counted += window.weight * (self.weights * valid.sum(axis=0)).sum()
-            chi2 += (precision * squares).sum()
-        for a, b, inverse in self._bias_sums(parts).values():
+            count += window.weight * (kelvin * constants.counts).sum()
+            counted += window.weight * (self.weights * constants.counts).sum()
+            chi2 += (constants.precision * squares).sum()
+        for a, b, inverse in self._group_sums(sums).values():
             chi2 -= float((b**2 / (a + inverse)).sum())  # the marginalised biases
         rmse = float(np.sqrt(sse / count))
         # (χ² + Σz²/κ)/n: the minimum of κχ² + Σz², on the scale of χ²/n whatever κ is
@@ -421,6 +451,57 @@ class CalibrationProblem(Problem):
 
     def _evaluate(self, x: np.ndarray, out: dict, *args: object, **kwargs: object) -> None:
         out["F"] = self.evaluate_candidates(x)[:, None]
+
+
+class _WindowConstants(NamedTuple):
+    """What scoring a window needs besides the model run: its valid samples' count per
+    sensor, each sensor's precision w_s·ω/σ_s² (1/K²) and its bias prior's 1/(κβ²) (+inf: no
+    bias term)."""
+
+    counts: np.ndarray
+    precision: np.ndarray
+    bias_inverse: np.ndarray
+
+
+def _residual_sums(residual: np.ndarray, valid: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """Per sensor Σ r and Σ r² over the ``valid`` samples of ``residual`` (samples,
+    sensors)."""
+    filled = np.where(valid, residual, 0.0)
+    return filled.sum(axis=0), (filled**2).sum(axis=0)
+
+
+def _window_sums(predicted: np.ndarray, measured: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_residual_sums` of r = predicted − measured over the samples measured, to the
+    bits of NumPy's sums: a C-ordered prediction (the FOM's) in one compiled pass in NumPy's
+    order for it, any other (a DataFrame's columns) by NumPy, whose order there differs."""
+    if predicted.dtype == np.float64 and predicted.flags.c_contiguous:
+        return _prediction_sums(predicted, measured)
+    return _residual_sums(predicted - measured, ~np.isnan(measured))
+
+
+@njit(cache=True)
+def _prediction_sums(predicted: np.ndarray, measured: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_residual_sums` of r = predicted − measured (C-ordered, samples × sensors) over
+    the samples measured (not NaN), in one pass, sample by sample: the order NumPy sums a
+    C-ordered array over its first axis in, so to the same bits."""
+    sum_r = np.zeros(measured.shape[1])
+    sum_r2 = np.zeros(measured.shape[1])
+    for k in range(measured.shape[0]):
+        for j in range(measured.shape[1]):
+            if not math.isnan(measured[k, j]):
+                r = predicted[k, j] - measured[k, j]
+                sum_r[j] += r
+                sum_r2[j] += r * r
+    return sum_r, sum_r2
+
+
+def _penalty(error: ValueError) -> Evaluation:
+    """The penalised :class:`Evaluation` of a candidate the simulator rejected."""
+    reason = str(error) or type(error).__name__
+    return Evaluation(PENALTY_RMSE, reason, PENALTY_RMSE)
 
 
 def _window_parts(windows: object) -> tuple[list[pd.DataFrame], list[str], list[float],

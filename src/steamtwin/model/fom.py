@@ -135,6 +135,32 @@ class CheckedInputs:
     columns: dict[str, np.ndarray]
     time_step: np.ndarray
 
+    @cached_property
+    def first_enthalpy(self) -> float:
+        """Specific enthalpy (J/kg, IAPWS-IF97) of the first sample's main steam, where a fresh
+        run starts: computed once per series, not at each of a calibration's runs."""
+        return float(if97.enthalpy_pt(self.columns["main_steam_pressure"][0],
+                                      self.columns["main_steam_temperature"][0]))
+
+    def inlet_states(self, constants: kernel.KernelConstants) -> np.ndarray:
+        """:func:`~steamtwin.model.kernel.inlet_states` of this series for ``constants`` (the
+        valves' pressure drop, the design flow and the Reynolds exponent are all it depends
+        on), computed on first use and kept: a calibration's thousands of runs of one series
+        share them."""
+        key = (constants.control.valve_pressure_drop, constants.design_flow,
+               constants.reynolds_exponent)
+        cache = self._inlet_cache
+        if key not in cache:
+            p0, t0, flow, p_exhaust = (self.columns[name] for name in INPUT_SIGNALS)
+            inlet = np.empty((kernel.INLET_ROWS, p0.size))
+            kernel.inlet_states(steam_tables(), *key, p0, t0, flow, p_exhaust, inlet)
+            cache[key] = inlet
+        return cache[key]
+
+    @cached_property
+    def _inlet_cache(self) -> dict[tuple[float, float, float], np.ndarray]:
+        return {}
+
 
 class FullOrderModel:
     """HP-section full-order model of a turbine described by ``spec``.
@@ -415,7 +441,7 @@ class FullOrderModel:
             # pressures falling linearly from 80 % of throttle to the exhaust, enthalpy
             # 100 kJ/kg under inlet
             "pressures": np.linspace(0.8 * p0[0], p_exhaust[0], stages + 1),
-            "enthalpies": np.full(stages + 1, float(if97.enthalpy_pt(p0[0], t0[0])) - 1.0e5),
+            "enthalpies": np.full(stages + 1, checked.first_enthalpy - 1.0e5),
             "metal": np.full(constants.metal.capacity.shape, t0[0]),
             "throttled": np.zeros((2, constants.control.level_area.size)),
             "cs_out": np.zeros(7),
@@ -499,7 +525,8 @@ class FullOrderModel:
             raise ValueError(f"pressure_tolerance and enthalpy_tolerance must be finite and > 0 "
                              f"(got {self.pressure_tolerance!r}, {self.enthalpy_tolerance!r})")
         solved = kernel.run_kernel(constants, steam_tables(), checked.time_step, p0, t0, flow,
-                                   p_exhaust, parameter_array, tolerance, carry["pressures"],
+                                   p_exhaust, checked.inlet_states(constants), parameter_array,
+                                   tolerance, carry["pressures"],
                                    carry["enthalpies"], carry["metal"], results, status, stage_p,
                                    stage_t, carry["throttled"], carry["cs_out"],
                                    carry["leak_flow"], carry["inlet_pv"], carry["previous"],

@@ -216,7 +216,12 @@ class KernelConstants(NamedTuple):
     leak_rejoins: np.ndarray  # int, 1: rejoins before the HP exhaust, 0: leaves the HP section
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+# The helpers below allocate nothing, so they are compiled without numba's reference counting
+# (``_nrt=False``, numba's flag for code that needs no runtime): a compiled call otherwise
+# increments and decrements the count of every array it is handed at entry and exit (~20 pairs
+# per control-stage evaluation; docs/benchmarks.md, sessions 18–19). ``run_kernel`` allocates
+# its work arrays and keeps the runtime.
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _nozzle_group_flow(area, p1, pressure, specific_volume):
     """Flow (kg/s) of a nozzle group fed at ``pressure`` (Pa) with ``specific_volume`` (m³/kg).
 
@@ -227,7 +232,7 @@ def _nozzle_group_flow(area, p1, pressure, specific_volume):
         pressure / specific_volume)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _throttled_pressure(flow, area, p1, p_valve, wide_open, h0, tables, guess, slope,
                         tolerance=THROTTLE_TOLERANCE):
     """Pressure after a part-open valve whose nozzle group must pass ``flow`` (kg/s).
@@ -270,7 +275,7 @@ def _throttled_pressure(flow, area, p1, p_valve, wide_open, h0, tables, guess, s
     return x1, slope
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _nozzle_group_expansion(cs, tables, cell_1, coordinate_1, h0, s_in, friction_coefficient):
     """Outlet enthalpy and isentropic drop (J/kg) of a nozzle group expanding to p1 (located)."""
     drop = max(h0 - enthalpy_ps_at(tables, cell_1, coordinate_1, s_in), 0.0)
@@ -280,7 +285,7 @@ def _nozzle_group_expansion(cs, tables, cell_1, coordinate_1, h0, s_in, friction
     return h0 - efficiency * drop, drop
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _level_lift(overlap, level, demand):
     """Lift (0…1) of opening level ``level`` (0-based) at valve demand ``demand``.
 
@@ -291,7 +296,7 @@ def _level_lift(overlap, level, demand):
     return min(max(demand - level * (1.0 - overlap), 0.0), 1.0)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _characteristic_share(lift_points, flow_shares, lift):
     """The valves' flow characteristic (share of the wide-open flow, piecewise linear in the
     lift) at ``lift`` (0…1).
@@ -307,7 +312,7 @@ def _characteristic_share(lift_points, flow_shares, lift):
         lift_points[m] - lift_points[m - 1]) * (lift - lift_points[m - 1])
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _level_share(cs, level, demand):
     """Share (0…1) of its wide-open flow that level ``level`` passes at valve demand ``demand``:
     the valves' flow characteristic at the level's scheduled lift."""
@@ -315,7 +320,7 @@ def _level_share(cs, level, demand):
                                  _level_lift(cs.valve_overlap, level, demand))
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _scheduled_share(level_area, lift_points, flow_shares, overlap, demand):
     """Σ level area × share at valve ``demand`` (m²): the scheduled flow per open-valve flux.
 
@@ -329,7 +334,7 @@ def _scheduled_share(level_area, lift_points, flow_shares, overlap, demand):
     return total
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _valve_demand(cs, open_flux, flow):
     """Valve demand at which the overlapping lift schedule passes ``flow`` (kg/s).
 
@@ -371,7 +376,7 @@ def _valve_demand(cs, open_flux, flow):
     return full
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, cell_1, coordinate_1,
                    params, throttled, out, throttle_tolerance):
     """Expand the nozzle groups to ``p1`` (located as ``cell_1``, ``coordinate_1``:
@@ -457,7 +462,7 @@ def _control_stage(cs, tables, flow, p_valve, s_valve, pv_valve, h0, p1, cell_1,
     return h1
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _shifted_control_stage(h1, shift, flow, out):
     """Control-stage outlet enthalpy (J/kg) at p1 + ``shift`` (Pa) from its state at p1.
 
@@ -471,7 +476,7 @@ def _shifted_control_stage(h1, shift, flow, out):
     return h1 + dh
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _setup_group_metal(metal, group, flow, htc_multiplier, metal_old, pivot, rhs, surface,
                        properties):
     """Steam-side coefficients and the implicit metal step of one group; its steam T (K).
@@ -502,7 +507,7 @@ def _setup_group_metal(metal, group, flow, htc_multiplier, metal_old, pivot, rhs
     return temperature
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _group_heat(group, temperature, surface):
     """Heat (W) the casing and rotor of ``group`` take from steam at ``temperature`` (K)."""
     heat = 0.0
@@ -513,7 +518,7 @@ def _group_heat(group, temperature, surface):
 
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _backward_sweep(stage_capacity, extraction_fraction, leak_origin, flow, flow_coefficient,
                     p_exhaust, inlet_pv, pressures, leak_flow):
     """Stage inlet pressures (Pa) by Stodola's law from the exhaust, with inlet p·v (J/kg).
@@ -552,7 +557,7 @@ def labyrinth_flow(capacity: float, upstream_pressure: float, upstream_pv: float
     return capacity * math.sqrt(head / upstream_pv) if head > 0.0 else 0.0
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _polytropic_pv(reference, pressures, inlet_pv, first_pv):
     """Carry the stage-inlet p·v (J/kg) from the ``reference`` pressures to ``pressures`` (Pa).
 
@@ -572,7 +577,7 @@ def _polytropic_pv(reference, pressures, inlet_pv, first_pv):
     inlet_pv[0] = first_pv
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _casing_thermocouple(sensor_group, sensor_node, sensor_weight, half_cell_resistance, area,
                          metal, surface, group_temperature):
     """Casing metal temperature (K) at the thermocouple's depth, linear between neighbours.
@@ -594,7 +599,7 @@ def _casing_thermocouple(sensor_group, sensor_node, sensor_weight, half_cell_res
     return wall + sensor_weight * (node_0 - wall)
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _metal_energy(capacity, outer_conductance, ambient_temperature, metal):
     """Heat content of all metal (J, from 0 K) and the lagging loss (W) of a metal state.
 
@@ -619,7 +624,7 @@ def _metal_energy(capacity, outer_conductance, ambient_temperature, metal):
     return (sum_0 + sum_1) + (sum_2 + sum_3), loss
 
 
-@njit(cache=True, error_model="numpy", fastmath={"contract"})
+@njit(cache=True, error_model="numpy", fastmath={"contract"}, _nrt=False)
 def _commit_metal(conductance, pivot, rhs, surface, group_temperature, metal):
     """Metal temperatures (K) at the end of the step, from the converged steam temperatures."""
     for chain in range(metal.shape[0]):
@@ -627,14 +632,45 @@ def _commit_metal(conductance, pivot, rhs, surface, group_temperature, metal):
     finish_chains(conductance, pivot, rhs, metal)
 
 
+INLET_ROWS = 4  # rows of :func:`inlet_states`' array
+
+
 @njit(cache=True, error_model="numpy", fastmath={"contract"})
-def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance, pressures,
-               enthalpies, metal, results, status, stage_pressures, stage_temperatures,
-               throttled, cs_out, leak_flow, inlet_pv, previous, resume):
+def inlet_states(tables, valve_pressure_drop, design_flow, reynolds_exponent, p0, t0, flow,
+                 p_exhaust, inlet):
+    """What each sample's solve needs of its inputs alone, whatever the parameters: fills
+    ``inlet`` (:data:`INLET_ROWS`, samples) with the main steam's enthalpy h0 (J/kg), its
+    entropy (J/(kg·K)) and p·v (J/kg) after the wide-open valves (at p0·(1 −
+    ``valve_pressure_drop``)), and the Reynolds factor's excess (m/m_design)^(−n) − 1 of the
+    stage losses (see :func:`run_kernel`); h0 NaN where the inputs leave the tables (the
+    kernel then reports :data:`STATUS_OUT_OF_TABLES`).
+
+    A calibration runs one series thousands of times: computed once per series
+    (``FullOrderModel``), these look-ups and powers leave the time loop.
+    """
+    for k in range(p0.size):
+        inlet[0, k] = math.nan
+        if not pressure_in_range(tables, p0[k]) or not pressure_in_range(tables, p_exhaust[k]):
+            continue
+        cell_0, coordinate_0 = locate_pressure(tables, p0[k])
+        h0 = enthalpy_pt_at(tables, cell_0, coordinate_0, t0[k])
+        if not 0.0 <= ph_domain_position_at(tables, cell_0, coordinate_0, h0) <= 1.0:
+            continue
+        inlet[0, k] = h0
+        cell_v, coordinate_v = locate_pressure(tables, p0[k] * (1.0 - valve_pressure_drop))
+        inlet[1, k], inlet[2, k] = entropy_and_pv_at(tables, cell_v, coordinate_v, h0)
+        inlet[3, k] = (flow[k] / design_flow) ** -reynolds_exponent - 1.0
+
+
+@njit(cache=True, error_model="numpy", fastmath={"contract"})
+def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, inlet, params, tolerance,
+               pressures, enthalpies, metal, results, status, stage_pressures,
+               stage_temperatures, throttled, cs_out, leak_flow, inlet_pv, previous, resume):
     """Simulate a series; the first sample starts from steady metal (equilibrium), or, with
     ``resume``, continues the series whose state the carried arrays hold.
 
-    ``params`` (rows, 3): flow, friction and heat-transfer coefficients, one row for the whole
+    ``inlet``: the series' :func:`inlet_states`. ``params`` (rows, 3): flow, friction and
+    heat-transfer coefficients, one row for the whole
     series or one per sample; ``tolerance`` (relative pressure, J/kg) bounds each sample's
     estimated convergence error. ``pressures``/``enthalpies`` (stages + 1) carry the warm start
     in and the last solution out; ``metal`` (chains, nodes) the metal temperatures (K), chain
@@ -682,12 +718,8 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
         if varying:
             for j in range(current.size):
                 current[j] = params[k, j]
-        if not pressure_in_range(tables, p0[k]) or not pressure_in_range(tables, p_exhaust[k]):
-            status[k] = STATUS_OUT_OF_TABLES
-            return k
-        cell_0, coordinate_0 = locate_pressure(tables, p0[k])
-        h0 = enthalpy_pt_at(tables, cell_0, coordinate_0, t0[k])
-        if not 0.0 <= ph_domain_position_at(tables, cell_0, coordinate_0, h0) <= 1.0:
+        h0 = inlet[0, k]
+        if math.isnan(h0):
             status[k] = STATUS_OUT_OF_TABLES
             return k
         # the first sample is steady (infinite step); the chains are factored anew only when the
@@ -731,8 +763,7 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                 enthalpy_tolerance / ENTHALPY_TOLERANCE, 1.0)
             # the state after the wide-open valves depends on the inputs only
             p_valve = p0[k] * (1.0 - control.valve_pressure_drop)
-            cell_v, coordinate_v = locate_pressure(tables, p_valve)
-            s_valve, pv_valve = entropy_and_pv_at(tables, cell_v, coordinate_v, h0)
+            s_valve, pv_valve = inlet[1, k], inlet[2, k]
             # 0. carry the previous sample's p·v to this sample's inputs
             predicted_p1 = math.nan  # the control stage evaluated there, reused by sweep 1
             predicted_h1 = predicted_level = 0.0
@@ -865,7 +896,7 @@ def run_kernel(c, tables, time_step, p0, t0, flow, p_exhaust, params, tolerance,
                 # 3. forward sweep over the pressure stages; the Reynolds correction raises each
                 # stage's loss 1 − η by the factor (m/m_design)^(−n), added as
                 # (1 − η)·(factor − 1) so that n = 0 leaves η bit for bit
-                reynolds_excess = (sample_flow / c.design_flow) ** -c.reynolds_exponent - 1.0
+                reynolds_excess = inlet[3, k]
                 stage_flow = sample_flow
                 extraction_energy = 0.0
                 rejoin_flow = rejoin_energy = outside_energy = 0.0

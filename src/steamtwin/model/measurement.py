@@ -52,14 +52,18 @@ def check_time_constants(time_constants: Mapping[str, float] | None,
 @njit(cache=True)
 def _lag(x, steps, tau, resume, y_before, x_before):
     y = np.empty_like(x)
+    step = math.nan  # the step the weights below belong to: DCS data repeat one step
+    a = one_minus_a = b0 = 0.0
     for k in range(x.size):
         if k == 0 and not resume:
             y[0] = x[0]
             continue
-        ratio = steps[k] / tau
-        a = math.exp(-ratio)
-        one_minus_a = -math.expm1(-ratio)
-        b0 = 1.0 - one_minus_a / ratio  # weight of x[k] under the first-order hold
+        if steps[k] != step:
+            step = steps[k]
+            ratio = step / tau
+            a = math.exp(-ratio)
+            one_minus_a = -math.expm1(-ratio)
+            b0 = 1.0 - one_minus_a / ratio  # weight of x[k] under the first-order hold
         y_last, x_last = (y_before, x_before) if k == 0 else (y[k - 1], x[k - 1])
         y[k] = a * y_last + (one_minus_a - b0) * x_last + b0 * x[k]
     return y
