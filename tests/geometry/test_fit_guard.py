@@ -285,9 +285,8 @@ def test_surface_samples_of_the_construction_lie_on_it() -> None:
 
 def test_a_defect_on_a_sparse_edge_is_refused_with_the_density_it_needs(slender_cloud) -> None:
     """The 0.11 mm trailing edge at the tip at 30k points: the refusal of a defect there says how
-    many points per mm the edge has and needs, and where. A circle below the point spacing is
-    measured too large (resolution-limited: 0.3 mm here), so the figure needed is a lower
-    bound."""
+    many points per mm the edge has and needs, and where (the radius within 3 × the truth
+    here; against known radii: tests/geometry/test_edge_density_figure.py)."""
     from steamtwin.geometry.fit_guard import Defect, GuardReport, refusal_message
 
     segmentation = segment_blade(slender_cloud)
