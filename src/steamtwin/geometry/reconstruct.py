@@ -82,7 +82,8 @@ class ReconstructionSettings:
     ``guard`` checks the surface against the cloud (None: not checked,
     :mod:`~steamtwin.geometry.fit_guard`); ``penalty_factor`` multiplies the fit's smoothing
     penalty (the guard's repairs raise it); ``model_edges``: sparse edges as tangent circles,
-    projected points replaced (:mod:`~steamtwin.geometry.edge_model`; off: no gain yet).
+    projected points replaced (:mod:`~steamtwin.geometry.edge_model`; on by default since
+    its start holds at the caps, :data:`~steamtwin.geometry.edge_span.START_PENALTY`).
     """
 
     segmentation: SegmentationSettings = field(default_factory=SegmentationSettings)
@@ -97,7 +98,7 @@ class ReconstructionSettings:
     span_spacing: float = 1e-3
     guard: GuardSettings | None = field(default_factory=GuardSettings)
     penalty_factor: float = 1.0
-    model_edges: bool = False
+    model_edges: bool = True
 
 
 @dataclass(frozen=True)
