@@ -57,13 +57,16 @@ Measured inputs (:data:`INPUT_UNCERTAINTIES`)
     ``g_i g_iᵀ`` with ``g_i = H_κ⁻¹ J_κᵀ (∂r_κ/∂u_i) u_i`` to the covariance (§5.1, the law
     of propagation of uncertainty; the input errors independent). Not the reported
     posterior's H = J^T J/(τS²) + …: where κ differs from 1/(τS²) (κ is estimated at the
-    priors' centres) and a parameter leans on its prior or on a prior-bound neighbour, that
-    gain is not the MAP's — on the virtual plant (seed 0) it gave 0.044 for the friction
-    coefficient's ln-shift per 1.24 K of main-steam temperature where refitting moved it by
-    0.064 (docs/benchmarks.md). ∂r_κ/∂u_i comes from central differences of ±u_i on every
-    window's input (the output thermocouples' own biases are integrated out as before, so an
-    input error that only shifts a temperature's level is absorbed there). The intervals
-    report the total ``C + Σ g_i g_iᵀ``; params.json keeps both parts.
+    priors' centres) and a parameter leans on its prior or on a prior-held neighbour, that
+    gain is not the MAP's. ∂r_κ/∂u_i comes from central differences of ±u_i on every
+    window's input, for a thermocouple one offset over all windows as its calibration error
+    is (an offset per window's mean temperature instead bends the load trend the friction
+    coefficient is fitted to). The output thermocouples' own biases are integrated out as
+    before, so an input error that only shifts a temperature's level is absorbed there.
+    Checked on the virtual plant (seed 0, main-steam temperature ±1.24 K, recalibrated):
+    the friction coefficient's ln moved by ∓0.064, this gain says 0.063; the reported
+    posterior's weighting with an offset per window said 0.038 (docs/benchmarks.md). The
+    intervals report the total ``C + Σ g_i g_iᵀ``; params.json keeps both parts.
 
 Model discrepancy: the cluster-robust covariance (:func:`cluster_robust_covariance`)
     A twin is not its plant: its error at one load repeats in every sample there and varies
@@ -157,8 +160,9 @@ it with the other inputs' (:data:`INPUT_UNCERTAINTIES`)."""
 class InputUncertainty:
     """Standard uncertainty of a measured input's calibration error: ``kind`` "relative"
     (``value`` a fraction of the reading), or "thermocouple" (IEC 60584-1 class 1 at the
-    window's mean reading, read as a uniform bound: ``value`` unused); ``source`` says where
-    it comes from."""
+    mean of the readings, read as a uniform bound: ``value`` unused — one offset for all of
+    them, as a thermocouple's calibration error is over the narrow range a record spans);
+    ``source`` says where it comes from."""
 
     kind: str
     value: float
@@ -174,7 +178,7 @@ class InputUncertainty:
         """Standard uncertainty (SI) at each reading (SI)."""
         if self.kind == "relative":
             return self.value * np.abs(reading)
-        return np.full_like(reading, thermocouple_bias_spread(float(np.mean(reading))))
+        return np.full_like(reading, thermocouple_bias_spread(float(np.nanmean(reading))))
 
 
 INPUT_UNCERTAINTIES: dict[str, InputUncertainty] = {
@@ -508,13 +512,17 @@ def input_covariance(objective: Objective, params: ModelParameters, gain: np.nda
     total = np.zeros((gain.shape[0], gain.shape[0]))
     rejected: list[str] = []
     for name, uncertainty in inputs.items():
+        # the readings of every window at once: a thermocouple's error is one offset over the
+        # whole record (InputUncertainty.at), not one per window's mean temperature
+        readings = [window.inputs[name].to_numpy(dtype=float) for window in objective.windows]
+        offsets = np.split(uncertainty.at(np.concatenate(readings)),
+                           np.cumsum([len(r) for r in readings])[:-1])
         shifted = []
         for sign in (1.0, -1.0):
             try:
                 moved = replace(objective, windows=tuple(
-                    _moved_input(objective, window, name, sign * uncertainty.at(
-                        window.inputs[name].to_numpy(dtype=float)))
-                    for window in objective.windows))
+                    _moved_input(objective, window, name, sign * offset)
+                    for window, offset in zip(objective.windows, offsets, strict=True)))
                 shifted.append((sign, moved.standardised_residuals(params)))
             except ValueError:
                 continue
