@@ -46,14 +46,27 @@ Measured inputs (:data:`INPUT_UNCERTAINTIES`)
     The model runs on the DCS's measured boundary conditions, and each input instrument has a
     calibration error that stays put over the data (the plant's flow nozzle may read 1 % high
     for years). Such an error moves the MAP as a parameter would; the data cannot tell them
-    apart. By the implicit-function theorem the MAP moves by
-    ``δθ = −H⁻¹ Jᵀ (∂r/∂u) δu`` for an input error δu (H the posterior precision, J = ∂r/∂θ),
-    and an input error of standard uncertainty u_i adds ``g_i g_iᵀ`` with ``g_i = H⁻¹ Jᵀ
-    (∂r/∂u_i) u_i`` to the covariance (GUM, JCGM 100:2008 §5.1, the law of propagation of
-    uncertainty; the input errors independent). ∂r/∂u_i comes from central differences of
-    ±u_i on every window's input (the output thermocouples' own biases are integrated out as
-    before, so an input error that only shifts a temperature's level is absorbed there).
-    The intervals report the total ``C + Σ g_i g_iᵀ``; params.json keeps both parts.
+    apart. The MAP θ̂ is the minimiser of the objective the calibrators ran — κχ²/2 + Σz²/2
+    with the tempering κ they fixed before the search (below) and the output sensors' biases
+    profiled at that κ — so it is that estimator's response the input errors propagate
+    through (GUM, JCGM 100:2008 §5.1: the measurement function is the estimator). By the
+    implicit-function theorem on its stationarity condition (Gauss–Newton Hessian), the MAP
+    moves by ``δθ = −H_κ⁻¹ J_κᵀ (∂r_κ/∂u) δu`` for an input error δu, with r_κ the
+    objective's standardised residuals (κ-weighted, biases profiled), J_κ = ∂r_κ/∂θ and
+    ``H_κ = J_κᵀJ_κ + diag(1/s²)``; an input error of standard uncertainty u_i adds
+    ``g_i g_iᵀ`` with ``g_i = H_κ⁻¹ J_κᵀ (∂r_κ/∂u_i) u_i`` to the covariance (§5.1, the law
+    of propagation of uncertainty; the input errors independent). Not the reported
+    posterior's H = J^T J/(τS²) + …: where κ differs from 1/(τS²) (κ is estimated at the
+    priors' centres) and a parameter leans on its prior or on a prior-held neighbour, that
+    gain is not the MAP's. ∂r_κ/∂u_i comes from central differences of ±u_i on every
+    window's input, for a thermocouple one offset over all windows as its calibration error
+    is (an offset per window's mean temperature instead bends the load trend the friction
+    coefficient is fitted to). The output thermocouples' own biases are integrated out as
+    before, so an input error that only shifts a temperature's level is absorbed there.
+    Checked on the virtual plant (seed 0, main-steam temperature ±1.24 K, recalibrated):
+    the friction coefficient's ln moved by ∓0.064, this gain says 0.063; the reported
+    posterior's weighting with an offset per window said 0.038 (docs/benchmarks.md). The
+    intervals report the total ``C + Σ g_i g_iᵀ``; params.json keeps both parts.
 
 Model discrepancy: the cluster-robust covariance (:func:`cluster_robust_covariance`)
     A twin is not its plant: its error at one load repeats in every sample there and varies
@@ -147,8 +160,9 @@ it with the other inputs' (:data:`INPUT_UNCERTAINTIES`)."""
 class InputUncertainty:
     """Standard uncertainty of a measured input's calibration error: ``kind`` "relative"
     (``value`` a fraction of the reading), or "thermocouple" (IEC 60584-1 class 1 at the
-    window's mean reading, read as a uniform bound: ``value`` unused); ``source`` says where
-    it comes from."""
+    mean of the readings, read as a uniform bound: ``value`` unused — one offset for all of
+    them, as a thermocouple's calibration error is over the narrow range a record spans);
+    ``source`` says where it comes from."""
 
     kind: str
     value: float
@@ -164,7 +178,7 @@ class InputUncertainty:
         """Standard uncertainty (SI) at each reading (SI)."""
         if self.kind == "relative":
             return self.value * np.abs(reading)
-        return np.full_like(reading, thermocouple_bias_spread(float(np.mean(reading))))
+        return np.full_like(reading, thermocouple_bias_spread(float(np.nanmean(reading))))
 
 
 INPUT_UNCERTAINTIES: dict[str, InputUncertainty] = {
@@ -407,13 +421,13 @@ def laplace_posterior(objective: Objective, params: ModelParameters,
         for target, scored in ((jacobian, objective), (weighted, laplace)):
             target[:, i] = (scored.standardise(runs[0]) - scored.standardise(runs[1])) / (
                 up[i] - down[i])
-    precision = weighted.T @ weighted + np.diag([1.0 / p.spread**2 for p in prior_tuple])
+    prior_precision = np.diag([1.0 / p.spread**2 for p in prior_tuple])
+    precision = weighted.T @ weighted + prior_precision
     covariance = np.linalg.inv(precision)
     posterior = Posterior(params, theta, covariance, prior_tuple, tau, int(base.size), scale)
     if clusters is not None:
         labels = _row_clusters(objective, clusters, base.size)
         if len(set(labels) - {None}) >= 2:
-            prior_precision = np.diag([1.0 / p.spread**2 for p in prior_tuple])
             robust, names, shifts = cluster_robust_covariance(
                 jacobian / np.sqrt(kappa), base / np.sqrt(kappa), labels, prior_precision,
                 weight=kappa)
@@ -421,10 +435,12 @@ def laplace_posterior(objective: Objective, params: ModelParameters,
                                 cluster_shifts=shifts)
     if not inputs:
         return posterior
-    gain = covariance @ weighted.T  # δθ = −gain·δr, r the reported posterior's residuals
+    # the MAP's own response: the objective it minimised (κ, its biases profiled at κ), not
+    # the reported posterior's weighting 1/(τ S²) (module docstring, "Measured inputs")
+    gain = np.linalg.solve(jacobian.T @ jacobian + prior_precision, jacobian.T)
     used = {name: u for name, u in inputs.items()
             if name in objective.simulator.input_signals}
-    covariance_in, rejected = input_covariance(laplace, params, gain, used)
+    covariance_in, rejected = input_covariance(objective, params, gain, used)
     return replace(posterior, input_covariance=covariance_in, input_sources=tuple(
         (name, f"not propagated: the model rejects the inputs with {name} moved by ±{u.source}"
          if name in rejected else u.source) for name, u in used.items()))
@@ -488,20 +504,25 @@ def _row_clusters(objective: Objective, clusters: Sequence[Hashable], rows: int
 def input_covariance(objective: Objective, params: ModelParameters, gain: np.ndarray,
                      inputs: Mapping[str, InputUncertainty]) -> tuple[np.ndarray, list[str]]:
     """Σ_i g_i g_iᵀ (θ units): the covariance the inputs' calibration errors add (module
-    docstring), with ``gain`` = H⁻¹Jᵀ of the standardised residuals at ``params`` and g_i the
-    MAP's shift for each input moved by its standard uncertainty (central differences; one
-    side where the model rejects the other); and the inputs the model rejects moved either
-    way (not propagated: the caller says so)."""
+    docstring), with ``gain`` = H_κ⁻¹J_κᵀ of ``objective``'s standardised residuals at
+    ``params`` (the objective the MAP minimised, with its own κ) and g_i the MAP's shift
+    for each input moved by its standard uncertainty (central differences; one side where
+    the model rejects the other); and the inputs the model rejects moved either way (not
+    propagated: the caller says so)."""
     total = np.zeros((gain.shape[0], gain.shape[0]))
     rejected: list[str] = []
     for name, uncertainty in inputs.items():
+        # the readings of every window at once: a thermocouple's error is one offset over the
+        # whole record (InputUncertainty.at), not one per window's mean temperature
+        readings = [window.inputs[name].to_numpy(dtype=float) for window in objective.windows]
+        offsets = np.split(uncertainty.at(np.concatenate(readings)),
+                           np.cumsum([len(r) for r in readings])[:-1])
         shifted = []
         for sign in (1.0, -1.0):
             try:
                 moved = replace(objective, windows=tuple(
-                    _moved_input(objective, window, name, sign * uncertainty.at(
-                        window.inputs[name].to_numpy(dtype=float)))
-                    for window in objective.windows))
+                    _moved_input(objective, window, name, sign * offset)
+                    for window, offset in zip(objective.windows, offsets, strict=True)))
                 shifted.append((sign, moved.standardised_residuals(params)))
             except ValueError:
                 continue
