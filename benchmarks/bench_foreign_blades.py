@@ -10,7 +10,10 @@ reconstruction samples and vertices → exact surface (RMS, max: spikes, beaks) 
 exact-surface samples → reconstruction (max: missing or cut-off parts), and where the worse
 maximum lies. Pass = watertight, RMS ≤ 0.02 mm and max ≤ 0.1 mm (the larger of the two
 maxima); "WORST" flags a watertight STL more than 0.5 mm off, the outcome the issue rules out;
-a refusal records the pipeline's message. ``seconds`` is the wall time of the reconstruction,
+a refusal records the pipeline's message. ``edge_across``: each edge's median point spacings
+across its half circle (:func:`~steamtwin.geometry.edge_density.check_edge_density`, in the
+frame and segmentation the pipeline uses, measured outside the timing; "" where the frame or
+segmentation refuses). ``seconds`` is the wall time of the reconstruction,
 ``cpu_seconds`` the process's CPU time over it (all threads; on a shared machine the wall time
 also counts the time the process waited for a core).
 
@@ -25,6 +28,7 @@ directory, steamtwin-bench/foreign_blades).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import json
 import math
@@ -43,14 +47,16 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "geometry
 from foreign_blades import FAMILY, compare_with_exact, family_blade, laser_cloud, random_pose
 
 from steamtwin.geometry.blade_cloud import ReconstructionError
+from steamtwin.geometry.edge_density import check_edge_density
 from steamtwin.geometry.fit_guard import GuardSettings
-from steamtwin.geometry.frame import reconstruct_in_any_pose
+from steamtwin.geometry.frame import estimate_blade_frame, reconstruct_in_any_pose
 from steamtwin.geometry.reconstruct import (
     Reconstruction,
     ReconstructionSettings,
     reconstruct_blade,
 )
 from steamtwin.geometry.scanner import EDGE_SAMPLES
+from steamtwin.geometry.segmentation import segment_blade
 
 LIMITS_MM = {"rms": 0.02, "max": 0.1, "worst": 0.5}
 """The issue's limits (mm): RMS and max of a passing STL; a watertight STL beyond ``worst``
@@ -97,6 +103,17 @@ POSES: dict[str, Callable[[np.ndarray, int], tuple[Reconstruction, np.ndarray]]]
 }
 
 
+def edge_across(points: np.ndarray, seed: int, pose: str) -> str:
+    """Median point spacings across each edge's half circle (``check_edge_density`` with no
+    minimum) in the frame and segmentation of ``pose``'s step, e.g. "LE 2.50 / TE 0.93"."""
+    if pose == "random":
+        scan, _ = random_pose(points, seed + 1000)
+        points = estimate_blade_frame(scan).to_blade(scan)
+    figures = check_edge_density(points, segment_blade(points, SETTINGS.segmentation), 0.0)
+    return " / ".join(f"{'LE' if edge == 'leading_edge' else 'TE'} {value:.2f}"
+                      for edge, value in figures.items())
+
+
 def run_case(member: str, points: int, seed: int, pose: str = "blade") -> dict:
     """One member × cloud size × seed: reconstruct and measure; figures in mm and s."""
     blade = family_blade(member)
@@ -104,7 +121,10 @@ def run_case(member: str, points: int, seed: int, pose: str = "blade") -> dict:
     row: dict = {"member": member, "points": points, "seed": seed, "pose": pose,
                  "watertight": False, "rms_mm": None, "max_mm": None, "back_max_mm": None,
                  "worst_at": "", "refused": "", "seconds": None, "cpu_seconds": None,
-                 "outcome": "refused"}
+                 "outcome": "refused", "edge_across": ""}
+    with contextlib.suppress(ReconstructionError), warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # a frame or segmentation that refuses: see the run
+        row["edge_across"] = edge_across(cloud.points, seed, pose)
     start, cpu = time.perf_counter(), time.process_time()
     try:
         with warnings.catch_warnings():
@@ -138,7 +158,7 @@ def _cell(value: object) -> str:
 def main(members: list[str], sizes: list[str], seeds: int, pose: str, out: Path) -> list[dict]:
     rows = []
     header = ("member", "points", "seed", "outcome", "watertight", "rms_mm", "max_mm",
-              "back_max_mm", "worst_at", "seconds", "cpu_seconds", "refused")
+              "back_max_mm", "worst_at", "seconds", "cpu_seconds", "edge_across", "refused")
     print(" | ".join(header))
     for member in members:
         for size in sizes:

@@ -602,7 +602,8 @@ class EdgeSampling:
     """Points on an edge in one span band: ``radius`` (m) of its circle, ``per_mm`` points per
     millimetre across its half circle, ``needed`` per millimetre for
     :data:`~steamtwin.geometry.scanner.EDGE_SAMPLES` on the half circle π·r (its square is
-    the area density, points per mm², that the scan needs there)."""
+    the area density, points per mm², that the scan needs there); ``circle_radius`` (m) the
+    circle fits' alone (:func:`edge_radius`; ≥ ``radius``)."""
 
     edge: str
     span_from: float
@@ -610,6 +611,7 @@ class EdgeSampling:
     radius: float
     per_mm: float
     needed: float
+    circle_radius: float = math.nan
 
     def describe(self) -> str:
         """e.g. "trailing edge at 60–80 % span: 2.1 points per mm across its 0.47 mm half
@@ -691,7 +693,7 @@ def edge_sampling(points: np.ndarray, segmentation: Segmentation, edge: str,
         circles = [edge_radius(xy) for xy in _slabs(members, a, b, slab, members)]
         if not circles:
             continue
-        radius = float(np.median(circles))
+        radius = circle = float(np.median(circles))
         # the flanks from slabs twice as high (more points on each); trusted where most slabs
         # have two straight flanks: round a resolved nose their lines miss the tip
         wedges = [wedge_radius(near[np.linalg.norm(near - np.median(xy, axis=0), axis=1)
@@ -705,7 +707,8 @@ def edge_sampling(points: np.ndarray, segmentation: Segmentation, edge: str,
         per_mm = math.sqrt(math.log(2.0) / (math.pi * gap * gap)) * 1e-3
         needed = samples / (math.pi * radius * 1e3)
         result.append(EdgeSampling(edge=edge, span_from=k / bands, span_to=(k + 1) / bands,
-                                   radius=radius, per_mm=per_mm, needed=needed))
+                                   radius=radius, per_mm=per_mm, needed=needed,
+                                   circle_radius=circle))
     return result
 
 

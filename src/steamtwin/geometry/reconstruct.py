@@ -41,6 +41,7 @@ import numpy as np
 
 from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.bspline import AdaptiveSurfaceFit, PeriodicSurface, clamped_knots
+from steamtwin.geometry.edge_density import MIN_POINTS_ACROSS, check_edge_density
 from steamtwin.geometry.edge_model import EdgeModel, model_sparse_edges
 from steamtwin.geometry.fit_guard import (
     GuardReport,
@@ -83,7 +84,9 @@ class ReconstructionSettings:
     :mod:`~steamtwin.geometry.fit_guard`); ``penalty_factor`` multiplies the fit's smoothing
     penalty (the guard's repairs raise it); ``model_edges``: sparse edges as tangent circles,
     projected points replaced (:mod:`~steamtwin.geometry.edge_model`; on by default since
-    its start holds at the caps, :data:`~steamtwin.geometry.edge_span.START_PENALTY`).
+    its start holds at the caps, :data:`~steamtwin.geometry.edge_span.START_PENALTY`);
+    ``min_edge_points_across``: an edge with fewer point spacings on its half circle is refused
+    before the fits (:mod:`~steamtwin.geometry.edge_density`; None: not checked).
     """
 
     segmentation: SegmentationSettings = field(default_factory=SegmentationSettings)
@@ -99,6 +102,7 @@ class ReconstructionSettings:
     guard: GuardSettings | None = field(default_factory=GuardSettings)
     penalty_factor: float = 1.0
     model_edges: bool = True
+    min_edge_points_across: float | None = MIN_POINTS_ACROSS
 
 
 @dataclass(frozen=True)
@@ -167,8 +171,9 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
     """Reconstruct a watertight blade from a cloud in the blade frame (m).
 
     Raises :class:`~steamtwin.geometry.blade_cloud.ReconstructionError` naming the problem
-    (empty, too small or flat cloud; missing caps or edges; a surface that does not close; a
-    surface that stands off the cloud or misses part of it, :func:`guarded`).
+    (empty, too small or flat cloud; missing caps or edges; an edge too sparse to fit,
+    :mod:`.edge_density`; a surface that does not close; a surface that stands off the cloud or
+    misses part of it, :func:`guarded`).
     ``segmentation``: the cloud's, when already computed.
     """
     settings = settings or ReconstructionSettings()
@@ -176,6 +181,8 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
     segmentation = segmentation or segment_blade(points, settings.segmentation)
     budget.mark()  # the refits repeat what follows
     points = np.asarray(points, dtype=np.float64)
+    if settings.min_edge_points_across is not None:  # before the fits: 0.1–0.4 s at 40k–80k
+        check_edge_density(points, segmentation, settings.min_edge_points_across)
     labels = segmentation.labels
     have = np.isin(labels, [REGIONS.index(name) for name in SIDE_REGIONS])
     s0, perimeter = initial_parameters(points, segmentation, have)
