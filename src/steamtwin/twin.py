@@ -568,11 +568,12 @@ class Twin:
         except InputError as error:
             if replay_over is None:
                 raise
-            # a row between the windows the model cannot take (a trip, a start-up): each
-            # window is then run on its own, from steady state, and the report says so
+            # a row the model cannot take (a trip, a start-up between the windows): each
+            # window is then run on its own, from steady state, and the report says so (a
+            # row inside a window stops that run too, and its error is raised there)
             report_settings["model runs"] = (
                 "each window from steady state at its first sample: the continuous run "
-                f"stopped at a row between the windows ({error})")
+                f"stopped at a row the model cannot take ({error})")
             warnings.warn(f"validate: {report_settings['model runs']}", stacklevel=2)
             report = monitored(None)
         self.validation_ = report
