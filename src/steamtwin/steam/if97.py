@@ -24,7 +24,6 @@ Thermodynamic Properties of Water and Steam.
 from __future__ import annotations
 
 import numpy as np
-from CoolProp.CoolProp import PropsSI
 from numpy.typing import ArrayLike, NDArray
 
 from steamtwin.errors import ModelError
@@ -170,6 +169,15 @@ def _check_pt(p: ArrayLike, T: ArrayLike) -> tuple[FloatArray, FloatArray]:
 # --------------------------------------------------------------------------------------------
 # CoolProp calls
 # --------------------------------------------------------------------------------------------
+
+
+def PropsSI(*arguments: object) -> object:  # noqa: N802 - CoolProp's own name
+    """CoolProp's ``PropsSI``, imported on the first call: CoolProp's import takes ~2 s of
+    CPU (it loads every fluid), which every process importing the model paid, each GA
+    worker included, though a calibration's model runs never call it."""
+    from CoolProp.CoolProp import PropsSI as props_si
+
+    return props_si(*arguments)
 
 
 def _props_raw(out: str, n1: str, v1: FloatArray, n2: str, v2: FloatArray) -> FloatArray:
