@@ -24,7 +24,6 @@ CPU times next to wall times and the load average with every figure: the machine
 from __future__ import annotations
 
 import argparse
-import math
 import multiprocessing
 import os
 import pickle
@@ -32,7 +31,6 @@ import platform
 import time
 import warnings
 from concurrent.futures import ProcessPoolExecutor
-from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -74,9 +72,9 @@ def _install(objective) -> None:
     _installed.append(objective)
 
 
-def _chunk(rows: np.ndarray, prune_above: float = math.inf) -> tuple[list, tuple]:
+def _chunk(rows: np.ndarray) -> tuple[list, tuple]:
     wall, cpu, in_kernel = time.perf_counter(), time.process_time(), _kernel_cpu[0]
-    results = _installed[0].evaluate_many(rows, prune_above)
+    results = _installed[0].evaluate_many(rows)
     return results, (os.getpid(), wall, time.perf_counter(), time.process_time() - cpu,
                      _kernel_cpu[0] - in_kernel, len(rows))
 
@@ -94,12 +92,11 @@ class _AccountingPool(ProcessPoolEvaluator):
                                          mp_context=multiprocessing.get_context("spawn"),
                                          initializer=_install, initargs=(objective,))
 
-    def evaluate(self, candidates: np.ndarray, prune_above: float = math.inf) -> list:
+    def evaluate(self, candidates: np.ndarray) -> list:
         wall, cpu = time.perf_counter(), time.process_time()
         results, stats = [], []
         parts = np.array_split(np.atleast_2d(candidates), 2 * self._workers)  # as the library
-        for chunk, stat in self._pool.map(partial(_chunk, prune_above=prune_above),
-                                          [part for part in parts if len(part)]):
+        for chunk, stat in self._pool.map(_chunk, [part for part in parts if len(part)]):
             results.extend(chunk)
             stats.append(stat)
         self.log.append((wall, time.perf_counter(), time.process_time() - cpu, stats))

@@ -100,10 +100,8 @@ class Calibrator:
     ``sensor_offsets_`` (sensor → its estimated bias, measured − model, SI, with
     ``sensor_bias``; empty without), ``history_`` (the GA: one row per generation,
     :data:`~steamtwin.calibration.search.HISTORY_COLUMNS`; the surrogate: one per round),
-    ``n_evaluations_`` (candidates the model ran), ``n_penalised_``, ``n_pruned_`` (of them,
-    those the GA stopped after some windows: :class:`GeneticSearch`'s ``prune``),
-    ``window_info_`` (per window: samples, filled and dropped input rows, excluded measured
-    samples), ``identifiability_`` (per
+    ``n_evaluations_`` (model runs), ``n_penalised_``, ``window_info_`` (per window: samples,
+    filled and dropped input rows, excluded measured samples), ``identifiability_`` (per
     parameter, :mod:`~steamtwin.calibration.identifiability`; an ``IdentifiabilityWarning``
     for each parameter the windows cannot identify) and what only one search has, else None:
     ``population_`` (the GA's final population), ``repair_counts_`` (its re-mutation
@@ -195,7 +193,6 @@ class Calibrator:
         self.history_ = found.history
         self.n_evaluations_ = problem.n_evaluations
         self.n_penalised_ = problem.n_penalised
-        self.n_pruned_ = problem.n_pruned
         self.population_ = found.population
         self.repair_counts_ = found.repair_counts
         self.samples_ = found.samples

@@ -13,11 +13,9 @@ model from the on-disk cache (:mod:`steamtwin.cache`), which takes a few seconds
 
 from __future__ import annotations
 
-import math
 import multiprocessing
 import os
 from concurrent.futures import ProcessPoolExecutor
-from functools import partial
 from typing import Any, Protocol
 
 import numpy as np
@@ -40,11 +38,8 @@ class Evaluator(Protocol):
     def start(self, objective: Objective) -> None:
         """Ship ``objective`` to wherever candidates are evaluated."""
 
-    def evaluate(self, candidates: np.ndarray, prune_above: float = math.inf
-                 ) -> list[Evaluation]:
-        """Results for the rows of ``candidates`` (n, 3), in order; a candidate whose score
-        certainly exceeds ``prune_above`` may come back pruned
-        (:meth:`Objective.evaluate`)."""
+    def evaluate(self, candidates: np.ndarray) -> list[Evaluation]:
+        """Results for the rows of ``candidates`` (n, 3), in order."""
 
     def close(self) -> None:
         """Release workers (idempotent)."""
@@ -57,11 +52,9 @@ class SerialEvaluator:
         """Keep ``objective``."""
         self._objective = objective
 
-    def evaluate(self, candidates: np.ndarray, prune_above: float = math.inf
-                 ) -> list[Evaluation]:
-        """Results for the rows of ``candidates``, in order (``prune_above``:
-        :meth:`Objective.evaluate`)."""
-        return self._objective.evaluate_many(candidates, prune_above)
+    def evaluate(self, candidates: np.ndarray) -> list[Evaluation]:
+        """Results for the rows of ``candidates``, in order."""
+        return self._objective.evaluate_many(candidates)
 
     def close(self) -> None:
         """Nothing to release."""
@@ -77,10 +70,10 @@ def _install(objective: Objective) -> None:
     _installed = objective
 
 
-def _evaluate_installed(rows: np.ndarray, prune_above: float = math.inf) -> list[Evaluation]:
+def _evaluate_installed(rows: np.ndarray) -> list[Evaluation]:
     if _installed is None:  # pragma: no cover - the initializer always runs first
         raise RuntimeError("no objective installed in this worker")
-    return _installed.evaluate_many(rows, prune_above)
+    return _installed.evaluate_many(rows)
 
 
 def _chunks(candidates: np.ndarray, parts: int) -> list[np.ndarray]:
@@ -108,13 +101,11 @@ class ProcessPoolEvaluator:
                                          mp_context=multiprocessing.get_context("spawn"),
                                          initializer=_install, initargs=(objective,))
 
-    def evaluate(self, candidates: np.ndarray, prune_above: float = math.inf
-                 ) -> list[Evaluation]:
-        """Results for the rows of ``candidates``, in order (``prune_above``:
-        :meth:`Objective.evaluate`)."""
+    def evaluate(self, candidates: np.ndarray) -> list[Evaluation]:
+        """Results for the rows of ``candidates``, in order."""
         chunks = _chunks(candidates, 2 * self._workers)
-        work = partial(_evaluate_installed, prune_above=prune_above)
-        return [result for chunk in self._pool.map(work, chunks) for result in chunk]
+        return [result for chunk in self._pool.map(_evaluate_installed, chunks)
+                for result in chunk]
 
     def close(self) -> None:
         """Shut the pool down."""
@@ -127,9 +118,8 @@ class ProcessPoolEvaluator:
 # -- Dask ------------------------------------------------------------------------------------
 
 
-def _evaluate_on_worker(rows: np.ndarray, objective: Objective,
-                        prune_above: float = math.inf) -> list[Evaluation]:
-    return objective.evaluate_many(rows, prune_above)
+def _evaluate_on_worker(rows: np.ndarray, objective: Objective) -> list[Evaluation]:
+    return objective.evaluate_many(rows)
 
 
 class DaskEvaluator:
@@ -151,13 +141,11 @@ class DaskEvaluator:
         self._workers = max(1, len(self._client.scheduler_info()["workers"]))
         [self._objective] = self._client.scatter([objective], broadcast=True, hash=False)
 
-    def evaluate(self, candidates: np.ndarray, prune_above: float = math.inf
-                 ) -> list[Evaluation]:
-        """Results for the rows of ``candidates``, in order (``prune_above``:
-        :meth:`Objective.evaluate`)."""
+    def evaluate(self, candidates: np.ndarray) -> list[Evaluation]:
+        """Results for the rows of ``candidates``, in order."""
         chunks = _chunks(candidates, 2 * self._workers)
         futures = self._client.map(_evaluate_on_worker, chunks, objective=self._objective,
-                                   prune_above=prune_above, pure=False)
+                                   pure=False)
         return [result for chunk in self._client.gather(futures) for result in chunk]
 
     def close(self) -> None:

@@ -57,20 +57,6 @@ Infeasible candidates
     samples, the evaluation scores :data:`PENALTY_RMSE` = 1000 K: finite, so the GA keeps
     ranking, and far above any feasible RMSE (temperature errors of a feasible model are tens of
     K at most), so penalised candidates always lose tournaments and never survive elitism.
-
-Pruning (``prune_above``)
-    The score is a sum over windows: with the biases profiled out, χ² = min_b [Σ_w f_w(b) +
-    prior(b)] ≥ min_b [Σ_{w done} f_w(b) + prior(b)] + Σ_{w left} min_b f_w(b), and each f_w ≥ 0
-    — a minimum of a sum is at least the sum of the minima. So the windows run so far (with
-    the bias priors and the parameters' prior terms) bound the score from below, and once that
-    bound exceeds ``prune_above`` the remaining windows cannot bring the score back under it:
-    :meth:`Objective.evaluate` stops there and returns a *pruned* :class:`Evaluation` — its
-    ``score`` the bound (a true lower bound, above the threshold), its RMSE NaN (not measured).
-    The GA passes its worst parent's score: an offspring above it can never survive the
-    elitist survival, so skipping its remaining windows leaves the GA's course unchanged
-    (:class:`~steamtwin.calibration.search.GeneticSearch`). The windows run in the order of
-    ``Objective.run_order``; the score of a candidate that is not pruned is computed in the
-    windows' own order, to the same bits whatever the run order.
 """
 
 from __future__ import annotations
@@ -114,12 +100,6 @@ PENALTY_RMSE = 1.0e3
 FITNESS_EPSILON = 1.0e-6
 """ε (K) in the method's fitness ``1 / (RMSE + ε)``."""
 
-PRUNE_MARGIN = 1.0e-9
-"""Relative margin by which a score's lower bound must exceed the threshold to prune: far
-above the round-off of the sums (7 200 samples × 3 sensors in float64, ~1e-13 relative, and
-the bias term's cancellation, Σpr²/χ² ≲ 10 on the plant's day), so that the bound computed in
-floating point never exceeds the score computed in floating point."""
-
 
 def fitness(rmse: float | np.ndarray) -> float | np.ndarray:
     """The method's fitness ``1 / (RMSE + ε)`` (1/K) of an RMSE in K."""
@@ -132,14 +112,11 @@ def fitness(rmse: float | np.ndarray) -> float | np.ndarray:
 class Evaluation:
     """One candidate's result: ``rmse`` (K; :data:`PENALTY_RMSE` if rejected), why, and the
     ``score`` the optimisers minimise (the posterior score; equal to ``rmse`` without priors
-    and with σ = 1 K; None = ``rmse``). ``pruned``: the evaluation stopped once a lower bound
-    of the score exceeded the caller's threshold (module docstring): ``score`` is that bound,
-    ``rmse`` NaN (not measured)."""
+    and with σ = 1 K; None = ``rmse``)."""
 
     rmse: float
     error: str = ""
     score: float | None = None
-    pruned: bool = False
 
     @property
     def value(self) -> float:
@@ -158,9 +135,7 @@ class Objective:
     the posterior score (module docstring) with ``priors`` (one per parameter, in
     PARAMETER_NAMES order; None = no prior term) and the likelihood tempered by
     ``tempering`` κ ∈ (0, 1] (χ² counts κ-fold; see
-    :func:`~steamtwin.calibration.posterior.likelihood_tempering`). ``run_order``: the order
-    :meth:`evaluate` runs the windows in (indices; None = as given), which matters only for
-    pruning.
+    :func:`~steamtwin.calibration.posterior.likelihood_tempering`).
 
     Picklable and self-contained: this is what evaluators send to their workers once.
     """
@@ -171,7 +146,6 @@ class Objective:
     weights: np.ndarray
     priors: tuple[ParameterPrior, ...] | None = None
     tempering: float = 1.0
-    run_order: tuple[int, ...] | None = None
 
     def prior_terms(self, x: Sequence[float]) -> np.ndarray:
         """z_k = (θ_k − m_k)/s_k per parameter (empty without priors)."""
@@ -292,73 +266,24 @@ class Objective:
         return [squared_errors(w, predict_window(self.simulator, w, params, self.sensors))
                 for w in self.windows]
 
-    def evaluate(self, x: Sequence[float], prune_above: float = math.inf) -> Evaluation:
+    def evaluate(self, x: Sequence[float]) -> Evaluation:
         """Score one decision vector; a rejected candidate scores :data:`PENALTY_RMSE`.
 
         The GA's and the surrogate's path: per window only each sensor's Σ r and Σ r² of the
         residuals r are formed (no residual arrays kept), the same sums and score as
-        :meth:`evaluate_with_residuals` gives. The windows run in :attr:`run_order`; before
-        each, once the score's lower bound from the windows run so far exceeds
-        ``prune_above`` (by :data:`PRUNE_MARGIN`), the rest are skipped and the evaluation is
-        pruned (module docstring)."""
-        order = range(len(self.windows)) if self.run_order is None else self.run_order
-        sums: list[tuple[np.ndarray, np.ndarray] | None] = [None] * len(self.windows)
+        :meth:`evaluate_with_residuals` gives."""
         try:
             params = self.parameters(x)
-            for index in order:
-                if math.isfinite(prune_above):
-                    bound = self._score_bound(x, sums)
-                    if bound > prune_above * (1.0 + PRUNE_MARGIN):
-                        return Evaluation(math.nan, score=bound, pruned=True)
-                window = self.windows[index]
+            sums = []
+            for window in self.windows:
                 predicted = predict_window(self.simulator, window, params, self.sensors)
                 window_sums = _window_sums(predicted, window.measured)
                 if not (np.isfinite(window_sums[0]).all() and np.isfinite(window_sums[1]).all()):
                     raise ValueError("the simulator returned non-finite temperatures")
-                sums[index] = window_sums
+                sums.append(window_sums)
         except ValueError as error:
             return _penalty(error)
         return self._evaluation(x, sums)
-
-    def _score_bound(self, x: Sequence[float],
-                     sums: Sequence[tuple[np.ndarray, np.ndarray] | None]) -> float:
-        """A lower bound of ``x``'s score from the windows whose Σ r, Σ r² are in ``sums``
-        (None: not run): their χ² with each bias profiled over them alone, under the bias
-        prior the whole score uses, plus the prior terms; the windows not run count 0
-        (module docstring)."""
-        chi2 = 0.0
-        a_b: dict[int, tuple[np.ndarray, np.ndarray]] = {}
-        for window, constants, done in zip(self.windows, self._window_constants, sums,
-                                            strict=True):
-            if done is None:
-                continue
-            sum_r, squares = done
-            chi2 += (constants.precision * squares).sum()
-            a = constants.precision * constants.counts
-            b = constants.precision * sum_r
-            if window.group in a_b:
-                a0, b0 = a_b[window.group]
-                a, b = a + a0, b + b0
-            a_b[window.group] = (a, b)
-        for group, (a, b) in a_b.items():
-            chi2 -= float((b**2 / (a + self._group_inverse[group])).sum())
-        return float(np.sqrt((max(chi2, 0.0) + (self.prior_terms(x) ** 2).sum()
-                              / self.tempering) / self._counted))
-
-    @cached_property
-    def _group_inverse(self) -> dict[int, np.ndarray]:
-        """Per instrument group the bias prior's 1/(κβ²) the score uses (:meth:`_group_sums`:
-        its last window's)."""
-        return {window.group: constants.bias_inverse
-                for window, constants in zip(self.windows, self._window_constants, strict=True)}
-
-    @cached_property
-    def _counted(self) -> float:
-        """Σ_w ω_w Σ_s w_s n_ws, summed as :meth:`_evaluation` sums it."""
-        counted = 0.0
-        for window, constants in zip(self.windows, self._window_constants, strict=True):
-            counted += window.weight * (self.weights * constants.counts).sum()
-        return counted
 
     def evaluate_with_residuals(self, x: Sequence[float]) -> tuple[Evaluation, np.ndarray | None]:
         """One model run of ``x``: its :class:`Evaluation` (as :meth:`evaluate`) and the
@@ -400,10 +325,9 @@ class Objective:
         return np.array([1.0 if s in SIGNALS and SIGNALS[s].si_unit == "K" else 0.0
                          for s in self.sensors])
 
-    def evaluate_many(self, rows: np.ndarray, prune_above: float = math.inf
-                      ) -> list[Evaluation]:
-        """Score each row of ``rows`` (n, 3) in order (``prune_above``: :meth:`evaluate`)."""
-        return [self.evaluate(row, prune_above) for row in np.atleast_2d(rows)]
+    def evaluate_many(self, rows: np.ndarray) -> list[Evaluation]:
+        """Score each row of ``rows`` (n, 3) in order."""
+        return [self.evaluate(row) for row in np.atleast_2d(rows)]
 
 
 class CalibrationProblem(Problem):
@@ -420,10 +344,8 @@ class CalibrationProblem(Problem):
     friction, heat-transfer coefficient), dimensionless, within the settings' bounds. Each
     generation's candidates go to ``evaluator`` as one batch (see
     :mod:`steamtwin.calibration.evaluation`; ``None`` evaluates in this process).
-    ``n_evaluations`` and ``n_penalised`` count evaluations, ``n_pruned`` those pruned
-    (:meth:`Objective.evaluate`); ``last_error`` keeps the last rejection's reason.
-    ``prune_above``: the threshold the candidates are scored under (+inf: none; the GA sets
-    its worst parent's score for each generation's offspring).
+    ``n_evaluations`` and ``n_penalised`` count evaluations; ``last_error`` keeps the last
+    rejection's reason.
     """
 
     def __init__(self, simulator: Simulator, windows: Sequence[pd.DataFrame],
@@ -457,8 +379,6 @@ class CalibrationProblem(Problem):
         self.evaluator = evaluator
         self.n_evaluations = 0
         self.n_penalised = 0
-        self.n_pruned = 0
-        self.prune_above = math.inf
         self.last_error: str | None = None
         low = np.array([self.parameter_bounds[n][0] for n in PARAMETER_NAMES])
         high = np.array([self.parameter_bounds[n][1] for n in PARAMETER_NAMES])
@@ -490,12 +410,12 @@ class CalibrationProblem(Problem):
 
     def evaluate_candidates(self, candidates: np.ndarray) -> np.ndarray:
         """Score of each row of ``candidates`` (n, 3), counted, via the evaluator (the RMSE in
-        K without priors and σ), pruned above :attr:`prune_above`."""
+        K without priors and σ)."""
         rows = np.atleast_2d(np.asarray(candidates, dtype=float))
         if self.evaluator is None:
-            results = self.objective.evaluate_many(rows, self.prune_above)
+            results = self.objective.evaluate_many(rows)
         else:
-            results = self.evaluator.evaluate(rows, self.prune_above)
+            results = self.evaluator.evaluate(rows)
         for result in results:
             self._count(result)
         return np.array([result.value for result in results])
@@ -517,7 +437,6 @@ class CalibrationProblem(Problem):
 
     def _count(self, result: Evaluation) -> None:
         self.n_evaluations += 1
-        self.n_pruned += result.pruned
         if result.penalised:
             self.n_penalised += 1
             self.last_error = result.error

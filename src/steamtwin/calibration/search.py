@@ -17,7 +17,6 @@ split of problem, algorithm and ``minimize``).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -41,11 +40,10 @@ __all__ = ["HISTORY_COLUMNS", "GeneticSearch", "SearchResult"]
 
 HISTORY_COLUMNS: tuple[str, ...] = (
     "generation", "best_rmse", "mean_rmse", "best_fitness", "mean_fitness", *PARAMETER_NAMES,
-    "evaluations", "penalised", "pruned", "remutations")
+    "evaluations", "penalised", "remutations")
 """Columns of a GA history row (``generation`` becomes the index of ``history_``).
 ``best_rmse``/``mean_rmse`` are the minimised objective: the RMSE (K) without priors and σ,
-otherwise the posterior score (:mod:`~steamtwin.calibration.objective`); ``evaluations``,
-``penalised`` and ``pruned`` count candidates so far (a pruned one ran only some windows)."""
+otherwise the posterior score (:mod:`~steamtwin.calibration.objective`)."""
 
 
 @dataclass(frozen=True)
@@ -69,14 +67,8 @@ class GeneticSearch:
     and ``crossover_eta``, polynomial ``mutation_probability`` (per variable; None = 1/3) and
     ``mutation_eta``, ``tournament_size``. ``checkpoint``: a file rewritten after every
     generation (:mod:`~steamtwin.calibration.checkpoint`); a run resumed from it ends with
-    the result of an uninterrupted one. ``prune``: score each generation's offspring under
-    the worst parent's score (:meth:`~steamtwin.calibration.objective.Objective.evaluate`
-    stops a candidate's windows once its score certainly exceeds it): the survival is
-    elitist (pymoo's ``FitnessSurvival`` keeps the best ``population`` of parents and
-    offspring), so such an offspring can never survive and the run takes the same course —
-    the same populations, history and result — with fewer window runs; only a candidate the
-    model would have rejected in a window it skipped counts as pruned, not penalised.
-    Arguments outside their range raise ``ValueError`` naming the argument, here.
+    the result of an uninterrupted one. Arguments outside their range raise ``ValueError``
+    naming the argument, here.
     """
 
     population: int = 50
@@ -87,7 +79,6 @@ class GeneticSearch:
     mutation_eta: float = 20.0
     tournament_size: int = 2
     checkpoint: str | Path | None = None
-    prune: bool = True
 
     mode = "ga"
     """The name of the strategy in the parameters file (``calibration.mode``)."""
@@ -101,9 +92,8 @@ class GeneticSearch:
         check_integer("generations", self.generations, 1)
 
     def course(self) -> dict[str, object]:
-        """Every setting that shapes the run's course (not the checkpoint's path, nor
-        pruning, which leaves the course as it is)."""
-        return {k: v for k, v in asdict(self).items() if k not in ("checkpoint", "prune")}
+        """Every setting that shapes the run's course (not the checkpoint's path)."""
+        return {k: v for k, v in asdict(self).items() if k != "checkpoint"}
 
     def record(self) -> dict[str, object]:
         """What the parameters file records of the search."""
@@ -139,14 +129,9 @@ class GeneticSearch:
             restore_algorithm(algorithm, state)
             rows = state.history
             problem.n_evaluations, problem.n_penalised = state.evaluations, state.penalised
-            problem.n_pruned = int(rows[-1]["pruned"]) if rows else 0
             problem.last_error = state.last_error
         while algorithm.has_next():
-            problem.prune_above = _worst_parent(algorithm) if self.prune else math.inf
-            try:
-                algorithm.next()
-            finally:
-                problem.prune_above = math.inf
+            algorithm.next()
             rows.append(_history_row(algorithm, problem, repair))
             if checkpoint is not None:
                 save_checkpoint(checkpoint, algorithm, problem, rows, digest)
@@ -159,13 +144,6 @@ class GeneticSearch:
             population=algorithm.pop.get("X").copy(),
             repair_counts={"out_of_bounds": repair.n_out_of_bounds,
                            "remutations": repair.n_remutations, "clipped": repair.n_clipped})
-
-
-def _worst_parent(algorithm: Algorithm) -> float:
-    """The worst score of the GA's current population (+inf before the initial one)."""
-    if not algorithm.is_initialized or algorithm.pop is None or len(algorithm.pop) == 0:
-        return math.inf
-    return float(np.max(algorithm.pop.get("F")[:, 0]))
 
 
 def _history_row(algorithm: Algorithm, problem: CalibrationProblem,
@@ -182,6 +160,5 @@ def _history_row(algorithm: Algorithm, problem: CalibrationProblem,
         **dict(zip(PARAMETER_NAMES, (float(v) for v in best.X), strict=True)),
         "evaluations": problem.n_evaluations,
         "penalised": problem.n_penalised,
-        "pruned": problem.n_pruned,
         "remutations": repair.n_remutations,
     }
