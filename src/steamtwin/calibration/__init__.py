@@ -11,37 +11,23 @@ them; :mod:`~steamtwin.calibration.objective`) with the method's real-coded GA
 (:mod:`~steamtwin.calibration.posterior`).
 Errors are ``ValueError`` subclasses: :class:`CalibrationError` when no candidate gave a finite
 RMSE, :class:`CheckpointError` for a checkpoint that cannot resume the run.
-The public objects are imported on first use (:mod:`steamtwin.lazy`): a GA worker, which
-imports :mod:`~steamtwin.calibration.evaluation` and the objective, does not load the posterior,
-the surrogate and their SciPy modules.
 """
 
-from steamtwin.lazy import lazy_exports
-
-_EXPORTS = {
-    "CalibrationError": "steamtwin.calibration.calibrator",
-    "Calibrator": "steamtwin.calibration.calibrator",
-    "CheckpointError": "steamtwin.calibration.checkpoint",
-    "RemutationRepair": "steamtwin.calibration.ga",
-    "make_ga": "steamtwin.calibration.ga",
-    "PENALTY_RMSE": "steamtwin.calibration.objective",
-    "CalibrationProblem": "steamtwin.calibration.objective",
-    "fitness": "steamtwin.calibration.objective",
-    "window_rmse": "steamtwin.calibration.objective",
-    "Posterior": "steamtwin.calibration.posterior",
-    "fit_map": "steamtwin.calibration.posterior",
-    "laplace_posterior": "steamtwin.calibration.posterior",
-    "GeneticSearch": "steamtwin.calibration.search",
-    "DEFAULT_SENSORS": "steamtwin.calibration.settings",
-    "THERMOCOUPLE_BIAS": "steamtwin.calibration.settings",
-    "ObjectiveSettings": "steamtwin.calibration.settings",
-    "SurrogateSearch": "steamtwin.calibration.surrogate",
-    "CalibrationWindow": "steamtwin.calibration.windowset",
-    "WindowSet": "steamtwin.calibration.windowset",
-    "WindowSource": "steamtwin.calibration.windowset",
-    "find_calibration_windows": "steamtwin.calibration.windowset",
-    "joint_window_set": "steamtwin.calibration.windowset",
-}
+from steamtwin.calibration.calibrator import CalibrationError, Calibrator
+from steamtwin.calibration.checkpoint import CheckpointError
+from steamtwin.calibration.ga import RemutationRepair, make_ga
+from steamtwin.calibration.objective import PENALTY_RMSE, CalibrationProblem, fitness, window_rmse
+from steamtwin.calibration.posterior import Posterior, fit_map, laplace_posterior
+from steamtwin.calibration.search import GeneticSearch
+from steamtwin.calibration.settings import DEFAULT_SENSORS, THERMOCOUPLE_BIAS, ObjectiveSettings
+from steamtwin.calibration.surrogate import SurrogateSearch
+from steamtwin.calibration.windowset import (
+    CalibrationWindow,
+    WindowSet,
+    WindowSource,
+    find_calibration_windows,
+    joint_window_set,
+)
 
 __all__ = [
     "DEFAULT_SENSORS",
@@ -67,4 +53,3 @@ __all__ = [
     "make_ga",
     "window_rmse",
 ]
-__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS, globals())
