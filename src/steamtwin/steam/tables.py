@@ -678,7 +678,10 @@ def enthalpy_ps_at(tables: SteamTables, i: int, t: float, s: float) -> float:
     return _enthalpy_ps(tables, i, t, s)
 
 
-@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+# inlined into its caller (the kernel's forward sweep, 12 calls a sample): handing the tables'
+# five arrays to a compiled call costs about a look-up; 6–8 % of a GA evaluation, the same bits
+# (docs/benchmarks.md, session 20)
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
 def isentropic_step_at(
     tables: SteamTables, i: int, t: float, h: float, x_out: float
 ) -> tuple[float, int, float, float]:
