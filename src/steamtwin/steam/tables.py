@@ -585,7 +585,10 @@ def _ph_cell(tables: SteamTables, i: int, t: float, h: float) -> tuple[int, floa
     return _locate_y(_ph_position(tables, i, t, h), tables.meta[_M_C_PH], tables.ph.shape[2])
 
 
-@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+# inlined into its callers (the kernel's throttle, control stage and acceptance, ~7 calls a
+# sample): 2–4 % of a GA evaluation, the same bits, ~+10 s of CPU for a cold compile
+# (docs/benchmarks.md, session 20)
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
 def ph_property_at(tables: SteamTables, prop: int, i: int, t: float, p: float, h: float) -> float:
     """As :func:`ph_property` at pressure p (Pa) already located as cell ``i``, coordinate ``t``."""
     if prop < 0 or prop >= tables.ph.shape[0]:
@@ -705,7 +708,10 @@ def pressure_in_range(tables: SteamTables, p: float) -> bool:
     return tables.meta[_M_P_MIN] <= p <= tables.meta[_M_P_MAX]
 
 
-@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH)
+# inlined into its callers (the kernel's throttle, control stage and acceptance, ~7 calls a
+# sample): 2–4 % of a GA evaluation, the same bits, ~+10 s of CPU for a cold compile
+# (docs/benchmarks.md, session 20)
+@njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
 def ph_property(tables: SteamTables, prop: int, p: float, h: float) -> float:
     """Property ``prop`` (one of PH_*) at p (Pa), h (J/kg); SI units; NaN for a bad ``prop``."""
     i, t = _locate_x(tables.meta, p)
