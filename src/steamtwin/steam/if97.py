@@ -24,7 +24,6 @@ Thermodynamic Properties of Water and Steam.
 from __future__ import annotations
 
 import numpy as np
-from CoolProp.CoolProp import PropsSI
 from numpy.typing import ArrayLike, NDArray
 
 from steamtwin.errors import ModelError
@@ -172,6 +171,15 @@ def _check_pt(p: ArrayLike, T: ArrayLike) -> tuple[FloatArray, FloatArray]:
 # --------------------------------------------------------------------------------------------
 
 
+def _props_si(*arguments: object) -> object:
+    """CoolProp's ``PropsSI``, imported on the first call: CoolProp's import takes ~2 s of
+    CPU (it loads every fluid), which every process importing the model paid, each GA
+    worker included, though a calibration's model runs never call it."""
+    from CoolProp.CoolProp import PropsSI as props_si
+
+    return props_si(*arguments)
+
+
 def _props_raw(out: str, n1: str, v1: FloatArray, n2: str, v2: FloatArray) -> FloatArray:
     """Vectorised PropsSI on broadcast inputs; failed elements are NaN (never raises)."""
     a, b = np.broadcast_arrays(v1, v2)
@@ -181,13 +189,13 @@ def _props_raw(out: str, n1: str, v1: FloatArray, n2: str, v2: FloatArray) -> Fl
     if fa.size == 0:
         return np.empty(shape)
     try:
-        res = np.asarray(PropsSI(out, n1, fa, n2, fb, FLUID), dtype=np.float64)
+        res = np.asarray(_props_si(out, n1, fa, n2, fb, FLUID), dtype=np.float64)
     except ValueError:
         # CoolProp raises (instead of returning inf) when a one-element vector fails.
         res = np.empty(fa.size)
         for i in range(fa.size):
             try:
-                res[i] = PropsSI(out, n1, float(fa[i]), n2, float(fb[i]), FLUID)
+                res[i] = _props_si(out, n1, float(fa[i]), n2, float(fb[i]), FLUID)
             except ValueError:
                 res[i] = np.nan
     res = res.reshape(shape)
@@ -221,7 +229,7 @@ def _coolprop_error(
     """SteamPropertyError carrying CoolProp's own message for one failed point."""
     if not why:
         try:
-            val = PropsSI(out, n1, x1, n2, x2, FLUID)
+            val = _props_si(out, n1, x1, n2, x2, FLUID)
             why = f"CoolProp returned {val!r}"
         except ValueError as exc:
             why = f"CoolProp: {exc}"
