@@ -587,7 +587,7 @@ def _ph_cell(tables: SteamTables, i: int, t: float, h: float) -> tuple[int, floa
 
 # inlined into its callers (the kernel's throttle, control stage and acceptance, ~7 calls a
 # sample): 2–4 % of a GA evaluation, the same bits, ~+10 s of CPU for a cold compile
-# (docs/benchmarks.md, session 20)
+# (docs/benchmarks.md, session 19)
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
 def ph_property_at(tables: SteamTables, prop: int, i: int, t: float, p: float, h: float) -> float:
     """As :func:`ph_property` at pressure p (Pa) already located as cell ``i``, coordinate ``t``."""
@@ -683,7 +683,7 @@ def enthalpy_ps_at(tables: SteamTables, i: int, t: float, s: float) -> float:
 
 # inlined into its caller (the kernel's forward sweep, 12 calls a sample): handing the tables'
 # five arrays to a compiled call costs about a look-up; 6–8 % of a GA evaluation, the same bits
-# (docs/benchmarks.md, session 20)
+# (docs/benchmarks.md, session 19)
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
 def isentropic_step_at(
     tables: SteamTables, i: int, t: float, h: float, x_out: float
@@ -710,7 +710,7 @@ def pressure_in_range(tables: SteamTables, p: float) -> bool:
 
 # inlined into its callers (the kernel's throttle, control stage and acceptance, ~7 calls a
 # sample): 2–4 % of a GA evaluation, the same bits, ~+10 s of CPU for a cold compile
-# (docs/benchmarks.md, session 20)
+# (docs/benchmarks.md, session 19)
 @njit(cache=True, nogil=True, error_model="numpy", fastmath=_FASTMATH, inline="always")
 def ph_property(tables: SteamTables, prop: int, p: float, h: float) -> float:
     """Property ``prop`` (one of PH_*) at p (Pa), h (J/kg); SI units; NaN for a bad ``prop``."""
