@@ -232,8 +232,8 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
     start = np.array([_section_values(fits[k][1]) for k in own]).reshape(-1, 5)
     pooled = len(own) < OWN_SHARE * len(fits)
     if pooled:  # too sparse per slab: flanks by geometry
-        z_own, start = _with_geometric_start(points, arc, edges_z, spacing, noise, window,
-                                             r_max, z_own, start)
+        z_own, start = _with_geometric_start(points, arc, edges_z, noise, window, r_max,
+                                             z_own, start)
     if not len(z_own):
         return [], [slab for slab, _, _ in fits], np.zeros(len(points), bool), np.full(
             len(points), np.nan), None
@@ -319,12 +319,12 @@ OWN_SHARE = 0.5
 
 
 def _with_geometric_start(points: np.ndarray, arc: np.ndarray, edges_z: np.ndarray,
-                          spacing: float, noise: float, window: tuple[float, float],
-                          r_max: float, z_own: np.ndarray, own: np.ndarray) -> tuple:
+                          noise: float, window: tuple[float, float], r_max: float,
+                          z_own: np.ndarray, own: np.ndarray) -> tuple:
     """The own circles' start values (heights ``z_own``, values ``own``) with the geometric
     starts of the slabs between (:func:`~steamtwin.geometry.edge_pooled.geometric_start`),
     by height."""
-    z_geometric, geometric = geometric_start(points, arc, edges_z, spacing, noise, window,
+    z_geometric, geometric = geometric_start(points, arc, edges_z, noise, window,
                                              (0.02 * r_max, 2.0 * r_max))
     height = edges_z[1] - edges_z[0]
     if len(z_own) and len(z_geometric):

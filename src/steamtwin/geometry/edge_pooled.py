@@ -27,8 +27,7 @@ flanks picked by ``s`` mix both faces ("flanks not straight", RMS 0.13–0.19 mm
 
 The per-slab values are only the start (median over ±:data:`START_SLABS` slabs, then the
 P-spline start of :func:`~steamtwin.geometry.edge_span.initial_coefficients`); the fit is the
-span model's. :func:`pooled_arc_points` is the density figure of that fit, used by
-:mod:`~steamtwin.geometry.edge_density` to refuse an edge that is too sparse even pooled.
+span model's.
 """
 
 from __future__ import annotations
@@ -38,14 +37,13 @@ import math
 import numpy as np
 
 from steamtwin.geometry.edge_circle import (
-    MIN_ARC_POINTS,
     arc_length_at,
     edge_distance_at,
     flank_plane,
     tangent_centre,
     tip_and_half_angle,
 )
-from steamtwin.geometry.edge_span import KNOT_SPACING, SpanEdgeModel
+from steamtwin.geometry.edge_span import SpanEdgeModel
 
 #: Fewest points of each geometric flank in a slab.
 MIN_FLANK_POINTS = 8
@@ -55,36 +53,14 @@ WEDGE_RANGE = (math.radians(2.0), math.radians(120.0))
 #: Slabs either side over which the geometric starts are smoothed (median): each comes from
 #: two or three arc points, so its radius scatters by tens of per cent.
 START_SLABS = 5
-#: Fewest arc points per knot span of the span model, ρ·π·r·Δz, for the pooled fit: the
-#: fewest points of an arc for a circle (edge_circle.MIN_ARC_POINTS).
-MIN_POOLED_ARC_POINTS = float(MIN_ARC_POINTS)
-
-
-def pooled_arc_points(per_mm: float, radius: float) -> float:
-    """Points on the half circle π·r of an edge within one knot span Δz of the span model,
-    ρ·π·r·Δz with ρ = ``per_mm``² (points per mm²; ``radius`` in m): the arc points the
-    pooled fit has per knot span."""
-    return per_mm**2 * math.pi * radius * 1e3 * KNOT_SPACING * 1e3
-
-
-def pooled_density_needed(radius: float) -> float:
-    """Points per mm² that put :data:`MIN_POOLED_ARC_POINTS` on the half circle of an edge of
-    ``radius`` (m) within one knot span."""
-    return MIN_POOLED_ARC_POINTS / (math.pi * radius * 1e3 * KNOT_SPACING * 1e3)
-
-
-def _geometric_slab(points: np.ndarray, candidates: np.ndarray, edge_mark: np.ndarray,
-                    spacing: float, window: tuple[float, float], noise: float,
-                    z_mid: float, bounds: tuple[float, float]) -> tuple | None:
-    """One slab's start from its geometry: (section values (cₓ, c_y, r, θ_left, θ_right),
-    median cloud arc length of the left and right faces' points) or None. ``candidates`` the
-    slab's side points near the edge, ``edge_mark`` (2,) a point near the edge, ``window``
-    (m) the flanks' distances behind the tip."""
+def _geometric_slab(points: np.ndarray, candidates: np.ndarray, axis: np.ndarray,
+                    window: tuple[float, float], noise: float, z_mid: float,
+                    bounds: tuple[float, float]) -> tuple | None:
+    """One slab's start from its geometry with the edge towards ``axis`` (2,): (section
+    values (cₓ, c_y, r, θ_left, θ_right), the left and right faces' points, the flanks' RMS
+    (m)) or None. ``candidates`` the slab's side points near the edge, ``window`` (m) the
+    flanks' distances behind the tip."""
     xy = points[candidates, :2]
-    mean = xy.mean(axis=0)
-    axis = np.linalg.svd(xy - mean, full_matrices=False)[2][0]
-    if axis @ (edge_mark - mean) < 0.0:
-        axis = -axis
     across = np.array([-axis[1], axis[0]])  # "left" looking towards the tip
     along = xy @ axis
     behind = float(np.percentile(along, 99.0)) - along  # robust to a stray point beyond
@@ -107,7 +83,9 @@ def _geometric_slab(points: np.ndarray, candidates: np.ndarray, edge_mark: np.nd
                                      - (points[f, 2] - z_mid) * d1[i])[fits[i][3]] ** 2)))
               for i, f in enumerate(faces))
     wedge = math.pi - math.acos(float(np.clip(normals[0] @ normals[1], -1.0, 1.0)))
-    if rms > noise or not WEDGE_RANGE[0] <= wedge <= WEDGE_RANGE[1]:
+    bisector = tip_and_half_angle(normals)[0]  # towards the lines' apex
+    if (rms > noise or not WEDGE_RANGE[0] <= wedge <= WEDGE_RANGE[1]
+            or bisector @ axis <= 0.0):  # the faces must close towards the tip
         return None
     # the radius whose circle's tip lies at the outermost point round the edge: the tip
     # moves along the bisector b by r·(1 − 1/sin γ) as r grows (γ the half wedge angle), so
@@ -117,16 +95,15 @@ def _geometric_slab(points: np.ndarray, candidates: np.ndarray, edge_mark: np.nd
     offsets = d0[None, :] + (points[tip, 2] - z_mid)[:, None] * d1[None, :]
     base = tangent_centre(normals, offsets, 0.0)
     step = tangent_centre(normals, np.zeros((1, 2)), 1.0)[0]
-    bisector = tip_and_half_angle(normals)[0]
     radius = float(np.clip(np.min(((points[tip, :2] - base) @ bisector)
                                   / (1.0 + step @ bisector)), *bounds))
     centre = tangent_centre(normals, d0[None, :], radius)[0]
     return [float(centre[0]), float(centre[1]), radius,
-            *np.arctan2(normals[:, 1], normals[:, 0]).tolist()], faces
+            *np.arctan2(normals[:, 1], normals[:, 0]).tolist()], faces, rms
 
 
-def geometric_start(points: np.ndarray, arc: np.ndarray, edges_z: np.ndarray, spacing: float,
-                    noise: float, window: tuple[float, float], bounds: tuple[float, float]
+def geometric_start(points: np.ndarray, arc: np.ndarray, edges_z: np.ndarray, noise: float,
+                    window: tuple[float, float], bounds: tuple[float, float]
                     ) -> tuple[np.ndarray, np.ndarray]:
     """Start values of the span model from each slab's geometry: heights (k,; m) and values
     (k, 5: centre x, y, radius (m), angles of the inward normals of the lines at negative
@@ -139,12 +116,17 @@ def geometric_start(points: np.ndarray, arc: np.ndarray, edges_z: np.ndarray, sp
     heights, values, faces = [], [], []
     for k in range(len(edges_z) - 1):
         members = candidates[(z >= edges_z[k]) & (z <= edges_z[k + 1])]
-        mark = members[np.abs(arc[members]) < window[0]]
-        if len(members) < 4 * MIN_FLANK_POINTS or not len(mark):
+        if len(members) < 4 * MIN_FLANK_POINTS:
             continue
         z_mid = 0.5 * (edges_z[k] + edges_z[k + 1])
-        found = _geometric_slab(points, members, np.median(points[mark, :2], axis=0),
-                                spacing, window, noise, z_mid, bounds)
+        # the edge lies at the end of the principal axis of the points near it towards which
+        # the faces close (the cloud's order, which put the points near the edge, can be off
+        # by millimetres on one face; where both ends close, the straighter flanks)
+        xy = points[members, :2]
+        axis = np.linalg.svd(xy - xy.mean(axis=0), full_matrices=False)[2][0]
+        tried = [_geometric_slab(points, members, sign * axis, window, noise, z_mid, bounds)
+                 for sign in (1.0, -1.0)]
+        found = min((f for f in tried if f is not None), key=lambda f: f[2], default=None)
         if found is not None:
             heights.append(z_mid)
             values.append(found[0])
