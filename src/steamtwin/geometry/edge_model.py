@@ -39,11 +39,15 @@ and hands the side's fit that model's points instead of the sparse edge's own:
   straight-line fit per slab, median over ±:data:`ORDER_SLABS` slabs, interpolated in z
   across slabs without enough flank points): the cloud's order is
   0.3–0.8 mm off within a millimetre of a thin edge, and neighbouring slabs that disagree make
-  the side's spline fold.
+  the side's spline fold;
+- where fewer than :data:`OWN_SHARE` of the slabs have a circle of their own (an edge below
+  about one point spacing across), every slab's start comes from its flanks found by geometry
+  and the cloud's order is read per face beyond the faces' mixing
+  (:mod:`~steamtwin.geometry.edge_pooled`).
 
-An edge is modelled where one of its slabs has a circle of its own, in the slabs where the span
-model's half circle holds fewer than :data:`MODEL_SAMPLES` points of the cloud's spacing;
-:attr:`EdgeModel.slabs` records each slab's own fit, or why it has none.
+An edge is modelled where one of its slabs has a circle (or a geometric start) of its own, in
+the slabs where the span model's half circle holds fewer than :data:`MODEL_SAMPLES` points of
+the cloud's spacing; :attr:`EdgeModel.slabs` records each slab's own fit, or why it has none.
 """
 
 from __future__ import annotations
