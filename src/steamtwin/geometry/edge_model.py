@@ -441,11 +441,7 @@ def _order_against_model(points: np.ndarray, arc: np.ndarray, members: np.ndarra
     xy = points[members, :2]
     u = arc_length_at(xy, *section)
     distance = edge_distance_at(xy, *section)[0]
-    # only the points the cloud's order puts on the model's face: below a spacing across the
-    # edge the order mixes the faces (edge_pooled), and a point it puts on the other face
-    # says nothing of the scale and shift
-    on_flank = ((np.abs(u) > cut + spacing) & (np.abs(distance) < TRIM_FLOOR)
-                & (np.sign(u) == np.sign(arc[members])))
+    on_flank = (np.abs(u) > cut + spacing) & (np.abs(distance) < TRIM_FLOOR)
     if on_flank.sum() < 2 * MIN_FLANK_POINTS:
         return math.nan, math.nan, math.nan
     scale, shift = np.polyfit(u[on_flank], arc[members[on_flank]], 1)
