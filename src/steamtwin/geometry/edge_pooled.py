@@ -2,7 +2,8 @@
 fitted pooled along the span.
 
 Below about one point spacing across an edge's half circle π·r (issue 19's slender blade:
-a 0.15-mm trailing edge at 0.23 mm spacing, 0.93 spacings across at 80k) a slab of
+a 0.15-mm trailing edge at 0.23 mm spacing, 0.93 spacings across at 80k;
+docs/benchmarks.md) a slab of
 :mod:`~steamtwin.geometry.edge_model` holds two or three points on the arc and no slab passes
 its own circle's checks; worse, the cloud's order ``s`` there is off by more than the flank
 window's start (measured on slender 80k seed 0, random pose, 2026-11-27: of the points the
@@ -11,13 +12,17 @@ flanks picked by ``s`` mix both faces ("flanks not straight", RMS 0.13–0.19 mm
 167 slabs). Two things still hold:
 
 - *the flanks by geometry:* in a slab the side points near the edge lie along the chord; the
-  principal axis of their section coordinates points to the edge, and a straight mid-line
-  through the points 1.4–5 mm behind the tip (offset across the axis against distance behind
-  the tip, a least-squares line) splits the two faces wherever the edge is thicker than the
-  noise — the construction of :func:`~steamtwin.geometry.edge_thickness.wedge_radius`. Each
-  face is then a flank plane (:func:`~steamtwin.geometry.edge_circle.flank_plane`) and the
-  circle tangent to both the geometric fit of all the slab's points
-  (:func:`~steamtwin.geometry.edge_circle.fit_tangent_circle`);
+  edge is the end of their principal axis towards which the faces close, and a straight
+  mid-line through the points 1.4–5 mm behind the tip (offset across the axis against
+  distance behind the tip, a least-squares line) splits the two faces wherever the edge is
+  thicker than the noise — the construction of :func:`~steamtwin.geometry.edge_thickness.
+  wedge_radius`. Each face is then a flank plane (:func:`~steamtwin.geometry.edge_circle.
+  flank_plane`), and the radius is that of the circle tangent to both whose tip lies at the
+  outermost point;
+- *the order per face:* 5–10 mm from the tip the order no longer mixes the faces (none of
+  slender's points there); there the cloud's arc length is read against the model's on each
+  face (:func:`face_order`), and every point within 10 mm of the tip gets its ``s`` from the
+  model through it;
 - *pooling along the span:* the span model (:mod:`~steamtwin.geometry.edge_span`) is fitted
   to the points of all slabs at once, so each of its knot spans (``KNOT_SPACING``) holds
   ρ·π·r·Δz points on the arc — ≈ 5 for the slender trailing edge at 80k (4.4 points per
