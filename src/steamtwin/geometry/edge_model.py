@@ -39,11 +39,15 @@ and hands the side's fit that model's points instead of the sparse edge's own:
   straight-line fit per slab, median over ±:data:`ORDER_SLABS` slabs, interpolated in z
   across slabs without enough flank points): the cloud's order is
   0.3–0.8 mm off within a millimetre of a thin edge, and neighbouring slabs that disagree make
-  the side's spline fold.
+  the side's spline fold;
+- where fewer than :data:`OWN_SHARE` of the slabs have a circle of their own (an edge below
+  about one point spacing across), every slab's start comes from its flanks found by geometry
+  and the cloud's order is read per face beyond the faces' mixing
+  (:mod:`~steamtwin.geometry.edge_pooled`).
 
-An edge is modelled where one of its slabs has a circle of its own, in the slabs where the span
-model's half circle holds fewer than :data:`MODEL_SAMPLES` points of the cloud's spacing;
-:attr:`EdgeModel.slabs` records each slab's own fit, or why it has none.
+An edge is modelled where one of its slabs has a circle (or a geometric start) of its own, in
+the slabs where the span model's half circle holds fewer than :data:`MODEL_SAMPLES` points of
+the cloud's spacing; :attr:`EdgeModel.slabs` records each slab's own fit, or why it has none.
 """
 
 from __future__ import annotations
@@ -64,6 +68,12 @@ from steamtwin.geometry.edge_circle import (
     refine_edge,
     tangent_centre,
     tip_and_half_angle,
+)
+from steamtwin.geometry.edge_pooled import (
+    face_order,
+    geometric_start,
+    order_arc,
+    pooled_members,
 )
 from steamtwin.geometry.edge_span import (
     SpanEdgeModel,
@@ -221,7 +231,14 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
             fits[k] = (replace(slab, used=False, reason="radius off its neighbours'"), None,
                        members)
     own = [k for k, (slab, _, _) in enumerate(fits) if slab.used]
-    if not own:
+    window, r_max = (start, reach), MODEL_SAMPLES * spacing / math.pi
+    z_own = np.array([fits[k][0].z for k in own])
+    start = np.array([_section_values(fits[k][1]) for k in own]).reshape(-1, 5)
+    pooled = len(own) < OWN_SHARE * len(fits)
+    if pooled:  # too sparse per slab: flanks by geometry
+        z_own, start = _with_geometric_start(points, arc, edges_z, noise, window, r_max,
+                                             z_own, start)
+    if not len(z_own):
         return [], [slab for slab, _, _ in fits], np.zeros(len(points), bool), np.full(
             len(points), np.nan), None
     # one model along the span (edge_span), started from the slabs' own circles, fitted to
@@ -229,10 +246,7 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
     # stray points, the flanks cut short next to a cap) are filled by the model
     z_range = (float(edges_z[0]), float(edges_z[-1]))
     knots = span_knots(z_range)
-    start = np.array([_section_values(fits[k][1]) for k in own])
     start[:, 3:] = np.unwrap(start[:, 3:], axis=0)
-    r_max = MODEL_SAMPLES * spacing / math.pi
-    z_own = np.array([fits[k][0].z for k in own])
     model, _ = fit_span_edge(points[near], SpanEdgeModel(
         knots, initial_coefficients(knots, z_own, start), z_range), (0.02 * r_max, 2.0 * r_max))
     # the flank window again, by arc length along this model rather than the cloud's order,
@@ -251,9 +265,15 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
     # (:func:`_order_against_model`), smoothed along the span: each slab's own is noisy by a
     # few tenths of a millimetre, and the side's spline, smooth over several slabs, folds
     # where neighbouring slabs disagree
-    order = np.array([_order_against_model(points, arc, members, model, spacing)
-                      for _, _, members in fits])
-    smooth = np.full((len(fits), 2), np.nan)
+    if pooled:  # the cloud's order mixes the faces: the model's members, an order per face
+        fits = [(slab, geometry, members) for (slab, geometry, _), members in zip(
+            fits, pooled_members(points, arc, model, reach, edges_z), strict=True)]
+        order = np.array([face_order(points, arc, members, model, reach)
+                          for _, _, members in fits])
+    else:
+        order = np.array([_order_against_model(points, arc, members, model, spacing)
+                          for _, _, members in fits])
+    smooth = np.full((len(fits), 3), np.nan)
     for k in range(len(fits)):
         around = order[max(0, k - ORDER_SLABS): k + ORDER_SLABS + 1]
         if np.isfinite(around[:, 0]).any():
@@ -270,9 +290,9 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
         elif len(known):
             slab = replace(slab, **fitted, used=True, reason="" if slab.used else
                            f"filled by the span model ({slab.reason})")
-            scale_shift = [np.interp(k, known, smooth[known, i]) for i in range(2)]
             applied = _apply_model(points, perimeter, members, model, spacing, centre_s,
-                                   (edges_z[k], edges_z[k + 1]), scale_shift)
+                                   (edges_z[k], edges_z[k + 1]), np.array(
+                                       [np.interp(k, known, smooth[known, i]) for i in range(3)]))
             pieces.append(applied[0])
             replaced[applied[1]] = True
             parameters[applied[2]] = applied[3]
@@ -293,6 +313,36 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
 #: while the span model itself holds to the cap planes (tests/geometry/test_edge_span.py):
 #: modelled to the caps, naca-twisted comes within 0.037 / 0.044 mm of the exact surface.
 ORDER_SLABS = 10
+
+
+#: Below this share of slabs with a circle of their own the edge is started from every
+#: slab's flanks found by geometry (:mod:`~steamtwin.geometry.edge_pooled`) and fitted pooled
+#: along the span: slender 80k's trailing edge (0.93 spacings across) had none of 167 (random
+#: pose, 2026-11-27). lean-sweep 80k seed 0's trailing edge has 34 of 80, good ones (0.25 →
+#: 0.2 mm as drawn): taken pooled at a share of 0.5 it failed, 0.128 mm (passes 0.079 without).
+OWN_SHARE = 0.1
+
+
+def _with_geometric_start(points: np.ndarray, arc: np.ndarray, edges_z: np.ndarray,
+                          noise: float, window: tuple[float, float], r_max: float,
+                          z_own: np.ndarray, own: np.ndarray) -> tuple:
+    """The own circles' start values (heights ``z_own``, values ``own``) with the geometric
+    starts of the slabs between (:func:`~steamtwin.geometry.edge_pooled.geometric_start`),
+    by height."""
+    z_geometric, geometric = geometric_start(points, arc, edges_z, noise, window,
+                                             (0.02 * r_max, 2.0 * r_max))
+    height = edges_z[1] - edges_z[0]
+    if len(z_own) and len(z_geometric):
+        apart = np.abs(z_geometric[:, None] - z_own[None, :]).min(axis=1) > 0.5 * height
+        z_geometric, geometric = z_geometric[apart], geometric[apart]
+        # the geometric angles on the own circles' branch (both are unwrapped along z)
+        shift = 2.0 * math.pi * np.round((np.median(own[:, 3:], axis=0)
+                                          - np.median(geometric[:, 3:], axis=0))
+                                         / (2.0 * math.pi)) if len(geometric) else 0.0
+        geometric[:, 3:] += shift
+    z = np.concatenate([z_own, z_geometric])
+    order = np.argsort(z)
+    return z[order], np.vstack([own, geometric])[order]
 
 
 def _window_by_model(points: np.ndarray, arc: np.ndarray, model: SpanEdgeModel,
@@ -379,34 +429,36 @@ def _model_cut(model: SpanEdgeModel, z: np.ndarray, spacing: float) -> tuple:
 
 
 def _order_against_model(points: np.ndarray, arc: np.ndarray, members: np.ndarray,
-                         model: SpanEdgeModel, spacing: float) -> tuple[float, float]:
-    """Scale and shift of the cloud's arc length (from its s) against the model's arc length
+                         model: SpanEdgeModel, spacing: float) -> tuple[float, float, float]:
+    """Shift and scale (twice: on either face, as :func:`~steamtwin.geometry.edge_pooled.
+    face_order`) of the cloud's arc length (from its s) against the model's arc length
     u on the flanks beyond the model (a straight-line fit: the slope is the local ratio of
     the parametrisation's length to the model's); NaN when too few flank points follow the
     model or the slope is off by more than a factor two."""
     if len(members) == 0:
-        return math.nan, math.nan
+        return math.nan, math.nan, math.nan
     section, cut = _model_cut(model, points[members, 2], spacing)
     xy = points[members, :2]
     u = arc_length_at(xy, *section)
     distance = edge_distance_at(xy, *section)[0]
     on_flank = (np.abs(u) > cut + spacing) & (np.abs(distance) < TRIM_FLOOR)
     if on_flank.sum() < 2 * MIN_FLANK_POINTS:
-        return math.nan, math.nan
+        return math.nan, math.nan, math.nan
     scale, shift = np.polyfit(u[on_flank], arc[members[on_flank]], 1)
-    return (float(scale), float(shift)) if 0.5 < scale < 2.0 else (math.nan, math.nan)
+    return (float(shift), float(scale), float(scale)) if 0.5 < scale < 2.0 else (
+        math.nan, math.nan, math.nan)
 
 
 def _apply_model(points: np.ndarray, perimeter: np.ndarray, members: np.ndarray,
                  model: SpanEdgeModel, spacing: float, centre_s: float,
-                 z_range: tuple[float, float], order: list[float]) -> tuple:
+                 z_range: tuple[float, float], order: np.ndarray) -> tuple:
     """Model points of a slab and the parameters of its cloud points: ((model points, s),
     replaced indices, the slab's indices, their s). The cloud's order s is unreliable next to a
     sparse edge: every point of the slab gets the s of its arc length u along the model,
-    through the (smoothed) ``order`` — scale and shift — of :func:`_order_against_model`.
+    through the (smoothed) ``order`` of :func:`_order_against_model` (shift, scale either
+    side, :func:`~steamtwin.geometry.edge_pooled.order_arc`).
     Model points lie in rings every spacing / RING_DENSITY over the slab, ARC_DENSITY per
     spacing along the model, out to the cut on either flank."""
-    scale, shift = order
     section, cut = _model_cut(model, points[members, 2], spacing)
     xy = points[members, :2]
     u = arc_length_at(xy, *section)
@@ -419,7 +471,7 @@ def _apply_model(points: np.ndarray, perimeter: np.ndarray, members: np.ndarray,
     fraction = np.linspace(-1.0, 1.0, max(5, math.ceil(2.0 * float(ring_cut.max())
                                                        * ARC_DENSITY / spacing) + 1))
     model_xyz, model_u = sample_span_edge(model, z, fraction, ring_cut)
-    model_s = np.mod(centre_s + (shift + scale * model_u) / length, 1.0)
+    model_s = np.mod(centre_s + order_arc(order, model_u) / length, 1.0)
     replaced = sector | (np.abs(u) < cut)  # the model's points, and stray points beyond it
-    members_s = np.mod(centre_s + (shift + scale * u) / length, 1.0)
+    members_s = np.mod(centre_s + order_arc(order, u) / length, 1.0)
     return (model_xyz, model_s), members[replaced], members, members_s
