@@ -84,9 +84,8 @@ class ReconstructionSettings:
     :mod:`~steamtwin.geometry.fit_guard`); ``penalty_factor`` multiplies the fit's smoothing
     penalty (the guard's repairs raise it); ``model_edges``: sparse edges as tangent circles,
     projected points replaced (:mod:`~steamtwin.geometry.edge_model`; off by default: with it
-    on the reference unit's 22 rows meet the accuracy limits, but its span fit costs 30–70 s
-    more CPU on the long rows, hp13 and ip6, and the time limit is not yet shown to hold,
-    docs/benchmarks.md);
+    on the reference unit's 22 rows meet the accuracy limits, but the whole row benchmark has
+    not yet been run with it, docs/benchmarks.md);
     ``min_edge_points_across``: an edge with fewer point spacings on its half circle is refused
     before the fits (:mod:`~steamtwin.geometry.edge_density`; None: not checked).
     """
