@@ -18,8 +18,8 @@ segmentation refuses). ``seconds`` is the wall time of the reconstruction,
 also counts the time the process waited for a core).
 
 Run: python benchmarks/bench_foreign_blades.py [--quick] [--members NAME ...]
-     [--points 40000 80000 planned] [--seeds N] [--pose blade|random] [--model-edges]
-     [--bridge-holes] [--out DIR]
+     [--points 40000 80000 planned] [--seeds N] [--pose blade|random] [--[no-]model-edges]
+     [--[no-]bridge-holes] [--out DIR]
 (--quick: 40k points, one seed; "planned": 4.5 points on the smallest edge's half circle.)
 Prints a table; writes foreign_blades.csv and .json to --out (default: the temporary
 directory, steamtwin-bench/foreign_blades).
@@ -73,7 +73,7 @@ def planned_points(member: str) -> int:
     return math.ceil(family_blade(member).mesh.area * EDGE_SAMPLES**2 / (math.pi * radius) ** 2)
 
 
-#: Settings of every reconstruction (``--model-edges`` turns the edge model on).
+#: Settings of every reconstruction (``--[no-]model-edges``, ``--[no-]bridge-holes``).
 SETTINGS = ReconstructionSettings()
 
 
@@ -188,15 +188,18 @@ if __name__ == "__main__":
                         help='cloud sizes: numbers of points or "planned" (planned_points)')
     parser.add_argument("--seeds", type=int, default=2)
     parser.add_argument("--pose", default="blade", choices=list(POSES))
-    parser.add_argument("--model-edges", action="store_true",
-                        help="fit sparse edges as circles tangent to both flanks (edge_model)")
+    parser.add_argument("--model-edges", action=argparse.BooleanOptionalAction, default=None,
+                        help="fit sparse edges as circles tangent to both flanks (edge_model; "
+                             "default: the library's)")
     parser.add_argument("--out", type=Path,
                         default=Path(tempfile.gettempdir()) / "steamtwin-bench" / "foreign_blades")
-    parser.add_argument("--bridge-holes", action="store_true",
+    parser.add_argument("--bridge-holes", action=argparse.BooleanOptionalAction, default=None,
                         help="the guard takes a vertex across a scan hole as bridged "
-                             "(GuardSettings.bridge_holes)")
+                             "(GuardSettings.bridge_holes; default: the library's)")
     args = parser.parse_args()
     sizes, seeds = (["40000"], 1) if args.quick else (args.points, args.seeds)
-    SETTINGS = ReconstructionSettings(model_edges=args.model_edges,
-                                      guard=GuardSettings(bridge_holes=args.bridge_holes))
+    SETTINGS = ReconstructionSettings(
+        **({} if args.model_edges is None else {"model_edges": args.model_edges}),
+        guard=GuardSettings(**({} if args.bridge_holes is None
+                               else {"bridge_holes": args.bridge_holes})))
     main(args.members, sizes, seeds, args.pose, args.out)

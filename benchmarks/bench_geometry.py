@@ -25,7 +25,7 @@ from steamtwin.geometry.meshing import blade_volume_mesh, mesh_quality, mesh_stl
 from steamtwin.geometry.preprocess import preprocess_views
 from steamtwin.geometry.preprocess_settings import PreprocessSettings
 from steamtwin.geometry.profile import Blade, make_blade
-from steamtwin.geometry.reconstruct import reconstruct_blade
+from steamtwin.geometry.reconstruct import ReconstructionSettings, reconstruct_blade
 from steamtwin.geometry.reconstruction_report import reconstruction_fidelity
 from steamtwin.geometry.registration import pose_errors
 from steamtwin.geometry.rigid import transform
@@ -35,7 +35,8 @@ from steamtwin.model.fom import FullOrderModel
 from steamtwin.spec import load_spec
 
 
-def main(row: str = "hp1", seed: int = 0, quick: bool = False, spheres: int = 4) -> dict:
+def main(row: str = "hp1", seed: int = 0, quick: bool = False, spheres: int = 4,
+         settings: ReconstructionSettings | None = None) -> dict:
     spec = load_spec("reference")
     blade = make_blade(spec, row)
     figures: dict = {"row": row, "seed": seed, "reference_spheres": spheres}
@@ -87,7 +88,7 @@ def main(row: str = "hp1", seed: int = 0, quick: bool = False, spheres: int = 4)
                               axis=1)
     figures["best_fit_vs_truth_pose_max_mm"] = float(distance.max()) * 1e3
 
-    figures["reconstruction"] = _reconstruction(blade, transform(fused, pose), quick)
+    figures["reconstruction"] = _reconstruction(blade, transform(fused, pose), quick, settings)
     figures["raw_views_to_stl_s"] = (figures["preprocess_s"] + figures["best_fit_s"]
                                      + figures["reconstruction"]["reconstruct_s"]
                                      + figures["reconstruction"]["write_stl_s"])
@@ -154,15 +155,17 @@ def _pose_recovery(scan: object, poses: list[np.ndarray]) -> dict:
             "root_cap_views": summary(poses, every[1::2])}
 
 
-def _reconstruction(blade: Blade, cloud: np.ndarray, quick: bool = False) -> dict:
-    """Surface reconstruction of the best-fitted fused cloud: patches, fit, deviation of the
-    STL from the exact blade, row metrics and a volume mesh of the STL (mm, s)."""
+def _reconstruction(blade: Blade, cloud: np.ndarray, quick: bool = False,
+                    settings: ReconstructionSettings | None = None) -> dict:
+    """Surface reconstruction of the best-fitted fused cloud (``settings``: the
+    reconstruction's, None for the defaults): patches, fit, deviation of the STL from the exact
+    blade, row metrics and a volume mesh of the STL (mm, s)."""
     import tempfile
     from pathlib import Path
 
     figures: dict = {}
     start = time.perf_counter()
-    result = reconstruct_blade(cloud)
+    result = reconstruct_blade(cloud, settings)
     figures["reconstruct_s"] = time.perf_counter() - start
     summary = result.summary()
     figures.update({key: summary[key] for key in (

@@ -9,7 +9,14 @@ time, each against the issue's limits (RMS <= 0.02 mm, max <= 0.1 mm, chord and 
 Each row is scanned with the points :func:`~steamtwin.geometry.scanner.planned_points` plans
 (150k for hp1, up to 485k for ip9), so the wall time is judged per 150k scanned points.
 
+A row the reconstruction refuses (``ReconstructionError``) is printed as refused with its
+message and the run goes on; the exit status is 1 when any row was refused or missed a limit.
+``--model-edges`` / ``--no-model-edges`` and ``--bridge-holes`` / ``--no-bridge-holes`` set
+``ReconstructionSettings.model_edges`` and ``GuardSettings.bridge_holes`` (default: the
+library's defaults).
+
 Run: python benchmarks/bench_geometry_rows.py [--seed N] [--rows hp1 ip9 ...] [--json FILE]
+     [--[no-]model-edges] [--[no-]bridge-holes]
 (about 23 min for all 22 rows on this 2-core machine).
 """
 
@@ -17,9 +24,13 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import warnings
+from dataclasses import replace
 
 from bench_geometry import main as bench_row
+from steamtwin.geometry.blade_cloud import ReconstructionError
+from steamtwin.geometry.reconstruct import ReconstructionSettings
 from steamtwin.geometry.row_sizing import ROWS
 from steamtwin.geometry.scanner import METHOD_SCAN_POINTS
 
@@ -44,20 +55,50 @@ def summarise(figures: dict) -> dict:
     return row
 
 
-def main() -> None:
+def settings_from(model_edges: bool | None, bridge_holes: bool | None
+                  ) -> ReconstructionSettings:
+    """The reconstruction's settings: the defaults, with ``model_edges`` and the guard's
+    ``bridge_holes`` where given (None: the default)."""
+    settings = ReconstructionSettings()
+    if model_edges is not None:
+        settings = replace(settings, model_edges=model_edges)
+    if bridge_holes is not None and settings.guard is not None:
+        settings = replace(settings, guard=replace(settings.guard, bridge_holes=bridge_holes))
+    return settings
+
+
+def main() -> int:
+    """Run the rows; 1 when any row was refused or missed a limit, else 0."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seed", type=int, default=0, help="scan seed")
     parser.add_argument("--rows", nargs="+", default=list(ROWS), choices=ROWS, metavar="ROW")
     parser.add_argument("--json", help="also write one JSON line per row to this file")
+    parser.add_argument("--model-edges", action=argparse.BooleanOptionalAction, default=None,
+                        help="fit sparse edges as circles tangent to both flanks "
+                             "(ReconstructionSettings.model_edges; default: the library's)")
+    parser.add_argument("--bridge-holes", action=argparse.BooleanOptionalAction, default=None,
+                        help="the guard takes a vertex across a scan hole as bridged "
+                             "(GuardSettings.bridge_holes; default: the library's)")
     arguments = parser.parse_args()
+    settings = settings_from(arguments.model_edges, arguments.bridge_holes)
     warnings.simplefilter("ignore")
-    print(f"seed {arguments.seed}\n")
+    guard = settings.guard
+    print(f"seed {arguments.seed}, model_edges {settings.model_edges}, bridge_holes "
+          f"{guard.bridge_holes if guard else None}\n")
     print("| row | scan points | RMS / max mm | chord mm | stagger ° | throat mm | poses mm / ° "
           "| raw → STL s (per 150k) | meets the limits |")
     print("|---|---|---|---|---|---|---|---|---|")
-    lines = []
+    lines, bad = [], 0
     for name in arguments.rows:
-        row = summarise(bench_row(name, arguments.seed, quick=True))
+        try:
+            row = summarise(bench_row(name, arguments.seed, quick=True, settings=settings))
+        except ReconstructionError as error:
+            bad += 1
+            print(f"| {name} | | | | | | | | refused: {error} |", flush=True)
+            lines.append(json.dumps({"row": name, "seed": arguments.seed,
+                                     "refused": str(error)}))
+            continue
+        bad += bool(row["failed"])
         verdict = "✓" if not row["failed"] else "✗ " + ", ".join(row["failed"])
         print(f"| {name} | {row['points']} | {row['rms']:.4f} / {row['max']:.3f} "
               f"| {row['chord']:.3f} | {row['stagger']:.3f} | {row['throat']:.3f} "
@@ -67,7 +108,7 @@ def main() -> None:
     if arguments.json:
         with open(arguments.json, "w", encoding="utf-8") as stream:
             stream.write("\n".join(lines) + "\n")
-
+    return 1 if bad else 0
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

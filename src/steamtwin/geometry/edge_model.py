@@ -47,7 +47,12 @@ and hands the side's fit that model's points instead of the sparse edge's own:
 
 An edge is modelled where one of its slabs has a circle (or a geometric start) of its own, in
 the slabs where the span model's half circle holds fewer than :data:`MODEL_SAMPLES` points of
-the cloud's spacing; :attr:`EdgeModel.slabs` records each slab's own fit, or why it has none.
+the cloud's spacing, and only if in every one of those slabs the arc's points lie on median
+within :data:`MODEL_BIAS` of the span model; otherwise the whole edge is left to the cloud's own
+points and order (a model continued from a few slabs over most of the span can stand far off
+the points: the reference unit's hp8, :func:`_model_off_points`; one edge's slabs modelled in
+part mix two orders, which cuts the edge, :data:`ORDER_SLABS`). :attr:`EdgeModel.slabs` records
+each slab's own fit, or why it has none.
 """
 
 from __future__ import annotations
@@ -102,6 +107,11 @@ SPAN_SPREAD = 0.1
 CUT_SPACINGS = 2.0
 #: Largest RMS of the arc's points about the circle, as a multiple of the flanks' RMS.
 ARC_RMS = 1.5
+#: Largest median distance (m) of a slab's arc points from the span model for the model to
+#: stand in for them: the circle fit's trim floor, above the scan noise (σ 0.017 mm). Measured
+#: (2026-11-27, worst slab of each modelled edge): the foreign-blade family's clouds that pass
+#: (40k, 80k, blade frame) 0.009–0.032 mm; hp8 (192k) 0.27 mm, hp9 0.011 mm.
+MODEL_BIAS = TRIM_FLOOR
 #: Model points along the arc and along the span, per point spacing.
 ARC_DENSITY = 2.0
 RING_DENSITY = 1.0
@@ -261,6 +271,12 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
     if 2 * len(window) >= len(near):
         model, _ = fit_span_edge(points[window], model, (0.02 * r_max, 2.0 * r_max))
     centres, radii, _ = model.at(np.array([slab.z for slab, _, _ in fits]))
+    off = _model_off_points(points, fits, model, radii, spacing)
+    if off is not None:  # the model stands off the cloud: the edge is left to the cloud
+        reason = (f"span model off the arc's points at z = {off[0] * 1e3:.1f} mm (median "
+                  f"{off[1] * 1e3:+.3f} mm)")
+        return [], [replace(slab, used=False, reason=reason) for slab, _, _ in fits], np.zeros(
+            len(points), bool), np.full(len(points), np.nan), None
     # the cloud's order along the edge, scale and shift of its arc length against the model's
     # (:func:`_order_against_model`), smoothed along the span: each slab's own is noisy by a
     # few tenths of a millimetre, and the side's spline, smooth over several slabs, folds
@@ -353,6 +369,29 @@ def _window_by_model(points: np.ndarray, arc: np.ndarray, model: SpanEdgeModel,
                                 & (points[:, 2] <= z_range[1]))
     section = model.at(points[candidates, 2])
     return candidates[np.abs(arc_length_at(points[candidates, :2], *section)) <= reach]
+
+
+def _model_off_points(points: np.ndarray, fits: list, model: SpanEdgeModel,
+                      radii: np.ndarray, spacing: float) -> tuple[float, float] | None:
+    """The first slab the model would stand in for (π·r below :data:`MODEL_SAMPLES` spacings)
+    whose arc points lie off the model, as (z, median signed distance; m), or None.
+
+    The span model is started from the slabs with a circle of their own and continued by its
+    P-splines over those without; where those are many and far from the others, the robust fit
+    does not bring the model back to the points within its evaluations (hp8 of the reference
+    unit, 192k points, 2026-11-27: 5 of 81 slabs with a circle of their own, all at 50–58 %
+    span, a 0.6-mm trailing edge between flanks 4° apart; the model 0.5–0.7 mm off the exact
+    surface over the last 10 % of span at either end, the STL refused 1.91 mm off). A model is
+    only as good as its fit to the points it replaces: on average over its half circle the
+    arc's points lie within the noise of it, :data:`MODEL_BIAS` (the median: robust to stray
+    points)."""
+    for k, (slab, _, members) in enumerate(fits):
+        if math.pi * radii[k] >= MODEL_SAMPLES * spacing or len(members) == 0:
+            continue
+        distance, sector = edge_distance_at(points[members, :2], *model.at(points[members, 2]))[:2]
+        if sector.sum() >= MIN_ARC_POINTS and not abs(np.median(distance[sector])) <= MODEL_BIAS:
+            return slab.z, float(np.median(distance[sector]))
+    return None
 
 
 def _section_values(geometry: tuple) -> list[float]:

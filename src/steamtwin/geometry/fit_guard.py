@@ -126,9 +126,9 @@ class GuardSettings:
     thick-impulse 80k seed 0 such a false alarm (0.29 mm where the fit is within 0.003 mm) was
     what started the repair that also removed a 0.33 mm bulge of the tip rim; since the rim
     zones are judged (:func:`rim_excursion`) the rim check starts it, and that cloud passes
-    with the bridging too. Off by default: with the model off the 80k family gives 6 pass / 1
-    fail / 5 refused with it (5 / 2 / 5 without), under the 8 passes that a flipped default
-    was to show (docs/benchmarks.md, "The guard at the cap rims").
+    with the bridging too. On by default, as the edge model (``ReconstructionSettings.
+    model_edges``) it goes with: with both on, the 80k family in random poses gives 9 pass /
+    0 fail / 3 refused (docs/benchmarks.md, "The edge model as the default again").
     ``cpu_budget`` (s of the process's CPU time, None: unlimited): a repair refit is started
     only when the reconstruction's CPU time so far plus the dearest refit's stays within it
     (:mod:`~steamtwin.geometry.repair_budget`; issue 19: ≤ 30 s per 80k-point cloud).
@@ -146,7 +146,7 @@ class GuardSettings:
     link_spacings: float = 3.0
     min_gap_points: int = 10
     cpu_budget: float | None = 30.0
-    bridge_holes: bool = False
+    bridge_holes: bool = True
 
 
 @dataclass(frozen=True)

@@ -83,8 +83,8 @@ class ReconstructionSettings:
     ``guard`` checks the surface against the cloud (None: not checked,
     :mod:`~steamtwin.geometry.fit_guard`); ``penalty_factor`` multiplies the fit's smoothing
     penalty (the guard's repairs raise it); ``model_edges``: sparse edges as tangent circles,
-    projected points replaced (:mod:`~steamtwin.geometry.edge_model`; off by default: it
-    refuses the reference unit's hp8 row, docs/benchmarks.md);
+    projected points replaced (:mod:`~steamtwin.geometry.edge_model`; on by default: all 22
+    rows of the reference unit within every limit, docs/benchmarks.md);
     ``min_edge_points_across``: an edge with fewer point spacings on its half circle is refused
     before the fits (:mod:`~steamtwin.geometry.edge_density`; None: not checked).
     """
@@ -101,7 +101,7 @@ class ReconstructionSettings:
     span_spacing: float = 1e-3
     guard: GuardSettings | None = field(default_factory=GuardSettings)
     penalty_factor: float = 1.0
-    model_edges: bool = False
+    model_edges: bool = True
     min_edge_points_across: float | None = MIN_POINTS_ACROSS
 
 
