@@ -53,6 +53,11 @@ points and order (a model continued from a few slabs over most of the span can s
 the points: the reference unit's hp8, :func:`_model_off_points`; one edge's slabs modelled in
 part mix two orders, which cuts the edge, :data:`ORDER_SLABS`). :attr:`EdgeModel.slabs` records
 each slab's own fit, or why it has none.
+
+Kept as one module because the slab fits, the span model's start, its check against the
+points and the cloud's order against it all read the same slab records and flank windows in
+one pass over an edge; the pooled start for edges too sparse per slab is apart
+(:mod:`~steamtwin.geometry.edge_pooled`).
 """
 
 from __future__ import annotations
