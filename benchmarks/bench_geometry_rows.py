@@ -110,5 +110,6 @@ def main() -> int:
             stream.write("\n".join(lines) + "\n")
     return 1 if bad else 0
 
+
 if __name__ == "__main__":
     sys.exit(main())

@@ -58,6 +58,8 @@ WEDGE_RANGE = (math.radians(2.0), math.radians(120.0))
 #: Slabs either side over which the geometric starts are smoothed (median): each comes from
 #: two or three arc points, so its radius scatters by tens of per cent.
 START_SLABS = 5
+
+
 def _geometric_slab(points: np.ndarray, candidates: np.ndarray, axis: np.ndarray,
                     window: tuple[float, float], noise: float, z_mid: float,
                     bounds: tuple[float, float]) -> tuple | None:
