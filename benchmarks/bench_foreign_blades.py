@@ -46,9 +46,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests" / "geometry
 
 from foreign_blades import FAMILY, compare_with_exact, family_blade, laser_cloud, random_pose
 
+from bench_geometry import settings_from
 from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.edge_density import check_edge_density
-from steamtwin.geometry.fit_guard import GuardSettings
 from steamtwin.geometry.frame import estimate_blade_frame, reconstruct_in_any_pose
 from steamtwin.geometry.reconstruct import (
     Reconstruction,
@@ -198,8 +198,5 @@ if __name__ == "__main__":
                              "(GuardSettings.bridge_holes; default: the library's)")
     args = parser.parse_args()
     sizes, seeds = (["40000"], 1) if args.quick else (args.points, args.seeds)
-    SETTINGS = ReconstructionSettings(
-        **({} if args.model_edges is None else {"model_edges": args.model_edges}),
-        guard=GuardSettings(**({} if args.bridge_holes is None
-                               else {"bridge_holes": args.bridge_holes})))
+    SETTINGS = settings_from(args.model_edges, args.bridge_holes)
     main(args.members, sizes, seeds, args.pose, args.out)

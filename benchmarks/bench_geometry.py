@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from dataclasses import replace
 
 import numpy as np
 
@@ -33,6 +34,18 @@ from steamtwin.geometry.scanner import ScannerSettings, planned_points, scan_bla
 from steamtwin.geometry.uncertainty import scan_uncertainty
 from steamtwin.model.fom import FullOrderModel
 from steamtwin.spec import load_spec
+
+
+def settings_from(model_edges: bool | None, bridge_holes: bool | None
+                  ) -> ReconstructionSettings:
+    """The reconstruction's settings: the defaults, with ``model_edges`` and the guard's
+    ``bridge_holes`` where given (None: the default)."""
+    settings = ReconstructionSettings()
+    if model_edges is not None:
+        settings = replace(settings, model_edges=model_edges)
+    if bridge_holes is not None and settings.guard is not None:
+        settings = replace(settings, guard=replace(settings.guard, bridge_holes=bridge_holes))
+    return settings
 
 
 def main(row: str = "hp1", seed: int = 0, quick: bool = False, spheres: int = 4,

@@ -26,11 +26,10 @@ import argparse
 import json
 import sys
 import warnings
-from dataclasses import replace
 
 from bench_geometry import main as bench_row
+from bench_geometry import settings_from
 from steamtwin.geometry.blade_cloud import ReconstructionError
-from steamtwin.geometry.reconstruct import ReconstructionSettings
 from steamtwin.geometry.row_sizing import ROWS
 from steamtwin.geometry.scanner import METHOD_SCAN_POINTS
 
@@ -53,18 +52,6 @@ def summarise(figures: dict) -> dict:
            "seconds": figures["raw_views_to_stl_s"] * METHOD_SCAN_POINTS / figures["scan_points"]}
     row["failed"] = [name for name, limit in LIMITS.items() if not row[name] <= limit]
     return row
-
-
-def settings_from(model_edges: bool | None, bridge_holes: bool | None
-                  ) -> ReconstructionSettings:
-    """The reconstruction's settings: the defaults, with ``model_edges`` and the guard's
-    ``bridge_holes`` where given (None: the default)."""
-    settings = ReconstructionSettings()
-    if model_edges is not None:
-        settings = replace(settings, model_edges=model_edges)
-    if bridge_holes is not None and settings.guard is not None:
-        settings = replace(settings, guard=replace(settings.guard, bridge_holes=bridge_holes))
-    return settings
 
 
 def main() -> int:
