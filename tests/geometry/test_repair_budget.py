@@ -47,7 +47,7 @@ def stand_ins(monkeypatch):
             pass
         return _Fit(points, segmentation, settings.penalty_factor)
 
-    monkeypatch.setattr(reconstruct, "reconstruct_blade", refit)
+    monkeypatch.setattr(reconstruct, "_reconstruct", refit)
     monkeypatch.setattr(reconstruct, "guard_surface",
                         lambda fit, settings: _report(state["sizes"][fit.penalty]))
     monkeypatch.setattr(reconstruct, "refusal_message",

@@ -53,12 +53,18 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import ConvexHull, cKDTree
+from threadpoolctl import threadpool_limits
 
 from steamtwin.geometry.blade_cloud import ReconstructionError, check_blade_cloud
 from steamtwin.geometry.fidelity import chord_line, farthest_pair, surface_samples
 from steamtwin.geometry.filters import local_frames
 from steamtwin.geometry.profile import Blade, reference_surface
-from steamtwin.geometry.reconstruct import Reconstruction, ReconstructionSettings, reconstruct_blade
+from steamtwin.geometry.reconstruct import (
+    BLAS_THREADS,
+    Reconstruction,
+    ReconstructionSettings,
+    reconstruct_blade,
+)
 
 #: Points whose normals are estimated (a random subset of larger clouds): enough for an axis
 #: to 0.01° (the scatter matrix averages thousands of side normals), seconds of k-NN PCA.
@@ -444,11 +450,13 @@ def reconstruct_in_any_pose(points: np.ndarray, settings: ReconstructionSettings
 
     Returns the reconstruction in the blade frame (m) and the frame; ``frame.to_scan`` takes
     its vertices back to the scan frame. A cloud already in a blade frame is reconstructed as
-    it is (``kept_scan_frame``).
+    it is (``kept_scan_frame``). Both steps run with ``reconstruct.BLAS_THREADS`` BLAS
+    thread(s).
     """
-    if frame is None:
-        frame = estimate_blade_frame(points, hub_end=hub_end, suction_side=suction_side)
-    return reconstruct_blade(frame.to_blade(points), settings), frame
+    with threadpool_limits(limits=BLAS_THREADS, user_api="blas"):
+        if frame is None:
+            frame = estimate_blade_frame(points, hub_end=hub_end, suction_side=suction_side)
+        return reconstruct_blade(frame.to_blade(points), settings), frame
 
 
 #: Rotation about the blade's x axis by 180°: the same frame with hub and tip swapped.

@@ -38,6 +38,7 @@ import math
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.bspline import AdaptiveSurfaceFit, PeriodicSurface, clamped_knots
@@ -69,6 +70,12 @@ from steamtwin.geometry.volume_mesh import REGIONS
 METRIC_SECTIONS = (("hub", 0.05), ("mid", 0.5), ("tip", 0.95))
 #: Points per group when measuring arc length along the sections (median of each group).
 GROUP = 7
+#: BLAS threads of a reconstruction. Its linear algebra is on short vectors (the norms and dot
+#: products inside scipy's LSMR, ~0.6 ms a call), where more threads only wait for each other:
+#: one edge-model call took 184 s of process CPU with OpenBLAS's default threads on a loaded
+#: 2-core machine and 34 s with one (docs/benchmarks.md, "A sparse edge pooled along the
+#: span"), and the guard's repair budget counts process CPU (:mod:`.repair_budget`).
+BLAS_THREADS = 1
 
 
 @dataclass(frozen=True)
@@ -168,7 +175,8 @@ class Reconstruction:
 
 def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | None = None,
                       segmentation: Segmentation | None = None) -> Reconstruction:
-    """Reconstruct a watertight blade from a cloud in the blade frame (m).
+    """Reconstruct a watertight blade from a cloud in the blade frame (m), with
+    :data:`BLAS_THREADS` BLAS thread(s).
 
     Raises :class:`~steamtwin.geometry.blade_cloud.ReconstructionError` naming the problem
     (empty, too small or flat cloud; missing caps or edges; an edge too sparse to fit,
@@ -176,7 +184,13 @@ def reconstruct_blade(points: np.ndarray, settings: ReconstructionSettings | Non
     misses part of it, :func:`guarded`).
     ``segmentation``: the cloud's, when already computed.
     """
-    settings = settings or ReconstructionSettings()
+    with threadpool_limits(limits=BLAS_THREADS, user_api="blas"):
+        return _reconstruct(points, settings or ReconstructionSettings(), segmentation)
+
+
+def _reconstruct(points: np.ndarray, settings: ReconstructionSettings,
+                 segmentation: Segmentation | None) -> Reconstruction:
+    """:func:`reconstruct_blade` within its BLAS limit."""
     budget = RepairBudget.start(settings.guard.cpu_budget if settings.guard else None)
     segmentation = segmentation or segment_blade(points, settings.segmentation)
     budget.mark()  # the refits repeat what follows
@@ -246,9 +260,9 @@ def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings,
             break
         budget.mark()
         try:
-            repaired = reconstruct_blade(reconstruction.points,
-                                         replace(settings, penalty_factor=factor, guard=None),
-                                         reconstruction.segmentation)
+            repaired = _reconstruct(reconstruction.points,
+                                    replace(settings, penalty_factor=factor, guard=None),
+                                    reconstruction.segmentation)
         except ReconstructionError:
             break  # the stronger penalty misses the cloud: refuse with the defect found
         trial = guard_surface(repaired, settings.guard)

@@ -13,7 +13,9 @@ cloud that passes at its first fit never meets the budget; one whose repair pass
 long as the first fit takes less than 1 / (1 + REFIT_MARGIN) of the budget (12 s of 30).
 
 CPU time is the process's (``time.process_time``, all threads), so that a machine shared with
-other work does not change which repairs are tried.
+other work does not change which repairs are tried; the reconstruction runs with one BLAS
+thread (``reconstruct.BLAS_THREADS``), whose default threads would otherwise count their
+spinning while they wait for a core of a loaded machine.
 """
 
 from __future__ import annotations
