@@ -18,7 +18,8 @@ segmentation refuses). ``seconds`` is the wall time of the reconstruction,
 also counts the time the process waited for a core).
 
 Run: python benchmarks/bench_foreign_blades.py [--quick] [--members NAME ...]
-     [--points 40000 80000 planned] [--seeds N] [--pose blade|random] [--[no-]model-edges]
+     [--points 40000 80000 planned] [--seeds N] [--first-seed K] [--pose blade|random]
+     [--[no-]model-edges]
      [--[no-]bridge-holes] [--out DIR]
 (--quick: 40k points, one seed; "planned": 4.5 points on the smallest edge's half circle.)
 Prints a table; writes foreign_blades.csv and .json to --out (default: the temporary
@@ -154,7 +155,8 @@ def _cell(value: object) -> str:
     return f"{value:.4f}" if isinstance(value, float) else str(value)
 
 
-def main(members: list[str], sizes: list[str], seeds: int, pose: str, out: Path) -> list[dict]:
+def main(members: list[str], sizes: list[str], seeds: range, pose: str, out: Path
+         ) -> list[dict]:
     rows = []
     header = ("member", "points", "seed", "outcome", "watertight", "rms_mm", "max_mm",
               "back_max_mm", "worst_at", "seconds", "cpu_seconds", "edge_across", "refused")
@@ -162,7 +164,7 @@ def main(members: list[str], sizes: list[str], seeds: int, pose: str, out: Path)
     for member in members:
         for size in sizes:
             points = planned_points(member) if size == "planned" else int(size)
-            for seed in range(seeds):
+            for seed in seeds:
                 row = run_case(member, points, seed, pose)
                 rows.append(row)
                 print(" | ".join(_cell(row[key]) for key in header), flush=True)
@@ -186,7 +188,9 @@ if __name__ == "__main__":
     parser.add_argument("--members", nargs="+", default=list(FAMILY), choices=list(FAMILY))
     parser.add_argument("--points", nargs="+", default=["40000", "80000"],
                         help='cloud sizes: numbers of points or "planned" (planned_points)')
-    parser.add_argument("--seeds", type=int, default=2)
+    parser.add_argument("--seeds", type=int, default=2, help="clouds per member and size")
+    parser.add_argument("--first-seed", type=int, default=0,
+                        help="seed of the first cloud (e.g. --seeds 2 --first-seed 2: seeds 2, 3)")
     parser.add_argument("--pose", default="blade", choices=list(POSES))
     parser.add_argument("--model-edges", action=argparse.BooleanOptionalAction, default=None,
                         help="fit sparse edges as circles tangent to both flanks (edge_model; "
@@ -197,6 +201,7 @@ if __name__ == "__main__":
                         help="the guard takes a vertex across a scan hole as bridged "
                              "(GuardSettings.bridge_holes; default: the library's)")
     args = parser.parse_args()
-    sizes, seeds = (["40000"], 1) if args.quick else (args.points, args.seeds)
+    sizes, count = (["40000"], 1) if args.quick else (args.points, args.seeds)
     SETTINGS = settings_from(args.model_edges, args.bridge_holes)
-    main(args.members, sizes, seeds, args.pose, args.out)
+    main(args.members, sizes, range(args.first_seed, args.first_seed + count), args.pose,
+         args.out)
