@@ -334,8 +334,8 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
 #: sample deeper than R/13 (below that it is within the limit anyway); a beak beyond an edge
 #: line is never surrounded, unless the line turns outward by more than 1 in 5 along the span
 #: (the former rule's reach). Measured on compressor-dca 80k seed 0 (random pose): the 29
-#: false-alarm vertices in its holes at 5 % span have half-plane depth 0 within 3 d, 0–14
-#: (one vertex 0) within 3 × their excursion, ≥ 13 within 5 d.
+#: false-alarm vertices in its holes at 1–3 mm span have half-plane depth 0 within 2 d and
+#: 0–17 within 5 × their excursion (the former rule's reach), 13–1018 within 5 d.
 BRIDGE_REACH = 5.0
 #: Fewest points in every half of a sample's tangent plane (its half-plane depth; Tukey 1975,
 #: "Mathematics and the picturing of data", Proc. ICM 2:523) that make it surrounded: a stray
