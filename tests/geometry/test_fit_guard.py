@@ -18,6 +18,7 @@ from steamtwin.geometry.fit_guard import (
     fit_circle,
     guard_surface,
     local_excursion,
+    remnants,
 )
 from steamtwin.geometry.profile import cap_triangles, reference_surface
 from steamtwin.geometry.reconstruct import ReconstructionSettings, reconstruct_blade, regions_at
@@ -162,6 +163,31 @@ def test_an_isolated_vertex_counts_beyond_the_ceiling(dense_hp1, region: str, si
     assert bool(report.defects) == caught
     if caught:
         assert report.defects[0].vertices == 1 and report.defects[0].region == region
+
+
+def _single(reconstruction, region: str, size: float):
+    """The reconstruction with one vertex at mid-span of ``region`` out by ``size`` (m)."""
+    planted = _planted(reconstruction, region, size)
+    moved = np.flatnonzero(np.any(planted.vertices != reconstruction.vertices, axis=1))
+    middle = moved[np.argmax(np.linalg.norm(planted.vertices[moved]
+                                            - reconstruction.vertices[moved], axis=1))]
+    vertices = reconstruction.vertices.copy()
+    vertices[middle] = planted.vertices[middle]
+    return dataclasses.replace(reconstruction, vertices=vertices)
+
+
+def test_what_a_repair_leaves_of_a_defect_counts_however_small(dense_hp1) -> None:
+    """After a repair one vertex still out where the first fit's defect lay is its remnant, not
+    an isolated false alarm; one vertex out elsewhere is not."""
+    first = guard_surface(_planted(dense_hp1, "suction_side", 0.5e-3))
+    assert first.defects and first.defects[0].region == "suction_side"
+    repaired = _single(dense_hp1, "suction_side", 0.3e-3)
+    report = guard_surface(repaired)
+    assert not report.defects  # one vertex alone: below the ceiling (isolated_limit)
+    left = remnants(repaired, report, first.defects)
+    assert len(left) == 1 and left[0].vertices == 1 and left[0].region == "suction_side"
+    elsewhere = _single(dense_hp1, "pressure_side", 0.3e-3)
+    assert not remnants(elsewhere, guard_surface(elsewhere), first.defects)
 
 
 def test_a_scan_hole_is_no_defect(dense_hp1) -> None:

@@ -45,7 +45,7 @@ def test_a_surface_across_a_hole_through_an_edge_is_not_beyond_the_data() -> Non
     without, _ = local_excursion(samples, sample_normals, points[upper], normals[upper],
                                  extent_points=points)
     with_axis, _ = local_excursion(samples, sample_normals, points[upper], normals[upper],
-                                   extent_points=points, span_axis=np.array([0.0, 0.0, 1.0]))
+                                   extent_points=points, bridge_holes=True)
     assert without[0] > 0.2e-3  # the extent alone: beyond the points round the hole
     assert with_axis[0] < 0.03e-3  # bridged: points above and below reach as far out
     assert with_axis[1] == without[1] > 0.3e-3  # the beak stays (0.35 mm beyond the tip)

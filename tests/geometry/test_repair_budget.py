@@ -50,6 +50,7 @@ def stand_ins(monkeypatch):
     monkeypatch.setattr(reconstruct, "_reconstruct", refit)
     monkeypatch.setattr(reconstruct, "guard_surface",
                         lambda fit, settings: _report(state["sizes"][fit.penalty]))
+    monkeypatch.setattr(reconstruct, "remnants", lambda fit, report, earlier: [])
     monkeypatch.setattr(reconstruct, "refusal_message",
                         lambda report, points, segmentation: report.defects[0].describe())
     return calls, state

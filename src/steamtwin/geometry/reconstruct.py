@@ -49,6 +49,7 @@ from steamtwin.geometry.fit_guard import (
     GuardSettings,
     guard_surface,
     refusal_message,
+    remnants,
     sparse_edges,
 )
 from steamtwin.geometry.mesh_sections import check_closed
@@ -244,9 +245,11 @@ def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings,
     guard_surface`); a surface off the cloud or missing part of it is refitted with the
     guard's stronger penalties in turn (a beak is an overshoot of the spline where few points
     hold it), refused with :class:`ReconstructionError` saying where and how far when none
-    passes. The repairs stop at one that does not shrink the worst defect (more penalty only
-    smooths further from the cloud), or when one more would overrun ``GuardSettings.
-    cpu_budget`` (:mod:`~steamtwin.geometry.repair_budget`; default: from now)."""
+    passes; a repair passes only without a vertex beyond the limit where the first fit's
+    defects lay (:func:`~steamtwin.geometry.fit_guard.remnants`). The repairs stop at one that
+    does not shrink the worst defect (more penalty only smooths further from the cloud), or
+    when one more would overrun ``GuardSettings.cpu_budget``
+    (:mod:`~steamtwin.geometry.repair_budget`; default: from now)."""
     if settings.guard is None:
         return reconstruction
     budget = budget or RepairBudget.start(settings.guard.cpu_budget)
@@ -254,7 +257,7 @@ def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings,
     budget.measure()
     if not report.failed:
         return replace(reconstruction, guard=replace(report, repairs=settings.penalty_factor))
-    first = report
+    first, worst = report, report.worst
     for factor in [f for f in settings.guard.penalty_factors if f > settings.penalty_factor]:
         if not budget.allows_refit():
             break
@@ -266,12 +269,14 @@ def guarded(reconstruction: Reconstruction, settings: ReconstructionSettings,
         except ReconstructionError:
             break  # the stronger penalty misses the cloud: refuse with the defect found
         trial = guard_surface(repaired, settings.guard)
+        left = remnants(repaired, trial, first.defects)  # of any size where a defect was
         budget.measure()
-        if not trial.failed:
+        if not trial.failed and not left:
             return replace(repaired, guard=replace(trial, repairs=factor))
-        if trial.worst >= report.worst:
+        trial_worst = max([trial.worst] + [d.size for d in left])
+        if trial_worst >= worst:
             break
-        report = trial
+        worst = trial_worst
     raise ReconstructionError(refusal_message(first, reconstruction.points,
                                               reconstruction.segmentation))
 
