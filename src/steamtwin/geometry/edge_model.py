@@ -79,6 +79,7 @@ from steamtwin.geometry.edge_circle import (
     tangent_centre,
     tip_and_half_angle,
 )
+from steamtwin.geometry.edge_nose import nose_refit
 from steamtwin.geometry.edge_pooled import (
     face_order,
     geometric_start,
@@ -277,6 +278,11 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
         model, _ = fit_span_edge(points[window], model, (0.02 * r_max, 2.0 * r_max))
     centres, radii, _ = model.at(np.array([slab.z for slab, _, _ in fits]))
     off = _model_off_points(points, fits, model, radii, spacing)
+    if off is not None:  # flanks that curve within the window: a nose (edge_nose)
+        model = nose_refit(points, _window_by_model(points, arc, model, 2.0 * reach, z_range),
+                           model, spacing, (0.02 * r_max, 2.0 * r_max))
+        centres, radii, _ = model.at(np.array([slab.z for slab, _, _ in fits]))
+        off = _model_off_points(points, fits, model, radii, spacing)
     if off is not None:  # the model stands off the cloud: the edge is left to the cloud
         reason = (f"span model off the arc's points at z = {off[0] * 1e3:.1f} mm (median "
                   f"{off[1] * 1e3:+.3f} mm)")
