@@ -63,7 +63,6 @@ one pass over an edge; the pooled start for edges too sparse per slab is apart
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -95,7 +94,6 @@ from steamtwin.geometry.edge_span import (
     sample_span_edge,
     span_knots,
 )
-from steamtwin.geometry.sections import slab_median
 from steamtwin.geometry.volume_mesh import REGIONS
 
 #: An edge is modelled where its half circle π·r holds fewer than this many point spacings.
@@ -181,20 +179,6 @@ def _circular(values: np.ndarray) -> np.ndarray:
     return np.mod(values + 0.5, 1.0) - 0.5
 
 
-#: Height (m) of the slabs along the span in which the edge's side parameter is found (median
-#: of its points'): the edge's s moves with the twist — slender 80k seed 1 (random pose,
-#: 2026-11-27) has its leading edge at s 0.43–0.52 over the span, and with one s for the whole
-#: edge its top 25 mm lay beyond the flank window (±5 mm of arc, ±0.07 of s).
-CENTRE_SLAB = 10e-3
-
-
-def _edge_centre(z: np.ndarray, offsets: np.ndarray, base: float
-                 ) -> Callable[[np.ndarray], np.ndarray]:
-    """The edge's side parameter along the span: medians of its points' ``offsets`` (s − base,
-    circular) at heights ``z`` (m) in :data:`CENTRE_SLAB` slabs, interpolated, plus ``base``."""
-    return lambda at: np.mod(base + slab_median(z, offsets, at, CENTRE_SLAB), 1.0)
-
-
 def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labels: np.ndarray,
                        perimeter: np.ndarray, spacing: float, noise: float = 0.03e-3
                        ) -> EdgeModel:
@@ -214,8 +198,8 @@ def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labe
         if on.sum() < MIN_ARC_POINTS:
             continue
         base = 0.0 if edge == "trailing_edge" else 0.5
-        result = _model_edge(points, s, mask, perimeter, spacing, noise, edge,
-                             _edge_centre(points[on, 2], _circular(s[on] - base), base))
+        centre_s = float(np.mod(base + np.median(_circular(s[on] - base)), 1.0))
+        result = _model_edge(points, s, mask, perimeter, spacing, noise, edge, centre_s)
         pieces += result[0]
         slabs += result[1]
         replaced |= result[2]
@@ -229,13 +213,12 @@ def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labe
 
 
 def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: np.ndarray,
-                spacing: float, noise: float, edge: str,
-                centre_s: Callable[[np.ndarray], np.ndarray]) -> tuple:
+                spacing: float, noise: float, edge: str, centre_s: float) -> tuple:
     """Slabs of one edge: (model point pieces, slab records, replaced mask, parameters, span
     model or None). The slabs next to a cap are modelled like the others (the span model
     holds there, :data:`ORDER_SLABS`)."""
     arc = np.full(len(points), np.inf)
-    arc[mask] = _circular(s[mask] - centre_s(points[mask, 2])) * perimeter[mask]  # (m)
+    arc[mask] = _circular(s[mask] - centre_s) * perimeter[mask]  # signed arc length (m)
     # the half circle of a modelled edge is shorter than MODEL_SAMPLES spacings: its tangent
     # points lie within π r / 2 < MODEL_SAMPLES·spacing / 2 of the edge's middle
     start = 0.5 * MODEL_SAMPLES * spacing + 2.0 * spacing
@@ -523,8 +506,7 @@ def _order_against_model(points: np.ndarray, arc: np.ndarray, members: np.ndarra
 
 
 def _apply_model(points: np.ndarray, perimeter: np.ndarray, members: np.ndarray,
-                 model: SpanEdgeModel, spacing: float,
-                 centre_s: Callable[[np.ndarray], np.ndarray],
+                 model: SpanEdgeModel, spacing: float, centre_s: float,
                  z_range: tuple[float, float], order: np.ndarray) -> tuple:
     """Model points of a slab and the parameters of its cloud points: ((model points, s),
     replaced indices, the slab's indices, their s). The cloud's order s is unreliable next to a
@@ -545,7 +527,7 @@ def _apply_model(points: np.ndarray, perimeter: np.ndarray, members: np.ndarray,
     fraction = np.linspace(-1.0, 1.0, max(5, math.ceil(2.0 * float(ring_cut.max())
                                                        * ARC_DENSITY / spacing) + 1))
     model_xyz, model_u = sample_span_edge(model, z, fraction, ring_cut)
-    model_s = np.mod(centre_s(model_xyz[:, 2]) + order_arc(order, model_u) / length, 1.0)
+    model_s = np.mod(centre_s + order_arc(order, model_u) / length, 1.0)
     replaced = sector | (np.abs(u) < cut)  # the model's points, and stray points beyond it
-    members_s = np.mod(centre_s(points[members, 2]) + order_arc(order, u) / length, 1.0)
+    members_s = np.mod(centre_s + order_arc(order, u) / length, 1.0)
     return (model_xyz, model_s), members[replaced], members, members_s
