@@ -48,10 +48,12 @@ and hands the side's fit that model's points instead of the sparse edge's own:
 An edge is modelled where one of its slabs has a circle (or a geometric start) of its own, in
 the slabs where the span model's half circle holds fewer than :data:`MODEL_SAMPLES` points of
 the cloud's spacing, and only if in every one of those slabs the arc's points lie on median
-within :data:`MODEL_BIAS` of the span model; otherwise the whole edge is left to the cloud's own
-points and order (a model continued from a few slabs over most of the span can stand far off
-the points: the reference unit's hp8, :func:`_model_off_points`; one edge's slabs modelled in
-part mix two orders, which cuts the edge, :data:`ORDER_SLABS`). :attr:`EdgeModel.slabs` records
+within :data:`MODEL_BIAS` of the span model (a model that is not is first refitted over a
+window of a few radii, for a nose whose flanks curve: :mod:`~steamtwin.geometry.edge_nose`);
+otherwise the whole edge is left to the cloud's own points and order (a model continued from
+a few slabs over most of the span can stand far off the points: the reference unit's hp8,
+:func:`_model_off_points`; one edge's slabs modelled in part mix two orders, which cuts the
+edge, :data:`ORDER_SLABS`). :attr:`EdgeModel.slabs` records
 each slab's own fit, or why it has none.
 
 Kept as one module because the slab fits, the span model's start, its check against the
