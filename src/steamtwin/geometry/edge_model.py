@@ -48,10 +48,12 @@ and hands the side's fit that model's points instead of the sparse edge's own:
 An edge is modelled where one of its slabs has a circle (or a geometric start) of its own, in
 the slabs where the span model's half circle holds fewer than :data:`MODEL_SAMPLES` points of
 the cloud's spacing, and only if in every one of those slabs the arc's points lie on median
-within :data:`MODEL_BIAS` of the span model; otherwise the whole edge is left to the cloud's own
-points and order (a model continued from a few slabs over most of the span can stand far off
-the points: the reference unit's hp8, :func:`_model_off_points`; one edge's slabs modelled in
-part mix two orders, which cuts the edge, :data:`ORDER_SLABS`). :attr:`EdgeModel.slabs` records
+within :data:`MODEL_BIAS` of the span model (a model that is not is first refitted over a
+window of a few radii, for a nose whose flanks curve: :mod:`~steamtwin.geometry.edge_nose`);
+otherwise the whole edge is left to the cloud's own points and order (a model continued from
+a few slabs over most of the span can stand far off the points: the reference unit's hp8,
+:func:`_model_off_points`; one edge's slabs modelled in part mix two orders, which cuts the
+edge, :data:`ORDER_SLABS`). :attr:`EdgeModel.slabs` records
 each slab's own fit, or why it has none.
 
 Kept as one module because the slab fits, the span model's start, its check against the
@@ -79,7 +81,9 @@ from steamtwin.geometry.edge_circle import (
     tangent_centre,
     tip_and_half_angle,
 )
+from steamtwin.geometry.edge_nose import nose_refit
 from steamtwin.geometry.edge_pooled import (
+    ORDER_DISTANCE,
     face_order,
     geometric_start,
     order_arc,
@@ -277,6 +281,12 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
         model, _ = fit_span_edge(points[window], model, (0.02 * r_max, 2.0 * r_max))
     centres, radii, _ = model.at(np.array([slab.z for slab, _, _ in fits]))
     off = _model_off_points(points, fits, model, radii, spacing)
+    nose = off is not None  # flanks that curve within the window: a nose (edge_nose)
+    if nose:
+        model = nose_refit(points, _window_by_model(points, arc, model, 2.0 * reach, z_range),
+                           model, spacing, (0.02 * r_max, 2.0 * r_max))
+        centres, radii, _ = model.at(np.array([slab.z for slab, _, _ in fits]))
+        off = _model_off_points(points, fits, model, radii, spacing)
     if off is not None:  # the model stands off the cloud: the edge is left to the cloud
         reason = (f"span model off the arc's points at z = {off[0] * 1e3:.1f} mm (median "
                   f"{off[1] * 1e3:+.3f} mm)")
@@ -292,7 +302,8 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
         order = np.array([face_order(points, arc, members, model, reach)
                           for _, _, members in fits])
     else:
-        order = np.array([_order_against_model(points, arc, members, model, spacing)
+        order = np.array([_order_against_model(points, arc, members, model, spacing,
+                                               ORDER_DISTANCE if nose else TRIM_FLOOR)
                           for _, _, members in fits])
     smooth = np.full((len(fits), 3), np.nan)
     for k in range(len(fits)):
@@ -473,19 +484,22 @@ def _model_cut(model: SpanEdgeModel, z: np.ndarray, spacing: float) -> tuple:
 
 
 def _order_against_model(points: np.ndarray, arc: np.ndarray, members: np.ndarray,
-                         model: SpanEdgeModel, spacing: float) -> tuple[float, float, float]:
+                         model: SpanEdgeModel, spacing: float, tolerance: float
+                         ) -> tuple[float, float, float]:
     """Shift and scale (twice: on either face, as :func:`~steamtwin.geometry.edge_pooled.
     face_order`) of the cloud's arc length (from its s) against the model's arc length
     u on the flanks beyond the model (a straight-line fit: the slope is the local ratio of
-    the parametrisation's length to the model's); NaN when too few flank points follow the
-    model or the slope is off by more than a factor two."""
+    the parametrisation's length to the model's) of the points within ``tolerance`` (m) of
+    the model (a nose's flanks curve off its lines: :data:`~steamtwin.geometry.edge_pooled.
+    ORDER_DISTANCE`); NaN when too few flank points follow the model or the slope is off by
+    more than a factor two."""
     if len(members) == 0:
         return math.nan, math.nan, math.nan
     section, cut = _model_cut(model, points[members, 2], spacing)
     xy = points[members, :2]
     u = arc_length_at(xy, *section)
     distance = edge_distance_at(xy, *section)[0]
-    on_flank = (np.abs(u) > cut + spacing) & (np.abs(distance) < TRIM_FLOOR)
+    on_flank = (np.abs(u) > cut + spacing) & (np.abs(distance) < tolerance)
     if on_flank.sum() < 2 * MIN_FLANK_POINTS:
         return math.nan, math.nan, math.nan
     scale, shift = np.polyfit(u[on_flank], arc[members[on_flank]], 1)

@@ -371,14 +371,21 @@ def estimate_blade_frame(points: np.ndarray, *, hub_end: str | None = None,
     first, second, _ = chord_line(mid)
     chord = float(np.linalg.norm(second - first))
     direction = (second - first) / chord
-    widths = (_end_width(mid, first, direction, chord),
-              _end_width(mid, second, -direction, chord))
-    if widths[1] > widths[0]:
-        first, second, direction, widths = second, first, -direction, widths[::-1]
+    # the widths at the section's ends, its farthest pair: where the pressure side is convex
+    # over part of the chord the bitangent's touch points need not be the ends (slender 80k
+    # seed 1, 65-series, 2026-11-27: a 25.5-mm bitangent of a 37.5-mm section, the ends
+    # judged from it the wrong way round)
+    ends = farthest_pair(mid[ConvexHull(mid).vertices])
+    length = float(np.linalg.norm(ends[1] - ends[0]))
+    widths = (_end_width(mid, ends[0], (ends[1] - ends[0]) / length, length),
+              _end_width(mid, ends[1], (ends[0] - ends[1]) / length, length))
+    if (widths[1] > widths[0]) == (direction @ (ends[1] - ends[0]) > 0.0):
+        first, second, direction = second, first, -direction
+    widths = (max(widths), min(widths))
     edges_ambiguous = widths[0] < (1.0 + BLUNTNESS_MARGIN) * widths[1]
     rules["chord"] = (f"mid-span chord line (pressure-side bitangent), {chord * 1e3:.3f} mm; "
                       f"leading edge = the blunter end (width {widths[0] * 1e3:.3f} mm against "
-                      f"{widths[1] * 1e3:.3f} mm at 2–8 % chord)"
+                      f"{widths[1] * 1e3:.3f} mm at 2–8 % of the section's length from its ends)"
                       + ("; ambiguous: the ends are alike" if edges_ambiguous else ""))
     chord_direction = basis.T @ direction  # in scan coordinates, ⊥ axis
 
