@@ -15,17 +15,14 @@ wiggles at the knot scale; points farther than 5 robust standard deviations and
 ``outlier_distance`` are trimmed (while the knots are refined, per knot span: 5 robust standard
 deviations of the span's own residuals, between ``outlier_distance`` and 10 × that; then a
 last fit at the final knots); every point's ``s`` is then corrected by a Newton projection onto
-its section curve (Hoschek 1988, "Intrinsic parametrization for approximation", CAGD 5:27) —
-a point still farther than ``outlier_distance`` is started again from the nearest point of a
-coarse sampling of the surface (Piegl & Tiller §6.1), as a start on the wrong face or beyond an
-edge would otherwise stay there — and the fit repeated. Knots are then inserted in the middle
-of every knot span whose residual RMS exceeds the tolerance and the noise (1.5 × the median
-span RMS) and that holds enough points for two spans, until no span does — so the RMS is
-below the tolerance too, unless the noise is larger —, a round gains less than 3 % or the knot
-budget is spent. A round whose surface folds (a section crossing itself,
-:meth:`PeriodicSurface.folds`) is refitted with a 10 and 100 times stronger penalty, else the
-refinement stops at the previous knots. Residuals are distances within the section plane
-z = const (m).
+its section curve (Hoschek 1988, "Intrinsic parametrization for approximation", CAGD 5:27) and
+the fit repeated. Knots are then inserted in the middle of every knot span whose residual RMS
+exceeds the tolerance and the noise (1.5 × the median span RMS) and that holds enough points
+for two spans, until no span does — so the RMS is below the tolerance too, unless the noise is
+larger —, a round gains less than 3 % or the knot budget is spent. A round whose surface folds
+(a section crossing itself, :meth:`PeriodicSurface.folds`) is refitted with a 10 and 100 times
+stronger penalty, else the refinement stops at the previous knots. Residuals are distances
+within the section plane z = const (m).
 """
 
 from __future__ import annotations
@@ -129,29 +126,6 @@ class PeriodicSurface:
             if active.size == 0:
                 break
         return s
-
-    def reproject(self, xy: np.ndarray, z: np.ndarray, s: np.ndarray, samples: int = 500,
-                  levels: int = 100) -> np.ndarray:
-        """Parameters ``s`` of the points ``xy`` at ``z`` restarted globally: from the nearest
-        of ``samples`` points round the section curves at ``levels`` heights over the z knots
-        (the ones nearest the points' z), refined by :meth:`project`, and kept where the point
-        lies nearer its section curve than from its old ``s``. Point inversion with a start
-        value from a coarse sampling (Piegl & Tiller 1997, §6.1): Newton's method only finds
-        the nearest curve point near its start, and a point started on the wrong face or
-        beyond an edge stays there. The default grid (0.025 s for 785 points of an 80k cloud)
-        gives the parameters of one 4 times as fine to 1e-6 (lean-sweep, 80k, seed 3)."""
-        if len(s) == 0:
-            return s
-        lo, step = self.z_knots[0], (self.z_knots[-1] - self.z_knots[0]) / levels
-        heights = lo + step * np.unique(np.round((z - lo) / step))
-        grid_s = np.tile(np.linspace(0.0, 1.0, samples, endpoint=False), len(heights))
-        grid_z = np.repeat(heights, samples)
-        grid = np.column_stack([self(grid_s, grid_z), grid_z])
-        _, nearest = cKDTree(grid).query(np.column_stack([xy, z]))
-        trial = self.project(xy, z, grid_s[nearest])
-        nearer = (np.linalg.norm(xy - self(trial, z), axis=1)
-                  < np.linalg.norm(xy - self(s, z), axis=1))
-        return np.where(nearer, trial, s)
 
     def folds(self, levels: int = 9, samples: int = 4000) -> bool:
         """Whether a section curve at one of ``levels`` heights spread over the z knots (both
@@ -339,11 +313,6 @@ class AdaptiveSurfaceFit:
                                            smoothing * self.penalty_factor * PENALTY)
             s = surface.project(xy, z, s)
             residual = surface.residuals(xy, z, s)
-            # points left far off may have started on the wrong face (a broken order round a
-            # thin edge): their fit folds the surface, and one fold stiffens the whole side
-            far = np.flatnonzero(np.abs(residual) > self.outlier_distance)
-            s[far] = surface.reproject(xy[far], z[far], s[far])
-            residual[far] = surface.residuals(xy[far], z[far], s[far])
             inliers = self._trim(breaks, s, residual, inliers, distance)
         return surface, s, residual, inliers
 
