@@ -56,6 +56,7 @@ from scipy.spatial import ConvexHull, cKDTree
 from threadpoolctl import threadpool_limits
 
 from steamtwin.geometry.blade_cloud import ReconstructionError, check_blade_cloud
+from steamtwin.geometry.end_face_density import end_face_need
 from steamtwin.geometry.fidelity import chord_line, farthest_pair, surface_samples
 from steamtwin.geometry.filters import local_frames
 from steamtwin.geometry.profile import Blade, reference_surface
@@ -340,11 +341,15 @@ def estimate_blade_frame(points: np.ndarray, *, hub_end: str | None = None,
             caps[name] = (normal if np.dot(normal, side_axis) >= 0.0 else -normal, members)
             checks[f"{name}_end_plane_rms_mm"] = rms * 1e3
     if len(caps) < 2:
-        missing = " and ".join(f"{n} end" for n in ("low", "high") if n not in caps)
+        missing = [n for n in ("low", "high") if n not in caps]
+        needs = [end_face_need(points, side_axis, low if n == "low" else high, spacing,
+                               NEIGHBOURS) for n in missing]
         raise ReconstructionError(
-            f"no planar end face found at the {missing} of the span axis (fewer than "
-            f"{MIN_CAP_POINTS} points with normals within {math.degrees(CAP_ANGLE):.0f}° of the "
-            "axis there): is it a blade with both end faces scanned?")
+            f"no planar end face found at the {' and '.join(n + ' end' for n in missing)} of "
+            f"the span axis (fewer than {MIN_CAP_POINTS} points with normals within "
+            f"{math.degrees(CAP_ANGLE):.0f}° of the axis there): is it a blade with both end "
+            "faces scanned?" + "".join(f"; at the {n} end {need}"
+                                      for n, need in zip(missing, needs, strict=True) if need))
     rules: dict[str, str] = {}
     ends_angle = _angle(caps["low"][0], caps["high"][0])
     cap_axis = _unit(caps["low"][0] + caps["high"][0])

@@ -41,6 +41,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from steamtwin.geometry.blade_cloud import MIN_POINTS, ReconstructionError, check_blade_cloud
+from steamtwin.geometry.end_face_density import end_face_need
 from steamtwin.geometry.orientation import oriented_normals
 from steamtwin.geometry.sections import section_chords, section_turn
 from steamtwin.geometry.volume_mesh import REGIONS
@@ -210,7 +211,7 @@ def segment_blade(points: np.ndarray, settings: SegmentationSettings | None = No
     cap_size = min(settings.min_segment_size, cap_patch_minimum(points, spacing))
     grown = region_growing(normals, variation, index, settings.smoothness_angle,
                            settings.curvature_threshold, cap_size)
-    root, tip = _caps(points, normals, grown)
+    root, tip = _caps(points, normals, grown, spacing, settings.neighbours)
     # ranks follow size: the segments of at least min_segment_size points keep theirs
     sizes = np.bincount(grown[grown >= 0])
     segments = grown.copy()
@@ -274,10 +275,12 @@ def cap_patch_minimum(points: np.ndarray, spacing: float) -> int:
     return max(MIN_CAP_PATCH, math.floor(CAP_SHARE * min(expected)))
 
 
-def _caps(points: np.ndarray, normals: np.ndarray, segments: np.ndarray
-          ) -> tuple[CapPlane, CapPlane]:
+def _caps(points: np.ndarray, normals: np.ndarray, segments: np.ndarray, spacing: float,
+          neighbours: int) -> tuple[CapPlane, CapPlane]:
     """Planes of the root and tip caps: the large segments whose mean normal is within 20° of
-    the z axis (either way), below mid-span (root) or above (tip)."""
+    the z axis (either way), below mid-span (root) or above (tip); a cap not found is refused
+    with the density its face needs for normals from ``neighbours`` points
+    (:func:`~steamtwin.geometry.end_face_density.end_face_need`; ``spacing`` in m)."""
     count = int(segments.max()) + 1 if np.any(segments >= 0) else 0
     big = segments >= 0
     mean_normal = np.zeros((count, 3))
@@ -293,11 +296,13 @@ def _caps(points: np.ndarray, normals: np.ndarray, segments: np.ndarray
         # normals and turn a whole cap inward (issue 19: a 250 mm blade)
         chosen = np.flatnonzero((np.abs(mean_normal[:, 2]) > along) & side)
         if chosen.size == 0:
+            end = np.percentile(points[:, 2], 0.5 if sign < 0 else 99.5)
+            need = end_face_need(points, np.eye(3)[2], end, spacing, neighbours)
             raise ReconstructionError(
                 f"no {name} cap found: no smooth patch with normals along z at the "
                 f"{'low' if sign < 0 else 'high'} end of the "
                 "span (is the cloud in the blade frame, z along the span, and are both end "
-                "faces scanned?)")
+                "faces scanned?)" + (f"; {need}" if need else ""))
         planes.append(fit_cap_plane(points[np.isin(segments, chosen)]))
     return planes[0], planes[1]
 
