@@ -18,4 +18,4 @@ def test_an_order_broken_next_to_the_tip_is_replaced_by_the_order_by_faces() -> 
     segmentation = segment_blade(cloud)
     side = np.isfinite(segmentation.turn)
     assert tour_ratio(cloud, side, segmentation.turn, segmentation.perimeter,
-                      4.0 * segmentation.spacing, worst=True) < 2.0
+                      4.0 * segmentation.spacing) < 2.0

@@ -51,11 +51,12 @@ SMOOTHING_PASSES = 3
 
 
 def tour_ratio(points: np.ndarray, mask: np.ndarray, turn: np.ndarray, perimeter: np.ndarray,
-               height: float, worst: bool = False) -> float:
-    """Median (``worst``: largest) over :data:`TOUR_SLABS` slabs ``height`` (m) thick, spread
-    over the span of the points under ``mask``, of the closed polyline length through the
-    slab's points in ``turn`` order over the slab's median ``perimeter`` (m); slabs with fewer
-    than 20 points are skipped (ratio 1 when none is left)."""
+               height: float) -> float:
+    """Largest over :data:`TOUR_SLABS` slabs ``height`` (m) thick, spread over the span of the
+    points under ``mask``, of the closed polyline length through the slab's points in ``turn``
+    order over the slab's median ``perimeter`` (m) — the worst slab: an order broken next to
+    one end only is broken all the same; slabs with fewer than 20 points are skipped (ratio 1
+    when none is left)."""
     z = points[:, 2]
     ratios = []
     for centre in np.linspace(np.percentile(z[mask], 2.0), np.percentile(z[mask], 98.0),
@@ -67,9 +68,7 @@ def tour_ratio(points: np.ndarray, mask: np.ndarray, turn: np.ndarray, perimeter
         xy = points[members[np.argsort(turn[members])], :2]
         length = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1).sum()
         ratios.append(length / float(np.median(perimeter[members])))
-    if not ratios:
-        return 1.0
-    return float(np.max(ratios) if worst else np.median(ratios))
+    return float(np.max(ratios)) if ratios else 1.0
 
 
 def two_face_turn(points: np.ndarray, normals: np.ndarray, mask: np.ndarray, lo: np.ndarray,
@@ -298,14 +297,14 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
                           1.0 - share + front_based / rear_turn * share)
     # a ring broken at a thin, sparse edge leaves the order jumping between the faces, if only
     # in the slabs next to one end: then the order by faces, when its worst slab is better
-    ratio = tour_ratio(points, mask, turn, perimeter, seed_radius, worst=True)
+    ratio = tour_ratio(points, mask, turn, perimeter, seed_radius)
     if ratio > BROKEN_TOUR:
         try:
             by_faces = two_face_turn(points, normals, mask, *graph_edges, front, rear,
                                      seed_radius, slab)
         except ReconstructionError:
             return turn, perimeter
-        if tour_ratio(points, mask, *by_faces, seed_radius, worst=True) < ratio:
+        if tour_ratio(points, mask, *by_faces, seed_radius) < ratio:
             return by_faces
     return turn, perimeter
 
