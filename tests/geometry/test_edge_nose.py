@@ -44,16 +44,17 @@ def exact_nose() -> tuple[np.ndarray, np.ndarray]:
     return curve, np.concatenate([-arc[::-1], arc[1:]])
 
 
-def nose_model(monkeypatch: pytest.MonkeyPatch, straight: bool) -> tuple:
+def nose_model(monkeypatch: pytest.MonkeyPatch, straight: bool, denser: float = 1.0) -> tuple:
     """The edge model of the synthetic cloud (``straight``: without the nose refit and with
-    no check of the model against the points, the straight-flank model as it is) and the
-    largest distance (m) of its points from the exact nose (NaN when not modelled)."""
+    no check of the model against the points, the straight-flank model as it is; ``denser``:
+    the density's factor) and the largest distance (m) of its points from the exact nose (NaN
+    when not modelled)."""
     if straight:
         monkeypatch.setattr(edge_nose, "NOSE_ROUNDS", 0)
         monkeypatch.setattr(edge_model, "MODEL_BIAS", math.inf)
     curve, arc = exact_nose()
     rng = np.random.default_rng(0)
-    count = round(DENSITY * 2.0 * REACH * HEIGHT)
+    count = round(denser * DENSITY * 2.0 * REACH * HEIGHT)
     u = rng.uniform(-REACH, REACH, count)
     xy = np.column_stack([np.interp(u, arc, curve[:, 0]), np.interp(u, arc, curve[:, 1])])
     tangent = np.column_stack([np.gradient(curve[:, 0]), np.gradient(curve[:, 1])])
@@ -66,7 +67,7 @@ def nose_model(monkeypatch: pytest.MonkeyPatch, straight: bool) -> tuple:
                                REGIONS.index("suction_side")))
     model = edge_model.model_sparse_edges(
         np.column_stack([xy, z]), np.mod(0.5 + u / PERIMETER, 1.0), np.ones(count, dtype=bool),
-        labels, np.full(count, PERIMETER), SPACING)
+        labels, np.full(count, PERIMETER), SPACING / math.sqrt(denser))
     if not len(model.points):
         return model, math.nan
     return model, float(cKDTree(curve).query(model.points[:, :2])[0].max())
@@ -83,3 +84,16 @@ def test_a_nose_with_curved_flanks_is_modelled_within_the_limits(
     model, error = nose_model(monkeypatch, straight=False)
     assert "leading_edge" in model.spans and model.replaced.any()
     assert error < 0.05e-3
+
+
+def test_a_resolved_edge_without_circles_of_its_own_is_not_pooled(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The pooled fit (edge_pooled) is for an edge too sparse for a slab's own circle. Taken
+    for every edge here (``OWN_SHARE`` above 1), the nose at 4 × slender's density (its
+    geometric start ~5 spacings across, ≥ ``POOLED_ACROSS``) is left to the cloud with the
+    reason, as the reference unit's hp5 leading edge must be (pooled, it was refused 3.9 mm
+    off)."""
+    monkeypatch.setattr(edge_model, "OWN_SHARE", 1.01)
+    model, _ = nose_model(monkeypatch, straight=False, denser=4.0)
+    assert "leading_edge" not in model.spans and not model.replaced.any()
+    assert all("spacings across: left to the cloud" in slab.reason for slab in model.slabs)

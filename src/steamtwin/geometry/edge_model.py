@@ -257,6 +257,12 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
     if pooled:  # too sparse per slab: flanks by geometry
         z_own, start = _with_geometric_start(points, arc, edges_z, noise, window, r_max,
                                              z_own, start)
+        across = math.pi * float(np.median(start[:, 2])) / spacing if len(z_own) else 0.0
+        if across >= POOLED_ACROSS:  # resolved, yet no slab's circle: not a sparse edge
+            reason = (f"no circle of its own in {len(fits) - len(own)} of {len(fits)} slabs, "
+                      f"though {across:.1f} spacings across: left to the cloud")
+            return [], [replace(slab, used=False, reason=reason) for slab, _, _ in fits], \
+                np.zeros(len(points), bool), np.full(len(points), np.nan), None
     if not len(z_own):
         return [], [slab for slab, _, _ in fits], np.zeros(len(points), bool), np.full(
             len(points), np.nan), None
@@ -353,6 +359,15 @@ ORDER_SLABS = 10
 #: pose, 2026-11-27). lean-sweep 80k seed 0's trailing edge has 34 of 80, good ones (0.25 →
 #: 0.2 mm as drawn): taken pooled at a share of 0.5 it failed, 0.128 mm (passes 0.079 without).
 OWN_SHARE = 0.1
+#: The pooled fit is for an edge too sparse for a slab's own circle: where its geometric
+#: start's median radius spans this many point spacings or more on its half circle (π·r / h),
+#: a slab holds enough arc points for its own circle, and none fitting means flanks that are
+#: not lines (a round nose), which pooling does not mend — the edge is left to the cloud. The
+#: reference unit's hp5 leading edge (0 of 67 own circles, start radii 0.53–0.58 mm at a
+#: 0.23-mm spacing: 7.5 across) was taken pooled at the model's radius bound and refused
+#: (3.9 mm off); slender 80k's trailing edge, the case the pooled fit is for, is 0.9–1.0 across
+#: (2026-11-27). 3: the sampling theorem's 1 (:mod:`.edge_density`) three times over.
+POOLED_ACROSS = 3.0
 
 
 def _with_geometric_start(points: np.ndarray, arc: np.ndarray, edges_z: np.ndarray,
