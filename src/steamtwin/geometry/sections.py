@@ -52,11 +52,10 @@ SMOOTHING_PASSES = 3
 
 def tour_ratio(points: np.ndarray, mask: np.ndarray, turn: np.ndarray, perimeter: np.ndarray,
                height: float) -> float:
-    """Largest over :data:`TOUR_SLABS` slabs ``height`` (m) thick, spread over the span of the
+    """Median over :data:`TOUR_SLABS` slabs ``height`` (m) thick, spread over the span of the
     points under ``mask``, of the closed polyline length through the slab's points in ``turn``
-    order over the slab's median ``perimeter`` (m) — the worst slab: an order broken next to
-    one end only is broken all the same; slabs with fewer than 20 points are skipped (ratio 1
-    when none is left)."""
+    order over the slab's median ``perimeter`` (m); slabs with fewer than 20 points are
+    skipped (ratio 1 when none is left)."""
     z = points[:, 2]
     ratios = []
     for centre in np.linspace(np.percentile(z[mask], 2.0), np.percentile(z[mask], 98.0),
@@ -68,7 +67,7 @@ def tour_ratio(points: np.ndarray, mask: np.ndarray, turn: np.ndarray, perimeter
         xy = points[members[np.argsort(turn[members])], :2]
         length = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1).sum()
         ratios.append(length / float(np.median(perimeter[members])))
-    return float(np.max(ratios)) if ratios else 1.0
+    return float(np.median(ratios)) if ratios else 1.0
 
 
 def two_face_turn(points: np.ndarray, normals: np.ndarray, mask: np.ndarray, lo: np.ndarray,
@@ -214,14 +213,12 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     is monotone round any section, however strongly cambered, and unchanged by twist and
     taper. Points the graph does not reach (strays) take the θ of their nearest reached point.
     Where the ring is broken — no seam across y = y_front at the front end (high stagger), the
-    paths do not come back, or the order jumps between the faces in a slab along the span
-    (:func:`~steamtwin.geometry.sections.tour_ratio` of the worst slab above
+    paths do not come back, or the order jumps between the faces
+    (:func:`~steamtwin.geometry.sections.tour_ratio` above
     :data:`~steamtwin.geometry.sections.BROKEN_TOUR`), as at a thin edge sampled too sparsely
     for the graph to go round it — the order by faces
     (:func:`~steamtwin.geometry.sections.two_face_turn`) is taken instead, when it follows the
-    sections better in its worst slab. A ring broken only near one end is broken all the same
-    (issue 19, lean-sweep 80k seed 2: a 0.2 mm trailing edge at the tip; worst slab 4.2, the
-    median 1.5, by faces 1.6): the side's fit folds there and is stiffened everywhere.
+    sections better.
     """
 
     count = len(points)
@@ -295,8 +292,8 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     turn[mask] = np.where(front_based >= rear_turn,
                           (front_based - rear_turn) / (1.0 - rear_turn) * (1.0 - share),
                           1.0 - share + front_based / rear_turn * share)
-    # a ring broken at a thin, sparse edge leaves the order jumping between the faces, if only
-    # in the slabs next to one end: then the order by faces, when its worst slab is better
+    # a ring broken at a thin, sparse edge leaves the order jumping between the faces: then
+    # the order by faces, when it follows the sections better
     ratio = tour_ratio(points, mask, turn, perimeter, seed_radius)
     if ratio > BROKEN_TOUR:
         try:
