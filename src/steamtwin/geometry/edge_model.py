@@ -214,6 +214,15 @@ def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labe
                      slabs=tuple(slabs), spans=spans)
 
 
+def _left_to_cloud(count: int, fits: list, reason: str | None = None) -> tuple:
+    """:func:`_model_edge`'s result for an edge left to the cloud's ``count`` points: no model
+    pieces, the slab records (each marked unused for ``reason`` when given), nothing replaced,
+    no parameters, no span model."""
+    slabs = [slab if reason is None else replace(slab, used=False, reason=reason)
+             for slab, _, _ in fits]
+    return [], slabs, np.zeros(count, bool), np.full(count, np.nan), None
+
+
 def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: np.ndarray,
                 spacing: float, noise: float, edge: str, centre_s: float) -> tuple:
     """Slabs of one edge: (model point pieces, slab records, replaced mask, parameters, span
@@ -261,11 +270,9 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
         if across >= POOLED_ACROSS:  # resolved, yet no slab's circle: not a sparse edge
             reason = (f"no circle of its own in {len(fits) - len(own)} of {len(fits)} slabs, "
                       f"though {across:.1f} spacings across: left to the cloud")
-            return [], [replace(slab, used=False, reason=reason) for slab, _, _ in fits], \
-                np.zeros(len(points), bool), np.full(len(points), np.nan), None
+            return _left_to_cloud(len(points), fits, reason)
     if not len(z_own):
-        return [], [slab for slab, _, _ in fits], np.zeros(len(points), bool), np.full(
-            len(points), np.nan), None
+        return _left_to_cloud(len(points), fits)
     # one model along the span (edge_span), started from the slabs' own circles, fitted to
     # the points of every slab of the edge: the slabs without a circle of their own (a hole,
     # stray points, the flanks cut short next to a cap) are filled by the model
@@ -296,8 +303,7 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
     if off is not None:  # the model stands off the cloud: the edge is left to the cloud
         reason = (f"span model off the arc's points at z = {off[0] * 1e3:.1f} mm (median "
                   f"{off[1] * 1e3:+.3f} mm)")
-        return [], [replace(slab, used=False, reason=reason) for slab, _, _ in fits], np.zeros(
-            len(points), bool), np.full(len(points), np.nan), None
+        return _left_to_cloud(len(points), fits, reason)
     # the cloud's order along the edge, scale and shift of its arc length against the model's
     # (:func:`_order_against_model`), smoothed along the span: each slab's own is noisy by a
     # few tenths of a millimetre, and the side's spline, smooth over several slabs, folds

@@ -24,6 +24,8 @@ import math
 import numpy as np
 from scipy.spatial import cKDTree
 
+from steamtwin.geometry.filters import plane_basis
+
 #: Slabs along the end section's length in which its thickness is measured (each ~1/8 of the
 #: chord).
 THICKNESS_BINS = 8
@@ -79,11 +81,7 @@ def end_face_need(points: np.ndarray, axis: np.ndarray, end: float, spacing: flo
     band = np.abs(height - end) < END_BAND * spacing
     if band.sum() <= neighbours:
         return ""
-    helper = np.eye(3)[int(np.argmin(np.abs(axis)))]
-    u = np.cross(axis, helper)
-    u /= np.linalg.norm(u)
-    basis = np.array([u, np.cross(axis, u)])
-    thickness = section_thickness(points[band] @ basis.T)
+    thickness = section_thickness(points[band] @ plane_basis(axis).T)
     near = np.abs(height - end) < END_BAND * spacing + 10.0 * spacing
     reach = float(np.median(cKDTree(points[near]).query(points[band], k=neighbours + 1)[0][:, -1]))
     if thickness <= 0.0 or 2.0 * reach <= thickness:

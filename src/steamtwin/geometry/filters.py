@@ -1,5 +1,6 @@
-"""Point-cloud filters: statistical outliers, moving-least-squares smoothing, local PCA frames,
-neighbour distances and feature-preserving voxel downsampling (lengths in m).
+"""Point-cloud filters: statistical outliers, moving-least-squares smoothing, local PCA frames
+(and the plane basis normal to a direction), neighbour distances and feature-preserving voxel
+downsampling (lengths in m).
 
 Each returns its result and, where points go, which ones; open3d does the statistical outlier
 search, scipy's k-d tree the rest; MLS smoothing is a small numpy implementation (open3d has none).
@@ -74,6 +75,15 @@ def local_frames(points: np.ndarray, neighbours: int, viewpoint: np.ndarray | No
         flip = np.einsum("ij,ij->i", normals, viewpoint - points) < 0.0
         normals[flip] *= -1.0
     return index, normals, variation
+
+
+def plane_basis(normal: np.ndarray) -> np.ndarray:
+    """Two unit vectors (2, 3) spanning the plane normal to the unit ``normal`` (3,): with it,
+    a right-handed orthonormal basis."""
+    helper = np.eye(3)[int(np.argmin(np.abs(normal)))]
+    first = np.cross(normal, helper)
+    first /= np.linalg.norm(first)
+    return np.array([first, np.cross(normal, first)])
 
 
 def mls_smooth(points: np.ndarray, neighbours: int = 30, max_shift: float = 0.05e-3

@@ -63,6 +63,7 @@ from scipy.spatial import cKDTree
 
 from steamtwin.geometry.bspline import PeriodicSurface
 from steamtwin.geometry.edge_thickness import FLANK_TO, FLANK_TO_MIN, wedge_radius
+from steamtwin.geometry.filters import plane_basis
 from steamtwin.geometry.scanner import EDGE_SAMPLES
 from steamtwin.geometry.segmentation import SIDE_REGIONS, Segmentation
 from steamtwin.geometry.volume_mesh import REGIONS
@@ -344,14 +345,6 @@ BRIDGE_REACH = 5.0
 BRIDGE_DEPTH = 4
 
 
-def _tangent_basis(normal: np.ndarray) -> np.ndarray:
-    """Two unit vectors (2, 3) spanning the plane normal to the unit ``normal`` (3,)."""
-    helper = np.eye(3)[int(np.argmin(np.abs(normal)))]
-    first = np.cross(normal, helper)
-    first /= np.linalg.norm(first)
-    return np.array([first, np.cross(normal, first)])
-
-
 def half_plane_depth(offsets: np.ndarray) -> int:
     """Fewest of the 2-D ``offsets`` (k, 2) in any open half-plane whose boundary line passes
     through the origin (0 when the origin lies outside their convex hull): the counts of the
@@ -380,7 +373,7 @@ def _bridged(samples: np.ndarray, normals: np.ndarray, beyond: np.ndarray, point
     gap, _ = tree.query(samples[checked])
     for i, distance in zip(checked, gap, strict=True):
         near = points[tree.query_ball_point(samples[i], BRIDGE_REACH * distance)] - samples[i]
-        result[i] = half_plane_depth(near @ _tangent_basis(normals[i]).T) >= BRIDGE_DEPTH
+        result[i] = half_plane_depth(near @ plane_basis(normals[i]).T) >= BRIDGE_DEPTH
     return result
 
 

@@ -58,7 +58,7 @@ from threadpoolctl import threadpool_limits
 from steamtwin.geometry.blade_cloud import ReconstructionError, check_blade_cloud
 from steamtwin.geometry.end_face_density import end_face_need
 from steamtwin.geometry.fidelity import chord_line, farthest_pair, surface_samples
-from steamtwin.geometry.filters import local_frames
+from steamtwin.geometry.filters import local_frames, plane_basis
 from steamtwin.geometry.profile import Blade, reference_surface
 from steamtwin.geometry.reconstruct import (
     BLAS_THREADS,
@@ -255,13 +255,6 @@ def _end_face(members: np.ndarray, axis: np.ndarray, low: bool, spacing: float) 
     return members[np.abs(height - end) <= reach]
 
 
-def _plane_basis(axis: np.ndarray) -> np.ndarray:
-    """Two unit vectors (2, 3) completing ``axis`` to an orthonormal basis."""
-    helper = np.eye(3)[int(np.argmin(np.abs(axis)))]
-    u = _unit(np.cross(axis, helper))
-    return np.array([u, np.cross(axis, u)])
-
-
 def _slab(points: np.ndarray, height: np.ndarray, at: float, thickness: float,
           basis: np.ndarray, spacing: float) -> np.ndarray:
     """In-plane coordinates (n, 2; m) of the points within ``thickness`` / 2 of ``at`` along the
@@ -368,7 +361,7 @@ def estimate_blade_frame(points: np.ndarray, *, hub_end: str | None = None,
     height = points @ axis
     end_height = {name: float(np.median(members @ axis)) for name, (_, members) in caps.items()}
     span = end_height["high"] - end_height["low"]
-    basis = _plane_basis(axis)
+    basis = plane_basis(axis)
     thickness = max(SLAB_SPACINGS * spacing, 0.002 * span)
 
     # 3. chordwise direction, leading edge first (independent of the hub/tip choice)
