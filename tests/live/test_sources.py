@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import dataclasses
+import time
 from datetime import UTC, datetime, timedelta
 
 import numpy as np
@@ -21,6 +22,7 @@ from steamtwin.live.plant_server import PlantServer, PlantServerSettings, plant_
 from steamtwin.live.sources import (
     PUBLISHING_INTERVAL_MS,
     QUEUE_SIZE,
+    WATCHDOG_S,
     OpcUaSecurity,
     OpcUaSource,
     ReplaySource,
@@ -231,12 +233,24 @@ def test_bad_input_becomes_findings_and_the_source_goes_on():
 
 def _accounted(blocks) -> int:
     """Values of the burst test's one tag the source has passed on: kept on the 1-s grid,
-    counted as crowded onto one sample time, or as going backwards."""
+    counted as crowded onto one sample time, as going backwards, or missing in a named gap
+    (one value per sample time there: the burst's own sample times were passed on)."""
     findings = [f for block in blocks for f in block.findings]
     crowded = sum(int(f.message.split(": ")[1].split(" ")[0])
                   for f in findings if f.kind == "crowded")
     late = sum(f.kind == "backwards" for f in findings)
-    return crowded + late + len(_frame(blocks))
+    return crowded + late + _gap_samples(findings) + len(_frame(blocks))
+
+
+#: the burst test's last burst sample time: values written after it and lost while reconnecting
+#: are a named gap (the 10 s before the burst are a gap of the test's own making)
+_BURST_END = pd.Timestamp("2026-03-01 00:00:02", tz="UTC")
+
+
+def _gap_samples(findings) -> int:
+    """Sample times after the burst the source named as a gap ("… (N missing) …")."""
+    return sum(int(f.message.split(" (")[1].split(" missing")[0])
+               for f in findings if f.kind == "gap" and f.time >= _BURST_END)
 
 
 def test_a_burst_of_ten_thousand_values_is_named_and_the_source_goes_on():
@@ -294,7 +308,60 @@ def test_a_burst_of_ten_thousand_values_is_named_and_the_source_goes_on():
     late = [f for block in blocks for f in block.findings if f.kind == "backwards"]
     received = _frame(blocks)["main_steam_pressure"]
     # every value is accounted for: one per sample time kept, the rest counted as crowded or,
-    # when their sample time had been passed on already, as going backwards
-    assert crowded + len(late) + len(received) == 1 + 10_000 + 5
+    # when their sample time had been passed on already, as going backwards; a connection
+    # lost after the burst (a loaded machine) leaves the values written meanwhile as a gap
+    gaps = _gap_samples([f for block in blocks for f in block.findings])
+    assert crowded + len(late) + len(received) + gaps == 1 + 10_000 + 5
     assert received.index.is_unique and received.index.is_monotonic_increasing
     assert received.iloc[-1] == pytest.approx(27.0e6)  # the source went on after the burst
+
+
+def test_a_server_slow_to_answer_the_liveness_probe_is_not_taken_for_lost():
+    """A server whose loop is busy for 2 s while the client's liveness probe waits (as when it
+    encodes a burst) is still connected: no reconnection, every value in. asyncua's default
+    probe (1 s) took it for lost, and the values written meanwhile became a gap."""
+    port = free_port()
+    endpoint = f"opc.tcp://127.0.0.1:{port}/busy/"
+    tag_map = plant_tag_map()
+    busy_s = 2.0
+    assert busy_s < WATCHDOG_S
+
+    def busy_state(nodeid, attr):  # the probe reads the server's state: answered after 2 s
+        time.sleep(busy_s)
+        return ua.DataValue(Value=ua.Variant(ua.ServerState.Running, ua.VariantType.Int32))
+
+    async def scenario():
+        server, variables = await _tag_server(endpoint, "urn:busy",
+                                              {"P": ua.Variant(0.0, ua.VariantType.Double)})
+        server.iserver.aspace.set_attribute_value_callback(
+            ua.NodeId(ua.ObjectIds.Server_ServerStatus_State), ua.AttributeIds.Value, busy_state)
+        spec = dataclasses.replace(tag_map.signals["main_steam_pressure"],
+                                   node_id="nsu=urn:busy;s=P")
+        mapped = dataclasses.replace(tag_map, signals={"main_steam_pressure": spec})
+        source = OpcUaSource(endpoint, mapped, INSECURE, settle_s=0.3)
+        blocks: list = []
+        consumer = await _started(source, blocks)
+        base = datetime(2026, 3, 1, tzinfo=UTC)
+        started = time.monotonic()
+        k = 0
+        while time.monotonic() - started < WATCHDOG_S + 2 * busy_s + 1.0:  # one probe at least
+            await server.write_attribute_value(variables["P"].nodeid, ua.DataValue(
+                Value=ua.Variant(10.0 + k, ua.VariantType.Double),
+                SourceTimestamp=base + timedelta(seconds=k)))
+            k += 1
+            await asyncio.sleep(0.5)
+        for _ in range(100):
+            if len(_frame(blocks)) >= k:
+                break
+            await asyncio.sleep(0.1)
+        source.close()
+        await consumer
+        await server.stop()
+        return blocks, k
+
+    blocks, written = asyncio.run(scenario())
+    kinds = [f.kind for block in blocks for f in block.findings]
+    assert "disconnected" not in kinds and "gap" not in kinds
+    received = _frame(blocks)["main_steam_pressure"]
+    assert len(received) == written
+    assert np.allclose(received.to_numpy(), (10.0 + np.arange(written)) * 1e6)

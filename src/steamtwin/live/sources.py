@@ -65,6 +65,13 @@ PUBLISHING_INTERVAL_MS = 20.0
 #: source checks the connection itself after 0.5 s without data; this only bounds the server's
 #: idle traffic).
 KEEP_ALIVE_S = 5.0
+#: Interval (s) of asyncua's liveness probe of the server, which is also the probe's timeout
+#: (asyncua takes the smaller of it and half the session timeout): a dead but open connection
+#: is found within twice this; a server or client loop busy for less than this (the client
+#: decoding a burst of 10 000 values while a probe waits) is not taken for a lost server.
+#: asyncua's default of 1 s dropped the connection mid-burst on a loaded CI machine; against a
+#: server without history the values written while reconnecting are then a gap.
+WATCHDOG_S = 5.0
 _ARRIVED = "__arrived__"  # key of a pending sample's first arrival (monotonic s)
 
 
@@ -232,7 +239,8 @@ class OpcUaSource:
         latest_per_signal: dict[str, pd.Timestamp] = {}
         while not self._closed.is_set():
             findings: list[SourceFinding] = []
-            client = Client(url=self.endpoint, timeout=self.timeout_s)
+            client = Client(url=self.endpoint, timeout=self.timeout_s,
+                            watchdog_intervall=WATCHDOG_S)
             await self.security.apply(client)
             try:
                 await client.connect()
