@@ -75,6 +75,14 @@ async def _tag_server(endpoint: str, urn: str, initial: dict[str, ua.Variant]):
     return server, variables
 
 
+def _pressure_source(endpoint: str, urn: str, settle_s: float) -> OpcUaSource:
+    """A source of the plant's main-steam pressure alone, read from node ``s=P`` of ``urn``."""
+    tag_map = plant_tag_map()
+    spec = dataclasses.replace(tag_map.signals["main_steam_pressure"], node_id=f"nsu={urn};s=P")
+    mapped = dataclasses.replace(tag_map, signals={"main_steam_pressure": spec})
+    return OpcUaSource(endpoint, mapped, INSECURE, settle_s=settle_s)
+
+
 def _frame(blocks) -> pd.DataFrame:
     frames = [block.frame for block in blocks if len(block.frame)]
     return pd.concat(frames) if frames else pd.DataFrame()
@@ -265,10 +273,7 @@ def test_a_burst_of_ten_thousand_values_is_named_and_the_source_goes_on():
         server, variables = await _tag_server(endpoint, "urn:burst",
                                               {"P": ua.Variant(0.0, ua.VariantType.Double)})
         variable = variables["P"]
-        spec = dataclasses.replace(tag_map.signals["main_steam_pressure"],
-                                   node_id="nsu=urn:burst;s=P")
-        mapped = dataclasses.replace(tag_map, signals={"main_steam_pressure": spec})
-        source = OpcUaSource(endpoint, mapped, INSECURE, settle_s=0.5)
+        source = _pressure_source(endpoint, "urn:burst", settle_s=0.5)
         blocks: list = []
         consumer = await _started(source, blocks)
         base = datetime(2026, 3, 1, tzinfo=UTC)
@@ -322,7 +327,6 @@ def test_a_server_slow_to_answer_the_liveness_probe_is_not_taken_for_lost():
     probe (1 s) took it for lost, and the values written meanwhile became a gap."""
     port = free_port()
     endpoint = f"opc.tcp://127.0.0.1:{port}/busy/"
-    tag_map = plant_tag_map()
     busy_s = 2.0
     assert busy_s < WATCHDOG_S
 
@@ -335,10 +339,7 @@ def test_a_server_slow_to_answer_the_liveness_probe_is_not_taken_for_lost():
                                               {"P": ua.Variant(0.0, ua.VariantType.Double)})
         server.iserver.aspace.set_attribute_value_callback(
             ua.NodeId(ua.ObjectIds.Server_ServerStatus_State), ua.AttributeIds.Value, busy_state)
-        spec = dataclasses.replace(tag_map.signals["main_steam_pressure"],
-                                   node_id="nsu=urn:busy;s=P")
-        mapped = dataclasses.replace(tag_map, signals={"main_steam_pressure": spec})
-        source = OpcUaSource(endpoint, mapped, INSECURE, settle_s=0.3)
+        source = _pressure_source(endpoint, "urn:busy", settle_s=0.3)
         blocks: list = []
         consumer = await _started(source, blocks)
         base = datetime(2026, 3, 1, tzinfo=UTC)
