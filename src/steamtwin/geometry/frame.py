@@ -56,6 +56,7 @@ from scipy.spatial import ConvexHull, cKDTree
 from threadpoolctl import threadpool_limits
 
 from steamtwin.geometry.blade_cloud import ReconstructionError, check_blade_cloud
+from steamtwin.geometry.end_face import end_face_points
 from steamtwin.geometry.end_face_density import end_face_need
 from steamtwin.geometry.fidelity import chord_line, farthest_pair, surface_samples
 from steamtwin.geometry.filters import local_frames, plane_basis
@@ -235,26 +236,6 @@ def _plane_normal(points: np.ndarray, spacing: float) -> tuple[np.ndarray, float
     return normal, float(np.sqrt(np.mean(distance[keep] ** 2)))
 
 
-def _end_face(members: np.ndarray, axis: np.ndarray, low: bool, spacing: float) -> np.ndarray:
-    """The cap-like points (m) of an end band that can lie on the end face: within the height
-    an end plane up to :data:`CAP_AGREEMENT` off perpendicular to ``axis`` spans over the
-    points' extent across it, plus four spacings (noise), of the extreme end. The rest of the
-    band's cap-like points are side points with tilted k-NN normals — at a thin, sparsely
-    sampled edge, many over a tenth of the span — that would turn a least-squares plane through
-    them all away from the end face (issue 19: a 250 mm blade's end planes came out 41° apart
-    and 86° off the span axis, whose estimate from the side normals a 40° twist tilts by 2°).
-    Where the side normals' axis is tilted further, the window holds a part of the end face
-    only, which gives the same plane."""
-    if len(members) < MIN_CAP_POINTS:
-        return members
-    height = members @ axis
-    across = members - np.outer(height, axis)
-    extent = float(np.linalg.norm(np.ptp(across, axis=0)))
-    reach = extent * math.sin(CAP_AGREEMENT) + 4.0 * spacing
-    end = np.percentile(height, 1.0 if low else 99.0)
-    return members[np.abs(height - end) <= reach]
-
-
 def _slab(points: np.ndarray, height: np.ndarray, at: float, thickness: float,
           basis: np.ndarray, spacing: float) -> np.ndarray:
     """In-plane coordinates (n, 2; m) of the points within ``thickness`` / 2 of ``at`` along the
@@ -328,7 +309,8 @@ def estimate_blade_frame(points: np.ndarray, *, hub_end: str | None = None,
     checks: dict[str, float] = {}
     for name, near in (("low", sample_height < low + CAP_BAND * (high - low)),
                        ("high", sample_height > high - CAP_BAND * (high - low))):
-        members = _end_face(sample[cap_like & near], side_axis, name == "low", spacing)
+        members = end_face_points(sample[cap_like & near], side_axis, name == "low",
+                                  spacing, CAP_AGREEMENT)
         if len(members) >= MIN_CAP_POINTS:
             normal, rms = _plane_normal(members, spacing)
             caps[name] = (normal if np.dot(normal, side_axis) >= 0.0 else -normal, members)

@@ -41,6 +41,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from steamtwin.geometry.blade_cloud import MIN_POINTS, ReconstructionError, check_blade_cloud
+from steamtwin.geometry.end_face import end_face_points
 from steamtwin.geometry.end_face_density import end_face_need
 from steamtwin.geometry.orientation import oriented_normals
 from steamtwin.geometry.sections import section_chords, section_turn
@@ -211,7 +212,7 @@ def segment_blade(points: np.ndarray, settings: SegmentationSettings | None = No
     cap_size = min(settings.min_segment_size, cap_patch_minimum(points, spacing))
     grown = region_growing(normals, variation, index, settings.smoothness_angle,
                            settings.curvature_threshold, cap_size)
-    root, tip = _caps(points, normals, grown, spacing, settings.neighbours)
+    root, tip = _caps(points, normals, grown, spacing, settings.neighbours, cap_size)
     # ranks follow size: the segments of at least min_segment_size points keep theirs
     sizes = np.bincount(grown[grown >= 0])
     segments = grown.copy()
@@ -276,10 +277,11 @@ def cap_patch_minimum(points: np.ndarray, spacing: float) -> int:
 
 
 def _caps(points: np.ndarray, normals: np.ndarray, segments: np.ndarray, spacing: float,
-          neighbours: int) -> tuple[CapPlane, CapPlane]:
+          neighbours: int, cap_size: int) -> tuple[CapPlane, CapPlane]:
     """Planes of the root and tip caps: the large segments whose mean normal is within 20° of
-    the z axis (either way), below mid-span (root) or above (tip); a cap not found is refused
-    with the density its face needs for normals from ``neighbours`` points
+    the z axis (either way), below mid-span (root) or above (tip); where none is, the plane of
+    the end face's cap-like points (:func:`_aligned_cap`); a cap not found is refused with the
+    density its face needs for normals from ``neighbours`` points
     (:func:`~steamtwin.geometry.end_face_density.end_face_need`; ``spacing`` in m)."""
     count = int(segments.max()) + 1 if np.any(segments >= 0) else 0
     big = segments >= 0
@@ -295,16 +297,45 @@ def _caps(points: np.ndarray, normals: np.ndarray, segments: np.ndarray, spacing
         # either orientation: on a long blade the propagation can cross the rim's blended
         # normals and turn a whole cap inward (issue 19: a 250 mm blade)
         chosen = np.flatnonzero((np.abs(mean_normal[:, 2]) > along) & side)
-        if chosen.size == 0:
+        if chosen.size:
+            planes.append(fit_cap_plane(points[np.isin(segments, chosen)]))
+            continue
+        half = points[:, 2] < middle if sign < 0 else points[:, 2] > middle
+        plane = _aligned_cap(points[half & (np.abs(normals[:, 2]) > along)], sign < 0, spacing,
+                             cap_size)
+        if plane is None:
             end = np.percentile(points[:, 2], 0.5 if sign < 0 else 99.5)
             need = end_face_need(points, np.eye(3)[2], end, spacing, neighbours)
             raise ReconstructionError(
-                f"no {name} cap found: no smooth patch with normals along z at the "
+                f"no {name} cap found: no smooth patch and no plane of {cap_size} points "
+                f"with normals along z at the "
                 f"{'low' if sign < 0 else 'high'} end of the "
                 "span (is the cloud in the blade frame, z along the span, and are both end "
                 "faces scanned?)" + (f"; {need}" if need else ""))
-        planes.append(fit_cap_plane(points[np.isin(segments, chosen)]))
+        planes.append(plane)
     return planes[0], planes[1]
+
+
+def _aligned_cap(aligned: np.ndarray, low: bool, spacing: float, cap_size: int
+                 ) -> CapPlane | None:
+    """The cap plane through the cap-like points ``aligned`` (normals within 20° of z; m) of
+    the end face at the low (``low``) or high end, where no smooth patch formed: on an end
+    face a few neighbourhoods wide every neighbourhood straddles a rim, so its surface variation
+    is above the region growing's seed threshold (issue 19: a 2.45 mm tip cap at 80k points,
+    variation 0.05 against 0.02) while its normals still point along z. The points within the
+    end-face window (:func:`~steamtwin.geometry.end_face.end_face_points`) give the plane when
+    at least ``cap_size`` of them lie on it (within 4 robust standard deviations) and it is
+    within 20° of perpendicular to z; None otherwise."""
+    members = end_face_points(aligned, np.eye(3)[2], low, spacing)
+    if len(members) < cap_size:
+        return None
+    plane = fit_cap_plane(members)
+    residual = np.abs(members[:, 2] - plane.height(members[:, :2]))
+    slope = math.hypot(plane.coefficients[1], plane.coefficients[2])
+    on_plane = int(np.sum(residual <= 4.0 * max(plane.rms, 1e-9)))
+    if on_plane < cap_size or slope > math.tan(math.radians(20.0)):
+        return None
+    return plane
 
 
 def _label_sides(points: np.ndarray, normals: np.ndarray, curvature: np.ndarray,
