@@ -159,10 +159,13 @@ def two_face_turn(points: np.ndarray, normals: np.ndarray, mask: np.ndarray, lo:
     turn[reached] = np.where(pressure[reached], 1.0 - share + fraction[reached] * share,
                              fraction[reached] * (1.0 - share))
     turn[reached] = np.mod(turn[reached], 1.0)
-    missed = mask & ~reached
-    if np.any(missed):
-        _, nearest = cKDTree(points[reached]).query(points[missed])
-        turn[missed] = turn[reached][nearest]
+    # points not reached from both ends take the θ of the nearest reached point of their face
+    # (at a sharp end the other face's is at θ ≈ 1 where theirs is ≈ 0)
+    for on in (pressure, ~pressure):
+        missed = mask & ~reached & on
+        if np.any(missed):
+            _, nearest = cKDTree(points[reached & on]).query(points[missed])
+            turn[missed] = turn[reached & on][nearest]
     return turn, perimeter
 
 
