@@ -187,26 +187,3 @@ def test_tour_ratio_judges_the_slabs_next_to_the_ends_one_by_one():
         scrambled[slab] = rng.random(slab.sum())
         assert (tour_ratio(points, mask, scrambled, perimeter, height) > BROKEN_TOUR) == broken
 
-
-def test_order_by_faces_goes_on_over_the_seeds_at_the_ends():
-    """Seeds within the seed radius of an end start at their distance from it: the order goes
-    on over them — all at 0, it stood still over a stretch the side's fit cannot follow (the
-    sparse hp1 quick scan: 2 mm, four spacings, at each end)."""
-    from scipy.stats import spearmanr
-
-    points, normals, pressure, along = crescent(8000, 30.0)
-    count = len(points)
-    distances, index = cKDTree(points).query(points, k=9)
-    i = np.repeat(np.arange(count), 8)
-    j = index[:, 1:].ravel()
-    agree = np.einsum("ij,ij->i", normals[i], normals[j]) > math.cos(math.radians(75.0))
-    direction = np.array([math.cos(math.radians(30.0)), math.sin(math.radians(30.0))])
-    front = np.zeros((count, 2))
-    rear = np.broadcast_to(CHORD * direction, (count, 2)).copy()
-    seed_radius = 0.1 * CHORD
-    turn, _ = two_face_turn(points, normals, np.ones(count, dtype=bool), i[agree], j[agree],
-                            distances[:, 1:].ravel()[agree], front, rear, seed_radius, 2e-3)
-    for end, ends in ((front, along < 0.05), (rear, along > 0.95)):
-        near = ~pressure & ends & (np.linalg.norm(points[:, :2] - end, axis=1) < seed_radius)
-        assert near.sum() > 100
-        assert spearmanr(turn[near], along[near]).statistic < -0.9

@@ -15,8 +15,6 @@ folds. This module gives an order that needs no path round either edge:
   (Dijkstra 1959 on the neighbour graph, as section_turn; graph distances converge to
   geodesic ones, Tenenbaum, de Silva & Langford 2000) give the arc-length fraction along the
   face, φ = d_f / (d_f + d_r), monotone from one end to the other;
-- each seed within ``seed_radius`` of an end starts at its distance from the end, so that the
-  order does not stand still over the seeds;
 - the faces' lengths L = d_f + d_r (medians in slabs along the span) give their shares of the
   perimeter, and θ follows section_turn's convention: the rear end at 0, the suction face
   (above the ends, +y) anticlockwise to the front end at 1 − a, the pressure face on to 1,
@@ -111,28 +109,20 @@ def two_face_turn(points: np.ndarray, normals: np.ndarray, mask: np.ndarray, lo:
     # (seen from the front end), the suction face's left; edges join points of one face only
     pressure = np.einsum("ij,ij->i", normals[:, :2], left) < 0.0
     same = pressure[lo] == pressure[hi]
-    origin = count  # a virtual source joined to the seeds at one end, on one face
+    graph = coo_array((np.concatenate([length[same], length[same]]),
+                       (np.concatenate([lo[same], hi[same]]),
+                        np.concatenate([hi[same], lo[same]]))), shape=(count, count)).tocsr()
     distance = {}
     for name, end in (("front", front), ("rear", rear)):
-        offset = np.linalg.norm(points[:, :2] - end, axis=1)
-        seed = mask & (offset < seed_radius)
+        seed = mask & (np.linalg.norm(points[:, :2] - end, axis=1) < seed_radius)
         for face, side in (("pressure", pressure), ("suction", ~pressure)):
             sources = np.flatnonzero(seed & side)
             if sources.size == 0:
                 raise ReconstructionError(
                     f"no side points at the {name} end of the sections on the {face} side: is "
                     f"the {'leading' if name == 'front' else 'trailing'} edge scanned?")
-            # each seed starts at its distance from the end, as section_turn's seam points:
-            # seeds all at 0 would flatten the order over ``seed_radius`` next to each end, a
-            # stretch of several spacings of a sparse scan the side's fit cannot follow
-            graph = coo_array((np.concatenate([length[same], length[same],
-                                               offset[sources] + 1e-12]),
-                               (np.concatenate([lo[same], hi[same],
-                                                np.full(sources.size, origin)]),
-                                np.concatenate([hi[same], lo[same], sources]))),
-                              shape=(count + 1, count + 1)).tocsr()
-            distance[name, face] = np.where(side, dijkstra(graph, indices=origin)[:count],
-                                            np.inf)
+            distance[name, face] = np.where(side, dijkstra(graph, indices=sources,
+                                                           min_only=True), np.inf)
     total = np.where(pressure, distance["front", "pressure"] + distance["rear", "pressure"],
                      distance["front", "suction"] + distance["rear", "suction"])
     reached = mask & np.isfinite(total)
@@ -159,13 +149,10 @@ def two_face_turn(points: np.ndarray, normals: np.ndarray, mask: np.ndarray, lo:
     turn[reached] = np.where(pressure[reached], 1.0 - share + fraction[reached] * share,
                              fraction[reached] * (1.0 - share))
     turn[reached] = np.mod(turn[reached], 1.0)
-    # points not reached from both ends take the θ of the nearest reached point of their face
-    # (at a sharp end the other face's is at θ ≈ 1 where theirs is ≈ 0)
-    for on in (pressure, ~pressure):
-        missed = mask & ~reached & on
-        if np.any(missed):
-            _, nearest = cKDTree(points[reached & on]).query(points[missed])
-            turn[missed] = turn[reached & on][nearest]
+    missed = mask & ~reached
+    if np.any(missed):
+        _, nearest = cKDTree(points[reached]).query(points[missed])
+        turn[missed] = turn[reached][nearest]
     return turn, perimeter
 
 
