@@ -23,7 +23,7 @@ folds. This module gives an order that needs no path round either edge:
 :func:`tour_ratio` says whether an order is broken: the length of the closed polyline through
 a thin slab's points in θ order over the slab's perimeter, ≈ 1–1.5 when the order follows the
 section (noise makes the polyline zig-zag) and several times that when it jumps between the
-faces.
+faces — at the median slab or in a slab next to either end of the span.
 """
 
 from __future__ import annotations
@@ -46,28 +46,47 @@ BROKEN_TOUR = 2.0
 MIN_FACE_POINTS = 100
 #: Thin slabs along the span in which :func:`tour_ratio` is measured.
 TOUR_SLABS = 12
+#: Slabs next to each end of the span judged one by one in :func:`tour_ratio` (the outer
+#: sixth of the span at each end).
+END_SLABS = 2
 #: Passes of neighbour averaging of the path lengths in :func:`section_turn`.
 SMOOTHING_PASSES = 3
 
 
-def tour_ratio(points: np.ndarray, mask: np.ndarray, turn: np.ndarray, perimeter: np.ndarray,
-               height: float) -> float:
-    """Median over :data:`TOUR_SLABS` slabs ``height`` (m) thick, spread over the span of the
-    points under ``mask``, of the closed polyline length through the slab's points in ``turn``
-    order over the slab's median ``perimeter`` (m); slabs with fewer than 20 points are
-    skipped (ratio 1 when none is left)."""
+def tour_ratios(points: np.ndarray, mask: np.ndarray, turn: np.ndarray, perimeter: np.ndarray,
+                height: float) -> np.ndarray:
+    """In :data:`TOUR_SLABS` slabs ``height`` (m) thick, spread over the span of the points
+    under ``mask`` (from the low end up), the closed polyline length through the slab's points
+    in ``turn`` order over the slab's median ``perimeter`` (m); NaN in slabs with fewer than 20
+    points."""
     z = points[:, 2]
-    ratios = []
-    for centre in np.linspace(np.percentile(z[mask], 2.0), np.percentile(z[mask], 98.0),
-                              TOUR_SLABS):
+    ratios = np.full(TOUR_SLABS, np.nan)
+    for slab, centre in enumerate(np.linspace(np.percentile(z[mask], 2.0),
+                                              np.percentile(z[mask], 98.0), TOUR_SLABS)):
         members = np.flatnonzero(mask & (np.abs(z - centre) < 0.5 * height)
                                  & np.isfinite(turn) & np.isfinite(perimeter))
         if len(members) < 20:
             continue
         xy = points[members[np.argsort(turn[members])], :2]
         length = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1).sum()
-        ratios.append(length / float(np.median(perimeter[members])))
-    return float(np.median(ratios)) if ratios else 1.0
+        ratios[slab] = length / float(np.median(perimeter[members]))
+    return ratios
+
+
+def tour_ratio(points: np.ndarray, mask: np.ndarray, turn: np.ndarray, perimeter: np.ndarray,
+               height: float) -> float:
+    """How broken an order is: the larger of the median of :func:`tour_ratios` and of the
+    largest in the :data:`END_SLABS` slabs next to either end of the span (ratio 1 when no slab
+    has points). A ring broken at a thin edge is broken over the whole span (the median) or
+    from the end where the edge is thinnest inwards (issue 19, lean-sweep 80k seeds 2–3:
+    4.2 and 2.2 next to one end, 1.5 at the median); a single slab up to 2.3 in mid-span is the
+    zig-zag of a sparse scan's noisy points (the hp1 quick scan, 10k points), not a break."""
+    ratios = tour_ratios(points, mask, turn, perimeter, height)
+    if np.all(np.isnan(ratios)):
+        return 1.0
+    ends = np.concatenate([ratios[:END_SLABS], ratios[-END_SLABS:]])
+    return float(max(np.nanmedian(ratios), np.nanmax(ends) if np.any(np.isfinite(ends))
+                     else 0.0))
 
 
 def two_face_turn(points: np.ndarray, normals: np.ndarray, mask: np.ndarray, lo: np.ndarray,
@@ -213,12 +232,14 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     is monotone round any section, however strongly cambered, and unchanged by twist and
     taper. Points the graph does not reach (strays) take the θ of their nearest reached point.
     Where the ring is broken — no seam across y = y_front at the front end (high stagger), the
-    paths do not come back, or the order jumps between the faces
-    (:func:`~steamtwin.geometry.sections.tour_ratio` above
+    paths do not come back, or the order jumps between the faces over the span or next to one
+    end of it (:func:`~steamtwin.geometry.sections.tour_ratio` above
     :data:`~steamtwin.geometry.sections.BROKEN_TOUR`), as at a thin edge sampled too sparsely
     for the graph to go round it — the order by faces
     (:func:`~steamtwin.geometry.sections.two_face_turn`) is taken instead, when it follows the
-    sections better.
+    sections better. A ring broken next to one end only is broken all the same (issue 19,
+    lean-sweep 80k seed 2: a 0.2 mm trailing edge at the tip): kept, the side's fit folds there
+    and is stiffened everywhere.
     """
 
     count = len(points)
@@ -292,8 +313,8 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     turn[mask] = np.where(front_based >= rear_turn,
                           (front_based - rear_turn) / (1.0 - rear_turn) * (1.0 - share),
                           1.0 - share + front_based / rear_turn * share)
-    # a ring broken at a thin, sparse edge leaves the order jumping between the faces: then
-    # the order by faces, when it follows the sections better
+    # a ring broken at a thin, sparse edge leaves the order jumping between the faces, over the
+    # span or next to one end: then the order by faces, when it follows the sections better
     ratio = tour_ratio(points, mask, turn, perimeter, seed_radius)
     if ratio > BROKEN_TOUR:
         try:
