@@ -21,8 +21,18 @@ themselves, so that a scan hole the fit bridges is not taken for a defect):
   turned by θ; the *excursion* is how far the vertex stands outside all of them, combined (root
   sum of squares) with how far it lies beyond the extent of its nearest cloud points in its
   tangent plane (all of them on one side). In a scan hole the nearest points surround the
-  vertex and the surface bridges them tangentially: no excursion. Inward dips are the other
-  direction, seen by the residuals (the points lie outside a dipped surface).
+  vertex and the surface bridges them tangentially: no excursion;
+- or how far the vertex lies *inside* all of them, each point's height taken over the arc
+  through the vertex (the drop signed: below the tangent plane on a convex face, above it on a
+  concave one). The residuals do not see such a dip or spike into the blade: the fit trims
+  the points it misses by more than its outlier distance, and the spike may be narrower than
+  the point spacing, so that no point lies far from the triangles round it (issue 19: with
+  sections.py at fa41e9a, examples/reconstruct_blade.py --quick passed a 0.83 mm inward
+  tongue at the trailing edge of hp1, 53–100 % span, as watertight; the 20 or so
+  pressure-side points round it lay 0.17–0.55 mm off the surface, all trimmed by the fit, in a
+  strip one point across — 0–7 of each one's 20 neighbours far too, short of a coverage gap's
+  half; the inside reads up to 2.8 mm there, on 279 vertices over the limit, where the good
+  fit's vertices lie at most 0.04 mm inside).
 
 Limit (stated rule): a vertex is a defect beyond ``max(noise_factor × σ, spacing_factor × h,
 floor)`` plus its allowance — σ the measured noise (1.4826 × the median absolute residual of
@@ -259,7 +269,10 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
     line say how far the sample stands outside all of them, each raised by the drop l·tan(θ/2)
     of a circular arc from the sample to it (l its distance from the normal line, θ the turn
     between the two normals) — on a convex edge a point l off the normal line lies that far
-    below the tangent plane, so a sample on the edge is not taken for a beak; the sample
+    below the tangent plane, so a sample on the edge is not taken for a beak — or how far it
+    lies inside all of them, each point's height taken over the arc through the sample, its
+    drop signed by the turn of its normal along its offset l (n·l/(1 + cos θ): l·tan(θ/2) on a
+    convex face, −l·tan(θ/2) on a concave one, where the arc rises); the sample
     lies beyond the data by the gap to the nearest of the ``neighbours`` nearest
     ``extent_points`` (default: the cloud; all patches, caps included) when all of them lie
     on one side of it in its tangent plane. A sample with fewer than :data:`ENVELOPE` facing
@@ -300,16 +313,24 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
         spread = np.linalg.norm(lateral, axis=2)
         # the envelope: the facing points nearest to the normal line
         nearest = np.argsort(np.where(facing, spread, np.inf), axis=1)[:, :ENVELOPE]
-        envelope = np.take_along_axis(height, nearest, axis=1)
+        heights = np.take_along_axis(height, nearest, axis=1)
         # the drop of a circular arc from the sample to a point l off its normal line whose
         # normal is turned by θ: l·tan(θ/2) (the chord bisects the turn)
         turn = np.take_along_axis(np.einsum("mki,mi->mk", cloud_normals[index[sl]], normal),
                                   nearest, axis=1)
         half = np.sqrt(np.clip((1.0 - turn) / (1.0 + turn), 0.0, None))  # tan(θ/2)
         sagitta = np.take_along_axis(spread, nearest, axis=1) * half
-        envelope = envelope + sagitta
+        envelope = heights + sagitta
         top = np.argmax(envelope, axis=1)
         above = -envelope[np.arange(len(top)), top]  # > 0: the sample stands outside them all
+        # inside them all: each point's height over the arc through the sample, its drop signed
+        # by the turn of its normal along the offset, n·l/(1 + cos θ) (= l·tan(θ/2) on a convex
+        # face, its negative on a concave one)
+        bend = np.einsum("mki,mki->mk", np.take_along_axis(cloud_normals[index[sl]],
+                                                           nearest[:, :, None], axis=1),
+                         np.take_along_axis(lateral, nearest[:, :, None], axis=1))
+        bend /= 1.0 + np.maximum(turn, math.cos(FACING))  # unchanged on the facing points
+        inside = (heights + bend).min(axis=1)  # > 0: the sample lies inside them all
         # the extent: whether every one of the nearest points of the whole cloud lies on the
         # side of their centroid, seen from the sample, in the sample's tangent plane
         apart = extent_points[extent_index[sl]] - samples[sl, None, :]
@@ -324,7 +345,8 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
             checked = np.where(beyond > bridge_from, beyond, 0.0)
             beyond = np.where(_bridged(samples[sl], normal, checked, cloud, cloud_tree), 0.0,
                               beyond)
-        excursion[sl] = np.hypot(np.maximum(stands, 0.0), beyond)
+        excursion[sl] = np.maximum(np.hypot(np.maximum(stands, 0.0), beyond),
+                                   np.where(enough, inside, 0.0))
         allowance[sl] = np.where(enough, sagitta.max(axis=1), 0.0)
     return excursion, allowance
 
