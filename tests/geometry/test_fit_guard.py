@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from steamtwin.geometry.blade_cloud import ReconstructionError
-from steamtwin.geometry.fidelity import sample_triangles, surface_samples
+from steamtwin.geometry.fidelity import blade_distance, sample_triangles, surface_samples
 from steamtwin.geometry.fit_guard import (
     GuardSettings,
     edge_sampling,
@@ -351,12 +351,13 @@ def _dented(reconstruction, region: str, depth: float, half_height: float = 2e-3
 
 
 def test_a_surface_missing_a_patch_is_caught_by_the_cloud(dense_hp1) -> None:
-    """A 0.4 mm dent over 4 mm of span on the suction side: the surface stands off no point
-    (the forward excursion sees nothing inward), but ~300 cloud points lie up to 0.4 mm off
-    it — gaps named by patch, span and chord position and distance."""
+    """A 0.4 mm dent over 4 mm of span on the suction side: ~300 cloud points lie up to 0.4 mm
+    off it — gaps named by patch, span and chord position and distance; the surface's side
+    sees it too, its vertices lying inside the points round them."""
     dented = _dented(dense_hp1, "suction_side", 0.4e-3)
     report = guard_surface(dented)
-    assert not report.defects  # the forward check alone would pass it
+    assert report.defects and report.defects[0].region == "suction_side"
+    assert report.defects[0].size == pytest.approx(0.4e-3, abs=0.06e-3)
     assert report.gaps and sum(gap.points for gap in report.gaps) >= 100
     for gap in report.gaps:
         assert gap.region == "suction_side"
@@ -400,4 +401,88 @@ def test_a_surface_that_misses_the_cloud_is_refused_not_written(dense_hp1, monke
     with pytest.raises(ReconstructionError,
                        match=r"cloud points 0\.[45]\d mm off the surface at the pressure side "
                              r"at [45]\d–[56]\d % span"):
+        reconstruct_blade(dense_hp1.points, settings, dense_hp1.segmentation)
+
+
+# --- inward: spikes into the blade (issue 19, item 4) -------------------------------------------
+
+
+@pytest.mark.parametrize(("region", "size_mm"), [
+    (region, size) for region in ("leading_edge", "suction_side", "pressure_side",
+                                  "trailing_edge") for size in (0.5, 2.0)])
+def test_planted_inward_spikes_are_caught(dense_hp1, hp1_blade, region: str, size_mm: float
+                                          ) -> None:
+    """Three vertices of one column pushed into the blade: no cloud point lies far from the
+    surface (the spike is narrower than the point spacing, the triangles round it stay on the
+    cloud) and none stands outside it, but the spike lies inside the points round it. Before
+    the inward side was measured the guard passed such a surface (examples/reconstruct_blade.py
+    --quick with sections.py at fa41e9a: a 0.83 mm inward tongue at the trailing edge). Its
+    size is the spike's distance from the blade's surface: 2 mm into the 1.6-mm trailing edge
+    the middle vertex ends 0.18 mm from a flank, its neighbour (1 mm in) 0.7 mm."""
+    planted = _planted(dense_hp1, region, -size_mm * 1e-3)
+    report = guard_surface(planted)
+    assert not report.gaps  # the cloud's side does not see it
+    assert report.defects, f"{size_mm} mm into the {region} not caught"
+    worst = report.defects[0]
+    assert worst.region == region
+    assert 0.4 <= worst.span_from <= worst.span_to <= 0.6
+    moved = np.any(planted.vertices != dense_hp1.vertices, axis=1)
+    deepest = float(blade_distance(hp1_blade, planted.vertices[moved]).max())
+    assert worst.size == pytest.approx(deepest, rel=0.25)
+
+
+def test_excursion_of_a_point_inside_the_faces_is_its_depth() -> None:
+    """A sample 0.3 mm below a sampled square is 0.3 mm off; on a cylinder of 2 mm radius a
+    sample 0.3 mm inside is 0.3 mm off, seen from outside (convex) and inside (concave), to
+    the arc's drop to the nearest points (0.1 rad × 0.2 mm grid: on the concave face the 20th
+    nearest is 0.15 rad round, 0.3 mm × cos 0.15 − R(1 − cos 0.15) = 0.274 mm)."""
+    rng = np.random.default_rng(0)
+    square = np.column_stack([rng.uniform(-5e-3, 5e-3, (20_000, 2)), np.zeros(20_000)])
+    up = np.array([0.0, 0.0, 1.0])
+    excursion, _ = local_excursion(np.array([[1e-3, 1e-3, -0.3e-3]]), up[None, :], square,
+                                   np.tile(up, (len(square), 1)))
+    assert excursion[0] == pytest.approx(0.3e-3, abs=1e-9)
+    angle, y = np.meshgrid((np.arange(-10, 10) + 0.5) * 0.1, (np.arange(-10, 10) + 0.5) * 0.2e-3)
+    angle, y = angle.ravel(), y.ravel()
+    radius = 2e-3
+    cloud = np.column_stack([radius * np.sin(angle), y, radius * np.cos(angle)])
+    outward = np.column_stack([np.sin(angle), np.zeros(len(angle)), np.cos(angle)])
+    for normals, inside in ((outward, -1.0), (-outward, 1.0)):  # convex, concave
+        samples = np.array([radius * up, (radius + inside * 0.3e-3) * up])
+        excursion, _ = local_excursion(samples, np.tile(-inside * up, (2, 1)), cloud, normals)
+        assert excursion[0] == pytest.approx(0.0, abs=3e-6)
+        assert 0.27e-3 <= excursion[1] <= 0.3e-3 + 3e-6
+
+
+def test_a_flipped_normal_on_a_thin_plate_is_not_inside() -> None:
+    """A 0.3-mm plate sampled on both faces (0.3 mm spacing), a sample on its upper face whose
+    normal is turned down through the plate (a micro-cusp of a fit, as at row ip5's trailing
+    edge): the points facing that normal are the lower face's, 0.3 mm along it, but the sample
+    lies on the upper face's tangent planes — not inside."""
+    rng = np.random.default_rng(2)
+    face = np.column_stack([rng.uniform(-5e-3, 5e-3, (1_000, 2)), np.zeros(1_000)])
+    cloud = np.vstack([face, face + np.array([0.0, 0.0, 0.3e-3])])
+    normals = np.repeat([[0.0, 0.0, -1.0], [0.0, 0.0, 1.0]], 1_000, axis=0)
+    excursion, _ = local_excursion(np.array([[0.0, 0.0, 0.3e-3]]), np.array([[0.0, 0.0, -1.0]]),
+                                   cloud, normals)
+    assert excursion[0] == pytest.approx(0.0, abs=1e-9)
+
+
+def test_an_inward_spike_is_refused_not_written(dense_hp1, monkeypatch) -> None:
+    """A fit with a spike into the blade whatever the penalty is refused, never returned as a
+    watertight success."""
+    import steamtwin.geometry.reconstruct as reconstruct
+
+    original = reconstruct.triangulate
+
+    def with_spike(*args, **kwargs):
+        vertices, triangles, regions, ring_s = original(*args, **kwargs)
+        fake = dataclasses.replace(dense_hp1, vertices=vertices, ring_parameters=ring_s,
+                                   boundaries=args[3], surface=args[0])
+        return _planted(fake, "pressure_side", -0.9e-3).vertices, triangles, regions, ring_s
+
+    monkeypatch.setattr(reconstruct, "triangulate", with_spike)
+    settings = ReconstructionSettings(guard=GuardSettings(penalty_factors=(10.0,)))
+    with pytest.raises(ReconstructionError,
+                       match=r"0\.[7-9]\d mm at the pressure side at [45]\d"):
         reconstruct_blade(dense_hp1.points, settings, dense_hp1.segmentation)

@@ -21,8 +21,25 @@ themselves, so that a scan hole the fit bridges is not taken for a defect):
   turned by θ; the *excursion* is how far the vertex stands outside all of them, combined (root
   sum of squares) with how far it lies beyond the extent of its nearest cloud points in its
   tangent plane (all of them on one side). In a scan hole the nearest points surround the
-  vertex and the surface bridges them tangentially: no excursion. Inward dips are the other
-  direction, seen by the residuals (the points lie outside a dipped surface).
+  vertex and the surface bridges them tangentially: no excursion;
+- or how far the vertex lies *inside*: behind the tangent planes of all of its
+  ``neighbours`` nearest kept side points in space, each by its own (fitted, outward) normal
+  — the least of those depths, so that a vertex on one face of a thin part is cleared by the
+  points of its own face, and its own normal, which a micro-cusp of the fit can turn through
+  the part, is not used (row ip5, seed 0: a column of such cusps at the trailing edge read
+  1.1–1.3 mm inside against the opposite face when the depth was taken along the vertex's
+  normal; by the tangent planes at most 0.065 mm, limit 0.114 mm). On a convex face the
+  depth reads the arc's drop R(1 − cos θ) to the nearest point high, on a concave one low.
+  The residuals do not see such a dip or spike into the blade: the fit trims the points it
+  misses by more than its outlier distance, and a spike may be narrower than the point
+  spacing, so that no point lies far from the triangles round it. Issue 19: with sections.py
+  at fa41e9a, examples/reconstruct_blade.py --quick passed a 0.83 mm inward tongue at the
+  trailing edge of hp1 (53–100 % span) as watertight; the 20 or so pressure-side points round
+  it lay 0.17–0.55 mm off the surface, all trimmed by the fit, in a strip one point across —
+  0–7 of each one's 20 neighbours far too, short of a coverage gap's half. The depth reads
+  0.43–0.60 mm there on 54 vertices beyond the limit and allowance (true 0.42–0.81 mm) where
+  the good fit of the same cloud reads at most 0.11 mm (limit 0.17 mm). The rim zones
+  (below) are judged outward only.
 
 Limit (stated rule): a vertex is a defect beyond ``max(noise_factor × σ, spacing_factor × h,
 floor)`` plus its allowance — σ the measured noise (1.4826 × the median absolute residual of
@@ -259,8 +276,10 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
     line say how far the sample stands outside all of them, each raised by the drop l·tan(θ/2)
     of a circular arc from the sample to it (l its distance from the normal line, θ the turn
     between the two normals) — on a convex edge a point l off the normal line lies that far
-    below the tangent plane, so a sample on the edge is not taken for a beak; the sample
-    lies beyond the data by the gap to the nearest of the ``neighbours`` nearest
+    below the tangent plane, so a sample on the edge is not taken for a beak — or how far it
+    lies behind the tangent planes of all of its ``neighbours`` nearest ``cloud`` points in
+    space, each by the point's own normal (inside the part; the sample's normal is not used);
+    the sample lies beyond the data by the gap to the nearest of the ``neighbours`` nearest
     ``extent_points`` (default: the cloud; all patches, caps included) when all of them lie
     on one side of it in its tangent plane. A sample with fewer than :data:`ENVELOPE` facing
     points (a gap across a thin edge) is judged by the extent alone.
@@ -289,7 +308,10 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
                                                                   len(extent_points)))
     excursion = np.empty(len(samples))
     allowance = np.zeros(len(samples))
-    cloud_tree = cKDTree(cloud) if bridge_holes else None
+    cloud_tree = cKDTree(cloud)
+    # inside: the points nearest in space, whatever face (below)
+    _, behind_index = cloud_tree.query(samples, k=min(neighbours, len(cloud)))
+    behind_index = behind_index.reshape(len(samples), -1)
     for start in range(0, len(samples), 20_000):  # bounded memory
         sl = slice(start, start + 20_000)
         normal = sample_normals[sl]
@@ -324,7 +346,13 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
             checked = np.where(beyond > bridge_from, beyond, 0.0)
             beyond = np.where(_bridged(samples[sl], normal, checked, cloud, cloud_tree), 0.0,
                               beyond)
-        excursion[sl] = np.hypot(np.maximum(stands, 0.0), beyond)
+        # inside: how far the sample lies behind the tangent planes of all its nearest points,
+        # by their own normals — not the sample's, which a micro-cusp of the fit can turn
+        # through the part (then its facing points are the opposite face of a thin edge)
+        near = behind_index[sl]
+        inside = np.einsum("mki,mki->mk", cloud[near] - samples[sl, None, :],
+                           cloud_normals[near]).min(axis=1)
+        excursion[sl] = np.maximum(np.hypot(np.maximum(stands, 0.0), beyond), inside)
         allowance[sl] = np.where(enough, sagitta.max(axis=1), 0.0)
     return excursion, allowance
 
