@@ -201,8 +201,8 @@ def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labe
         if on.sum() < MIN_ARC_POINTS:
             continue
         base = 0.0 if edge == "trailing_edge" else 0.5
-        result = _model_edge(points, s, mask, perimeter, spacing, noise, edge,
-                             _edge_centre(s[on], points[on, 2], base))
+        centre_s = float(np.mod(base + np.median(_circular(s[on] - base)), 1.0))
+        result = _model_edge(points, s, mask, perimeter, spacing, noise, edge, centre_s)
         pieces += result[0]
         slabs += result[1]
         replaced |= result[2]
@@ -215,36 +215,6 @@ def model_sparse_edges(points: np.ndarray, s: np.ndarray, mask: np.ndarray, labe
                      slabs=tuple(slabs), spans=spans)
 
 
-#: Height (m) of the span bands in which the edge's side parameter is taken (the median of
-#: its labelled points'), interpolated along the span between them.
-CENTRE_BAND = 10e-3
-
-
-def _edge_centre(s: np.ndarray, z: np.ndarray, base: float) -> tuple[np.ndarray, np.ndarray]:
-    """The side parameter of an edge along the span from its labelled points' ``s`` at
-    heights ``z`` (m): the median in each :data:`CENTRE_BAND` band, then the median of each
-    band and its two neighbours, as (band heights, values near ``base``) for linear
-    interpolation. One median over the span missed slender 80k seed 1's leading edge, whose
-    s runs over 0.43–0.52 along the span, by more than the flank window (±0.07) over its top
-    25 mm, left without a model (2026-11-27, docs/benchmarks.md, branch ``nose``)."""
-    bands = max(1, round(float(np.ptp(z)) / CENTRE_BAND))
-    bounds = np.linspace(float(z.min()), float(z.max()), bands + 1)
-    which = np.clip(np.searchsorted(bounds, z, side="right") - 1, 0, bands - 1)
-    heights, values = [], []
-    for k in range(bands):
-        on = which == k
-        if on.sum() >= MIN_ARC_POINTS:
-            heights.append(0.5 * (bounds[k] + bounds[k + 1]))
-            values.append(base + float(np.median(_circular(s[on] - base))))
-    if not heights:
-        return np.array([float(np.median(z))]), np.array(
-            [base + float(np.median(_circular(s - base)))])
-    values = np.array(values)
-    padded = np.concatenate([values[:1], values, values[-1:]])
-    return np.array(heights), np.median(np.stack([padded[:-2], padded[1:-1], padded[2:]]),
-                                        axis=0)
-
-
 def _left_to_cloud(count: int, fits: list, reason: str | None = None) -> tuple:
     """:func:`_model_edge`'s result for an edge left to the cloud's ``count`` points: no model
     pieces, the slab records (each marked unused for ``reason`` when given), nothing replaced,
@@ -255,14 +225,12 @@ def _left_to_cloud(count: int, fits: list, reason: str | None = None) -> tuple:
 
 
 def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: np.ndarray,
-                spacing: float, noise: float, edge: str,
-                centre: tuple[np.ndarray, np.ndarray]) -> tuple:
-    """Slabs of one edge (its side parameter along the span ``centre``, :func:`_edge_centre`):
-    (model point pieces, slab records, replaced mask, parameters, span model or None). The
-    slabs next to a cap are modelled like the others (the span model holds there,
-    :data:`ORDER_SLABS`)."""
+                spacing: float, noise: float, edge: str, centre_s: float) -> tuple:
+    """Slabs of one edge: (model point pieces, slab records, replaced mask, parameters, span
+    model or None). The slabs next to a cap are modelled like the others (the span model
+    holds there, :data:`ORDER_SLABS`)."""
     arc = np.full(len(points), np.inf)
-    arc[mask] = _circular(s[mask] - np.interp(points[mask, 2], *centre)) * perimeter[mask]
+    arc[mask] = _circular(s[mask] - centre_s) * perimeter[mask]  # signed arc length (m)
     # the half circle of a modelled edge is shorter than MODEL_SAMPLES spacings: its tangent
     # points lie within π r / 2 < MODEL_SAMPLES·spacing / 2 of the edge's middle
     start = 0.5 * MODEL_SAMPLES * spacing + 2.0 * spacing
@@ -358,9 +326,7 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
     known = np.flatnonzero(np.isfinite(smooth[:, 0]))  # slabs between: interpolated in z
     # one side parameter for the edge's tip along the span (:func:`_pinned`)
     lengths = np.array([_slab_length(perimeter, members) for _, _, members in fits])
-    centre_s = np.interp([slab.z for slab, _, _ in fits], *centre)
-    tip = (float(np.median(centre_s[known] + smooth[known, 0] / lengths[known])) if len(known)
-           else 0.0)
+    tip = float(np.median(smooth[known, 0] / lengths[known])) if len(known) else 0.0
     outer = ORDER_BAND[1] * reach if pooled else reach
     pieces, slabs = [], []
     replaced = np.zeros(len(points), dtype=bool)
@@ -373,10 +339,10 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
         elif len(known):
             slab = replace(slab, **fitted, used=True, reason="" if slab.used else
                            f"filled by the span model ({slab.reason})")
-            applied = _apply_model(points, lengths[k], members, model, spacing, centre_s[k],
+            applied = _apply_model(points, lengths[k], members, model, spacing, centre_s,
                                    (edges_z[k], edges_z[k + 1]), _pinned(np.array(
                                        [np.interp(k, known, smooth[known, i]) for i in range(3)]),
-                                       (tip - centre_s[k]) * lengths[k], outer))
+                                       tip * lengths[k], outer))
             pieces.append(applied[0])
             replaced[applied[1]] = True
             parameters[applied[2]] = applied[3]
@@ -587,9 +553,16 @@ def _pinned(order: np.ndarray, tip: float, outer: float) -> np.ndarray:
     edge's tip wandered over −1.4…+2.6 mm of arc, jumping 2.9 mm within 10 mm of span at 150
     mm — where the side folded (2026-11-28). Pinned at its median, the difference goes into
     the faces' scale over the ±``outer`` of points the model orders (10 mm: a 0.25 change of a
-    slope of 1, within the factor two the order's fit allows)."""
+    slope of 1, within the factor two the order's fit allows). A shift that would halve a
+    face's slope is cut to that (the tip then stays off by the rest): the cloud's order beyond
+    ``outer`` must not be reached before the tip (tried with the edge's s taken per 10-mm
+    band, on slender 80k seed 1's leading edge, 5 mm of arc off its median over the top 12 mm
+    of span: its pressure face's points were ordered back onto the suction face, leaving the
+    spline without points over 22 mm of arc)."""
     c, b0, b1 = order
-    return np.array([tip, b0 + (tip - c) / outer, b1 - (tip - c) / outer])
+    limit = 0.5 * outer * min(b0, b1)
+    shift = float(np.clip(tip - c, -limit, limit))
+    return np.array([c + shift, b0 + shift / outer, b1 - shift / outer])
 
 
 def _apply_model(points: np.ndarray, length: float, members: np.ndarray,
