@@ -39,7 +39,9 @@ and hands the side's fit that model's points instead of the sparse edge's own:
   straight-line fit per slab, median over ±:data:`ORDER_SLABS` slabs, interpolated in z
   across slabs without enough flank points): the cloud's order is
   0.3–0.8 mm off within a millimetre of a thin edge, and neighbouring slabs that disagree make
-  the side's spline fold;
+  the side's spline fold; the tip itself is put at one ``s`` along the whole span, the
+  difference taken up by the faces' scale (:func:`_pinned`: the spline's breakpoints are
+  the same at every height);
 - where fewer than :data:`OWN_SHARE` of the slabs have a circle of their own (an edge below
   about one point spacing across), every slab's start comes from its flanks found by geometry
   and the cloud's order is read per face beyond the faces' mixing

@@ -184,21 +184,15 @@ def face_order(points: np.ndarray, arc: np.ndarray, members: np.ndarray,
     """The cloud's arc length (m) against the model's u on either face, arc = c + bᵢ·u (b₀
     for u < 0, b₁ beyond; one c, so the order stays continuous at the tip), least squares
     over the slab's ``members`` in :data:`ORDER_BAND` × ``reach`` (m) that the cloud's order
-    puts on the model's face and that lie within :data:`ORDER_DISTANCE` of the face's median
-    distance from the model's line there (a cambered face leaves the line by up to 0.6 mm at
-    7.5–10 mm from the tip: slender 80k seed 3, 2026-11-28, where the lines' own band held
-    0–8 points a slab and no slab got an order): (c, b₀, b₁), NaN when a face has fewer than
+    puts on the model's face: (c, b₀, b₁), NaN when a face has fewer than
     :data:`MIN_FLANK_POINTS` there or a slope is off by more than a factor two."""
     if len(members) == 0:
         return math.nan, math.nan, math.nan
     section = model.at(points[members, 2])
     u = arc_length_at(points[members, :2], *section)
     distance = edge_distance_at(points[members, :2], *section)[0]
-    band = (np.abs(u) >= ORDER_BAND[0] * reach) & (np.sign(u) == np.sign(arc[members]))
-    for face in (u < 0.0, u > 0.0):  # about the face's own offset from its line (camber)
-        on = band & face
-        if on.any():
-            band[on] = np.abs(distance[on] - np.median(distance[on])) <= ORDER_DISTANCE
+    band = ((np.abs(u) >= ORDER_BAND[0] * reach) & (np.abs(distance) <= ORDER_DISTANCE)
+            & (np.sign(u) == np.sign(arc[members])))
     if min(np.sum(band & (u < 0.0)), np.sum(band & (u > 0.0))) < MIN_FLANK_POINTS:
         return math.nan, math.nan, math.nan
     design = np.column_stack([np.ones(band.sum()), np.minimum(u[band], 0.0),
