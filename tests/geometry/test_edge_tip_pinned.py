@@ -64,3 +64,19 @@ def test_order_meets_the_cloud_far_from_the_edge(wandering) -> None:
     assert far.sum() > 50
     difference = (np.mod(model.parameters[given[far]] - s[given[far]] + 0.5, 1.0) - 0.5)
     assert np.median(np.abs(difference)) * perimeter < 0.2e-3
+
+
+def test_pinned_order_meets_the_former_at_the_ends_and_keeps_half_its_slope() -> None:
+    """The pinned order equals the former at u = ±outer; a shift beyond half the smaller
+    slope × outer is cut to that (the tip then keeps the rest of its offset)."""
+    from steamtwin.geometry.edge_model import _pinned
+    from steamtwin.geometry.edge_pooled import order_arc
+
+    outer, order = 10e-3, np.array([1e-3, 1.0, 1.2])
+    ends = np.array([-outer, outer])
+    pinned = _pinned(order, -2e-3, outer)
+    assert pinned[0] == pytest.approx(-2e-3)
+    assert order_arc(pinned, ends) == pytest.approx(order_arc(order, ends))
+    cut = _pinned(order, 12e-3, outer)  # 11 mm of shift over 10 mm: cut to 5 mm
+    assert cut[0] == pytest.approx(6e-3) and cut[2] == pytest.approx(0.7)  # ≥ half of 1.2
+    assert order_arc(cut, ends) == pytest.approx(order_arc(order, ends))

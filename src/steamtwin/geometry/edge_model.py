@@ -555,8 +555,8 @@ def _pinned(order: np.ndarray, tip: float, outer: float) -> np.ndarray:
     edge's tip wandered over −1.4…+2.6 mm of arc, jumping 2.9 mm within 10 mm of span at 150
     mm — where the side folded (2026-11-28). Pinned at its median, the difference goes into
     the faces' scale over the ±``outer`` of points the model orders (10 mm: a 0.25 change of a
-    slope of 1, within the factor two the order's fit allows). A shift that would halve a
-    face's slope is cut to that (the tip then stays off by the rest): the cloud's order beyond
+    slope of 1, within the factor two the order's fit allows). A shift beyond half the smaller
+    slope × ``outer`` is cut to that (the tip then stays off by the rest): the cloud's order beyond
     ``outer`` must not be reached before the tip (tried with the edge's s taken per 10-mm
     band, on slender 80k seed 1's leading edge, 5 mm of arc off its median over the top 12 mm
     of span: its pressure face's points were ordered back onto the suction face, leaving the
