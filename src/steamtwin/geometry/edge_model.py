@@ -39,7 +39,7 @@ and hands the side's fit that model's points instead of the sparse edge's own:
   straight-line fit per slab, median over ±:data:`ORDER_SLABS` slabs, interpolated in z
   across slabs without enough flank points): the cloud's order is
   0.3–0.8 mm off within a millimetre of a thin edge, and neighbouring slabs that disagree make
-  the side's spline fold; the tip itself is put at one ``s`` along the whole span, the
+  the side's spline fold; a pooled edge's tip is put at one ``s`` along the whole span, the
   difference taken up by the faces' scale (:func:`_pinned`: the spline's breakpoints are
   the same at every height);
 - where fewer than :data:`OWN_SHARE` of the slabs have a circle of their own (an edge below
@@ -326,10 +326,9 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
         if np.isfinite(around[:, 0]).any():
             smooth[k] = np.nanmedian(around, axis=0)
     known = np.flatnonzero(np.isfinite(smooth[:, 0]))  # slabs between: interpolated in z
-    # one side parameter for the edge's tip along the span (:func:`_pinned`)
+    # a pooled edge's tip at one side parameter along the span (:func:`_pinned`)
     lengths = np.array([_slab_length(perimeter, members) for _, _, members in fits])
     tip = float(np.median(smooth[known, 0] / lengths[known])) if len(known) else 0.0
-    outer = ORDER_BAND[1] * reach if pooled else reach
     pieces, slabs = [], []
     replaced = np.zeros(len(points), dtype=bool)
     parameters = np.full(len(points), np.nan)
@@ -341,10 +340,11 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
         elif len(known):
             slab = replace(slab, **fitted, used=True, reason="" if slab.used else
                            f"filled by the span model ({slab.reason})")
+            order_k = np.array([np.interp(k, known, smooth[known, i]) for i in range(3)])
+            if pooled:
+                order_k = _pinned(order_k, tip * lengths[k], ORDER_BAND[1] * reach)
             applied = _apply_model(points, lengths[k], members, model, spacing, centre_s,
-                                   (edges_z[k], edges_z[k + 1]), _pinned(np.array(
-                                       [np.interp(k, known, smooth[known, i]) for i in range(3)]),
-                                       tip * lengths[k], outer))
+                                   (edges_z[k], edges_z[k + 1]), order_k)
             pieces.append(applied[0])
             replaced[applied[1]] = True
             parameters[applied[2]] = applied[3]
@@ -550,10 +550,12 @@ def _pinned(order: np.ndarray, tip: float, outer: float) -> np.ndarray:
     The side's spline has one set of breakpoints in ``s`` along the whole span, so an edge
     whose tip wanders in ``s`` by more than its knot spans round the edge (a third of the half
     circle, ~0.15 mm for a 0.15-mm edge) is cut where it leaves them, or folds where it jumps.
-    Each slab's shift c of the cloud's order against the model is a fit to the points 7.5–10
-    mm from the tip (pooled) and scatters by millimetres: on slender 80k seed 0 the trailing
+    A pooled edge's shift c of the cloud's order against the model is a fit to the points
+    7.5–10 mm from the tip and scatters by millimetres: on slender 80k seed 0 the trailing
     edge's tip wandered over −1.4…+2.6 mm of arc, jumping 2.9 mm within 10 mm of span at 150
-    mm — where the side folded (2026-11-28). Pinned at its median, the difference goes into
+    mm — where the side folded (2026-11-28). Only pooled edges are pinned: pinning every
+    modelled edge took lean-sweep 80k seed 3 (random pose) from a refusal to a watertight STL
+    0.11 mm off at the tip (a fail). Pinned at its median, the difference goes into
     the faces' scale over the ±``outer`` of points the model orders (10 mm: a 0.25 change of a
     slope of 1, within the factor two the order's fit allows). A shift beyond half the smaller
     slope × ``outer`` is cut to that (the tip then stays off by the rest): the cloud's order beyond
