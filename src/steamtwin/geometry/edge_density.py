@@ -30,7 +30,7 @@ from λ of them σ/√λ (0.009 mm at λ = 4, σ 0.017 mm), and a knot span hold
 probability e^(−λ) (Poisson: 1.8 % at 4), filled by the P-spline from its neighbours. So an
 edge is refused only when it also holds fewer than :data:`MIN_POOLED_POINTS` arc points per
 knot span (median over its bands). Measured (2026-11-28): slender 80k's 0.15-mm trailing edge,
-0.93–0.98 across, holds ≈ 5 (its pooled model within 0.03 mm of the exact tip; the blade
+0.93–0.98 across, holds ≈ 5 (its pooled model within 0.03 mm of the exact tip; seed 0
 within the issue's limits, docs/benchmarks.md, branch ``slender``); at 40k ≈ 2.4, refused.
 """
 
