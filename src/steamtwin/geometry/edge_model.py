@@ -486,7 +486,8 @@ def _fit_slab(points: np.ndarray, arc: np.ndarray, members: np.ndarray, spacing:
                                           radius, keep, bounds)
     offsets = line_offsets(points[members, 2])
     residual, sector = edge_distance(xy, normals, offsets, radius)
-    rms = float(np.sqrt(np.mean(residual[sector & keep] ** 2))) if sector.any() else math.nan
+    fitted_arc = sector & keep
+    rms = float(np.sqrt(np.mean(residual[fitted_arc] ** 2))) if fitted_arc.any() else math.nan
     centre = tangent_centre(normals, line_offsets(np.array([z_mid])), radius)[0]
     record = {**record, "radius": radius, "rms": rms, "centre": (float(centre[0]),
                                                                  float(centre[1]))}
