@@ -18,9 +18,11 @@ import numpy as np
 
 __all__ = ["END_FACE_TILT", "end_face_points"]
 
-#: The end face's tilt off perpendicular to the span axis that the window allows: the end
-#: planes of our rows and of issue 19's family are parallel to each other within 0.6° and
-#: within 2.3° of the side normals' axis (docs/geometry.md, frame).
+#: The end face's tilt off perpendicular to the axis that the window allows: the twist and
+#: taper of our rows tilt the side normals' axis by up to 2.3° off the end planes (hp5); issue
+#: 19's compressor blade by 4.8–7.2°, where the window holds a part of the end face only,
+#: which gives the same plane (:mod:`steamtwin.geometry.frame`). In the blade frame the axis is
+#: the end planes' own normal.
 END_FACE_TILT = math.radians(5.0)
 
 
