@@ -91,6 +91,7 @@ def test_a_sparse_edge_is_refused_before_the_fits(no_fits) -> None:
         reconstruct.reconstruct_blade(points, segmentation=segmentation)
     message = str(refused.value)
     assert "points per mm" in message and "× this scan's density" in message
+    assert "pooled: needs ≥" in message  # the density the pooled edge model needs, per band
     assert "leading edge" not in message.split("—")[0]  # its 1-mm nose is sampled
     assert len(refused.value.bands) == 5
 
@@ -99,6 +100,14 @@ def test_a_sampled_edge_goes_on_to_the_fits(no_fits) -> None:
     """2.5 spacings across the same edge: the check passes and the reconstruction reaches the
     side's fits."""
     points, segmentation = cloud(2.5)
+    with pytest.raises(RuntimeError, match="reached the fits"):
+        reconstruct.reconstruct_blade(points, segmentation=segmentation)
+
+
+def test_an_edge_the_pooled_model_holds_goes_on_to_the_fits(no_fits) -> None:
+    """0.95 spacings across (slender 80k's trailing edge: 0.93–0.98) holds ≈ 5 arc points per
+    knot span of the pooled model (≥ MIN_POOLED_POINTS): not refused (before: refused, < 1.2)."""
+    points, segmentation = cloud(0.95)
     with pytest.raises(RuntimeError, match="reached the fits"):
         reconstruct.reconstruct_blade(points, segmentation=segmentation)
 

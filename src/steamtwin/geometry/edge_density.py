@@ -21,6 +21,17 @@ never reads a sparse edge's radius too small (it takes the flanks' points and co
 too holds fewer than :data:`~steamtwin.geometry.edge_model.MODEL_SAMPLES` spacings — the edge
 model's own bound of an unresolved edge. Missing a refusal here costs time (the later checks
 still refuse); a wrong refusal would cost a blade that fits.
+
+Below one spacing across, the edge model pooled along the span (:mod:`~steamtwin.geometry.
+edge_pooled`) still holds an edge whose span model gets enough arc points per knot span
+(:data:`~steamtwin.geometry.edge_span.KNOT_SPACING`): ρ·π·r·Δz = n·√ρ·Δz for n points
+across. Its flanks are fixed by thousands of points, its tip along the bisector by the arc's:
+from λ of them σ/√λ (0.009 mm at λ = 4, σ 0.017 mm), and a knot span holds none with
+probability e^(−λ) (Poisson: 1.8 % at 4), filled by the P-spline from its neighbours. So an
+edge is refused only when it also holds fewer than :data:`MIN_POOLED_POINTS` arc points per
+knot span (median over its bands). Measured (2026-11-28): slender 80k's 0.15-mm trailing edge,
+0.93–0.98 across, holds ≈ 5 (its pooled model within 0.03 mm of the exact tip; seed 0
+within the issue's limits, docs/benchmarks.md, branch ``slender``); at 40k ≈ 2.4, refused.
 """
 
 from __future__ import annotations
@@ -31,12 +42,16 @@ import numpy as np
 
 from steamtwin.geometry.blade_cloud import ReconstructionError
 from steamtwin.geometry.edge_model import MODEL_SAMPLES
+from steamtwin.geometry.edge_span import KNOT_SPACING
 from steamtwin.geometry.fit_guard import EdgeSampling, edge_sampling
 from steamtwin.geometry.segmentation import Segmentation
 
 #: Fewest points across an edge's half circle (median over its span bands) for the cloud to be
 #: reconstructed: the sampling theorem's 1 with a 20 % margin (module docstring).
 MIN_POINTS_ACROSS = 1.2
+#: Fewest arc points per knot span of the pooled edge model (median over the bands) for an
+#: edge below :data:`MIN_POINTS_ACROSS` to be fitted (module docstring).
+MIN_POOLED_POINTS = 4.0
 
 
 class SparseEdgeError(ReconstructionError):
@@ -54,15 +69,27 @@ def points_across(band: EdgeSampling, radius: float | None = None) -> float:
     return band.per_mm * math.pi * (band.radius if radius is None else radius) * 1e3
 
 
+def pooled_points(band: EdgeSampling) -> float:
+    """Arc points per knot span of the pooled edge model, ρ·π·r·Δz (dimensionless; Δz
+    :data:`~steamtwin.geometry.edge_span.KNOT_SPACING`)."""
+    return points_across(band) * band.per_mm * KNOT_SPACING * 1e3
+
+
+def pooled_needed(band: EdgeSampling) -> float:
+    """Points per mm (√ρ) for :data:`MIN_POOLED_POINTS` arc points per knot span."""
+    return math.sqrt(MIN_POOLED_POINTS / (math.pi * band.radius * KNOT_SPACING * 1e6))
+
+
 def check_edge_density(points: np.ndarray, segmentation: Segmentation,
                        minimum: float = MIN_POINTS_ACROSS) -> dict[str, float]:
     """The median points across each edge's half circle (``points`` (n, 3) in m, in the blade
     frame; ``segmentation`` the cloud's). Raises :class:`SparseEdgeError` when an edge's
-    median is below ``minimum`` and the circle through its points holds fewer than
-    :data:`~steamtwin.geometry.edge_model.MODEL_SAMPLES` spacings, with :func:`~steamtwin.
-    geometry.fit_guard.edge_sampling`'s description of the bands below ``minimum`` (span
-    range, points per mm and per mm², × this scan's density). Edges without a sampled band
-    are left out."""
+    median is below ``minimum``, the circle through its points holds fewer than
+    :data:`~steamtwin.geometry.edge_model.MODEL_SAMPLES` spacings and its bands fewer than
+    :data:`MIN_POOLED_POINTS` arc points per knot span of the pooled model (median), with
+    :func:`~steamtwin.geometry.fit_guard.edge_sampling`'s description of the bands below
+    ``minimum`` (span range, points per mm and per mm², × this scan's density) and the density
+    the pooled model needs in each. Edges without a sampled band are left out."""
     figures = {}
     for edge in ("leading_edge", "trailing_edge"):
         bands = edge_sampling(points, segmentation, edge)
@@ -70,11 +97,16 @@ def check_edge_density(points: np.ndarray, segmentation: Segmentation,
             continue
         figures[edge] = float(np.median([points_across(band) for band in bands]))
         circle = float(np.median([points_across(band, band.circle_radius) for band in bands]))
-        if figures[edge] < minimum and circle < MODEL_SAMPLES:
-            low = [band.describe() for band in bands if points_across(band) < minimum]
+        pooled = float(np.median([pooled_points(band) for band in bands]))
+        if figures[edge] < minimum and circle < MODEL_SAMPLES and pooled < MIN_POOLED_POINTS:
+            low = [band for band in bands if points_across(band) < minimum]
             raise SparseEdgeError(
                 f"too few points on the {edge.replace('_', ' ')} to fit it: "
                 f"{figures[edge]:.2f} point spacings across its half circle (median over the "
-                f"span), needs ≥ {minimum:g} — " + "; ".join(low)
+                f"span), needs ≥ {minimum:g}, or ≥ {MIN_POOLED_POINTS:g} arc points per "
+                f"{KNOT_SPACING * 1e3:g} mm of span for the edge model pooled along the span "
+                f"(has {pooled:.1f}) — " + "; ".join(
+                    f"{band.describe()}; pooled: needs ≥ {pooled_needed(band):.1f} points per "
+                    f"mm ({pooled_needed(band) ** 2:.0f} per mm²)" for band in low)
                 + " — refused before the side fit", bands)
     return figures

@@ -39,7 +39,9 @@ and hands the side's fit that model's points instead of the sparse edge's own:
   straight-line fit per slab, median over ±:data:`ORDER_SLABS` slabs, interpolated in z
   across slabs without enough flank points): the cloud's order is
   0.3–0.8 mm off within a millimetre of a thin edge, and neighbouring slabs that disagree make
-  the side's spline fold;
+  the side's spline fold; a pooled edge's tip is put at one ``s`` along the whole span, the
+  difference taken up by the faces' scale (:func:`_pinned`: the spline's breakpoints are
+  the same at every height);
 - where fewer than :data:`OWN_SHARE` of the slabs have a circle of their own (an edge below
   about one point spacing across), every slab's start comes from its flanks found by geometry
   and the cloud's order is read per face beyond the faces' mixing
@@ -83,6 +85,7 @@ from steamtwin.geometry.edge_circle import (
 )
 from steamtwin.geometry.edge_nose import nose_refit
 from steamtwin.geometry.edge_pooled import (
+    ORDER_BAND,
     ORDER_DISTANCE,
     face_order,
     geometric_start,
@@ -323,6 +326,9 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
         if np.isfinite(around[:, 0]).any():
             smooth[k] = np.nanmedian(around, axis=0)
     known = np.flatnonzero(np.isfinite(smooth[:, 0]))  # slabs between: interpolated in z
+    # a pooled edge's tip at one side parameter along the span (:func:`_pinned`)
+    lengths = np.array([_slab_length(perimeter, members) for _, _, members in fits])
+    tip = float(np.median(smooth[known, 0] / lengths[known])) if len(known) else 0.0
     pieces, slabs = [], []
     replaced = np.zeros(len(points), dtype=bool)
     parameters = np.full(len(points), np.nan)
@@ -334,9 +340,11 @@ def _model_edge(points: np.ndarray, s: np.ndarray, mask: np.ndarray, perimeter: 
         elif len(known):
             slab = replace(slab, **fitted, used=True, reason="" if slab.used else
                            f"filled by the span model ({slab.reason})")
-            applied = _apply_model(points, perimeter, members, model, spacing, centre_s,
-                                   (edges_z[k], edges_z[k + 1]), np.array(
-                                       [np.interp(k, known, smooth[known, i]) for i in range(3)]))
+            order_k = np.array([np.interp(k, known, smooth[known, i]) for i in range(3)])
+            if pooled:
+                order_k = _pinned(order_k, tip * lengths[k], ORDER_BAND[1] * reach)
+            applied = _apply_model(points, lengths[k], members, model, spacing, centre_s,
+                                   (edges_z[k], edges_z[k + 1]), order_k)
             pieces.append(applied[0])
             replaced[applied[1]] = True
             parameters[applied[2]] = applied[3]
@@ -529,7 +537,40 @@ def _order_against_model(points: np.ndarray, arc: np.ndarray, members: np.ndarra
         math.nan, math.nan, math.nan)
 
 
-def _apply_model(points: np.ndarray, perimeter: np.ndarray, members: np.ndarray,
+def _slab_length(perimeter: np.ndarray, members: np.ndarray) -> float:
+    """The section perimeter (m) of a slab's ``members``: their median, or the cloud's."""
+    return float(np.median(perimeter[members])) if len(members) else float(
+        np.median(perimeter[np.isfinite(perimeter)]))
+
+
+def _pinned(order: np.ndarray, tip: float, outer: float) -> np.ndarray:
+    """The order (c, b₀, b₁) of :func:`~steamtwin.geometry.edge_pooled.order_arc` with its
+    tip moved to the cloud's arc length ``tip`` (m) and each face's slope changed so that the
+    order still meets the former at u = ∓``outer`` (m), where the modelled points end.
+
+    The side's spline has one set of breakpoints in ``s`` along the whole span, so an edge
+    whose tip wanders in ``s`` by more than its knot spans round the edge (a third of the half
+    circle, ~0.15 mm for a 0.15-mm edge) is cut where it leaves them, or folds where it jumps.
+    A pooled edge's shift c of the cloud's order against the model is a fit to the points
+    7.5–10 mm from the tip and scatters by millimetres: on slender 80k seed 0 the trailing
+    edge's tip wandered over −1.4…+2.6 mm of arc, jumping 2.9 mm within 10 mm of span at 150
+    mm — where the side folded (2026-11-28). Only pooled edges are pinned: pinning every
+    modelled edge took lean-sweep 80k seed 3 (random pose) from a refusal to a watertight STL
+    0.11 mm off at the tip (a fail). Pinned at its median, the difference goes into
+    the faces' scale over the ±``outer`` of points the model orders (10 mm: a 0.25 change of a
+    slope of 1, within the factor two the order's fit allows). A shift beyond half the smaller
+    slope × ``outer`` is cut to that (the tip then stays off by the rest): the cloud's order beyond
+    ``outer`` must not be reached before the tip (tried with the edge's s taken per 10-mm
+    band, on slender 80k seed 1's leading edge, 5 mm of arc off its median over the top 12 mm
+    of span: its pressure face's points were ordered back onto the suction face, leaving the
+    spline without points over 22 mm of arc)."""
+    c, b0, b1 = order
+    limit = 0.5 * outer * min(b0, b1)
+    shift = float(np.clip(tip - c, -limit, limit))
+    return np.array([c + shift, b0 + shift / outer, b1 - shift / outer])
+
+
+def _apply_model(points: np.ndarray, length: float, members: np.ndarray,
                  model: SpanEdgeModel, spacing: float, centre_s: float,
                  z_range: tuple[float, float], order: np.ndarray) -> tuple:
     """Model points of a slab and the parameters of its cloud points: ((model points, s),
@@ -543,8 +584,6 @@ def _apply_model(points: np.ndarray, perimeter: np.ndarray, members: np.ndarray,
     xy = points[members, :2]
     u = arc_length_at(xy, *section)
     sector = edge_distance_at(xy, *section)[1]
-    length = float(np.median(perimeter[members])) if len(members) else float(
-        np.median(perimeter[np.isfinite(perimeter)]))
     rings = max(1, math.ceil((z_range[1] - z_range[0]) * RING_DENSITY / spacing))
     z = z_range[0] + (np.arange(rings) + 0.5) * (z_range[1] - z_range[0]) / rings
     ring_cut = _model_cut(model, z, spacing)[1]
