@@ -427,20 +427,21 @@ BRIDGE_SPAN_REACH = 20.0
 
 def _span_bridge(sample: np.ndarray, normal: np.ndarray, distance: float, points: np.ndarray,
                  tree: cKDTree) -> float:
-    """How far (m) ``sample`` (3,; m, unit ``normal``) lies off the line between the rims of a
-    hole along the span, or inf when the data do not reach past it on both sides of it.
+    """How far (m) ``sample`` (3,; m, unit ``normal``) stands outward of the line between the
+    rims of a hole along the span, or inf when the data do not reach past it on both sides.
 
     ``distance`` (m) is its distance from the nearest of ``points``. The span axis z, turned
     into its tangent plane, is the edge line's direction; the rim candidates are the points
-    within ``distance`` of that line in the tangent plane and within
-    :data:`BRIDGE_SPAN_REACH` × ``distance``, on each side the :data:`BRIDGE_DEPTH` nearest
-    along the line. The surface across the hole interpolates between the two rims: the sample
-    is read at the point of the line between a rim point above and one below that it passes
-    (the nearest such point over the pairs), outward along the normal and across in the
-    tangent plane (inside is judged by the depth). In a hole that reading is about the noise;
-    beside an edge line (a beak or fin beyond it) the line runs at the sample's distance from
-    the data, and a reading over half that distance is no hole (inf); a beak beyond a tip or
-    root rim has no data on its far side."""
+    within ``distance`` of the line through the sample (not the faces behind a thin edge, which
+    run along it too) and within :data:`BRIDGE_SPAN_REACH` × ``distance`` along it, on each
+    side the :data:`BRIDGE_DEPTH` nearest. The surface across the hole interpolates between
+    the two rims: the sample is read by how far it stands outward of the line from a rim point
+    above to one below (the least over the pairs whose line passes within half its
+    ``distance`` across in the tangent plane; inside is judged by the depth). In a hole that
+    reading is about the noise; beside an edge line (a beak beyond it, or a fin in the plane
+    of a face) the data lie at the sample's distance, across or inward, and a reading over
+    half that distance is no hole (inf); a beak beyond a tip or root rim has no data on its
+    far side."""
     along = np.array([0.0, 0.0, 1.0]) - normal[2] * normal
     length = float(np.linalg.norm(along))
     if length < 0.5:  # the span axis within 30° of the normal: no edge line along the span
@@ -449,18 +450,18 @@ def _span_bridge(sample: np.ndarray, normal: np.ndarray, distance: float, points
     across = np.cross(normal, along)
     near = points[tree.query_ball_point(sample, BRIDGE_SPAN_REACH * distance)] - sample
     u, w, height = near @ along, near @ across, near @ normal
-    strip = np.abs(w) <= distance
+    line = np.hypot(w, height) <= distance
     rims = []
     for side in (1.0, -1.0):
-        on = np.flatnonzero(strip & (side * u > 0.0))
+        on = np.flatnonzero(line & (side * u > 0.0))
         if len(on) < BRIDGE_DEPTH:
             return math.inf
         rims.append(on[np.argsort(side * u[on])[:BRIDGE_DEPTH]])
     a, b = np.meshgrid(*rims, indexing="ij")
     t = u[a] / (u[a] - u[b])  # where the line from a to b passes the sample, 0 at a
-    reading = float(np.min(np.hypot(w[a] + t * (w[b] - w[a]),
-                                    np.maximum(-(height[a] + t * (height[b] - height[a])),
-                                               0.0))))
+    on_line = np.abs(w[a] + t * (w[b] - w[a])) <= 0.5 * distance
+    outward = -(height[a] + t * (height[b] - height[a]))
+    reading = max(float(np.min(outward[on_line], initial=math.inf)), 0.0)
     return reading if reading <= 0.5 * distance else math.inf
 
 
