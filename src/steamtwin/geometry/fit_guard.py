@@ -349,7 +349,7 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
         if bridge_holes:
             checked = np.where(beyond > bridge_from, beyond, 0.0)
             beyond = np.minimum(beyond, _bridged(samples[sl], normal, checked, cloud,
-                                                 cloud_tree))
+                                                 cloud_tree, cloud_normals))
         # inside: how far the sample lies behind the tangent planes of all its nearest points,
         # by their own normals — not the sample's, which a micro-cusp of the fit can turn
         # through the part (then its facing points are the opposite face of a thin edge)
@@ -390,7 +390,7 @@ def half_plane_depth(offsets: np.ndarray) -> int:
 
 
 def _bridged(samples: np.ndarray, normals: np.ndarray, beyond: np.ndarray, points: np.ndarray,
-             tree: cKDTree) -> np.ndarray:
+             tree: cKDTree, point_normals: np.ndarray) -> np.ndarray:
     """How far (m) each sample that lies ``beyond`` (m, > 0) its nearest points stands beyond
     the data once a scan hole it may bridge is allowed for (inf: no hole, the extent stands).
 
@@ -402,9 +402,10 @@ def _bridged(samples: np.ndarray, normals: np.ndarray, beyond: np.ndarray, point
     - surrounded (0): the ``points`` within :data:`BRIDGE_REACH` × its distance from the
       nearest of them, projected onto its tangent plane, surround it — at least
       :data:`BRIDGE_DEPTH` of them in every half-plane through it (a hole in a face);
-    - along the span (:func:`_span_bridge`): a hole through an edge thinner than the hole has
-      no rim beside the edge, only above and below it along the edge line; there the sample
-      stands beyond the data by how far it lies outside the line between the two rims.
+    - along the span (:func:`_span_bridge`, ``point_normals`` the points' unit normals): a hole
+      through an edge thinner than the hole has no rim beside the edge, only above and below
+      it along the edge line; there the sample stands beyond the data by how far it lies
+      outside the rims' tangent planes, interpolated between them.
     """
     result = np.full(len(samples), np.inf)
     checked = np.flatnonzero(beyond > 0.0)
@@ -416,7 +417,8 @@ def _bridged(samples: np.ndarray, normals: np.ndarray, beyond: np.ndarray, point
         if half_plane_depth(near @ plane_basis(normals[i]).T) >= BRIDGE_DEPTH:
             result[i] = 0.0
         else:
-            result[i] = _span_bridge(samples[i], normals[i], distance, points, tree)
+            result[i] = _span_bridge(samples[i], normals[i], distance, points, tree,
+                                     point_normals)
     return result
 
 
@@ -430,42 +432,49 @@ BRIDGE_SPAN_REACH = 20.0
 
 
 def _span_bridge(sample: np.ndarray, normal: np.ndarray, distance: float, points: np.ndarray,
-                 tree: cKDTree) -> float:
-    """How far (m) ``sample`` (3,; m, unit ``normal``) stands outward of the line between the
+                 tree: cKDTree, point_normals: np.ndarray) -> float:
+    """How far (m) ``sample`` (3,; m, unit ``normal``) stands outside the tangent planes of the
     rims of a hole along the span, or inf when the data do not reach past it on both sides.
 
-    ``distance`` (m) is its distance from the nearest of ``points``. The span axis z, turned
-    into its tangent plane, is the edge line's direction; the rim candidates are the points
-    within ``distance`` of the line through the sample (not the faces behind a thin edge, which
-    run along it too) and within :data:`BRIDGE_SPAN_REACH` × ``distance`` along it, on each
-    side the :data:`BRIDGE_DEPTH` nearest. The surface across the hole interpolates between
-    the two rims: the sample is read by how far it stands outward of the line from a rim point
-    above to one below (the least over the pairs whose line passes within half its
-    ``distance`` across in the tangent plane; inside is judged by the depth). In a hole that
-    reading is about the noise; beside an edge line (a beak beyond it, or a fin in the plane
-    of a face) the data lie at the sample's distance, across or inward, and a reading over
-    half that distance is no hole (inf); a beak beyond a tip or root rim has no data on its
+    ``distance`` (m) is its distance from the nearest of ``points`` (unit normals
+    ``point_normals``). The span axis z, turned into its tangent plane, is the edge line's
+    direction; the rims are the points within ``distance`` of the line through the sample
+    (not the faces behind a thin edge, which run along it too) and within
+    :data:`BRIDGE_SPAN_REACH` × ``distance`` along it, on each side the :data:`BRIDGE_DEPTH`
+    nearest. A surface across the hole continues the rims: on a convex edge it lies inside
+    the tangent plane of every rim point, whatever its place round the edge. The reading is
+    the largest, over the pairs of a rim point above and one below whose line passes within
+    half the sample's distance of it across (beside a sheet's boundary, as beyond a face's
+    edge, the rims' line runs at its distance), of the sample's height over their tangent
+    planes interpolated linearly to it along the line (an edge leaning
+    off the span axis, whose planes the normals — the sections', horizontal — tilt, tilts
+    them oppositely above and below). A beak beyond the edge, or a fin in the plane of a face
+    beyond it, stands outside the planes of the edge's points by its size; a reading over half
+    the sample's distance is no hole (inf); a beak beyond a tip or root rim has no data on its
     far side."""
     along = np.array([0.0, 0.0, 1.0]) - normal[2] * normal
     length = float(np.linalg.norm(along))
     if length < 0.5:  # the span axis within 30° of the normal: no edge line along the span
         return math.inf
     along /= length
-    across = np.cross(normal, along)
-    near = points[tree.query_ball_point(sample, BRIDGE_SPAN_REACH * distance)] - sample
-    u, w, height = near @ along, near @ across, near @ normal
-    line = np.hypot(w, height) <= distance
+    index = np.asarray(tree.query_ball_point(sample, BRIDGE_SPAN_REACH * distance), dtype=int)
+    near = points[index] - sample
+    u, w = near @ along, near @ np.cross(normal, along)
+    line = np.linalg.norm(near - u[:, None] * along, axis=1) <= distance
     rims = []
     for side in (1.0, -1.0):
         on = np.flatnonzero(line & (side * u > 0.0))
         if len(on) < BRIDGE_DEPTH:
             return math.inf
         rims.append(on[np.argsort(side * u[on])[:BRIDGE_DEPTH]])
+    # the sample's height over each rim point's tangent plane
+    over = -np.einsum("ki,ki->k", near, point_normals[index])
     a, b = np.meshgrid(*rims, indexing="ij")
-    t = u[a] / (u[a] - u[b])  # where the line from a to b passes the sample, 0 at a
+    t = u[a] / (u[a] - u[b])  # the sample's place on the line from a to b, 0 at a
     on_line = np.abs(w[a] + t * (w[b] - w[a])) <= 0.5 * distance
-    outward = -(height[a] + t * (height[b] - height[a]))
-    reading = max(float(np.min(outward[on_line], initial=math.inf)), 0.0)
+    if not np.any(on_line):
+        return math.inf
+    reading = max(float(np.max((over[a] + t * (over[b] - over[a]))[on_line])), 0.0)
     return reading if reading <= 0.5 * distance else math.inf
 
 
