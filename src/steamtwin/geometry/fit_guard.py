@@ -294,7 +294,7 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
     points but surrounded by ``cloud`` points (not the caps', whose outline reaches out across
     the whole section) in its tangent plane is a bridged scan hole, not beyond the data; in a
     hole through a thin edge, with rims only above and below it along the edge, it is beyond
-    them by its height over the line between the rims (:func:`_bridged`; checked where it lies
+    them by its height over the rims' tangent planes (:func:`_bridged`; checked where it lies
     more than ``bridge_from`` (m) beyond them).
 
     Returns the excursion and its allowance (m): the largest drop added, by which k-NN normals
@@ -446,12 +446,12 @@ def _span_bridge(sample: np.ndarray, normal: np.ndarray, distance: float, points
     the largest, over the pairs of a rim point above and one below whose line passes within
     half the sample's distance of it across (beside a sheet's boundary, as beyond a face's
     edge, the rims' line runs at its distance), of the sample's height over their tangent
-    planes interpolated linearly to it along the line (an edge leaning
-    off the span axis, whose planes the normals — the sections', horizontal — tilt, tilts
-    them oppositely above and below). A beak beyond the edge, or a fin in the plane of a face
-    beyond it, stands outside the planes of the edge's points by its size; a reading over half
-    the sample's distance is no hole (inf); a beak beyond a tip or root rim has no data on its
-    far side."""
+    planes interpolated linearly to it along the line (an edge leaning off the span axis, whose
+    planes the normals — the sections', horizontal — tilt, tilts them oppositely above and
+    below; a convex body lies inside all its tangent planes). A beak beyond the edge, or a fin
+    in the plane of a face beyond it, stands outside the planes of the edge's points by its
+    size; a reading over half the sample's distance is no hole (inf); a beak beyond a tip or
+    root rim has no data on its far side."""
     along = np.array([0.0, 0.0, 1.0]) - normal[2] * normal
     length = float(np.linalg.norm(along))
     if length < 0.5:  # the span axis within 30° of the normal: no edge line along the span
