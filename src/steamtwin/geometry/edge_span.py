@@ -176,7 +176,8 @@ def _robust_lm(function, jacobian, x: np.ndarray, bounds: tuple[np.ndarray, np.n
                 | ((x >= upper) & (step_rhs[inverse] > 0.0)))[order]
         normal[held, :], normal[:, held], step_rhs[held] = 0.0, 0.0, 0.0
         diagonal = np.diag(normal).copy()
-        if math.isnan(mu):
+        if math.isnan(mu):  # τ = 1e-3 of the largest diagonal term (Madsen, Nielsen &
+            # Tingleff 2004, "Methods for non-linear least squares problems", §3.2)
             mu = 1e-3 * float(diagonal.max())
         ab = np.zeros((band + 1, len(x)))
         for k in range(band + 1):
@@ -186,8 +187,9 @@ def _robust_lm(function, jacobian, x: np.ndarray, bounds: tuple[np.ndarray, np.n
             ab[band] = diagonal + mu + held
             try:
                 step = solveh_banded(ab, step_rhs, check_finite=False)[inverse] * x_scale
-            except LinAlgError:
+            except LinAlgError:  # not positive definite in floating point: damp more
                 mu *= 4.0
+                evaluations += 1
                 continue
             trial = np.clip(x + step, lower, upper)
             f_trial = function(trial)
@@ -195,17 +197,14 @@ def _robust_lm(function, jacobian, x: np.ndarray, bounds: tuple[np.ndarray, np.n
             trial_cost = cost(f_trial)
             if trial_cost < current:
                 accepted = True
-                decrease = current - trial_cost
-                moved = np.abs(trial - x) / x_scale
+                moved = float(np.max(np.abs(trial - x) / x_scale))
+                if (current - trial_cost <= TOLERANCE * trial_cost
+                        or moved <= TOLERANCE * (TOLERANCE + np.abs(trial / x_scale).max())):
+                    return trial
                 x, f, jac, current = trial, f_trial, jacobian(trial), trial_cost
                 mu /= 3.0
-                if (decrease <= TOLERANCE * current
-                        or moved.max() <= TOLERANCE * (TOLERANCE + np.abs(x / x_scale).max())):
-                    return x
             else:
                 mu *= 4.0
-        if not accepted:
-            return x
     return x
 
 
