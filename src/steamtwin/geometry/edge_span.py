@@ -15,8 +15,8 @@ roughness penalty) with the second-difference penalty of P-splines on its coeffi
 stretch of span without points — a scan hole, stray points — is filled by the penalty, a
 straight continuation of its neighbours, with no separate bridging. All coefficients are
 fitted together to every point of the edge and its flanks by robust nonlinear least squares
-(scipy ``least_squares``, trust-region reflective, Branch, Coleman & Li 1999; soft-L1 loss of
-scale :data:`~steamtwin.geometry.edge_circle.SOFT_SCALE`, Triggs et al. 2000 §6.8) on the
+(Levenberg–Marquardt on the banded, reweighted normal equations, :func:`_robust_lm`; soft-L1
+loss of scale :data:`~steamtwin.geometry.edge_circle.SOFT_SCALE`, Triggs et al. 2000 §6.8) on the
 geometric distance of :func:`~steamtwin.geometry.edge_circle.edge_distance_at`, with its
 analytic Jacobian; points beyond three robust standard deviations (at least
 :data:`~steamtwin.geometry.edge_circle.TRIM_FLOOR`) are then left out and the fit repeated.
