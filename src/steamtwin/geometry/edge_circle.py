@@ -89,9 +89,10 @@ def edge_distance_at(xy: np.ndarray, centre: np.ndarray, radius: np.ndarray | fl
     (−1 in the sector)."""
     tip = tip_and_half_angle(normals)[0]
     r = np.asarray(radius)
-    sector = np.ones(len(xy), dtype=bool)
-    line = np.full(len(xy), np.inf)
-    which = np.full(len(xy), -1)
+    shape = np.broadcast_shapes(xy.shape[:-1], np.shape(centre)[:-1], r.shape)
+    sector = np.ones(shape, dtype=bool)
+    line = np.full(shape, np.inf)
+    which = np.full(shape, -1)
     for i in range(2):
         n = normals[..., i, :]
         past = _dot(xy - (centre - r[..., None] * n), _away(n, tip)) < 0.0
@@ -100,7 +101,7 @@ def edge_distance_at(xy: np.ndarray, centre: np.ndarray, radius: np.ndarray | fl
         beside = ~past & (np.abs(distance) < np.abs(line))
         line[beside] = distance[beside]
         which[beside] = i
-    circle = np.linalg.norm(xy - centre, axis=1) - r
+    circle = np.linalg.norm(xy - centre, axis=-1) - r
     which[sector] = -1
     return np.where(which < 0, circle, line), sector, which
 
@@ -135,10 +136,13 @@ def fit_tangent_circle(xy: np.ndarray, normals: np.ndarray, offsets: np.ndarray,
             ratio = edge_distance(xy[use], normals, offsets[use], r)[0] / SOFT_SCALE
             return float(np.sum(np.sqrt(1.0 + ratio * ratio) - 1.0))
 
-        # the cost is piecewise (points enter and leave the arc's sector): a grid first,
-        # then Brent's method within the best grid cell
+        # the cost is piecewise (points enter and leave the arc's sector): a grid first
+        # (every radius at once), then Brent's method within the best grid cell
         grid = np.linspace(bounds[0], bounds[1], SEARCH_GRID)
-        best = int(np.argmin([cost(r) for r in grid]))
+        centres = np.linalg.solve(normals, offsets[keep].T[None] + grid[:, None, None])
+        ratio = edge_distance_at(xy[keep], centres.transpose(0, 2, 1), grid[:, None],
+                                 normals)[0] / SOFT_SCALE
+        best = int(np.argmin(np.sum(np.sqrt(1.0 + ratio * ratio) - 1.0, axis=-1)))
         cell = (grid[max(best - 1, 0)], grid[min(best + 1, SEARCH_GRID - 1)])
         radius = float(minimize_scalar(cost, bounds=cell, method="bounded",
                                        options={"xatol": 1e-8}).x)

@@ -422,8 +422,9 @@ def _model_off_points(points: np.ndarray, fits: list, model: SpanEdgeModel,
     whose arc points lie off the model, as (z, median signed distance; m), or None.
 
     The span model is started from the slabs with a circle of their own and continued by its
-    P-splines over those without; where those are many and far from the others, the robust fit
-    does not bring the model back to the points within its evaluations (hp8 of the reference
+    P-splines over those without; where those are many and far from the others, the robust fit can
+    fail to bring the model back to the points within its evaluations (scipy ``least_squares``
+    before 2026-11-28 on hp8 of the reference
     unit, 192k points, 2026-11-27: 5 of 81 slabs with a circle of their own, all at 50–58 %
     span, a 0.6-mm trailing edge between flanks 4° apart; the model 0.5–0.7 mm off the exact
     surface over the last 10 % of span at either end, the STL refused 1.91 mm off). A model is
