@@ -387,7 +387,7 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
         inside = _depth_inside(cloud[near] - samples[sl, None, :], cloud_normals[near], normal)
         outside = np.hypot(np.maximum(stands, 0.0), beyond)
         drop = np.where(enough, slack.max(axis=1), 0.0)
-        # each reading against its own allowance: the arc drop is the outward envelope's
+        # each reading against its own allowance: the convex slack is the outward envelope's
         # (the inward depth allows for the arc itself); the one further beyond is reported
         inward = inside > outside - drop
         excursion[sl] = np.where(inward, inside, outside)
