@@ -47,13 +47,20 @@ themselves, so that a scan hole the fit bridges is not taken for a defect):
 Limit (stated rule): a vertex is a defect beyond ``max(noise_factor × σ, spacing_factor × h,
 floor)`` plus its allowance — σ the measured noise (1.4826 × the median absolute residual of
 the side points the fit kept, the normal-consistent scale of the median absolute deviation), h
-the median point spacing, the allowance (outward only) the largest arc drop of its envelope
-(the drop is trusted to its own size: where the points lie a spacing off the normal line on
-a sharp edge the vertex is judged only to what they allow). Within ``rim_spacings`` × h of a
-cap rim the side data end and the neighbourhoods straddle the crease: there a vertex is
-measured in its own section against the side's points and the cap's (:func:`rim_excursion`:
-the cap plane and its outline count as data), so that a bulge of the rim ring is judged too;
-its allowance is :data:`RIM_SLACK` spacings.
+the median point spacing, the allowance (outward only) what a convex surface may drop beyond
+the arc between an envelope point and the normal line: a convex curve through the point,
+tangent to its plane, drops anywhere from 0 to l·tan θ there (the plane itself), so the
+allowance is the largest l·(tan θ − tan(θ/2)) of the envelope — l·tan(θ/2) to first order in
+θ, the arc drop itself (where the points lie a spacing off the normal line on a sharp edge the
+vertex is judged only to what they allow); on a tight edge whose facing points are turned far
+it is more (slender 80k seed 2: a vertex on a 0.15-mm trailing-edge circle, its facing points
+turned 58° and 0.64–0.73 mm off its normal line, 0.91–1.07 mm below its tangent plane, read
+0.55 mm out against an arc allowance of 0.40 mm; the turn happens at once on the circle and
+the rest is flat, a drop of ≈ 0.9 mm; the true deviation is 0.005 mm). Within
+``rim_spacings`` × h of a cap rim the side data end and the neighbourhoods straddle the
+crease: there a vertex is measured in its own section against the side's points and the
+cap's (:func:`rim_excursion`: the cap plane and its outline count as data), so that a bulge of
+the rim ring is judged too; its allowance is :data:`RIM_SLACK` spacings.
 
 Defects are the connected groups of offending vertices, named by their patch (leading or
 trailing edge, suction or pressure side), span range (% from the root) and size (mm).
@@ -63,11 +70,14 @@ The other way (:func:`coverage_gaps`, the cloud side of the Hausdorff distance, 
 the same limit. A remaining outlier (0.2–2 mm off along the normal, isolated) is one of them,
 but its neighbours lie on the surface; where the surface misses a part of the blade (an edge cut
 short, a dent) the points there are far together. A far point counts when at least
-``coherent_share`` of its ``neighbours`` nearest patch points are far too, and the counted
-points linked within ``link_spacings`` point spacings form a gap when there are at least
-``min_gap_points`` of them — named by patch, span range, chord range and distance. Where an
-edge carries few points, :func:`edge_sampling` measures the points per millimetre across the
-edge's half circle and what :data:`~steamtwin.geometry.scanner.EDGE_SAMPLES` needs there.
+``coherent_share`` of its ``neighbours`` nearest patch points are far too, or of its
+``line_neighbours`` nearest side points along the span (:func:`_strips`: a strip about one
+point across, as at a nose the fit flattened, whose apex points it trimmed), and the counted
+points linked within ``link_spacings`` point spacings or as neighbours along the strip form a
+gap when there are at least ``min_gap_points`` of them — named by patch, span range, chord
+range and distance. Where an edge carries few points, :func:`edge_sampling` measures the
+points per millimetre across the edge's half circle and what
+:data:`~steamtwin.geometry.scanner.EDGE_SAMPLES` needs there.
 """
 
 from __future__ import annotations
@@ -140,6 +150,14 @@ class GuardSettings:
     points are also that far (an isolated outlier has none: 1 % outliers put on average 0.2 of
     its 20 neighbours out); counted points linked within ``link_spacings`` spacings form a gap
     when there are ``min_gap_points`` or more (a gap one point spacing across and a few long).
+    A far point also counts when ``coherent_share`` of its ``line_neighbours`` nearest side
+    points in the surface's parameters, the across distance weighted ``line_stretch`` times the
+    span's, are far by a like amount (:func:`_strips`): for points spread at random at
+    spacing h (ρ = ln 2/(π h²), Clark & Evans 1954, Ecology 35:445) that neighbourhood reaches
+    h·√(k/(w ln 2)) = 0.49 h across and w times that (29 h) along the span — a strip one point
+    across, as the apex points a fit flattened across a nose trimmed (lean-sweep 40k seed 3:
+    18 points 0.11–0.20 mm off at the leading edge at 56–63 % span, 15–35 % of their 20
+    nearest points far; none such on the 43 cached first fits of the family within 0.1 mm).
 
     ``bridge_holes``: a vertex beyond its nearest points but surrounded by the side's points in
     its tangent plane, or in a hole through a thin edge between rims along the span, is a
@@ -169,6 +187,8 @@ class GuardSettings:
     coherent_share: float = 0.5
     link_spacings: float = 3.0
     min_gap_points: int = 10
+    line_neighbours: int = 10
+    line_stretch: float = 60.0
     cpu_budget: float | None = 30.0
     bridge_holes: bool = True
 
@@ -301,8 +321,9 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
     them by its height over the rims' tangent planes (:func:`_bridged`; checked where it lies
     more than ``bridge_from`` (m) beyond them).
 
-    Returns the excursion and its allowance (m): outward, the largest drop added, by which
-    k-NN normals (blends on a sharp edge) may leave the envelope too low — a sample with its
+    Returns the excursion and its allowance (m): outward, the most a convex surface may drop
+    beyond the arc to an envelope point, l·(tan θ − tan(θ/2)) (the rest of the way to the
+    point's tangent plane, module docstring), largest over the envelope — a sample with its
     envelope points right on its normal line is judged to the noise, one across a gap in the
     points on an edge only to what the gap allows; inward (:func:`_depth_inside`, which takes
     the arc's drop off itself) none. The reading further beyond its allowance is returned:
@@ -339,8 +360,13 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
         turn = np.take_along_axis(np.einsum("mki,mi->mk", cloud_normals[index[sl]], normal),
                                   nearest, axis=1)
         half = np.sqrt(np.clip((1.0 - turn) / (1.0 + turn), 0.0, None))  # tan(θ/2)
-        sagitta = np.take_along_axis(spread, nearest, axis=1) * half
+        lateral_nearest = np.take_along_axis(spread, nearest, axis=1)
+        sagitta = lateral_nearest * half
         envelope = envelope + sagitta
+        # a convex surface through the point, tangent to its plane, drops anywhere from 0 to
+        # l·tan θ (the plane itself) by the normal line: the rest beyond the arc's is allowed
+        cosine = np.clip(turn, math.cos(FACING), 1.0)
+        slack = lateral_nearest * (np.sqrt(1.0 - cosine * cosine) / cosine - half)
         top = np.argmax(envelope, axis=1)
         above = -envelope[np.arange(len(top)), top]  # > 0: the sample stands outside them all
         # the extent: whether every one of the nearest points of the whole cloud lies on the
@@ -364,8 +390,8 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
         near = behind_index[sl]
         inside = _depth_inside(cloud[near] - samples[sl, None, :], cloud_normals[near], normal)
         outside = np.hypot(np.maximum(stands, 0.0), beyond)
-        drop = np.where(enough, sagitta.max(axis=1), 0.0)
-        # each reading against its own allowance: the arc drop is the outward envelope's
+        drop = np.where(enough, slack.max(axis=1), 0.0)
+        # each reading against its own allowance: the convex slack is the outward envelope's
         # (the inward depth allows for the arc itself); the one further beyond is reported
         inward = inside > outside - drop
         excursion[sl] = np.where(inward, inside, outside)
@@ -672,12 +698,18 @@ def coverage_gaps(reconstruction: GuardedMesh, back_distance: np.ndarray, limit:
     k = min(settings.neighbours + 1, len(points))
     _, index = cKDTree(points).query(points[far], k=k)
     share = far[index[:, 1:]].mean(axis=1)  # the point itself left out
-    members = np.flatnonzero(far)[share >= settings.coherent_share]
+    coherent = np.flatnonzero(far)[share >= settings.coherent_share]
+    strip, strip_pairs = _strips(reconstruction.parameters[assigned], points[:, 2],
+                                 back_distance[assigned], limit,
+                                 float(np.nanmedian(reconstruction.segmentation.perimeter)),
+                                 settings)
+    members = np.union1d(coherent, strip)
     if len(members) < settings.min_gap_points:
         return []
     spacing = reconstruction.segmentation.spacing
     pairs = cKDTree(points[members]).query_pairs(settings.link_spacings * spacing,
                                                  output_type="ndarray")
+    pairs = np.concatenate([pairs.reshape(-1, 2), np.searchsorted(members, strip_pairs)])
     graph = coo_array((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])),
                       shape=(len(members), len(members)))
     _, component = connected_components(graph, directed=False)
@@ -700,6 +732,43 @@ def coverage_gaps(reconstruction: GuardedMesh, back_distance: np.ndarray, limit:
                                 distance=float(back_distance[assigned][inside].max()),
                                 points=len(inside)))
     return sorted(gaps, key=lambda g: -g.distance)
+
+
+def _strips(parameters: np.ndarray, z: np.ndarray, distance: np.ndarray, limit: float,
+            perimeter: float, settings: GuardSettings) -> tuple[np.ndarray, np.ndarray]:
+    """The points farther than ``limit`` (m; ``distance`` (m) from the triangulation, per
+    point) coherent along a strip one point across: of their ``settings.line_neighbours``
+    nearest points with a side parameter (``parameters``, NaN for the others) in the surface's
+    parameters — s unrolled round a circle of the section's ``perimeter`` (m) with the across
+    distance weighted ``settings.line_stretch`` times z's, so that the neighbourhood follows
+    the span about a spacing across — at least ``settings.coherent_share`` far by a like
+    amount (within a factor :data:`LIKE` either way: a scan's outlier, 0.2–2 mm off along the
+    normal, does not join a strip of points 0.1–0.2 mm off, nor they it). Returns their
+    indices and the pairs (indices) of such points in each other's neighbourhoods (the links
+    of the strip)."""
+    on = np.flatnonzero(~np.isnan(parameters))
+    wanted = np.flatnonzero(distance[on] > limit)
+    k = min(settings.line_neighbours + 1, len(on))
+    if len(wanted) == 0 or k < 2:
+        return np.empty(0, dtype=int), np.empty((0, 2), dtype=int)
+    turn = 2.0 * math.pi * parameters[on]
+    radius = settings.line_stretch * perimeter / (2.0 * math.pi)
+    keys = np.column_stack([radius * np.cos(turn), radius * np.sin(turn), z[on]])
+    _, index = cKDTree(keys).query(keys[wanted], k=k)
+    neighbours = on[index[:, 1:]]  # the point itself left out
+    own = distance[on[wanted]][:, None]
+    near = distance[neighbours]
+    like = (near > limit) & (near <= LIKE * own) & (LIKE * near >= own)
+    counted = like.mean(axis=1) >= settings.coherent_share
+    members = on[wanted[counted]]
+    rows = np.repeat(members, k - 1).reshape(-1, k - 1)[like[counted]]
+    partners = neighbours[counted][like[counted]]
+    keep = np.isin(partners, members)
+    return members, np.column_stack([rows[keep], partners[keep]])
+
+
+#: Ratio within which the distances of two far points make them one strip (:func:`_strips`).
+LIKE = 2.0
 
 
 def _chord_fraction(reconstruction: GuardedMesh):
