@@ -41,10 +41,11 @@ def test_a_folding_side_is_refused_with_the_edge_density_it_needs(monkeypatch) -
     class Folding:
         inliers_ = np.ones(10, dtype=bool)
         outlier_distance = 0.1e-3
+        fold_range = None
 
         class surface_:
             @staticmethod
-            def folds() -> bool:
+            def folds(z_range=None) -> bool:
                 return True
 
     asked = []
@@ -55,6 +56,6 @@ def test_a_folding_side_is_refused_with_the_edge_density_it_needs(monkeypatch) -
 
     with pytest.raises(ReconstructionError, match=r"folds over itself.*trailing edge at 80–100"):
         check_side_fit(Folding(), note)
-    Folding.surface_.folds = staticmethod(lambda: False)
+    Folding.surface_.folds = staticmethod(lambda z_range=None: False)
     check_side_fit(Folding(), note)
     assert len(asked) == 1

@@ -20,7 +20,8 @@ the fit repeated. Knots are then inserted in the middle of every knot span whose
 exceeds the tolerance and the noise (1.5 × the median span RMS) and that holds enough points
 for two spans, until no span does — so the RMS is below the tolerance too, unless the noise is
 larger —, a round gains less than 3 % or the knot budget is spent. A round whose surface folds
-(a section crossing itself, :meth:`PeriodicSurface.folds`) is refitted with a 10 and 100 times
+(a section crossing itself, :meth:`PeriodicSurface.folds`, in the part of the span that is
+used) is refitted with a 10 and 100 times
 stronger penalty, else the refinement stops at the previous knots. Residuals are distances
 within the section plane z = const (m).
 """
@@ -127,12 +128,14 @@ class PeriodicSurface:
                 break
         return s
 
-    def folds(self, levels: int = 9, samples: int = 4000) -> bool:
-        """Whether a section curve at one of ``levels`` heights spread over the z knots (both
-        ends included) crosses itself: a loop or swallowtail, as left by spans that too few
-        points pin down. Each curve is a polyline of ``samples`` points."""
+    def folds(self, levels: int = 9, samples: int = 4000,
+              z_range: tuple[float, float] | None = None) -> bool:
+        """Whether a section curve at one of ``levels`` heights spread over ``z_range`` (m; the
+        z knots when None; both ends included) crosses itself: a loop or swallowtail, as left
+        by spans that too few points pin down. Each curve is a polyline of ``samples`` points."""
         s = np.linspace(0.0, 1.0, samples, endpoint=False)
-        for z in np.linspace(self.z_knots[0], self.z_knots[-1], levels):
+        low, high = z_range if z_range is not None else (self.z_knots[0], self.z_knots[-1])
+        for z in np.linspace(low, high, levels):
             start = self(s, np.full(samples, z))
             step = np.roll(start, -1, axis=0) - start
             length = np.linalg.norm(step, axis=1)
@@ -216,8 +219,9 @@ class AdaptiveSurfaceFit:
     from the surface are trimmed; ``corrections`` is the number of fit/projection rounds per
     knot vector; ``max_rounds`` bounds the refinement rounds; a span is split only when it
     holds twice ``min_span_points`` and twice 2 × the z basis functions; ``penalty_factor``
-    multiplies the penalty throughout (a repair refit, :mod:`~steamtwin.geometry.fit_guard`).
-    After :meth:`fit`:
+    multiplies the penalty throughout (a repair refit, :mod:`~steamtwin.geometry.fit_guard`);
+    ``fold_range`` (m) is the part of the span where folds are judged (the part of the surface
+    that is used; the whole z knot vector when None). After :meth:`fit`:
     ``surface_``, ``parameters_`` (corrected s), ``residuals_`` (signed, m), ``inliers_`` (mask
     of the points kept by trimming) and ``history_`` (breakpoints, RMS, ``folded`` and the
     penalty factor ``smoothing`` of every round).
@@ -232,6 +236,7 @@ class AdaptiveSurfaceFit:
     history_: list[dict] = field(default_factory=list, init=False, repr=False)
     _split_points: int = field(default=16, init=False, repr=False)
     penalty_factor: float = 1.0
+    fold_range: tuple[float, float] | None = None
 
     def fit(self, s: np.ndarray, z: np.ndarray, xy: np.ndarray, breaks: np.ndarray,
             z_knots: np.ndarray) -> AdaptiveSurfaceFit:
@@ -268,7 +273,7 @@ class AdaptiveSurfaceFit:
                 surface, s_new, residual, inliers = self._fit_knots(
                     s, z, xy, breaks, z_knots, 10.0 * self.outlier_distance, smoothing)
                 rms = self._record(breaks, z_knots, residual, inliers)
-                folded = surface.folds()
+                folded = surface.folds(z_range=self.fold_range)
                 self.history_[-1].update(folded=folded, smoothing=smoothing)
                 if not folded:
                     break
@@ -289,7 +294,8 @@ class AdaptiveSurfaceFit:
             self.surface_, self.parameters_, self.residuals_, self.inliers_ = self._fit_knots(
                 s, z, xy, breaks, z_knots, self.outlier_distance, smoothing)
             self._record(breaks, z_knots, self.residuals_, self.inliers_)
-            self.history_[-1].update(folded=self.surface_.folds(), smoothing=smoothing)
+            self.history_[-1].update(folded=self.surface_.folds(z_range=self.fold_range),
+                                     smoothing=smoothing)
             if not self.history_[-1]["folded"]:
                 break
         return self

@@ -205,12 +205,16 @@ def _reconstruct(points: np.ndarray, settings: ReconstructionSettings,
     breaks = initial_breaks(boundaries, perimeter, settings,
                             edge_arcs(segmentation, labels, perimeter))
     root, tip = _refit_caps(points, labels, segmentation)
-    z_lo, z_hi = _span_range(points[have], root, tip)
+    used = _span_range(points[have], root, tip)
+    margin = 1e-3 * (used[1] - used[0])
+    z_lo, z_hi = used[0] - margin, used[1] + margin
     interior = max(0, math.ceil((z_hi - z_lo) / settings.spanwise_knot_spacing) - 1)
     z_knots = clamped_knots(z_lo, z_hi, interior)
+    # folds are judged between the cap planes: a loop in the margin beyond them (at a thin
+    # edge next to the tip, issue 19 lean-sweep 80k seed 5) is no part of the triangulation
     fit = AdaptiveSurfaceFit(tolerance=settings.tolerance, max_breaks=settings.max_breaks,
                              outlier_distance=settings.outlier_distance,
-                             penalty_factor=settings.penalty_factor)
+                             penalty_factor=settings.penalty_factor, fold_range=used)
     model = (model_sparse_edges(points, s0, have, labels, segmentation.perimeter,
                                 segmentation.spacing) if settings.model_edges
              else EdgeModel.none(len(points)))
@@ -348,7 +352,7 @@ def check_side_fit(fit: AdaptiveSurfaceFit, edges=None) -> None:
     surface then does not follow the cloud, whatever the triangulation would make of it.
     ``edges()`` gives the note on sparse edges (:func:`~.fit_guard.sparse_edges`)."""
     trimmed = float(np.mean(~fit.inliers_))
-    if fit.surface_.folds() or trimmed > MAX_TRIMMED:
+    if fit.surface_.folds(z_range=fit.fold_range) or trimmed > MAX_TRIMMED:
         raise ReconstructionError(
             f"the fitted side folds over itself or misses the cloud ({trimmed:.0%} of the side "
             f"points farther than {fit.outlier_distance * 1e3:.3g} mm): is the cloud too "
@@ -441,11 +445,11 @@ def _refit_caps(points: np.ndarray, labels: np.ndarray, segmentation: Segmentati
 
 
 def _span_range(side: np.ndarray, root: CapPlane, tip: CapPlane) -> tuple[float, float]:
-    """z range (m) of the side surface: the side points and the cap planes over them."""
+    """z range (m) of the side surface that is triangulated: the side points and the cap
+    planes over them."""
     lo = min(side[:, 2].min(), root.height(side[:, :2]).min())
     hi = max(side[:, 2].max(), tip.height(side[:, :2]).max())
-    margin = 1e-3 * (hi - lo)
-    return lo - margin, hi + margin
+    return float(lo), float(hi)
 
 
 # --- triangulation -------------------------------------------------------------------------------
