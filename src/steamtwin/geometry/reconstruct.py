@@ -71,6 +71,16 @@ from steamtwin.geometry.volume_mesh import REGIONS
 METRIC_SECTIONS = (("hub", 0.05), ("mid", 0.5), ("tip", 0.95))
 #: Points per group when measuring arc length along the sections (median of each group).
 GROUP = 7
+#: Point spacings between the slabs on which the turn fraction is mapped to arc length, and
+#: slabs either side over which each slab's mapping is smoothed (median; ±5.5 mm at 80k on
+#: slender). Nine slabs over 10–90 % of span, as before 2026-11-28, missed how fast the turn
+#: of a face changes next to a cap: on slender 80k (random pose) the pressure side's turn spans
+#: 0.50–1.00 at 200 mm, 0.70–1.00 at 230 mm and 0.85–1.00 at 242 mm, so its points over the
+#: top 30 mm got s far from their place, and the side folded at the leading edge (seeds 1, 4,
+#: 5; docs/benchmarks.md, "slender 80k seeds 1, 4, 5"). Slabs every 16 spacings with no
+#: smoothing across them left the hub 0.8 mm off on seed 4.
+SLAB_STEP = 8.0
+SLAB_MEDIAN = 3
 #: BLAS threads of a reconstruction. Its linear algebra is on short vectors (the norms and dot
 #: products inside scipy's LSMR, ~0.6 ms a call), where more threads only wait for each other:
 #: one edge-model call took 184 s of process CPU with OpenBLAS's default threads on a loaded
@@ -293,10 +303,11 @@ def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.
     :func:`~steamtwin.geometry.sections.section_turn`: geodesic arc length anticlockwise
     from the rear end over the perimeter) is monotone round any section — also where a strongly
     cambered face is no graph over the chord — and unchanged by twist and taper. θ is then
-    mapped to the arc-length fraction measured on 9 thin slabs spread over the span: the medians
-    of their points in θ order, in groups of :data:`GROUP` (robust to stray points), give a
-    polyline whose cumulative length is the arc length. The mapping of each slab is the median
-    of its own and its neighbours' and is interpolated linearly along the span (graph distances
+    mapped to the arc-length fraction measured on thin slabs every :data:`SLAB_STEP` point
+    spacings over the whole span: the medians of their points in θ order, in groups of
+    :data:`GROUP` (robust to stray points), give a polyline whose cumulative length is the arc
+    length. The mapping of each slab is the median of its own and its :data:`SLAB_MEDIAN`
+    neighbours' either side and is interpolated linearly along the span (graph distances
     stretch differently where the sampling differs).
     """
     theta = np.full(len(points), np.nan)
@@ -304,8 +315,10 @@ def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.
     z = points[mask, 2]
     grid = np.linspace(0.0, 1.0, 2001)
     height = 2.0 * segmentation.spacing
+    lo, hi = float(z.min()) + height, float(z.max()) - height
+    count = max(9, math.ceil((hi - lo) / (SLAB_STEP * segmentation.spacing)) + 1)
     fractions, perimeters, centres = [], [], []
-    for centre in np.linspace(np.percentile(z, 10.0), np.percentile(z, 90.0), 9):
+    for centre in np.linspace(lo, hi, count):
         members = np.flatnonzero(mask)[np.abs(z - centre) < height]
         if len(members) < 200:
             continue
@@ -322,19 +335,24 @@ def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.
         centres.append(centre)
     if not fractions:
         raise ReconstructionError("too few side points to order them round the section")
-    # the median of each slab and its two neighbours, interpolated along the span
-    fractions = np.array(fractions)
-    padded = np.vstack([fractions[:1], fractions, fractions[-1:]])
-    mappings = np.median(np.stack([padded[:-2], padded[1:-1], padded[2:]]), axis=0)
+    # the median of each slab and its SLAB_MEDIAN neighbours either side, interpolated along
+    # the span
+    fractions, wide = np.array(fractions), SLAB_MEDIAN
+    padded = np.vstack([fractions[:1]] * wide + [fractions] + [fractions[-1:]] * wide)
+    mappings = np.median(np.stack([padded[k: k + len(fractions)] for k in range(2 * wide + 1)]),
+                         axis=0)
     mappings = (mappings - mappings[:, :1]) / (mappings[:, -1:] - mappings[:, :1])
-    at = np.array([np.interp(theta[mask], grid, row) for row in mappings])  # (slabs, n)
     position = np.interp(z, centres, np.arange(len(centres)))
     lower = np.minimum(np.floor(position).astype(int), len(centres) - 1)
     upper = np.minimum(lower + 1, len(centres) - 1)
     weight = position - lower
-    columns = np.arange(len(z))
+    turn = theta[mask]
+    below, above = np.empty(len(z)), np.empty(len(z))
+    for k, row in enumerate(mappings):  # each point through its two slabs' mappings only
+        below[lower == k] = np.interp(turn[lower == k], grid, row)
+        above[upper == k] = np.interp(turn[upper == k], grid, row)
     s = np.full(len(points), np.nan)
-    s[mask] = np.mod((1.0 - weight) * at[lower, columns] + weight * at[upper, columns], 1.0)
+    s[mask] = np.mod((1.0 - weight) * below + weight * above, 1.0)
     return s, float(np.median(perimeters))
 
 
