@@ -34,7 +34,6 @@ guard's repair loop, which refits from step 3 — while each step's own work liv
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass, field, replace
 
@@ -72,20 +71,19 @@ from steamtwin.geometry.volume_mesh import REGIONS
 METRIC_SECTIONS = (("hub", 0.05), ("mid", 0.5), ("tip", 0.95))
 #: Points per group when measuring arc length along the sections (median of each group).
 GROUP = 7
-#: Turn fractions at which each slab's mapping to arc length is kept.
-TURN_GRID = np.linspace(0.0, 1.0, 2001)
-#: Largest difference of two neighbouring slabs' mappings (arc-length fraction at a turn
-#: fraction) before a slab is added between them, and their closest spacing (point
-#: spacings). Nine slabs over 10–90 % of span, as before 2026-11-28, missed how fast the turn
+#: Point spacings between the slabs on which the turn fraction is mapped to arc length, and
+#: slabs either side over which each slab's mapping is smoothed (median; ±5.5 mm at 80k on
+#: slender). Nine slabs over 10–90 % of span, as before 2026-11-28, missed how fast the turn
 #: of a face changes next to a cap: on slender 80k (random pose) the pressure side's turn spans
 #: 0.50–1.00 at 200 mm, 0.70–1.00 at 230 mm and 0.85–1.00 at 242 mm, so its points over the
 #: top 30 mm got s up to 0.35 of the perimeter from their place, and the side folded at the
-#: leading edge (seeds 1, 4, 5; docs/benchmarks.md, "slender 80k seeds 1, 4, 5"). Slabs every
-#: 8 spacings over the whole span (median over ±3) mended those, but moved ip1's start
-#: parameter (40k exact points) up to 5.8 mm off at 90 % span (nine slabs: 2.3 mm): slabs are
-#: added only where the mapping changes. 0.05: above the slabs' own scatter (ip1 none added).
-SLAB_SPLIT = 0.05
+#: leading edge (seeds 1, 4, 5; docs/benchmarks.md, "slender 80k seeds 1, 4, 5"). Measured
+#: there (unguarded): every 16 spacings with no smoothing across slabs left seed 4 0.82 mm off
+#: at the hub, every 8 with none seed 1 2.5 mm off at the tip; slabs added only where
+#: neighbouring mappings differ (by 0.05 or 0.1 of the perimeter) split on the mappings' own
+#: scatter and refused or failed seeds 0, 1 and 5.
 SLAB_STEP = 8.0
+SLAB_MEDIAN = 3
 #: BLAS threads of a reconstruction. Its linear algebra is on short vectors (the norms and dot
 #: products inside scipy's LSMR, ~0.6 ms a call), where more threads only wait for each other:
 #: one edge-model call took 184 s of process CPU with OpenBLAS's default threads on a loaded
@@ -308,45 +306,44 @@ def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.
     :func:`~steamtwin.geometry.sections.section_turn`: geodesic arc length anticlockwise
     from the rear end over the perimeter) is monotone round any section — also where a strongly
     cambered face is no graph over the chord — and unchanged by twist and taper. θ is then
-    mapped to the arc-length fraction measured on thin slabs: nine spread over 10–90 % of
-    the span and one next to either end, and one more halfway between two neighbours whose
-    mappings differ by more than :data:`SLAB_SPLIT` anywhere round the section, down to
-    :data:`SLAB_STEP` point spacings apart. In each slab the medians of its points in θ order,
-    in groups of :data:`GROUP` (robust to stray points), give a polyline whose cumulative length
-    is the arc length. The mapping of each slab is the median of its own and its neighbours'
-    and is interpolated linearly along the span (graph distances stretch differently where the
-    sampling differs).
+    mapped to the arc-length fraction measured on thin slabs every :data:`SLAB_STEP` point
+    spacings over the whole span: the medians of their points in θ order, in groups of
+    :data:`GROUP` (robust to stray points), give a polyline whose cumulative length is the arc
+    length. The mapping of each slab is the median of its own and its :data:`SLAB_MEDIAN`
+    neighbours' either side and is interpolated linearly along the span (graph distances
+    stretch differently where the sampling differs).
     """
     theta = np.full(len(points), np.nan)
     theta[mask] = segmentation.turn[mask]
     z = points[mask, 2]
+    grid = np.linspace(0.0, 1.0, 2001)
     height = 2.0 * segmentation.spacing
-    slabs = {}
-    for centre in [*np.linspace(np.percentile(z, 10.0), np.percentile(z, 90.0), 9),
-                   z.min() + height, z.max() - height]:
-        _add_slab(slabs, points, theta, mask, float(centre), height)
-    compared = set()
-    while True:  # halve the gaps across which the mapping changes fast
-        centres = sorted(slabs)
-        middles = []
-        for pair in itertools.pairwise(centres):
-            if pair[1] - pair[0] >= 2.0 * SLAB_STEP * segmentation.spacing and (
-                    pair not in compared):
-                compared.add(pair)
-                if np.abs(slabs[pair[0]][0] - slabs[pair[1]][0]).max() > SLAB_SPLIT:
-                    middles.append(0.5 * (pair[0] + pair[1]))
-        if not middles:
-            break
-        for centre in middles:
-            _add_slab(slabs, points, theta, mask, centre, height)
-    if not slabs:
+    lo, hi = float(z.min()) + height, float(z.max()) - height
+    count = max(9, math.ceil((hi - lo) / (SLAB_STEP * segmentation.spacing)) + 1)
+    fractions, perimeters, centres = [], [], []
+    for centre in np.linspace(lo, hi, count):
+        members = np.flatnonzero(mask)[np.abs(z - centre) < height]
+        if len(members) < 200:
+            continue
+        order = members[np.argsort(theta[members])]
+        groups = len(order) // GROUP
+        xy = np.median(points[order[: GROUP * groups], :2].reshape(groups, GROUP, 2), axis=1)
+        angle = theta[order[: GROUP * groups]].reshape(groups, GROUP).mean(axis=1)
+        steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
+        length = np.concatenate([[0.0], np.cumsum(steps)])
+        knots = np.concatenate([[0.0], angle, [1.0]])
+        values = np.concatenate([[0.0], length[:-1] + 0.5 * steps[-1], [length[-1]]])
+        fractions.append(np.maximum.accumulate(np.interp(grid, knots, values / length[-1])))
+        perimeters.append(length[-1])
+        centres.append(centre)
+    if not fractions:
         raise ReconstructionError("too few side points to order them round the section")
-    centres = sorted(slabs)
-    perimeters = [slabs[centre][1] for centre in centres]
-    # the median of each slab and its two neighbours, interpolated along the span
-    fractions = np.array([slabs[centre][0] for centre in centres])
-    padded = np.vstack([fractions[:1], fractions, fractions[-1:]])
-    mappings = np.median(np.stack([padded[:-2], padded[1:-1], padded[2:]]), axis=0)
+    # the median of each slab and its SLAB_MEDIAN neighbours either side, interpolated along
+    # the span
+    fractions, wide = np.array(fractions), SLAB_MEDIAN
+    padded = np.vstack([fractions[:1]] * wide + [fractions] + [fractions[-1:]] * wide)
+    mappings = np.median(np.stack([padded[k: k + len(fractions)] for k in range(2 * wide + 1)]),
+                         axis=0)
     mappings = (mappings - mappings[:, :1]) / (mappings[:, -1:] - mappings[:, :1])
     position = np.interp(z, centres, np.arange(len(centres)))
     lower = np.minimum(np.floor(position).astype(int), len(centres) - 1)
@@ -355,31 +352,11 @@ def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.
     turn = theta[mask]
     below, above = np.empty(len(z)), np.empty(len(z))
     for k, row in enumerate(mappings):  # each point through its two slabs' mappings only
-        below[lower == k] = np.interp(turn[lower == k], TURN_GRID, row)
-        above[upper == k] = np.interp(turn[upper == k], TURN_GRID, row)
+        below[lower == k] = np.interp(turn[lower == k], grid, row)
+        above[upper == k] = np.interp(turn[upper == k], grid, row)
     s = np.full(len(points), np.nan)
     s[mask] = np.mod((1.0 - weight) * below + weight * above, 1.0)
     return s, float(np.median(perimeters))
-
-
-def _add_slab(slabs: dict, points: np.ndarray, theta: np.ndarray, mask: np.ndarray,
-              centre: float, height: float) -> None:
-    """Add to ``slabs`` the arc-length fraction at :data:`TURN_GRID` of turn and the perimeter
-    (m) of the side points under ``mask`` within ``height`` (m) of ``centre`` (m), when there
-    are enough of them (:func:`initial_parameters`)."""
-    members = np.flatnonzero(mask & (np.abs(points[:, 2] - centre) < height))
-    if len(members) < 200:
-        return
-    order = members[np.argsort(theta[members])]
-    groups = len(order) // GROUP
-    xy = np.median(points[order[: GROUP * groups], :2].reshape(groups, GROUP, 2), axis=1)
-    angle = theta[order[: GROUP * groups]].reshape(groups, GROUP).mean(axis=1)
-    steps = np.linalg.norm(np.diff(np.vstack([xy, xy[:1]]), axis=0), axis=1)
-    length = np.concatenate([[0.0], np.cumsum(steps)])
-    knots = np.concatenate([[0.0], angle, [1.0]])
-    values = np.concatenate([[0.0], length[:-1] + 0.5 * steps[-1], [length[-1]]])
-    slabs[centre] = (np.maximum.accumulate(np.interp(TURN_GRID, knots, values / length[-1])),
-                     float(length[-1]))
 
 
 #: Largest share of the side points the fit may leave out before the side counts as not fitted.
