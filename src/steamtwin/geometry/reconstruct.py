@@ -71,20 +71,6 @@ from steamtwin.geometry.volume_mesh import REGIONS
 METRIC_SECTIONS = (("hub", 0.05), ("mid", 0.5), ("tip", 0.95))
 #: Points per group when measuring arc length along the sections (median of each group).
 GROUP = 7
-#: The fine mapping of :func:`initial_parameters`: point spacings between its slabs, slabs
-#: either side over which each slab's mapping is smoothed (median; ±5.5 mm at 80k on
-#: slender), and the differences from the coarse mapping (fractions of the perimeter) from
-#: which it is blended in and by which it is taken whole. Nine slabs over 10–90 % of span miss
-#: how fast the turn of a face changes next to a cap: on slender 80k (random pose) the pressure
-#: side's turn spans 0.50–1.00 at 200 mm, 0.70–1.00 at 230 mm and 0.85–1.00 at 242 mm, so its
-#: points over the top 30 mm got s up to 0.35 of the perimeter from their place, and the side
-#: folded at the leading edge (seeds 1, 4, 5; docs/benchmarks.md, "slender 80k seeds 1, 4,
-#: 5"). The fine mapping alone is noisier: on ip1 (40k exact points) its start was 5.8 mm off
-#: at 90 % span (coarse: 2.3 mm, fine and coarse within 0.03 of the perimeter everywhere), and
-#: ip1 at 100k 0.115 mm off (coarse: 0.055–0.061 mm); hence a blend from 0.05.
-SLAB_STEP = 8.0
-SLAB_MEDIAN = 3
-FINE_MAPPING = (0.05, 0.1)
 #: BLAS threads of a reconstruction. Its linear algebra is on short vectors (the norms and dot
 #: products inside scipy's LSMR, ~0.6 ms a call), where more threads only wait for each other:
 #: one edge-model call took 184 s of process CPU with OpenBLAS's default threads on a loaded
@@ -307,40 +293,19 @@ def initial_parameters(points: np.ndarray, segmentation: Segmentation, mask: np.
     :func:`~steamtwin.geometry.sections.section_turn`: geodesic arc length anticlockwise
     from the rear end over the perimeter) is monotone round any section — also where a strongly
     cambered face is no graph over the chord — and unchanged by twist and taper. θ is then
-    mapped to the arc-length fraction measured on 9 thin slabs spread over 10–90 % of the span
-    (:func:`_slab_mapping`, each slab's mapping the median of its own and its neighbours').
-    Where a face's share of the turn changes within a few millimetres of span (next to a cap),
-    those miss it: there the mapping on slabs every :data:`SLAB_STEP` point spacings over the
-    whole span (median over ±:data:`SLAB_MEDIAN`) is taken instead, blended in as the two
-    differ by :data:`FINE_MAPPING` of the perimeter.
+    mapped to the arc-length fraction measured on 9 thin slabs spread over the span: the medians
+    of their points in θ order, in groups of :data:`GROUP` (robust to stray points), give a
+    polyline whose cumulative length is the arc length. The mapping of each slab is the median
+    of its own and its neighbours' and is interpolated linearly along the span (graph distances
+    stretch differently where the sampling differs).
     """
     theta = np.full(len(points), np.nan)
     theta[mask] = segmentation.turn[mask]
     z = points[mask, 2]
-    coarse, perimeter = _slab_mapping(points, theta, mask, np.linspace(
-        np.percentile(z, 10.0), np.percentile(z, 90.0), 9), 2.0 * segmentation.spacing, 1)
-    lo, hi = z.min() + 2.0 * segmentation.spacing, z.max() - 2.0 * segmentation.spacing
-    count = max(9, math.ceil((hi - lo) / (SLAB_STEP * segmentation.spacing)) + 1)
-    fine, _ = _slab_mapping(points, theta, mask, np.linspace(lo, hi, count),
-                            2.0 * segmentation.spacing, SLAB_MEDIAN)
-    difference = np.mod(fine - coarse + 0.5, 1.0) - 0.5
-    weight = np.clip((np.abs(difference) - FINE_MAPPING[0])
-                     / (FINE_MAPPING[1] - FINE_MAPPING[0]), 0.0, 1.0)
-    return np.mod(coarse + weight * difference, 1.0), perimeter
-
-
-def _slab_mapping(points: np.ndarray, theta: np.ndarray, mask: np.ndarray,
-                  centres: np.ndarray, height: float, wide: int) -> tuple[np.ndarray, float]:
-    """The arc-length fraction of the points under ``mask`` from their turn ``theta``, mapped
-    on the slabs within ``height`` (m) of ``centres`` (m): the medians of a slab's points in θ
-    order, in groups of :data:`GROUP` (robust to stray points), give a polyline whose
-    cumulative length is the arc length; each slab's mapping is the median of its own and its
-    ``wide`` neighbours' either side, interpolated linearly along the span (graph distances
-    stretch differently where the sampling differs). Also the median perimeter (m)."""
-    z = points[mask, 2]
     grid = np.linspace(0.0, 1.0, 2001)
-    fractions, perimeters, kept = [], [], []
-    for centre in centres:
+    height = 2.0 * segmentation.spacing
+    fractions, perimeters, centres = [], [], []
+    for centre in np.linspace(np.percentile(z, 10.0), np.percentile(z, 90.0), 9):
         members = np.flatnonzero(mask)[np.abs(z - centre) < height]
         if len(members) < 200:
             continue
@@ -354,25 +319,22 @@ def _slab_mapping(points: np.ndarray, theta: np.ndarray, mask: np.ndarray,
         values = np.concatenate([[0.0], length[:-1] + 0.5 * steps[-1], [length[-1]]])
         fractions.append(np.maximum.accumulate(np.interp(grid, knots, values / length[-1])))
         perimeters.append(length[-1])
-        kept.append(centre)
+        centres.append(centre)
     if not fractions:
         raise ReconstructionError("too few side points to order them round the section")
+    # the median of each slab and its two neighbours, interpolated along the span
     fractions = np.array(fractions)
-    padded = np.vstack([fractions[:1]] * wide + [fractions] + [fractions[-1:]] * wide)
-    mappings = np.median(np.stack([padded[k: k + len(fractions)] for k in range(2 * wide + 1)]),
-                         axis=0)
+    padded = np.vstack([fractions[:1], fractions, fractions[-1:]])
+    mappings = np.median(np.stack([padded[:-2], padded[1:-1], padded[2:]]), axis=0)
     mappings = (mappings - mappings[:, :1]) / (mappings[:, -1:] - mappings[:, :1])
-    position = np.interp(z, kept, np.arange(len(kept)))
-    lower = np.minimum(np.floor(position).astype(int), len(kept) - 1)
-    upper = np.minimum(lower + 1, len(kept) - 1)
+    at = np.array([np.interp(theta[mask], grid, row) for row in mappings])  # (slabs, n)
+    position = np.interp(z, centres, np.arange(len(centres)))
+    lower = np.minimum(np.floor(position).astype(int), len(centres) - 1)
+    upper = np.minimum(lower + 1, len(centres) - 1)
     weight = position - lower
-    turn = theta[mask]
-    below, above = np.empty(len(z)), np.empty(len(z))
-    for k, row in enumerate(mappings):  # each point through its two slabs' mappings only
-        below[lower == k] = np.interp(turn[lower == k], grid, row)
-        above[upper == k] = np.interp(turn[upper == k], grid, row)
+    columns = np.arange(len(z))
     s = np.full(len(points), np.nan)
-    s[mask] = np.mod((1.0 - weight) * below + weight * above, 1.0)
+    s[mask] = np.mod((1.0 - weight) * at[lower, columns] + weight * at[upper, columns], 1.0)
     return s, float(np.median(perimeters))
 
 
