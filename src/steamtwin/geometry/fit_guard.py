@@ -364,9 +364,18 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
         sagitta = lateral_nearest * half
         envelope = envelope + sagitta
         # a convex surface through the point, tangent to its plane, drops anywhere from 0 to
-        # l·tan θ (the plane itself) by the normal line: the rest beyond the arc's is allowed
-        cosine = np.clip(turn, math.cos(FACING), 1.0)
-        slack = lateral_nearest * (np.sqrt(1.0 - cosine * cosine) / cosine - half)
+        # l·tan θ (the plane itself) by the normal line: the rest beyond the arc's is allowed.
+        # θ is the turn within the plane of the sample's normal and the offset to the point,
+        # tan θ = n_p·u / n_p·n_v (u the unit offset in the tangent plane): a point whose
+        # normal turns across the offset (round a nose, for a beak beyond the edge's end along
+        # it) does not slope away along it
+        envelope_normals = np.take_along_axis(cloud_normals[index[sl]], nearest[:, :, None],
+                                              axis=1)
+        towards_point = np.take_along_axis(lateral, nearest[:, :, None], axis=1)
+        towards_point /= np.maximum(lateral_nearest, 1e-300)[:, :, None]
+        slope = (np.maximum(np.einsum("mki,mki->mk", envelope_normals, towards_point), 0.0)
+                 / np.clip(turn, math.cos(FACING), 1.0))
+        slack = lateral_nearest * (slope - slope / (1.0 + np.sqrt(1.0 + slope * slope)))
         top = np.argmax(envelope, axis=1)
         above = -envelope[np.arange(len(top)), top]  # > 0: the sample stands outside them all
         # the extent: whether every one of the nearest points of the whole cloud lies on the
