@@ -47,20 +47,21 @@ themselves, so that a scan hole the fit bridges is not taken for a defect):
 Limit (stated rule): a vertex is a defect beyond ``max(noise_factor × σ, spacing_factor × h,
 floor)`` plus its allowance — σ the measured noise (1.4826 × the median absolute residual of
 the side points the fit kept, the normal-consistent scale of the median absolute deviation), h
-the median point spacing, the allowance (outward only) what a convex surface may drop beyond
-the arc between an envelope point and the normal line: a convex curve through the point,
-tangent to its plane, drops anywhere from 0 to l·tan θ there (the plane itself), so the
-allowance is the largest l·(tan θ − tan(θ/2)) of the envelope — l·tan(θ/2) to first order in
-θ, the arc drop itself (where the points lie a spacing off the normal line on a sharp edge the
-vertex is judged only to what they allow); on a tight edge whose facing points are turned far
-it is more (slender 80k seed 2: a vertex on a 0.15-mm trailing-edge circle, its facing points
-turned 58° and 0.64–0.73 mm off its normal line, 0.91–1.07 mm below its tangent plane, read
-0.55 mm out against an arc allowance of 0.40 mm; the turn happens at once on the circle and
-the rest is flat, a drop of ≈ 0.9 mm; the true deviation is 0.005 mm). Within
-``rim_spacings`` × h of a cap rim the side data end and the neighbourhoods straddle the
-crease: there a vertex is measured in its own section against the side's points and the
-cap's (:func:`rim_excursion`: the cap plane and its outline count as data), so that a bulge of
-the rim ring is judged too; its allowance is :data:`RIM_SLACK` spacings.
+the median point spacing, the allowance (outward only) what a convex surface may drop beyond the
+arc between an envelope point and the normal line: a convex curve through the point, tangent to
+its plane, drops anywhere from 0 to l·tan θ there (the plane itself), so the allowance is the
+largest l·(tan θ − tan(θ/2)) of the envelope, θ the turn within the plane of the normal and the
+offset to the point (a turn across the offset, as round a nose for a beak beyond the edge's end,
+is no slope along it) — l·tan(θ/2) to first order in θ, the arc drop itself (where the points
+lie a spacing off the normal line on a sharp edge the vertex is judged only to what they allow);
+on a tight edge whose facing points are turned far it is more (slender 80k seed 2: a vertex on a
+0.15-mm trailing-edge circle, its facing points turned 58° and 0.64–0.73 mm off its normal line,
+0.91–1.07 mm below its tangent plane, read 0.55 mm out against an arc allowance of 0.40 mm; the
+turn happens at once on the circle and the rest is flat, a drop of ≈ 0.9 mm; the true deviation
+is 0.005 mm). Within ``rim_spacings`` × h of a cap rim the side data end and the neighbourhoods
+straddle the crease: there a vertex is measured in its own section against the side's points and
+the cap's (:func:`rim_excursion`: the cap plane and its outline count as data), so that a bulge
+of the rim ring is judged too; its allowance is :data:`RIM_SLACK` spacings.
 
 Defects are the connected groups of offending vertices, named by their patch (leading or
 trailing edge, suction or pressure side), span range (% from the root) and size (mm).
@@ -323,8 +324,9 @@ def local_excursion(samples: np.ndarray, sample_normals: np.ndarray, cloud: np.n
 
     Returns the excursion and its allowance (m): outward, the most a convex surface may drop
     beyond the arc to an envelope point, l·(tan θ − tan(θ/2)) (the rest of the way to the
-    point's tangent plane, module docstring), largest over the envelope — a sample with its
-    envelope points right on its normal line is judged to the noise, one across a gap in the
+    point's tangent plane, θ within the plane of the normal and the offset; module
+    docstring), largest over the envelope — a sample with its envelope points right on its
+    normal line is judged to the noise, one across a gap in the
     points on an edge only to what the gap allows; inward (:func:`_depth_inside`, which takes
     the arc's drop off itself) none. The reading further beyond its allowance is returned:
     the envelope's allowance once hid a surface 0.13 mm inside a sparse nose (0.21–0.27 mm
