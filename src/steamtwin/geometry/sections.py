@@ -51,6 +51,9 @@ TOUR_SLABS = 12
 END_SLABS = 2
 #: Passes of neighbour averaging of the path lengths in :func:`section_turn`.
 SMOOTHING_PASSES = 3
+#: Reach of :func:`nose_directions` round the front end, in seed radii (about three k-th
+#: neighbour distances: points of both faces, short of a blade's mid-chord).
+NOSE_REACH = 3.0
 
 
 def tour_ratios(points: np.ndarray, mask: np.ndarray, turn: np.ndarray, perimeter: np.ndarray,
@@ -200,6 +203,29 @@ def section_chords(points: np.ndarray, mask: np.ndarray, slab: float
     return fitted[:, :2], fitted[:, 2:], centres
 
 
+def nose_directions(points: np.ndarray, mask: np.ndarray, front: np.ndarray,
+                    offset: np.ndarray, seed_radius: float, slab: float) -> np.ndarray:
+    """Unit x-y direction (n, 2) from the sections' front end into the nose at every point's
+    z: towards the median offset of the points under ``mask`` within :data:`NOSE_REACH`
+    ``seed_radius`` (m) of the front end (``offset``, m), per slab ``slab`` (m) high along
+    the span. The points there lie on both faces leaving the front end, so the direction runs
+    between them — along the camber line's start — where the axial direction +x can run along
+    a face: at high stagger both faces leave the most upstream point upwards (or downwards),
+    and a line y = y_front through it crosses the lower face again within a millimetre (issue
+    19, a slender blade 50° staggered at the tip). +x where a slab has fewer than 3 points
+    near its front end."""
+    count = len(points)
+    near = mask & (offset < NOSE_REACH * seed_radius)
+    direction = np.tile([1.0, 0.0], (count, 1))
+    if np.sum(near) < 3:
+        return direction
+    relative = points[near, :2] - front[near]
+    for axis in range(2):
+        direction[:, axis] = slab_median(points[near, 2], relative[:, axis], points[:, 2], slab)
+    length = np.linalg.norm(direction, axis=1, keepdims=True)
+    return np.where(length > 0.0, direction / np.maximum(length, 1e-300), [1.0, 0.0])
+
+
 def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mask: np.ndarray,
                  front: np.ndarray, rear: np.ndarray, seed_radius: float, slab: float
                  ) -> tuple[np.ndarray, np.ndarray]:
@@ -214,11 +240,13 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     sampled surfaces, Tenenbaum, de Silva & Langford 2000, Science 290). Edges join each point
     to those of its :data:`GRAPH_NEIGHBOURS` nearest neighbours whose outward normals,
     projected on the section plane, agree within 75° and whose chord lies within 45° of both
-    tangent planes. The front end's outward normal is −x, so the points just below it (smaller
-    y) lie anticlockwise of it: the graph is cut along the line y = y_front within
-    2 ``seed_radius`` of the front end (the section crosses it there once, at right angles), and
-    the paths start from the points within ``seed_radius`` below the cut, run once round the
-    section and end at those above it. The distance d from the start (averaged
+    tangent planes. The front end's outward normal is −x, so the points to the right of the
+    line from it into the nose (:func:`nose_directions`, between the two faces) come first
+    anticlockwise round the section: the graph is cut along that line within
+    2 ``seed_radius`` of the front end (the section crosses it there once; a line y = y_front
+    can cross a face leaving the front end upwards again within a millimetre, at high stagger),
+    and the paths start from the points within ``seed_radius`` to the right of the cut, run
+    once round the section and end at those to its left. The distance d from the start (averaged
     :data:`SMOOTHING_PASSES` times over each point and its graph neighbours) is the arc length
     anticlockwise from the front end; the perimeter P is d plus the distance to the front end
     at the end points (median per slab along the span). From θ' = d / P and the rear end's θ'_r
@@ -258,15 +286,17 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     lo, hi, length = i[edge][unique], j[edge][unique], length[edge][unique]
     graph_edges = (lo, hi, length)  # for the order by faces, should the ring be broken
     offset = np.linalg.norm(points[:, :2] - front, axis=1)
-    below = points[:, 1] < front[:, 1]
-    # cut the ring along the line y = y_front across the leading edge
+    # cut the ring along the line from the front end into the nose, between its two faces
+    inward = nose_directions(points, mask, front, offset, seed_radius, slab)
+    relative = points[:, :2] - front
+    below = inward[:, 0] * relative[:, 1] - inward[:, 1] * relative[:, 0] < 0.0
     cut = (below[lo] != below[hi]) & (np.minimum(offset[lo], offset[hi]) < 2.0 * seed_radius)
     lo, hi, length = lo[~cut], hi[~cut], length[~cut]
     seam = mask & (offset < seed_radius)
     start, end = np.flatnonzero(seam & below), np.flatnonzero(seam & ~below)
     if start.size == 0 or end.size == 0:
-        # no seam across the line y = y_front (a section staggered so far that both faces
-        # leave the front end upwards or downwards): the order by faces, cut along the chord
+        # no seam across the cut line (a nose too sparse for points on both sides of it
+        # within a seed radius): the order by faces, cut along the chord
         return two_face_turn(points, normals, mask, *graph_edges, front, rear, seed_radius,
                              slab)
     origin = count  # a virtual source joined to the seam points below the cut
