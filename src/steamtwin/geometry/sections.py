@@ -54,6 +54,8 @@ SMOOTHING_PASSES = 3
 #: Reach of :func:`nose_directions` round the front end, in seed radii (about three k-th
 #: neighbour distances: points of both faces, short of a blade's mid-chord).
 NOSE_REACH = 3.0
+#: Fewest points round the front end of a slab for :func:`nose_directions`.
+MIN_NOSE_POINTS = 10
 
 
 def tour_ratios(points: np.ndarray, mask: np.ndarray, turn: np.ndarray, perimeter: np.ndarray,
@@ -206,24 +208,33 @@ def section_chords(points: np.ndarray, mask: np.ndarray, slab: float
 def nose_directions(points: np.ndarray, mask: np.ndarray, front: np.ndarray,
                     offset: np.ndarray, seed_radius: float, slab: float) -> np.ndarray:
     """Unit x-y direction (n, 2) from the sections' front end into the nose at every point's
-    z: towards the median offset of the points under ``mask`` within :data:`NOSE_REACH`
-    ``seed_radius`` (m) of the front end (``offset``, m), per slab ``slab`` (m) high along
-    the span. The points there lie on both faces leaving the front end, so the direction runs
-    between them — along the camber line's start — where the axial direction +x can run along
-    a face: at high stagger both faces leave the most upstream point upwards (or downwards),
-    and a line y = y_front through it crosses the lower face again within a millimetre (issue
-    19, a slender blade 50° staggered at the tip). +x where a slab has fewer than 3 points
-    near its front end."""
-    count = len(points)
-    near = mask & (offset < NOSE_REACH * seed_radius)
-    direction = np.tile([1.0, 0.0], (count, 1))
-    if np.sum(near) < 3:
-        return direction
-    relative = points[near, :2] - front[near]
-    for axis in range(2):
-        direction[:, axis] = slab_median(points[near, 2], relative[:, axis], points[:, 2], slab)
-    length = np.linalg.norm(direction, axis=1, keepdims=True)
-    return np.where(length > 0.0, direction / np.maximum(length, 1e-300), [1.0, 0.0])
+    z: the bisector of the directions in which the two faces leave the front end. Per slab
+    ``slab`` (m) high along the span, the directions from the front end to the points under
+    ``mask`` between 1 and :data:`NOSE_REACH` ``seed_radius`` (m) from it (``offset``, m)
+    span an angle from one face to the other (5th to 95th percentile, so stray points and
+    unequal numbers on the faces do not move it); its middle is the bisector, interpolated
+    along the span. It is +x on a round nose, and runs between the faces where the axial
+    direction runs along one: at high stagger both faces leave the most upstream point upwards
+    (or downwards), and a line y = y_front through it crosses the lower face again within a
+    millimetre (issue 19, a slender blade 50° staggered at the tip). +x where no slab has
+    :data:`MIN_NOSE_POINTS` such points."""
+    relative = points[:, :2] - front
+    angle = np.arctan2(relative[:, 1], relative[:, 0])
+    # points upstream of the front end are strays (it is the most upstream point)
+    near = (mask & (offset > seed_radius) & (offset < NOSE_REACH * seed_radius)
+            & (np.abs(angle) < 0.5 * math.pi))
+    z, angle = points[near, 2], angle[near]
+    centres, bisectors = [], []
+    if z.size:
+        for lo, hi in itertools.pairwise(np.arange(z.min(), z.max() + slab, slab)):
+            inside = angle[(z >= lo) & (z < hi)]
+            if inside.size >= MIN_NOSE_POINTS:
+                centres.append(0.5 * (lo + hi))
+                bisectors.append(0.5 * float(np.sum(np.percentile(inside, [5.0, 95.0]))))
+    if not centres:
+        return np.tile([1.0, 0.0], (len(points), 1))
+    bisector = np.interp(points[:, 2], centres, bisectors)
+    return np.column_stack([np.cos(bisector), np.sin(bisector)])
 
 
 def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mask: np.ndarray,
