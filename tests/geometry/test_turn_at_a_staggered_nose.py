@@ -10,10 +10,12 @@ into the nose, each face's turn follows its arc length."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from foreign_blades import family_blade, laser_cloud, random_pose
 from scipy.spatial import cKDTree
 
 from steamtwin.geometry.frame import estimate_blade_frame
+from steamtwin.geometry.sections import nose_directions
 from steamtwin.geometry.segmentation import segment_blade
 
 
@@ -57,3 +59,50 @@ def test_each_face_keeps_its_share_of_the_turn_next_to_the_tip():
             spreads[depth, name] = spread / (0.9 * share)
     # measured 1.01–1.10 (cut along y = y_front: 0.17–0.23 on the squeezed face, 0.99–1.01)
     assert all(0.7 < ratio < 1.4 for ratio in spreads.values()), spreads
+
+
+
+def _nose(points_per_face: tuple[int, int], up: float, down: float, radius: float,
+          seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """An extruded nose (m) whose front end is (0, 0): a circle of ``radius`` round
+    (radius, 0) over the angles facing upstream, and two straight faces leaving it tangent in
+    the directions ``up`` and ``down`` (rad from +x), sampled with the given numbers of
+    points. Returns the points and +1 for those on the upper face or arc, −1 on the lower."""
+    rng = np.random.default_rng(seed)
+    pieces, sides = [], []
+    for count, angle, sign in zip(points_per_face, (up, down), (1.0, -1.0), strict=True):
+        start = np.array([radius, 0.0]) + sign * radius * np.array([-np.sin(angle),
+                                                                     np.cos(angle)])
+        length = 4e-3 * rng.random(count)
+        pieces.append(start + length[:, None] * np.array([np.cos(angle), np.sin(angle)]))
+        sides.append(np.full(count, sign))
+    arc = np.pi / 2 + rng.random(400) * np.pi
+    pieces.append(np.column_stack([radius + radius * np.cos(arc), radius * np.sin(arc)]))
+    sides.append(np.sign(np.sin(arc)))
+    xy = np.vstack(pieces)
+    return np.column_stack([xy, 5e-3 * rng.random(len(xy))]), np.concatenate(sides)
+
+
+@pytest.mark.parametrize(("counts", "up", "down", "radius"), [
+    ((2000, 2000), 30.0, -30.0, 1.5e-3),  # a round nose: the direction is +x
+    ((2000, 2000), 39.0, 8.0, 0.1e-3),  # both faces leave upwards (slender's tip)
+    ((3000, 1000), 39.0, 8.0, 0.1e-3),  # and unequally sampled
+])
+def test_the_cut_into_the_nose_keeps_each_face_on_its_side(counts, up, down, radius):
+    """The line from the front end along :func:`nose_directions` has the upper face on its
+    left and the lower on its right within the cut's reach (2 seed radii), where the line
+    y = y_front crosses a lower face leaving at 8° again 0.8 mm from the front end."""
+    points, upper = _nose(counts, np.radians(up), np.radians(down), radius)
+    front = np.zeros((len(points), 2))
+    seed_radius = 0.5e-3
+    offset = np.linalg.norm(points[:, :2], axis=1)
+    direction = nose_directions(points, np.ones(len(points), dtype=bool), front, offset,
+                                seed_radius, 1e-3)
+    assert np.allclose(np.linalg.norm(direction, axis=1), 1.0)
+    left = direction[:, 0] * points[:, 1] - direction[:, 1] * points[:, 0] > 0.0
+    reach = (offset < 2.0 * seed_radius) & (offset > 0.05e-3)
+    assert np.all(left[reach] == (upper[reach] > 0.0))
+    if up == -down:
+        assert np.allclose(direction, [1.0, 0.0], atol=0.05)
+    else:  # the axial line does not keep them apart
+        assert np.any((points[reach, 1] > 0.0) != (upper[reach] > 0.0))
