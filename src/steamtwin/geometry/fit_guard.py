@@ -562,11 +562,15 @@ def _span_bridge(sample: np.ndarray, normal: np.ndarray, distance: float, points
 #: spacing by 0.04 mm; the 80k family's clean rims read ≤ 0.095 mm; thick-impulse 80k seed 0's
 #: 0.33 mm tip-rim bulge reads 0.17–0.30 mm at its three worst vertices, beyond it).
 RIM_SLACK = 0.25
+#: Distance (point spacings) from a rim sample's normal line within which the outline's points
+#: alone make its reading, when there are any (:func:`rim_excursion`): 1.5 spacings hold a
+#: few points of a Poisson sample on either side of the line.
+RIM_NEAR = 1.5
 
 
 def rim_excursion(samples: np.ndarray, sample_normals: np.ndarray,
-                  outlines: list[tuple[np.ndarray, np.ndarray]], neighbours: int = 20
-                  ) -> np.ndarray:
+                  outlines: list[tuple[np.ndarray, np.ndarray]], neighbours: int = 20,
+                  near: float = 0.0) -> np.ndarray:
     """How far each rim sample (n, 3; m, horizontal outward unit normals (n, 3)) stands
     outside the data next to it in its own section (m).
 
@@ -584,7 +588,12 @@ def rim_excursion(samples: np.ndarray, sample_normals: np.ndarray,
     Hausdorff distance, Cignoni et al. 1998, against the outline). The normals are the fitted
     surface's, not k-NN blends, so the drop is not added to the limit again (unlike
     :func:`local_excursion`'s allowance). A bulge beyond the outline has all of them inside; a
-    sample with no facing point gets 0 (a hole at the rim).
+    sample with no facing point gets 0 (a hole at the rim). Where a set has facing points
+    within ``near`` (m) of the sample's normal line, only those count: the drop is the
+    arc's only where the fitted normals turn as the data do, and at a bulge they turn faster
+    on its flanks (issue 19, naca-twisted 80k seed 6: a 0.20-mm bulge at the tip rim's
+    leading edge read 0.11 mm through a point 0.43 mm off the normal line, turned 56°, whose
+    drop was 0.23 mm; its points within 0.2 mm read 0.20 mm).
     """
     normal = _flat(sample_normals)[:, :2]
     across = np.column_stack([-normal[:, 1], normal[:, 0]])
@@ -601,7 +610,10 @@ def rim_excursion(samples: np.ndarray, sample_normals: np.ndarray,
         turn = np.einsum("mki,mi->mk", _flat(data_normals[index.ravel()]).reshape(
             len(samples), k, 3)[:, :, :2], normal)
         drop = lateral * np.sqrt(np.clip((1.0 - turn) / (1.0 + turn), 0.0, None))  # l·tan(θ/2)
-        envelope = np.where(turn > math.cos(FACING), height + drop, -np.inf)
+        facing = turn > math.cos(FACING)
+        close = facing & (lateral <= near)
+        counted = np.where(close.any(axis=1, keepdims=True), close, facing)
+        envelope = np.where(counted, height + drop, -np.inf)
         top = np.maximum(top, envelope.max(axis=1))
     return np.where(np.isfinite(top), np.maximum(-top, 0.0), 0.0)
 
@@ -663,10 +675,27 @@ def guard_surface(reconstruction: GuardedMesh, settings: GuardSettings | None = 
                                                                      REGIONS.index("tip")])]
     _, nearest = cKDTree(reconstruction.vertices[rim]).query(cap_points)
     allowance[rim] = RIM_SLACK * spacing
+    # the side points the fit kept, and those it trimmed whose nearest kept point lies on a
+    # face turned as the surface is where the fit placed them: at a bulge the points under
+    # it are off the surface by more than the trimming distance, and without them the
+    # outline there is read from points farther round the edge; a point of the opposite face
+    # of a thin edge, placed on this one, lies among that face's kept points (its k-NN normal
+    # can be turned with this face's: slender 80k seed 2's 0.15-mm tip trailing edge)
+    placed = side & ~np.isnan(reconstruction.parameters)
+    placed_normals = np.zeros((len(placed), 3))
+    placed_normals[placed, :2] = surface.outward_normals(reconstruction.parameters[placed],
+                                                         reconstruction.points[placed, 2])
+    trimmed = np.flatnonzero(placed & ~reconstruction.inliers)
+    if trimmed.size and cloud.size:
+        _, nearest_kept = cKDTree(cloud).query(reconstruction.points[trimmed])
+        along = np.einsum("ij,ij->i", placed_normals[trimmed], cloud_normals[nearest_kept])
+        placed[trimmed[along <= math.cos(FACING)]] = False
+    placed_normals = placed_normals[placed]
     excursion[rim] = rim_excursion(
         reconstruction.vertices[rim], vertex_normals[rim],
-        [(cloud, cloud_normals), (cap_points, vertex_normals[rim][nearest])],
-        settings.neighbours)
+        [(reconstruction.points[placed], placed_normals),
+         (cap_points, vertex_normals[rim][nearest])],
+        settings.neighbours, RIM_NEAR * spacing)
     judged = np.ones(len(excursion), dtype=bool)
     defects = [d for d in _defects(reconstruction, excursion, limit + allowance)
                if d.vertices >= settings.min_vertices or d.size > settings.isolated_limit]
