@@ -61,7 +61,10 @@ turn happens at once on the circle and the rest is flat, a drop of ≈ 0.9 mm; t
 is 0.005 mm). Within ``rim_spacings`` × h of a cap rim the side data end and the neighbourhoods
 straddle the crease: there a vertex is measured in its own section against the side's points and
 the cap's (:func:`rim_excursion`: the cap plane and its outline count as data), so that a bulge
-of the rim ring is judged too; its allowance is :data:`RIM_SLACK` spacings.
+of the rim ring is judged too; its allowance is :data:`RIM_SLACK` spacings. The side's points
+there include those the fit trimmed whose nearest kept point faces as they were placed (the
+points under a bulge are off it by more than the trimming distance), and the points within
+:data:`RIM_NEAR` spacings of the vertex's normal line, where there are any, read alone.
 
 Defects are the connected groups of offending vertices, named by their patch (leading or
 trailing edge, suction or pressure side), span range (% from the root) and size (mm).
