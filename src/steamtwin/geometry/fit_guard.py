@@ -573,7 +573,7 @@ RIM_NEAR = 1.5
 
 def rim_excursion(samples: np.ndarray, sample_normals: np.ndarray,
                   outlines: list[tuple[np.ndarray, np.ndarray]], neighbours: int = 20,
-                  near: float = 0.0) -> np.ndarray:
+                  near: tuple[float, ...] = ()) -> np.ndarray:
     """How far each rim sample (n, 3; m, horizontal outward unit normals (n, 3)) stands
     outside the data next to it in its own section (m).
 
@@ -591,8 +591,10 @@ def rim_excursion(samples: np.ndarray, sample_normals: np.ndarray,
     Hausdorff distance, Cignoni et al. 1998, against the outline). The normals are the fitted
     surface's, not k-NN blends, so the drop is not added to the limit again (unlike
     :func:`local_excursion`'s allowance). A bulge beyond the outline has all of them inside; a
-    sample with no facing point gets 0 (a hole at the rim). Where a set has facing points
-    within ``near`` (m) of the sample's normal line, only those count: the drop is the
+    sample with no facing point gets 0 (a hole at the rim). Where the i-th set has facing
+    points within ``near[i]`` (m; 0 when not given) of the sample's normal line, only those
+    count — for the side's points, not the cap's, whose points near that line lie inside the
+    outline, not on it: the drop is the
     arc's only where the fitted normals turn as the data do, and at a bulge they turn faster
     on its flanks (issue 19, naca-twisted 80k seed 6: a 0.20-mm bulge at the tip rim's
     leading edge read 0.11 mm through a point 0.43 mm off the normal line, turned 56°, whose
@@ -601,7 +603,7 @@ def rim_excursion(samples: np.ndarray, sample_normals: np.ndarray,
     normal = _flat(sample_normals)[:, :2]
     across = np.column_stack([-normal[:, 1], normal[:, 0]])
     top = np.full(len(samples), -np.inf)
-    for data, data_normals in outlines:
+    for number, (data, data_normals) in enumerate(outlines):
         k = min(neighbours, len(data))
         if k == 0:
             continue
@@ -614,7 +616,7 @@ def rim_excursion(samples: np.ndarray, sample_normals: np.ndarray,
             len(samples), k, 3)[:, :, :2], normal)
         drop = lateral * np.sqrt(np.clip((1.0 - turn) / (1.0 + turn), 0.0, None))  # l·tan(θ/2)
         facing = turn > math.cos(FACING)
-        close = facing & (lateral <= near)
+        close = facing & (lateral <= (near[number] if number < len(near) else 0.0))
         counted = np.where(close.any(axis=1, keepdims=True), close, facing)
         envelope = np.where(counted, height + drop, -np.inf)
         top = np.maximum(top, envelope.max(axis=1))
@@ -698,7 +700,7 @@ def guard_surface(reconstruction: GuardedMesh, settings: GuardSettings | None = 
         reconstruction.vertices[rim], vertex_normals[rim],
         [(reconstruction.points[placed], placed_normals),
          (cap_points, vertex_normals[rim][nearest])],
-        settings.neighbours, RIM_NEAR * spacing)
+        settings.neighbours, (RIM_NEAR * spacing,))
     judged = np.ones(len(excursion), dtype=bool)
     defects = [d for d in _defects(reconstruction, excursion, limit + allowance)
                if d.vertices >= settings.min_vertices or d.size > settings.isolated_limit]
