@@ -648,11 +648,14 @@ def guard_surface(reconstruction: GuardedMesh, settings: GuardSettings | None = 
     # the side points the fit kept, with the fitted surface's normals at their parameters
     # (consistently outward), looked up by parameter: s unrolled onto a circle as long as
     # the section's perimeter, and z
-    kept = side & reconstruction.inliers & ~np.isnan(reconstruction.parameters)
+    placed = side & ~np.isnan(reconstruction.parameters)
+    placed_normals = np.zeros((len(placed), 3))
+    placed_normals[placed, :2] = surface.outward_normals(reconstruction.parameters[placed],
+                                                         reconstruction.points[placed, 2])
+    kept = placed & reconstruction.inliers
     cloud = reconstruction.points[kept]
     cloud_s = reconstruction.parameters[kept]
-    cloud_normals = np.column_stack([surface.outward_normals(cloud_s, cloud[:, 2]),
-                                     np.zeros(len(cloud))])
+    cloud_normals = placed_normals[kept]
     radius = float(np.nanmedian(segmentation.perimeter)) / (2.0 * math.pi)
 
     def unrolled(parameter: np.ndarray, z: np.ndarray) -> np.ndarray:
@@ -686,19 +689,15 @@ def guard_surface(reconstruction: GuardedMesh, settings: GuardSettings | None = 
     # outline there is read from points farther round the edge; a point of the opposite face
     # of a thin edge, placed on this one, lies among that face's kept points (its k-NN normal
     # can be turned with this face's: slender 80k seed 2's 0.15-mm tip trailing edge)
-    placed = side & ~np.isnan(reconstruction.parameters)
-    placed_normals = np.zeros((len(placed), 3))
-    placed_normals[placed, :2] = surface.outward_normals(reconstruction.parameters[placed],
-                                                         reconstruction.points[placed, 2])
+    outline = placed.copy()
     trimmed = np.flatnonzero(placed & ~reconstruction.inliers)
     if trimmed.size and cloud.size:
         _, nearest_kept = cKDTree(cloud).query(reconstruction.points[trimmed])
         along = np.einsum("ij,ij->i", placed_normals[trimmed], cloud_normals[nearest_kept])
-        placed[trimmed[along <= math.cos(FACING)]] = False
-    placed_normals = placed_normals[placed]
+        outline[trimmed[along <= math.cos(FACING)]] = False
     excursion[rim] = rim_excursion(
         reconstruction.vertices[rim], vertex_normals[rim],
-        [(reconstruction.points[placed], placed_normals),
+        [(reconstruction.points[outline], placed_normals[outline]),
          (cap_points, vertex_normals[rim][nearest])],
         settings.neighbours, (RIM_NEAR * spacing,))
     judged = np.ones(len(excursion), dtype=bool)
