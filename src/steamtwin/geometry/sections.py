@@ -412,15 +412,20 @@ def _face_lengths(points: np.ndarray, mask: np.ndarray, rear: np.ndarray,
                            slab) * mirror[:2]
     right = _right_of(points, tail, rear)
     short = mask & (behind >= seed_radius) & (behind < NOSE_REACH * seed_radius)
-    if not (np.any(short & right) and np.any(short & ~right)):  # (∞ where a path is missing)
-        raise ReconstructionError("no side points on both faces next to the rear end of the "
-                                  "sections: is the trailing edge scanned?")
+    missing = ReconstructionError("no side points on both faces next to the rear end of the "
+                                  "sections reached from the front end: is the trailing edge "
+                                  "scanned?")
+    if not (np.any(short & right) and np.any(short & ~right)):
+        raise missing
     # the face the pressure paths reach sooner is the pressure face, whichever side it lies
+    # (a point no path reaches counts as ∞ in the medians)
     pressure_side = right if (np.median(pressure_path[short & right])
                               < np.median(pressure_path[short & ~right])) else ~right
     lengths = []
     for path, on in ((pressure_path, pressure_side), (suction_path, ~pressure_side)):
         chosen = short & on & np.isfinite(path)
+        if not np.any(chosen):
+            raise missing
         lengths.append(lower_envelope(points[chosen, 2], path[chosen] + behind[chosen],
                                       points[:, 2], slab))
     return lengths[0], lengths[1]
