@@ -62,7 +62,10 @@ MIN_NOSE_POINTS = 10
 #: Reach of the sources of :func:`section_turn`'s paths round the front end, in seed radii:
 #: next to a sharp nose a face can be cut off from the points within one seed radius (k-NN
 #: normals turned by the other face), and its paths then came round by the span (2–10 mm too
-#: long over the last 10 mm of issue 19's slender blade, whose fit folded there).
+#: long over the last 10 mm of issue 19's slender blade, whose fit folded there). The sources
+#: beyond one seed radius start at π/2 × their straight distance: started at it, they
+#: undercut the paths round the reference unit's round noses and moved their start
+#: parameters enough to refuse ip2 and put hp4 0.109 mm off.
 SOURCE_REACH = 2.0
 #: :func:`lower_envelope`: the percentile of each slab's values, the smoothing weight, the
 #: weight of the values above the curve, the reweighting rounds and the order of the
@@ -275,7 +278,8 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     end upwards again within a millimetre, at high stagger). Each face is then measured from
     the front end alone: d_p from the points within :data:`SOURCE_REACH` ``seed_radius`` to the
     right of the cut (the pressure face, first anticlockwise), each starting at its straight
-    distance from the front end, and d_s from those to its left, each averaged
+    distance from the front end (π/2 times that beyond one ``seed_radius``), and d_s from those
+    to its left, each averaged
     :data:`SMOOTHING_PASSES` times over each point and its graph neighbours. No path has to go
     round the rear end: a thin trailing edge whose k-NN normals straddle both faces keeps the
     graph from going round it, or links the faces across it, and a single path round the
@@ -332,12 +336,15 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
         return two_face_turn(points, normals, mask, *graph_edges, front, rear, seed_radius,
                              slab)
     # two virtual sources, joined to the points right and left of the cut next to the front
-    # end, each at its straight distance from it
+    # end: those within a seed radius at their straight distance from it, those farther out at
+    # π/2 times that — the most a convex nose's arc exceeds its chord (a half circle), so they
+    # start no path that goes on from the front end unbroken, only those a cut-off face needs
     near_front = mask & (offset < SOURCE_REACH * seed_radius)
     start, end = np.flatnonzero(near_front & below), np.flatnonzero(near_front & ~below)
+    start_at = np.where(offset < seed_radius, offset, 0.5 * math.pi * offset) + 1e-12
     rows = np.concatenate([lo, hi, np.full(start.size, count), np.full(end.size, count + 1)])
     cols = np.concatenate([hi, lo, start, end])
-    weights = np.concatenate([length, length, offset[start] + 1e-12, offset[end] + 1e-12])
+    weights = np.concatenate([length, length, start_at[start], start_at[end]])
     graph = coo_array((weights, (rows, cols)), shape=(count + 2, count + 2)).tocsr()
     pressure_path, suction_path = (_smoothed(d, mask & np.isfinite(d), lo, hi)
                                    for d in dijkstra(graph, indices=[count, count + 1])[:, :count])
