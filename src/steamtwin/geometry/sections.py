@@ -59,14 +59,6 @@ SMOOTHING_PASSES = 3
 NOSE_REACH = 3.0
 #: Fewest points round the front end of a slab for :func:`nose_directions`.
 MIN_NOSE_POINTS = 10
-#: Reach of the sources of :func:`section_turn`'s paths round the front end, in seed radii:
-#: next to a sharp nose a face can be cut off from the points within one seed radius (k-NN
-#: normals turned by the other face), and its paths then came round by the span (2–10 mm too
-#: long over the last 10 mm of issue 19's slender blade, whose fit folded there). The sources
-#: beyond one seed radius start at π/2 × their straight distance: started at it, they
-#: undercut the paths round the reference unit's round noses and moved their start
-#: parameters enough to refuse ip2 and put hp4 0.109 mm off.
-SOURCE_REACH = 2.0
 #: :func:`lower_envelope`: the percentile of each slab's values, the smoothing weight, the
 #: weight of the values above the curve, the reweighting rounds and the order of the
 #: differences penalised (on lines lengthened in up to half of 40 slabs by 5–30 mm, in runs,
@@ -276,10 +268,9 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     (:func:`nose_directions`, between the two faces) within 2 ``seed_radius`` of the front end
     (the section crosses it there once; a line y = y_front can cross a face leaving the front
     end upwards again within a millimetre, at high stagger). Each face is then measured from
-    the front end alone: d_p from the points within :data:`SOURCE_REACH` ``seed_radius`` to the
-    right of the cut (the pressure face, first anticlockwise), each starting at its straight
-    distance from the front end (π/2 times that beyond one ``seed_radius``), and d_s from those
-    to its left, each averaged
+    the front end alone: d_p from the points within ``seed_radius`` to the right of the cut
+    (the pressure face, first anticlockwise), each starting at its straight distance from the
+    front end, and d_s from those to its left, each averaged
     :data:`SMOOTHING_PASSES` times over each point and its graph neighbours. No path has to go
     round the rear end: a thin trailing edge whose k-NN normals straddle both faces keeps the
     graph from going round it, or links the faces across it, and a single path round the
@@ -330,21 +321,17 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     cut = (below[lo] != below[hi]) & (np.minimum(offset[lo], offset[hi]) < 2.0 * seed_radius)
     lo, hi, length = lo[~cut], hi[~cut], length[~cut]
     seam = mask & (offset < seed_radius)
-    if not (np.any(seam & below) and np.any(seam & ~below)):
+    start, end = np.flatnonzero(seam & below), np.flatnonzero(seam & ~below)
+    if start.size == 0 or end.size == 0:
         # no seam across the cut line (a nose too sparse for points on both sides of it
         # within a seed radius): the order by faces, cut along the chord
         return two_face_turn(points, normals, mask, *graph_edges, front, rear, seed_radius,
                              slab)
-    # two virtual sources, joined to the points right and left of the cut next to the front
-    # end: those within a seed radius at their straight distance from it, those farther out at
-    # π/2 times that — the most a convex nose's arc exceeds its chord (a half circle), so they
-    # start no path that goes on from the front end unbroken, only those a cut-off face needs
-    near_front = mask & (offset < SOURCE_REACH * seed_radius)
-    start, end = np.flatnonzero(near_front & below), np.flatnonzero(near_front & ~below)
-    start_at = np.where(offset < seed_radius, offset, 0.5 * math.pi * offset) + 1e-12
+    # two virtual sources, joined to the seam points right and left of the cut, each at its
+    # straight distance from the front end
     rows = np.concatenate([lo, hi, np.full(start.size, count), np.full(end.size, count + 1)])
     cols = np.concatenate([hi, lo, start, end])
-    weights = np.concatenate([length, length, start_at[start], start_at[end]])
+    weights = np.concatenate([length, length, offset[start] + 1e-12, offset[end] + 1e-12])
     graph = coo_array((weights, (rows, cols)), shape=(count + 2, count + 2)).tocsr()
     pressure_path, suction_path = (_smoothed(d, mask & np.isfinite(d), lo, hi)
                                    for d in dijkstra(graph, indices=[count, count + 1])[:, :count])
