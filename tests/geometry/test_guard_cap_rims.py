@@ -101,3 +101,11 @@ def test_a_tip_rim_bulge_is_a_defect(blade_fit) -> None:
     worst = bulged.defects[0]
     assert worst.span_to == pytest.approx(1.0, abs=1e-3) and worst.size >= 0.25e-3
     assert worst.region in {"tip", "suction_side"} and worst.vertices >= 3
+
+
+def test_rim_excursion_refuses_more_reaches_than_sets_of_points():
+    """A near-line reach per set of points: one more than the sets is a mistake, not ignored."""
+    samples = np.array([[1e-3, 0.0, 0.0]])
+    outward = np.array([[1.0, 0.0, 0.0]])
+    with pytest.raises(ValueError, match="2 near-line reaches for 1 sets"):
+        rim_excursion(samples, outward, [(samples, outward)], near=(1e-4, 1e-4))

@@ -600,10 +600,13 @@ def rim_excursion(samples: np.ndarray, sample_normals: np.ndarray,
     leading edge read 0.11 mm through a point 0.43 mm off the normal line, turned 56°, whose
     drop was 0.23 mm; its points within 0.2 mm read 0.20 mm).
     """
+    if len(near) > len(outlines):
+        raise ValueError(f"{len(near)} near-line reaches for {len(outlines)} sets of points")
+    reaches = (*near, *(0.0,) * (len(outlines) - len(near)))
     normal = _flat(sample_normals)[:, :2]
     across = np.column_stack([-normal[:, 1], normal[:, 0]])
     top = np.full(len(samples), -np.inf)
-    for number, (data, data_normals) in enumerate(outlines):
+    for (data, data_normals), reach in zip(outlines, reaches, strict=True):
         k = min(neighbours, len(data))
         if k == 0:
             continue
@@ -616,7 +619,7 @@ def rim_excursion(samples: np.ndarray, sample_normals: np.ndarray,
             len(samples), k, 3)[:, :, :2], normal)
         drop = lateral * np.sqrt(np.clip((1.0 - turn) / (1.0 + turn), 0.0, None))  # l·tan(θ/2)
         facing = turn > math.cos(FACING)
-        close = facing & (lateral <= (near[number] if number < len(near) else 0.0))
+        close = facing & (lateral <= reach)
         counted = np.where(close.any(axis=1, keepdims=True), close, facing)
         envelope = np.where(counted, height + drop, -np.inf)
         top = np.maximum(top, envelope.max(axis=1))
