@@ -7,18 +7,10 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
 from steamtwin.geometry.orientation import part_orientation, sheet_offset_bound
-from steamtwin.geometry.sections import (
-    BROKEN_TOUR,
-    TOUR_SLABS,
-    lower_envelope,
-    tour_ratio,
-    two_face_turn,
-)
+from steamtwin.geometry.sections import BROKEN_TOUR, TOUR_SLABS, tour_ratio, two_face_turn
 
 CHORD, SPAN = 30e-3, 20e-3
 #: Sagittas of the suction and pressure arcs (m): 10 % and 6 % of the chord, so the section is
@@ -195,22 +187,3 @@ def test_tour_ratio_judges_the_slabs_next_to_the_ends_one_by_one():
         scrambled[slab] = rng.random(slab.sum())
         assert (tour_ratio(points, mask, scrambled, perimeter, height) > BROKEN_TOUR) == broken
 
-
-
-@settings(max_examples=25, deadline=None)
-@given(seed=st.integers(0, 10_000), lifted=st.floats(0.1, 0.5), slope=st.floats(-0.1, 0.1))
-def test_lower_envelope_follows_the_shortest_paths_past_detours(seed, lifted, slope):
-    """Face lengths along the span (m): a straight line, the paths' noise (0.3 mm) above it,
-    and up to half of the slabs lengthened by 5–30 mm (a face reached round a cut-off strip):
-    the envelope stays on the line within the noise, where a median per slab does not."""
-    rng = np.random.default_rng(seed)
-    slab = 3e-3
-    z = rng.uniform(0.0, 0.12, 3000)
-    true = 40e-3 + slope * z
-    values = true + np.abs(rng.normal(0.0, 0.3e-3, z.size))
-    slabs = np.floor(z / slab).astype(int)
-    detoured = rng.random(slabs.max() + 1) < lifted
-    values[detoured[slabs]] += rng.uniform(5e-3, 30e-3, int(detoured[slabs].sum()))
-    at = np.linspace(0.01, 0.11, 50)
-    envelope = lower_envelope(z, values, at, slab)
-    assert np.max(np.abs(envelope - (40e-3 + slope * at))) < 0.5e-3
