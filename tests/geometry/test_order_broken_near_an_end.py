@@ -1,10 +1,9 @@
-"""An order round the sections must not be broken next to one end of the span (issue 19,
-lean-sweep 80k seeds 2–3: the ring of neighbours does not go round the 0.2 mm trailing edge at
-the tip). A single path round the section broke there; the slabs next to the ends caught it
-and the order by faces replaced it. Kept (its median slab is under the limit), it started the
-side points there on the wrong face: the side's fit folded next to the tip, was stiffened
-everywhere for it, and stood 1.08 mm off the leading edge at the hub. Each face measured from
-the leading edge alone needs no path round the trailing edge."""
+"""An order round the sections broken only next to one end of the span (issue 19, lean-sweep
+80k seeds 2–3: the ring of neighbours does not go round the 0.2 mm trailing edge at the tip) is
+caught by the slabs next to the ends and replaced by the order by faces. Kept (its median slab
+is under the limit), it started the side points there on the wrong face: the side's fit folded
+next to the tip, was stiffened everywhere for it, and stood 1.08 mm off the leading edge at the
+hub."""
 
 import numpy as np
 from foreign_blades import family_blade, laser_cloud
@@ -13,11 +12,10 @@ from steamtwin.geometry.sections import BROKEN_TOUR, tour_ratios
 from steamtwin.geometry.segmentation import segment_blade
 
 
-def test_the_order_follows_the_sections_next_to_the_tip() -> None:
-    """lean-sweep, 80k points, seed 2, blade frame: the single path's order jumped between the
-    faces in the slab next to the tip (tour ratio 3.0, median 1.9) and was first kept; the order
-    by faces followed the sections in every slab (≤ 1.3), and so does each face measured from
-    the leading edge (1.12–1.28: the zig-zag of noisy points)."""
+def test_an_order_broken_next_to_the_tip_is_replaced_by_the_order_by_faces() -> None:
+    """lean-sweep, 80k points, seed 2, blade frame: the ring's order jumps between the faces in
+    the slab next to the tip (tour ratio 3.0, median 1.9) — before the fix it was kept; the
+    order by faces follows the sections in every slab (≤ 1.3)."""
     cloud = laser_cloud(family_blade("lean-sweep"), points=80_000, seed=2).points
     segmentation = segment_blade(cloud)
     side = np.isfinite(segmentation.turn)

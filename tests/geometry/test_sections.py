@@ -7,18 +7,10 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
 from steamtwin.geometry.orientation import part_orientation, sheet_offset_bound
-from steamtwin.geometry.sections import (
-    BROKEN_TOUR,
-    TOUR_SLABS,
-    lower_envelope,
-    tour_ratio,
-    two_face_turn,
-)
+from steamtwin.geometry.sections import BROKEN_TOUR, TOUR_SLABS, tour_ratio, two_face_turn
 
 CHORD, SPAN = 30e-3, 20e-3
 #: Sagittas of the suction and pressure arcs (m): 10 % and 6 % of the chord, so the section is
@@ -195,49 +187,3 @@ def test_tour_ratio_judges_the_slabs_next_to_the_ends_one_by_one():
         scrambled[slab] = rng.random(slab.sum())
         assert (tour_ratio(points, mask, scrambled, perimeter, height) > BROKEN_TOUR) == broken
 
-
-
-@settings(max_examples=25, deadline=None)
-@given(seed=st.integers(0, 10_000), lifted=st.floats(0.1, 0.5), slope=st.floats(-0.1, 0.1))
-def test_lower_envelope_follows_the_shortest_paths_past_detours(seed, lifted, slope):
-    """Face lengths along the span (m): a straight line, the paths' noise (0.3 mm) above it,
-    and up to half of the slabs lengthened by 5–30 mm (a face reached round a cut-off strip):
-    the envelope stays on the line within the noise, where a median per slab does not."""
-    rng = np.random.default_rng(seed)
-    slab = 3e-3
-    z = rng.uniform(0.0, 0.12, 3000)
-    true = 40e-3 + slope * z
-    values = true + np.abs(rng.normal(0.0, 0.3e-3, z.size))
-    slabs = np.floor(z / slab).astype(int)
-    detoured = rng.random(slabs.max() + 1) < lifted
-    values[detoured[slabs]] += rng.uniform(5e-3, 30e-3, int(detoured[slabs].sum()))
-    at = np.linspace(0.01, 0.11, 50)
-    envelope = lower_envelope(z, values, at, slab)
-    assert np.max(np.abs(envelope - (40e-3 + slope * at))) < 0.5e-3
-
-
-@settings(max_examples=25, deadline=None)
-@given(seed=st.integers(0, 10_000), curvature=st.floats(-0.5, 0.5))
-def test_lower_envelope_of_the_least_values_is_a_smooth_floor(seed, curvature):
-    """The third path next to the rear end (m): a few values per slab above a smooth floor,
-    whose least jumps from slab to slab with the sampling (0.37–0.94 mm on a noise-free hp1
-    cloud). At the 0th percentile the envelope lies on the floor, under every slab's least
-    value and without its jumps (measured over 200 draws: 0.046 mm off the floor, 0.031 mm
-    over a least value, steps 0.09 of the least values'; at the 25th percentile 0.16 and
-    0.14 mm)."""
-    rng = np.random.default_rng(seed)
-    slab = 0.8e-3
-    z = rng.uniform(0.0, 0.04, 300)  # 50 slabs, 6 values in each on average
-
-    def floor(at: np.ndarray) -> np.ndarray:
-        return 0.5e-3 + curvature * (at - 0.02) ** 2
-
-    values = floor(z) + rng.exponential(0.3e-3, z.size)
-    which = np.floor(z / slab).astype(int)
-    slabs = np.unique(which)
-    least = np.array([values[which == k].min() for k in slabs])
-    at = (slabs + 0.5) * slab
-    envelope = lower_envelope(z, values, at, slab, percentile=0.0)
-    assert np.max(np.abs(envelope - floor(at))) < 0.08e-3
-    assert np.all(envelope < least + 0.06e-3)
-    assert np.max(np.abs(np.diff(envelope))) < 0.2 * np.max(np.abs(np.diff(least)))

@@ -1,15 +1,12 @@
-"""Order round a blade's sections: the turn fraction θ of every side point.
+"""Order round the sections where the ring of a blade's side is broken at a thin edge.
 
-:func:`~steamtwin.geometry.sections.section_turn` measures each face from the leading edge
-alone: geodesic paths from the points just below the leading edge run along the pressure face,
-those from the points just above it along the suction face, and neither has to go round the
-trailing edge. At a thin, sparsely sampled trailing edge (0.2 mm radius at 0.14 mm spacing) the
-neighbour graph does not go round the edge — neighbours there have normals more than 75°
-apart — or links the faces across it, and a single path round the section reached the far
-face by detours, 3–5 mm too long next to the edge, where the side's fit then folded (issue 19).
-Where the nose itself is too sparse for seeds on both sides of it (a 0.15 mm radius at
-0.23 mm spacing, issue 19's slender blade), or the order jumps between the faces,
-:func:`two_face_turn` gives an order that needs no path round either edge:
+:func:`~steamtwin.geometry.sections.section_turn` measures the turn fraction round each
+section by geodesic paths that start below the leading edge, run once round the section
+through the trailing edge and come back above it. At a thin, sparsely sampled edge (a
+0.15 mm radius at 0.23 mm spacing, issue 19's slender blade) the neighbour graph does not go
+round the edge — neighbours there have normals more than 75° apart — and the paths reach the
+far face only through holes and stray links, out of order: the fit of such a parametrisation
+folds. This module gives an order that needs no path round either edge:
 
 - the points are split into the two faces by their outward normals — the pressure face's
   point to the right of the section's own chord line (front to rear end, whatever the
@@ -59,21 +56,6 @@ SMOOTHING_PASSES = 3
 NOSE_REACH = 3.0
 #: Fewest points round the front end of a slab for :func:`nose_directions`.
 MIN_NOSE_POINTS = 10
-#: :func:`lower_envelope`: the percentile of each slab's values, the smoothing weight, the
-#: weight of the values above the curve, the reweighting rounds and the order of the
-#: differences penalised (on lines lengthened in up to half of 40 slabs by 5–30 mm, in runs,
-#: the envelope stays within 0.3 mm of a quadratic; with second differences or a weight of
-#: 0.05 above, 4–12 mm off it). The 25th percentile, not the median: in slabs where most of
-#: a face's points next to the rear end are reached by detours (issue 19's slender blade, 80k
-#: seeds 6 and 7) the median is a detour's length, and the fit was refused.
-ENVELOPE_PERCENTILE = 25.0
-ENVELOPE_SMOOTHING = 1000.0
-ENVELOPE_ASYMMETRY = 0.001
-ENVELOPE_ITERATIONS = 30
-ENVELOPE_ORDER = 3
-#: Round the rear end the turn is the rear path's, within this many seed radii of it along the
-#: surface less one, blended linearly into the front paths' over the next seed radius.
-REAR_ZONE = 2.0
 
 
 def tour_ratios(points: np.ndarray, mask: np.ndarray, turn: np.ndarray, perimeter: np.ndarray,
@@ -269,60 +251,34 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     sampled surfaces, Tenenbaum, de Silva & Langford 2000, Science 290). Edges join each point
     to those of its :data:`GRAPH_NEIGHBOURS` nearest neighbours whose outward normals,
     projected on the section plane, agree within 75° and whose chord lies within 45° of both
-    tangent planes. The graph is cut along the line from the front end into the nose
-    (:func:`nose_directions`, between the two faces) within 2 ``seed_radius`` of the front end
-    (the section crosses it there once; a line y = y_front can cross a face leaving the front
-    end upwards again within a millimetre, at high stagger). Each face is then measured from
-    the front end alone: d_p from the points within ``seed_radius`` to the right of the cut
-    (the pressure face, first anticlockwise), each starting at its straight distance from the
-    front end, and d_s from those to its left, each averaged
-    :data:`SMOOTHING_PASSES` times over each point and its graph neighbours. No path has to go
-    round the rear end: a thin trailing edge whose k-NN normals straddle both faces keeps the
-    graph from going round it, or links the faces across it, and a single path round the
-    section then reached the far face by a detour along the span (3–5 mm too long near the
-    edge, issue 19 lean-sweep 80k seed 5), which folded the side's fit.
-
-    Each face's length L(z) is read 1–3 ``seed_radius`` short of the rear end, as d plus the
-    way on to the rear end along the surface, on that face's points only (split by the
-    bisector of the faces round the rear end, :func:`nose_directions` mirrored): the points at
-    the edge itself are reached by detours where the edge is thin. The way on is a third
-    path's, from the points within ``seed_radius`` of the rear end, each starting at its
-    straight distance: the straight distance itself is up to π/2 times shorter round a thick
-    edge's circle, and the reference unit's hp8 (a 0.6 mm trailing edge at a 1 mm seed radius)
-    had its faces' lengths summing about 1 mm short of the perimeter the paths measure — its
-    turn stepped by 1.2 mm at the trailing edge and the row was refused. Along the span L(z)
-    is the lower envelope of those values (:func:`lower_envelope`): a face cut off from its
-    own seam next to the rear end, over part of the span (k-NN normals turned at a thin edge),
-    is reached round the cut, 20–30 mm too long on issue 19's slender blade. A point belongs to
-    the face whose distance, less that face's length, is smaller (a detour only lengthens a
-    path), and θ = 1 − a + a · d_p / L_p on the pressure face, (1 − d_s / L_s)(1 − a) on the
-    suction face: the rear end at θ = 0, the front end at 1 − a, a the median of
-    L_p / (L_p + L_s), each face keeping a fixed share of the turn along the span.
-
-    Round the rear end the turn is the third path's instead: −a · r / L_p on the pressure side
-    of the faces' bisector, (1 − a) · r / L_s on the other, r the third path's length less its
-    smooth floor along the span, alone up to :data:`REAR_ZONE` − 1 ``seed_radius`` of the rear
-    end and blended linearly into the front paths' turn over the next ``seed_radius``. Where a
-    sparse scan's edge circle is wider than the point spacing, the rear end (the most
-    downstream point) can lie at one end of the circle and the whole circle belong to one
-    face; the third path starts from the far side of the circle at the straight distance
-    across it, that face's length comes out short, and the circle's points wrapped onto the
-    other face (the reference unit's hp1 at 0.64 mm spacing and a 2.5 mm seed radius: L_p
-    2.4–2.7 mm short, each half of its 0.82 mm trailing edge mirrored, the fit refused). The
-    floor is the :func:`lower_envelope` of the slabs' least values within ``seed_radius`` of
-    the rear end: the rear end itself may lie off a sparse edge, and the slabs' own least
-    values jump with the sampling (0.37–0.94 mm on a noise-free 25k-point hp1 cloud, up to
-    0.39 mm from slab to slab; their median over five slabs cost its fit 45 more knots and 34 µm
-    RMS at the hub rim). The perimeter is L_p + L_s. Unlike
-    the chordwise position, θ is monotone round any section, however strongly cambered, and
-    unchanged by twist and taper. Points neither path reaches (strays) take the θ of their
-    nearest reached point. Where there is no seam across the cut (a nose too sparse for points
-    on both sides of it within a seed radius), the paths reach too few points, or the order
-    jumps between the faces over the span or next to one end of it
-    (:func:`~steamtwin.geometry.sections.tour_ratio` above
-    :data:`~steamtwin.geometry.sections.BROKEN_TOUR`), the order by faces split by their normals
+    tangent planes. The front end's outward normal is −x, so the points to the right of the
+    line from it into the nose (:func:`nose_directions`, between the two faces) come first
+    anticlockwise round the section: the graph is cut along that line within
+    2 ``seed_radius`` of the front end (the section crosses it there once; a line y = y_front
+    can cross a face leaving the front end upwards again within a millimetre, at high stagger),
+    and the paths start from the points within ``seed_radius`` to the right of the cut, run
+    once round the section and end at those to its left. The distance d from the start (averaged
+    :data:`SMOOTHING_PASSES` times over each point and its graph neighbours) is the arc length
+    anticlockwise from the front end; the perimeter P is d plus the distance to the front end
+    at the end points (median per slab along the span). From θ' = d / P and the rear end's θ'_r
+    (median of the points within ``seed_radius`` of it, per slab: it moves with the twist),
+    θ = (θ' − θ'_r) / (1 − θ'_r) · (1 − a) on the suction side and 1 − a + θ' / θ'_r · a on the
+    pressure side, a the median θ'_r: each face keeps a fixed share of the turn along the span,
+    the rear end at θ = 0 and the front end at 1 − a, as the chordwise turn fraction kept them
+    at 0 and 0.5. The cut is at the leading edge, whose circle spans several point spacings;
+    at a thin trailing edge k-NN normals straddle both faces and an edge may cut across, which
+    only shortens the paths beyond it by part of the circle. Unlike the chordwise position, θ
+    is monotone round any section, however strongly cambered, and unchanged by twist and
+    taper. Points the graph does not reach (strays) take the θ of their nearest reached point.
+    Where the ring is broken — no seam across y = y_front at the front end (high stagger), the
+    paths do not come back, or the order jumps between the faces over the span or next to one
+    end of it (:func:`~steamtwin.geometry.sections.tour_ratio` above
+    :data:`~steamtwin.geometry.sections.BROKEN_TOUR`), as at a thin edge sampled too sparsely
+    for the graph to go round it — the order by faces
     (:func:`~steamtwin.geometry.sections.two_face_turn`) is taken instead, when it follows the
-    sections better.
+    sections better. A ring broken next to one end only is broken all the same (issue 19,
+    lean-sweep 80k seed 2: a 0.2 mm trailing edge at the tip): kept, the side's fit folds there
+    and is stiffened everywhere.
     """
 
     count = len(points)
@@ -342,8 +298,9 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
     graph_edges = (lo, hi, length)  # for the order by faces, should the ring be broken
     offset = np.linalg.norm(points[:, :2] - front, axis=1)
     # cut the ring along the line from the front end into the nose, between its two faces
-    below = _right_of(points, nose_directions(points, mask, front, offset, seed_radius, slab),
-                      front)
+    inward = nose_directions(points, mask, front, offset, seed_radius, slab)
+    relative = points[:, :2] - front
+    below = inward[:, 0] * relative[:, 1] - inward[:, 1] * relative[:, 0] < 0.0
     cut = (below[lo] != below[hi]) & (np.minimum(offset[lo], offset[hi]) < 2.0 * seed_radius)
     lo, hi, length = lo[~cut], hi[~cut], length[~cut]
     seam = mask & (offset < seed_radius)
@@ -353,54 +310,50 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
         # within a seed radius): the order by faces, cut along the chord
         return two_face_turn(points, normals, mask, *graph_edges, front, rear, seed_radius,
                              slab)
-    # two virtual sources, joined to the seam points right and left of the cut, each at its
-    # straight distance from the front end, and a third joined to the points round the rear end
-    behind = np.linalg.norm(points[:, :2] - rear, axis=1)
-    tail = np.flatnonzero(mask & (behind < seed_radius))
-    if tail.size == 0:
-        raise ReconstructionError("no side points at the rear end of the sections: is the "
-                                  "trailing edge scanned?")
-    rows = np.concatenate([lo, hi, np.full(start.size, count), np.full(end.size, count + 1),
-                           np.full(tail.size, count + 2)])
-    cols = np.concatenate([hi, lo, start, end, tail])
-    weights = np.concatenate([length, length, offset[start] + 1e-12, offset[end] + 1e-12,
-                              behind[tail] + 1e-12])
-    graph = coo_array((weights, (rows, cols)), shape=(count + 3, count + 3)).tocsr()
-    pressure_path, suction_path, rear_path = (
-        _smoothed(d, mask & np.isfinite(d), lo, hi)
-        for d in dijkstra(graph, indices=[count, count + 1, count + 2])[:, :count])
-    reached = mask & (np.isfinite(pressure_path) | np.isfinite(suction_path))
-    if np.mean(reached[mask]) < 0.9:
+    origin = count  # a virtual source joined to the seam points below the cut
+    rows = np.concatenate([lo, hi, np.full(start.size, origin)])
+    cols = np.concatenate([hi, lo, start])
+    weights = np.concatenate([length, length, offset[start] + 1e-12])
+    graph = coo_array((weights, (rows, cols)), shape=(count + 1, count + 1)).tocsr()
+    distance = dijkstra(graph, indices=origin)[:count]
+    reached = mask & np.isfinite(distance)
+    # the zig-zag of the paths through noisy points varies from point to point: average d over
+    # each point and its graph neighbours (d is linear along the surface, the mean keeps it)
+    near = reached[lo] & reached[hi]
+    adjacency = coo_array((np.ones(2 * near.sum()), (np.concatenate([lo[near], hi[near]]),
+                                                     np.concatenate([hi[near], lo[near]]))),
+                          shape=(count, count)).tocsr()
+    degree = np.asarray(adjacency.sum(axis=1)).ravel() + 1.0
+    smooth = np.where(reached, distance, 0.0)
+    for _ in range(SMOOTHING_PASSES):
+        smooth = (smooth + adjacency @ smooth) / degree
+    distance = np.where(reached, smooth, np.inf)
+    closing = end[np.isfinite(distance[end])]
+    if closing.size == 0 or np.mean(reached[mask]) < 0.9:
         return two_face_turn(points, normals, mask, *graph_edges, front, rear, seed_radius,
                              slab)
-    pressure_length, suction_length, pressure_behind = _face_lengths(
-        points, mask, rear, pressure_path, suction_path, rear_path, seed_radius, slab)
     perimeter = np.full(count, np.nan)
-    perimeter[mask] = (pressure_length + suction_length)[mask]
-    share = float(np.median((pressure_length / perimeter)[mask]))
-    # a detour only lengthens a path: a point is on the face whose path, less its length, is
-    # shorter (also for a point of one face reached round the rear end from the other); the
-    # turn is counted here from the rear end, −share … 0 on the pressure face
-    with np.errstate(invalid="ignore"):
-        pressure = pressure_path - pressure_length < suction_path - suction_length
-        from_front = np.where(pressure, share * (pressure_path / pressure_length - 1.0),
-                              (1.0 - suction_path / suction_length) * (1.0 - share))
-        # round the rear end, the way to it (from the nearest point: the rear end itself
-        # may lie off a sparse edge) and the side of the faces' bisector
-        near_rear = mask & (behind < seed_radius) & np.isfinite(rear_path)
-        to_rear = rear_path - lower_envelope(points[near_rear, 2], rear_path[near_rear],
-                                             points[:, 2], slab, percentile=0.0)
-        from_rear = np.where(pressure_behind, -share * to_rear / pressure_length,
-                             (1.0 - share) * to_rear / suction_length)
-    rear_weight = np.clip(REAR_ZONE - rear_path[reached] / seed_radius, 0.0, 1.0)
-    near_end = np.where(np.isfinite(from_rear), from_rear, 0.0)[reached]
+    perimeter[mask] = slab_median(points[closing, 2], distance[closing] + offset[closing],
+                                   points[mask, 2], slab)
     turn = np.full(count, np.nan)
-    turn[reached] = np.mod(rear_weight * near_end + (1.0 - rear_weight) * from_front[reached],
-                           1.0)
+    turn[reached] = np.mod(distance[reached] / perimeter[reached], 1.0)
     missed = mask & ~reached
     if np.any(missed):
         _, nearest = cKDTree(points[reached]).query(points[missed])
         turn[missed] = turn[reached][nearest]
+    near_rear = mask & (np.linalg.norm(points[:, :2] - rear, axis=1) < seed_radius)
+    if not np.any(near_rear):
+        raise ReconstructionError("no side points at the rear end of the sections: is the "
+                                  "trailing edge scanned?")
+    # the rear end's turn along the span (it moves with the twist), then both faces stretched
+    # to fixed shares so that the rear end is at θ = 0 and the front end at 1 − share
+    rear_turn = np.clip(slab_median(points[near_rear, 2], turn[near_rear], points[mask, 2],
+                                     slab), 0.05, 0.95)
+    share = float(np.median(rear_turn))
+    front_based = turn[mask]
+    turn[mask] = np.where(front_based >= rear_turn,
+                          (front_based - rear_turn) / (1.0 - rear_turn) * (1.0 - share),
+                          1.0 - share + front_based / rear_turn * share)
     # a ring broken at a thin, sparse edge leaves the order jumping between the faces, over the
     # span or next to one end: then the order by faces, when it follows the sections better
     ratio = tour_ratio(points, mask, turn, perimeter, seed_radius)
@@ -413,103 +366,6 @@ def section_turn(points: np.ndarray, normals: np.ndarray, index: np.ndarray, mas
         if tour_ratio(points, mask, *by_faces, seed_radius) < ratio:
             return by_faces
     return turn, perimeter
-
-
-def _right_of(points: np.ndarray, direction: np.ndarray, through: np.ndarray) -> np.ndarray:
-    """Whether each point lies right of the line along ``direction`` (n, 2) through
-    ``through`` (x-y, m), seen from the tip."""
-    relative = points[:, :2] - through
-    return direction[:, 0] * relative[:, 1] - direction[:, 1] * relative[:, 0] < 0.0
-
-
-def _smoothed(distance: np.ndarray, reached: np.ndarray, lo: np.ndarray, hi: np.ndarray
-              ) -> np.ndarray:
-    """Path lengths ``distance`` (m) averaged :data:`SMOOTHING_PASSES` times over each reached
-    point and its graph neighbours (edges ``lo``–``hi``): the zig-zag of the paths through
-    noisy points varies from point to point, and d is linear along the surface, so the mean
-    keeps it. ∞ where not reached."""
-    near = reached[lo] & reached[hi]
-    adjacency = coo_array((np.ones(2 * near.sum()), (np.concatenate([lo[near], hi[near]]),
-                                                     np.concatenate([hi[near], lo[near]]))),
-                          shape=(len(distance), len(distance))).tocsr()
-    degree = np.asarray(adjacency.sum(axis=1)).ravel() + 1.0
-    smooth = np.where(reached, distance, 0.0)
-    for _ in range(SMOOTHING_PASSES):
-        smooth = (smooth + adjacency @ smooth) / degree
-    return np.where(reached, smooth, np.inf)
-
-
-def _face_lengths(points: np.ndarray, mask: np.ndarray, rear: np.ndarray,
-                  pressure_path: np.ndarray, suction_path: np.ndarray, rear_path: np.ndarray,
-                  seed_radius: float, slab: float
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Lengths (m) of the pressure and suction faces from the front end to the rear end at
-    every point's z (:func:`section_turn`): the path from the front end plus the path on to
-    the rear end (``rear_path``, m), on each face's points 1–3 ``seed_radius`` (m) short of
-    it; and whether each point under ``mask`` lies on the pressure face's side of the faces'
-    bisector round the rear end."""
-    behind = np.linalg.norm(points[:, :2] - rear, axis=1)
-    mirror = np.array([-1.0, 1.0, 1.0])  # the rear end is the front end of the mirrored blade
-    tail = nose_directions(points * mirror, mask, rear * mirror[:2], behind, seed_radius,
-                           slab) * mirror[:2]
-    right = _right_of(points, tail, rear)
-    short = mask & (behind >= seed_radius) & (behind < NOSE_REACH * seed_radius)
-    missing = ReconstructionError("no side points on both faces next to the rear end of the "
-                                  "sections reached from the front end: is the trailing edge "
-                                  "scanned?")
-    if not (np.any(short & right) and np.any(short & ~right)):
-        raise missing
-    # the face the pressure paths reach sooner is the pressure face, whichever side it lies
-    # (a point no path reaches counts as ∞ in the medians)
-    pressure_side = right if (np.median(pressure_path[short & right])
-                              < np.median(pressure_path[short & ~right])) else ~right
-    lengths = []
-    for path, on in ((pressure_path, pressure_side), (suction_path, ~pressure_side)):
-        chosen = short & on & np.isfinite(path)
-        if not np.any(chosen):
-            raise missing
-        lengths.append(lower_envelope(points[chosen, 2], path[chosen] + rear_path[chosen],
-                                      points[:, 2], slab))
-    return lengths[0], lengths[1], mask & pressure_side
-
-
-def lower_envelope(z: np.ndarray, values: np.ndarray, at: np.ndarray, slab: float,
-                   percentile: float = ENVELOPE_PERCENTILE) -> np.ndarray:
-    """A smooth lower envelope of ``values`` along z, at the heights ``at`` (held beyond the end
-    slabs): the ``percentile`` th percentile (default :data:`ENVELOPE_PERCENTILE`) of the
-    values in each slab ``slab``
-    (m) high (slabs with fewer than 3 values skipped), then the asymmetric least-squares
-    smoother of Eilers & Boelens (2005, "Baseline correction with asymmetric least squares
-    smoothing", Leiden University Medical Centre report): a Whittaker smoother (penalty on the
-    differences of order :data:`ENVELOPE_ORDER` — a quadratic along the span passes
-    unchanged —, weight :data:`ENVELOPE_SMOOTHING`) whose values above the curve weigh
-    :data:`ENVELOPE_ASYMMETRY` and those below 1 − that, reweighted
-    :data:`ENVELOPE_ITERATIONS` times. Path lengths are only lengthened
-    by detours (a face cut off next to the rear end over part of the span is reached round it,
-    20–30 mm too long on issue 19's slender blade), so the shortest slabs are the true ones."""
-    edges = np.arange(z.min(), z.max() + slab, slab)
-    which = np.clip(np.searchsorted(edges, z, side="right") - 1, 0, len(edges) - 1)
-    counts = np.bincount(which, minlength=len(edges))
-    full = np.flatnonzero(counts >= 3)
-    if full.size == 0:
-        return np.full(len(at), float(np.percentile(values, percentile)))
-    low = np.array([float(np.percentile(values[which == k], percentile))
-                    for k in full])
-    if full.size >= 3:
-        count = int(full[-1] - full[0] + 1)  # every slab between the first and last filled
-        observed = np.zeros(count)
-        observed[full - full[0]] = low
-        present = np.zeros(count)
-        present[full - full[0]] = 1.0
-        difference = np.diff(np.eye(count), n=ENVELOPE_ORDER, axis=0)
-        penalty = ENVELOPE_SMOOTHING * difference.T @ difference
-        weights = present.copy()
-        for _ in range(ENVELOPE_ITERATIONS):
-            curve = np.linalg.solve(np.diag(weights) + penalty, weights * observed)
-            weights = present * np.where(observed > curve, ENVELOPE_ASYMMETRY,
-                                         1.0 - ENVELOPE_ASYMMETRY)
-        low = curve[full - full[0]]
-    return np.interp(at, edges[full] + 0.5 * slab, low)
 
 
 def slab_median(z: np.ndarray, values: np.ndarray, at: np.ndarray, slab: float) -> np.ndarray:
